@@ -1,0 +1,34 @@
+# The two commands of the README. Each creates .venv and installs what it needs from PyPI.
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+
+.PHONY: demo test lint bench clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[viz,dev]'
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/rtgait scenarios
+	$(BIN)/rtgait plan fig4 --out out/fig4
+	$(BIN)/rtgait plan fig6 --out out/fig6
+	$(BIN)/rtgait plan fig7 --out out/fig7
+	$(BIN)/rtgait plan fig8 --out out/fig8
+	@echo "Figures, trajectory.csv and summary.json for each scenario are in out/<scenario>/"
+
+test: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/python -m pytest -q
+
+lint: $(STAMP)
+	$(BIN)/ruff check .
+
+bench: $(STAMP)
+	$(BIN)/python benchmarks/replan.py
+
+clean:
+	rm -rf $(VENV) out .pytest_cache .hypothesis

@@ -1,0 +1,69 @@
+"""Boundary-value solve for the homogeneous coefficients ``V_j, W_j`` (eqs. 8-12).
+
+Unknowns are ordered ``[V_1, W_1, ..., V_m, W_m]``. Rows: the initial COG position, COG position and velocity
+continuity at each of the ``m - 1`` junctions, the terminal COG position. The matrix depends on the segment
+durations and ``w`` only, so it is factored once per timing pattern (:class:`BoundaryValueSolver`) and the
+factorisation is reused for any ZMP spline of that timing, for both axes at once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import lu_factor, lu_solve
+
+from rtgait.core.lipm import CogTrajectory, particular_matrix
+from rtgait.core.spline import PiecewisePolynomial, evaluate_polynomials
+
+
+def bvp_matrix(durations: np.ndarray, w: float) -> np.ndarray:
+    """The ``2m x 2m`` matrix of eqs. 8-12 for segment ``durations`` (s) and frequency ``w`` (1/s)."""
+    durations = np.asarray(durations, dtype=float)
+    m = durations.size
+    ch, sh = np.cosh(w * durations), np.sinh(w * durations)
+    M = np.zeros((2 * m, 2 * m))
+    M[0, 0] = 1.0
+    for j in range(m - 1):
+        v, wcol = 2 * j, 2 * j + 1
+        row = 1 + 2 * j
+        M[row, v], M[row, wcol], M[row, v + 2] = ch[j], sh[j], -1.0
+        M[row + 1, v], M[row + 1, wcol], M[row + 1, wcol + 2] = w * sh[j], w * ch[j], -w
+    M[-1, -2], M[-1, -1] = ch[-1], sh[-1]
+    return M
+
+
+def bvp_rhs(particular: np.ndarray, durations: np.ndarray, c_start: np.ndarray, c_end: np.ndarray) -> np.ndarray:
+    """Right-hand side ``(2m, d)`` for polynomial parts ``particular`` ``(m, n + 1, d)`` and end positions (m)."""
+    end_pos = evaluate_polynomials(particular, durations, 0)
+    end_vel = evaluate_polynomials(particular, durations, 1)
+    m, d = particular.shape[0], particular.shape[2]
+    rhs = np.empty((2 * m, d))
+    rhs[0] = np.asarray(c_start, dtype=float) - particular[0, 0]
+    rhs[1:-1:2] = particular[1:, 0] - end_pos[:-1]
+    rhs[2:-1:2] = particular[1:, 1] - end_vel[:-1]
+    rhs[-1] = np.asarray(c_end, dtype=float) - end_pos[-1]
+    return rhs
+
+
+class BoundaryValueSolver:
+    """Factored BVP of one timing pattern; :meth:`solve` then costs a pair of triangular solves.
+
+    Args:
+        durations: segment durations (s), all positive.
+        w: pendulum frequency (1/s).
+    """
+
+    def __init__(self, durations: np.ndarray, w: float) -> None:
+        durations = np.asarray(durations, dtype=float)
+        if durations.ndim != 1 or durations.size == 0 or np.any(~np.isfinite(durations)) or np.any(durations <= 0):
+            raise ValueError(f"durations must be finite and > 0 s, got {np.atleast_1d(durations).tolist()}")
+        self.durations = durations
+        self.w = float(w)
+        self._lu = lu_factor(bvp_matrix(durations, self.w))
+
+    def solve(self, zmp: PiecewisePolynomial, c_start: np.ndarray, c_end: np.ndarray) -> CogTrajectory:
+        """COG through the ZMP spline with COG position ``c_start`` at its start and ``c_end`` at its end (m)."""
+        if zmp.durations.shape != self.durations.shape or not np.allclose(zmp.durations, self.durations):
+            raise ValueError("the ZMP spline's durations differ from the factored timing pattern")
+        A = np.einsum("ik,jkd->jid", particular_matrix(zmp.degree, self.w), zmp.coeffs)
+        VW = lu_solve(self._lu, bvp_rhs(A, self.durations, c_start, c_end))
+        return CogTrajectory(zmp=zmp, V=VW[0::2], W=VW[1::2], w=self.w)

@@ -1,0 +1,256 @@
+"""Footsteps, strides, sole rectangles and the phase timeline of a walk.
+
+Footprints are numbered ``F[0], F[1], ...``: ``F[0]`` is the standing position of the foot that swings first,
+``F[1]`` that of the other foot, and ``F[i + 1]`` is where step ``i`` (1-based) lands. Step ``i`` swings the
+foot from ``F[i - 1]`` to ``F[i + 1]`` while the robot stands on ``F[i]``.
+
+Phases are numbered ``q = 0, 1, 2, ...``: ``q = 0`` is the starting double support (ZMP from between the feet
+to the first stance foot), ``q = 2i - 1`` the single support of step ``i``, ``q = 2i`` the double support after
+step ``i`` lands (feet ``F[i]`` and ``F[i + 1]``). In a walk of ``N`` steps, phase ``2N`` is the final double
+support (ZMP back between the feet) and ``2N + 1`` the settling phase in which the COG comes to rest.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+Side = Literal["left", "right"]
+SIDES: tuple[Side, Side] = ("left", "right")
+
+
+def other_side(side: Side) -> Side:
+    return "right" if side == "left" else "left"
+
+
+def wrap_angle(angle: float) -> float:
+    """Angle wrapped to ``[-pi, pi)`` (rad)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def _require_finite(name: str, value: float) -> None:
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value}")
+
+
+@dataclass(frozen=True)
+class Footstep:
+    """A footprint on the ground: foot frame position (m), yaw (rad) and which foot."""
+
+    x: float
+    y: float
+    yaw: float
+    side: Side
+
+    def __post_init__(self) -> None:
+        for name in ("x", "y", "yaw"):
+            _require_finite(f"footstep {name}", getattr(self, name))
+        if self.side not in SIDES:
+            raise ValueError(f"footstep side must be 'left' or 'right', got {self.side!r}")
+
+    @property
+    def position(self) -> np.ndarray:
+        return np.array([self.x, self.y])
+
+
+@dataclass(frozen=True)
+class Stride:
+    """Where a step lands relative to the previous footprint (the stance foot).
+
+    Attributes:
+        length: forward displacement along the mean heading of the two footprints (m).
+        width: lateral distance between the two footprints, positive = feet apart (m).
+        turn: yaw change from the stance foot to the landing foot (rad), positive = to the left.
+    """
+
+    length: float
+    width: float
+    turn: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("length", "width", "turn"):
+            _require_finite(f"stride {name}", getattr(self, name))
+        if self.width <= 0.0:
+            raise ValueError(f"stride width must be > 0 m (feet apart), got {self.width}")
+        if abs(self.turn) >= math.pi / 2:
+            raise ValueError(f"stride turn must be within +-pi/2 rad, got {self.turn}")
+
+
+def place_step(stance: Footstep, stride: Stride) -> Footstep:
+    """Landing footprint of the other foot for ``stride`` taken from ``stance``."""
+    side = other_side(stance.side)
+    lateral = stride.width if side == "left" else -stride.width
+    heading = stance.yaw + 0.5 * stride.turn
+    c, s = math.cos(heading), math.sin(heading)
+    return Footstep(
+        x=stance.x + c * stride.length - s * lateral,
+        y=stance.y + s * stride.length + c * lateral,
+        yaw=wrap_angle(stance.yaw + stride.turn),
+        side=side,
+    )
+
+
+def stride_between(stance: Footstep, landing: Footstep) -> Stride:
+    """Inverse of :func:`place_step`: the stride that takes ``stance`` to ``landing``."""
+    if landing.side == stance.side:
+        raise ValueError("consecutive footprints must alternate between left and right")
+    turn = wrap_angle(landing.yaw - stance.yaw)
+    heading = stance.yaw + 0.5 * turn
+    c, s = math.cos(heading), math.sin(heading)
+    dx, dy = landing.x - stance.x, landing.y - stance.y
+    lateral = -s * dx + c * dy
+    return Stride(length=c * dx + s * dy, width=lateral if landing.side == "left" else -lateral, turn=turn)
+
+
+def standing_feet(step_width: float, first_side: Side = "right") -> tuple[Footstep, Footstep]:
+    """``(F[0], F[1])``: feet side by side at the origin, ``step_width`` (m) apart, heading +x."""
+    if not (math.isfinite(step_width) and step_width > 0.0):
+        raise ValueError(f"step_width must be > 0 m, got {step_width}")
+    if first_side not in SIDES:
+        raise ValueError(f"first_side must be 'left' or 'right', got {first_side!r}")
+    half = 0.5 * step_width
+    first = Footstep(0.0, half if first_side == "left" else -half, 0.0, first_side)
+    second = Footstep(0.0, -first.y, 0.0, other_side(first_side))
+    return first, second
+
+
+def place_footsteps(start: tuple[Footstep, Footstep], strides: list[Stride]) -> list[Footstep]:
+    """Footprints ``F[0..N+1]`` of a walk of ``N = len(strides)`` steps from standing feet ``start``."""
+    prints = list(start)
+    for stride in strides:
+        prints.append(place_step(prints[-1], stride))
+    return prints
+
+
+def midpoint(a: Footstep, b: Footstep) -> tuple[float, float]:
+    """Point halfway between two footprints (m)."""
+    return 0.5 * (a.x + b.x), 0.5 * (a.y + b.y)
+
+
+@dataclass(frozen=True)
+class SoleRect:
+    """Sole rectangle around the foot frame (m): ``front``/``back`` along the foot, ``inner`` toward the other
+    foot, ``outer`` away from it. All distances are from the foot frame origin and non-negative."""
+
+    front: float
+    back: float
+    inner: float
+    outer: float
+
+    def __post_init__(self) -> None:
+        for name in ("front", "back", "inner", "outer"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"sole {name} must be a finite distance >= 0 m, got {value}")
+        if self.front + self.back <= 0.0 or self.inner + self.outer <= 0.0:
+            raise ValueError("sole rectangle must have a positive length and width")
+
+    def corners(self, foot: Footstep) -> np.ndarray:
+        """World corners of the sole of ``foot``, counter-clockwise, shape ``(4, 2)`` (m)."""
+        left = foot.side == "left"
+        y_max = self.outer if left else self.inner
+        y_min = -self.inner if left else -self.outer
+        local = np.array([[self.front, y_min], [self.front, y_max], [-self.back, y_max], [-self.back, y_min]])
+        c, s = math.cos(foot.yaw), math.sin(foot.yaw)
+        rotation = np.array([[c, -s], [s, c]])
+        return local @ rotation.T + foot.position
+
+
+@dataclass(frozen=True)
+class Timing:
+    """Phase durations of a walk (s).
+
+    Attributes:
+        single_support: one foot on the ground, the other swinging (``T_s``).
+        double_support: both feet on the ground between steps (``T_dbl``).
+        start: initial double support, ZMP from between the feet to the first stance foot.
+        end: final double support, ZMP from the last stance foot back between the feet.
+        settle: ZMP held between the feet while the COG comes to rest.
+    """
+
+    single_support: float
+    double_support: float
+    start: float = 1.0
+    end: float = 1.0
+    settle: float = 2.0
+
+    def __post_init__(self) -> None:
+        for name in ("single_support", "double_support", "start", "end", "settle"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"timing {name} must be a finite duration > 0 s, got {value}")
+
+    @property
+    def step_period(self) -> float:
+        """Time from one lift-off to the next (s)."""
+        return self.single_support + self.double_support
+
+
+PhaseKind = Literal["start", "single", "double", "end", "settle"]
+
+
+@dataclass(frozen=True)
+class Timeline:
+    """Phase boundaries of a walk of ``n_steps`` steps (``None``: no end planned yet), times from its start."""
+
+    timing: Timing
+    n_steps: int | None = None
+
+    def kind(self, q: int) -> PhaseKind:
+        if q == 0:
+            return "start"
+        if q % 2 == 1:
+            return "single" if self.n_steps is None or q < 2 * self.n_steps else "settle"
+        if self.n_steps is not None and q == 2 * self.n_steps:
+            return "end"
+        return "double"
+
+    def duration(self, q: int) -> float:
+        t = self.timing
+        return {
+            "start": t.start,
+            "single": t.single_support,
+            "double": t.double_support,
+            "end": t.end,
+            "settle": t.settle,
+        }[self.kind(q)]
+
+    def start_time(self, q: int) -> float:
+        """Start of phase ``q`` relative to the walk's start (s)."""
+        t = self.timing
+        if q == 0:
+            return 0.0
+        step = (q + 1) // 2  # step whose single support is phase 2*step - 1
+        time = t.start + (step - 1) * t.step_period
+        if q % 2 == 0:
+            time += t.single_support
+        if self.n_steps is not None and q == 2 * self.n_steps + 1:
+            time = self.start_time(q - 1) + t.end
+        return time
+
+    @property
+    def last_phase(self) -> int | None:
+        return None if self.n_steps is None else 2 * self.n_steps + 1
+
+    @property
+    def end_time(self) -> float:
+        """End of the settling phase (s); ``inf`` while no end is planned."""
+        if self.n_steps is None:
+            return math.inf
+        q = 2 * self.n_steps + 1
+        return self.start_time(q) + self.timing.settle
+
+    def phase_at(self, t: float) -> int:
+        """Phase index containing time ``t`` (s from the start); clamped to the first and last phase."""
+        timing = self.timing
+        if t < timing.start:
+            return 0
+        k = int((t - timing.start) // timing.step_period)
+        q = 2 * k + 1 if (t - timing.start) - k * timing.step_period < timing.single_support else 2 * k + 2
+        if self.n_steps is not None and q >= 2 * self.n_steps:
+            end_start = self.start_time(2 * self.n_steps)
+            return 2 * self.n_steps if t < end_start + timing.end else 2 * self.n_steps + 1
+        return q

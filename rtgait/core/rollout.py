@@ -1,0 +1,148 @@
+"""Run the online planner as a control loop would and record every tick.
+
+Scheduled footstep changes are handed to the planner at the latest moment its connection mode allows (the
+paper's experiments: real-time changes at the changed step's lift-off, quasi-real-time ones at the start of
+the double support before it), so a rollout shows what each mode can absorb.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from rtgait.core.footsteps import Footstep, SoleRect
+from rtgait.core.online import SAMPLE_FIELDS, OnlinePlanner, PlanRecord
+from rtgait.core.support import signed_margin, support_polygon
+
+
+@dataclass(frozen=True)
+class ScheduledChange:
+    """A change of the stride of ``step`` (and of the steps up to ``through``), decided at the mode's deadline.
+
+    ``None`` leaves a value as it was. Lengths and widths in m, turn in rad.
+    """
+
+    step: int
+    length: float | None = None
+    width: float | None = None
+    turn: float | None = None
+    through: int | None = None
+
+
+@dataclass(frozen=True)
+class Rollout:
+    """Every control tick of a walk.
+
+    Attributes:
+        times: tick times (s), shape ``(k,)``.
+        values: samples in :data:`~rtgait.core.online.SAMPLE_FIELDS` order, shape ``(k, 21)``.
+        support: ``"double"``, ``"left"`` or ``"right"`` per tick.
+        phase: phase index per tick.
+        margin: signed ZMP margin to the support polygon per tick (m, positive inside).
+        footprints: the footprints ``F[0..N+1]`` as walked.
+        plans: every replanning, in order.
+        changes: ``(decision time (s), step)`` of every change handed to the planner.
+    """
+
+    times: np.ndarray
+    values: np.ndarray
+    support: np.ndarray
+    phase: np.ndarray
+    margin: np.ndarray
+    footprints: list[Footstep]
+    plans: list[PlanRecord]
+    changes: list[tuple[float, int]]
+
+    def column(self, name: str) -> np.ndarray:
+        """One sampled quantity by its :data:`SAMPLE_FIELDS` name."""
+        return self.values[:, SAMPLE_FIELDS.index(name)]
+
+    @property
+    def worst_index(self) -> int:
+        """Tick with the smallest ZMP margin."""
+        return int(np.argmin(self.margin))
+
+    @property
+    def zmp_margin_min(self) -> float:
+        """Smallest signed ZMP margin over the walk (m)."""
+        return float(self.margin[self.worst_index])
+
+    @property
+    def zmp_outside(self) -> bool:
+        """Whether the planned ZMP leaves the support polygon anywhere."""
+        return self.zmp_margin_min < 0.0
+
+    @property
+    def connections(self) -> list[PlanRecord]:
+        """Replannings that connected to a running plan (all but the initial plan)."""
+        return self.plans[1:]
+
+
+def zmp_margins(planner: OnlinePlanner, sole: SoleRect, zmp: np.ndarray, phase: np.ndarray) -> np.ndarray:
+    """Signed margin (m) of each ZMP sample ``(k, 2)`` to the support polygon of its phase."""
+    margin = np.empty(len(zmp))
+    for q in np.unique(phase):
+        mask = phase == q
+        polygon = support_polygon(planner.contact_feet(int(q)), sole)
+        margin[mask] = signed_margin(zmp[mask], polygon)
+    return margin
+
+
+def rollout(
+    planner: OnlinePlanner,
+    dt: float,
+    sole: SoleRect,
+    changes: Sequence[ScheduledChange] = (),
+    duration: float | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> Rollout:
+    """Start ``planner`` at t = 0 and sample it every ``dt`` (s) until the walk has come to rest.
+
+    Args:
+        planner: a planner for a finite walk (not yet started).
+        dt: control period (s).
+        sole: sole rectangle for the support polygons.
+        changes: footstep changes, each handed over at its connection-mode deadline.
+        duration: how long to run (s); default: until the walk has settled.
+        progress: called now and then with the fraction done, for long runs.
+    """
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise ValueError(f"dt must be a finite period > 0 s, got {dt}")
+    planner.start(0.0)
+    end = planner.end_time if duration is None else duration
+    if not math.isfinite(end):
+        raise ValueError("a rollout needs a finite duration: the walk has no planned end")
+    pending = sorted(changes, key=lambda c: planner.change_deadline(c.step))
+    n_ticks = math.floor(end / dt + 1e-9) + 1
+    values = np.empty((n_ticks, len(SAMPLE_FIELDS)))
+    support = np.empty(n_ticks, dtype=object)
+    phase = np.empty(n_ticks, dtype=int)
+    times = np.arange(n_ticks) * dt
+    applied: list[tuple[float, int]] = []
+    report_every = max(n_ticks // 20, 1)
+    for k in range(n_ticks):
+        t = float(times[k])
+        while pending and t >= planner.change_deadline(pending[0].step):
+            change = pending.pop(0)
+            planner.change_step(
+                change.step, length=change.length, width=change.width, turn=change.turn, through=change.through
+            )
+            applied.append((planner.change_deadline(change.step), change.step))
+        row, support[k], phase[k] = planner.sample_values(t)
+        values[k] = row
+        if progress is not None and k % report_every == 0:
+            progress(k / n_ticks)
+    zmp = values[:, SAMPLE_FIELDS.index("zmp_x") : SAMPLE_FIELDS.index("zmp_y") + 1]
+    return Rollout(
+        times=times,
+        values=values,
+        support=support.astype(str),
+        phase=phase,
+        margin=zmp_margins(planner, sole, zmp, phase),
+        footprints=planner.footprints(),
+        plans=list(planner.plans),
+        changes=applied,
+    )
