@@ -209,14 +209,13 @@ class Timeline:
         return "double"
 
     def duration(self, q: int) -> float:
+        kind = self.kind(q)
         t = self.timing
-        return {
-            "start": t.start,
-            "single": t.single_support,
-            "double": t.double_support,
-            "end": t.end,
-            "settle": t.settle,
-        }[self.kind(q)]
+        if kind == "single":
+            return t.single_support
+        if kind == "double":
+            return t.double_support
+        return t.start if kind == "start" else t.end if kind == "end" else t.settle
 
     def start_time(self, q: int) -> float:
         """Start of phase ``q`` relative to the walk's start (s)."""

@@ -20,7 +20,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 
@@ -37,7 +37,7 @@ from rtgait.core.footsteps import (
     stride_between,
 )
 from rtgait.core.lipm import GRAVITY, CogTrajectory, omega
-from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey, PlanOperator, transfer_cubic
+from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey, PlanOperator
 from rtgait.core.spline import PiecewisePolynomial
 from rtgait.core.swing import swing_pose
 
@@ -164,8 +164,7 @@ class GaitSample:
         return self.values[17:21]
 
 
-@dataclass(frozen=True)
-class PlanRecord:
+class PlanRecord(NamedTuple):
     """One replanning: when (s), at which phase, the first segment's reference ends, and its cost (s)."""
 
     t: float
@@ -175,19 +174,52 @@ class PlanRecord:
     compute_time: float
 
 
+EAGER_SEGMENTS = 2
+"""Segments evaluated at replan time: the double support that begins and the single support after it. Replans
+happen at every double-support start, so later segments are rarely sampled; they are evaluated on first use."""
+
+
 class _ActivePlan:
-    """The plan being executed, in the flat form the per-tick evaluation reads."""
+    """The plan being executed, in the form the per-tick evaluation reads.
 
-    __slots__ = ("durations", "first_reference", "phase0", "segments", "starts", "t_start")
+    ``segment(j)`` is ``(x, y)``, each ``[a0..a4, A0..A4, V, W]`` of segment ``j`` as Python floats: scalar
+    arithmetic on floats beats numpy calls for one sample.
+    """
 
-    def __init__(self, t_start: float, phase0: int, durations: np.ndarray, data: np.ndarray, first_reference):
+    __slots__ = ("durations", "first_reference", "layout", "offsets", "phase0", "segments", "t_start", "y")
+
+    def __init__(self, t_start: float, phase0: int, layout: _Layout, y: np.ndarray, first_reference) -> None:
         self.t_start = t_start
         self.phase0 = phase0
-        self.durations = durations.tolist()
-        self.starts = (t_start + np.concatenate(([0.0], np.cumsum(durations[:-1])))).tolist()
-        # segments[j][axis] = [a0..a4, A0..A4, V, W] as Python floats: scalar math beats numpy per tick.
-        self.segments = data.transpose(0, 2, 1).tolist()
-        self.first_reference = first_reference  # [axis][4] cubic of segment 1's reference ZMP
+        self.layout = layout
+        self.y = y
+        self.durations = layout.durations
+        self.offsets = layout.offsets  # segment starts relative to t_start (s)
+        self.first_reference = first_reference  # [axis] -> cubic coefficients of segment 1's reference ZMP
+        x_rows, y_rows = (layout.G_eager @ y).T.tolist()
+        self.segments: list = [None] * len(layout.durations)
+        for j in range(min(EAGER_SEGMENTS, len(self.segments))):
+            self.segments[j] = (x_rows[12 * j : 12 * j + 12], y_rows[12 * j : 12 * j + 12])
+
+    def segment(self, j: int) -> tuple[list[float], list[float]]:
+        seg = self.segments[j]
+        if seg is None:
+            seg = self.segments[j] = tuple((self.layout.G[12 * j : 12 * j + 12] @ self.y).T.tolist())
+        return seg
+
+
+class _Layout:
+    """What a replan needs to know about one plan shape: its operator and where its anchors come from."""
+
+    __slots__ = ("G", "G_eager", "anchor_phases", "durations", "offsets", "operator")
+
+    def __init__(self, operator: PlanOperator, kinds: tuple[str, ...]) -> None:
+        self.operator = operator
+        self.G = operator.G
+        self.G_eager = np.ascontiguousarray(operator.G[: 12 * EAGER_SEGMENTS])
+        self.durations = operator.durations.tolist()
+        self.offsets = np.concatenate(([0.0], np.cumsum(operator.durations[:-1]))).tolist()
+        self.anchor_phases = tuple(k for k, kind in enumerate(kinds) if kind in MOVING_KINDS)
 
 
 class OnlinePlanner:
@@ -223,12 +255,14 @@ class OnlinePlanner:
                 raise ValueError("a walk needs at least one stride")
             self._finite = True
         self._prints = [*self._standing]
-        self._operators: dict[PatternKey, PlanOperator] = {}
+        self._layouts: dict[tuple[bool, int, bool], _Layout] = {}
         self._plan: _ActivePlan | None = None
+        self._next_replan_time = math.inf
         self._t0 = math.nan
         self._time = -math.inf
         self._next_replan_phase: int | None = 0
-        self._timeline = Timeline(config.timing, self.n_steps)
+        self._n = len(self._strides) if self._finite else None
+        self._timeline = Timeline(config.timing, self._n)
         self.plans: list[PlanRecord] = []
         self.change_log: list[tuple[float, int]] = []
         """(time, step) of every accepted change."""
@@ -237,15 +271,18 @@ class OnlinePlanner:
     @property
     def timeline(self) -> Timeline:
         """Phase boundaries of the walk as planned now (times relative to :attr:`t0`)."""
-        n = self.n_steps
+        return self._timeline
+
+    def _walk_changed(self) -> None:
+        """Keep the cached step count and timeline in step with the walk."""
+        self._n = n = len(self._strides) if self._finite else None
         if self._timeline.n_steps != n:
             self._timeline = Timeline(self.config.timing, n)
-        return self._timeline
 
     @property
     def n_steps(self) -> int | None:
         """Number of steps of the walk, ``None`` while walking by command without a planned end."""
-        return len(self._strides) if self._finite else None
+        return self._n
 
     @property
     def started(self) -> bool:
@@ -367,11 +404,12 @@ class OnlinePlanner:
         self._ensure_prints(start)
         if start > len(self._strides) + 1:
             raise ValueError(f"from_step {start} leaves a gap after step {len(self._strides)}")
-        if not strides and start == 1:
-            raise ValueError("a walk needs at least one stride")
+        if not strides:
+            raise ValueError("set_strides needs at least one stride: the walk's last step is still to come")
         self._strides = self._strides[: start - 1] + list(strides)
         self._finite = True
         self._command = None
+        self._walk_changed()
         self._rebuild_prints(start)
         self.change_log.append((self._time, start))
 
@@ -399,6 +437,7 @@ class OnlinePlanner:
         self._ensure_prints(start)
         del self._strides[start - 1 :]
         self._finite = False
+        self._walk_changed()
         self._rebuild_prints(start)
         self.change_log.append((self._time, start))
 
@@ -418,70 +457,95 @@ class OnlinePlanner:
         self._plan = None
         self.plans.clear()
         self._next_replan_phase = 0  # the first plan is made by the first sample, like every later one
+        self._next_replan_time = self._t0
 
-    def _operator(self, first: int, last: int) -> PlanOperator:
-        timeline = self.timeline
-        kinds = tuple(timeline.kind(q) for q in range(first, last + 1))
-        key = PatternKey(
-            kinds=kinds,
-            durations=tuple(timeline.duration(q) for q in range(first, last + 1)),
-            w=self.w,
-            first_degree=self.config.first_degree,
-        )
-        op = self._operators.get(key)
-        if op is None:
-            op = self._operators[key] = PlanOperator(key)
-        return op
-
-    def _anchor(self, q: int) -> tuple[float, float]:
-        """Where the reference ZMP is at the end of double-support phase ``q`` (m)."""
-        i = q // 2
+    def _layout(self, first: int, last: int) -> _Layout:
+        """Operator and anchor bookkeeping for the plan over phases ``first..last`` (cached by plan shape)."""
         n = self.n_steps
-        prints = self._prints
-        if n is not None and i == n:
-            return midpoint(prints[n], prints[n + 1])
-        return prints[i + 1].x, prints[i + 1].y
+        # The phase kinds of a plan depend only on these three facts, so they key the cache cheaply.
+        shape = (first == 0, last - first, n is not None and last == 2 * n + 1)
+        layout = self._layouts.get(shape)
+        if layout is None:
+            timeline = self._timeline
+            kinds = tuple(timeline.kind(q) for q in range(first, last + 1))
+            key = PatternKey(
+                kinds=kinds,
+                durations=tuple(timeline.duration(q) for q in range(first, last + 1)),
+                w=self.w,
+                first_degree=self.config.first_degree,
+            )
+            layout = self._layouts[shape] = _Layout(PlanOperator(key), kinds)
+        return layout
 
-    def _current_state(self, q: int) -> list[list[float]]:
-        """``[p0, dp0, c0, dc0]`` rows ``[x, y]`` at the start of phase ``q``: ZMP as the left limit."""
+    def _anchors(self, q: int, layout: _Layout) -> list[float]:
+        """Where the reference ZMP is at the end of each double support of a plan starting at phase ``q`` (m).
+
+        After double support ``2i`` it rests on footprint ``F[i + 1]``; after the final one, between the feet.
+        Returned flat: ``[x_0, y_0, x_1, y_1, ...]``.
+        """
+        n, prints = self._n, self._prints
+        anchors = []
+        for k in layout.anchor_phases:
+            i = (q + k) >> 1
+            if i == n:
+                anchors.extend(midpoint(prints[n], prints[n + 1]))
+            else:
+                foot = prints[i + 1]
+                anchors.append(foot.x)
+                anchors.append(foot.y)
+        return anchors
+
+    def _current_state(self, q: int) -> list[float]:
+        """``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]`` at the start of phase ``q`` (m, m/s).
+
+        The state comes from the plan being executed; the ZMP is its left limit (the end of the segment before).
+        """
         if self._plan is None:
-            center = midpoint(*self._standing)
-            return [list(center), [0.0, 0.0], list(center), [0.0, 0.0]]
+            cx, cy = midpoint(*self._standing)
+            return [cx, cy, 0.0, 0.0, cx, cy, 0.0, 0.0]
         plan = self._plan
         j = q - 1 - plan.phase0
         tau = plan.durations[j]
-        e = math.exp(self.w * tau)
-        ch, sh = 0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e)
         w = self.w
-        rows = [[0.0, 0.0] for _ in range(4)]
-        for axis, seg in enumerate(plan.segments[j]):
-            a0, a1, a2, a3, a4, A0, A1, A2, A3, A4, V, W = seg
-            rows[0][axis] = a0 + tau * (a1 + tau * (a2 + tau * (a3 + tau * a4)))
-            rows[1][axis] = a1 + tau * (2.0 * a2 + tau * (3.0 * a3 + tau * 4.0 * a4))
-            rows[2][axis] = V * ch + W * sh + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4)))
-            rows[3][axis] = w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4))
-        return rows
+        e = math.exp(w * tau)
+        ch, sh = 0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e)
+        state = [0.0] * 8
+        for axis, coeffs in enumerate(plan.segment(j)):
+            a0, a1, a2, a3, a4, A0, A1, A2, A3, A4, V, W = coeffs
+            state[axis] = a0 + tau * (a1 + tau * (a2 + tau * (a3 + tau * a4)))
+            state[2 + axis] = a1 + tau * (2.0 * a2 + tau * (3.0 * a3 + tau * 4.0 * a4))
+            state[4 + axis] = V * ch + W * sh + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4)))
+            state[6 + axis] = w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4))
+        return state
 
     def _replan(self) -> None:
+        """Make and connect the plan of the double support that begins now (phase ``_next_replan_phase``)."""
         began = time.perf_counter()
         q = self._next_replan_phase
         assert q is not None
-        n = self.n_steps
+        n = self._n
         last = q + 2 * self.config.horizon_steps
         if n is not None and last >= 2 * n:
             last = 2 * n + 1
-        self._ensure_prints(last // 2 + 2)
-        op = self._operator(q, last)
+        if len(self._prints) < last // 2 + 3:
+            self._ensure_prints(last // 2 + 2)
+        layout = self._layout(q, last)
         state = self._current_state(q)
-        anchors = [self._anchor(p) for p in range(q, last + 1, 2) if self.timeline.kind(p) in MOVING_KINDS]
-        data = op.solve(np.array(state + anchors))
-        t_start = self.phase_start(q)
-        reference = transfer_cubic(np.array(state[0]), np.array(anchors[0]), op.durations[0]).T.tolist()
-        self._plan = _ActivePlan(t_start, q, op.durations, data, reference)
-        self.plans.append(
-            PlanRecord(t_start, q, t_start + float(op.durations[0]), op.n_segments, time.perf_counter() - began)
-        )
-        self._next_replan_phase = q + 2 if n is None or q + 2 <= 2 * n else None
+        y = state + self._anchors(q, layout)
+        # Reference of the free segment: the cubic transfer the footsteps alone would ask for.
+        duration = layout.durations[0]
+        k2, k3 = 3.0 / duration**2, -2.0 / duration**3
+        px, py, ax, ay = y[0], y[1], y[8], y[9]
+        reference = ((px, 0.0, k2 * (ax - px), k3 * (ax - px)), (py, 0.0, k2 * (ay - py), k3 * (ay - py)))
+        t_start = self._t0 + self._timeline.start_time(q)
+        self._plan = _ActivePlan(t_start, q, layout, np.array(y).reshape(-1, 2), reference)
+        if n is None or q + 2 <= 2 * n:
+            self._next_replan_phase = q + 2
+            self._next_replan_time = self.phase_start(q + 2)
+        else:
+            self._next_replan_phase, self._next_replan_time = None, math.inf
+        elapsed = time.perf_counter() - began
+        self.plans.append(PlanRecord(t_start, q, t_start + duration, len(layout.durations), elapsed))
 
     def _advance(self, t: float) -> None:
         """Replan at every double-support start up to ``t``, each from the state of the plan before it."""
@@ -492,9 +556,9 @@ class OnlinePlanner:
     def current_plan(self) -> CogTrajectory:
         """The plan being executed as a :class:`CogTrajectory` (for analysis; sampling does not need it)."""
         if self._plan is None:
-            raise RuntimeError("call start() first")
+            raise RuntimeError("no plan yet: call start() and sample()")
         plan = self._plan
-        data = np.array(plan.segments).transpose(0, 2, 1)  # (m, width, axes)
+        data = (plan.layout.G @ plan.y).reshape(len(plan.durations), 12, 2)  # (m, 12, axes)
         zmp = PiecewisePolynomial(plan.t_start, np.array(plan.durations), data[:, : DEGREE + 1])
         return CogTrajectory(zmp=zmp, V=data[:, -2], W=data[:, -1], w=self.w)
 
@@ -506,28 +570,32 @@ class OnlinePlanner:
 
     def sample_values(self, t: float) -> tuple[list[float], str, int]:
         """As :meth:`sample` but returns plain floats in :data:`SAMPLE_FIELDS` order (for tight loops)."""
-        if not self.started:
-            raise RuntimeError("call start() before sample()")
-        earliest = self._t0 if self._plan is None else self._plan.t_start
-        if not t >= earliest:  # also rejects NaN
-            raise ValueError(f"t={t} s is before the plan being executed (starts at {earliest} s)")
-        self._advance(t)
+        if t >= self._next_replan_time:
+            self._advance(t)
         plan = self._plan
-        assert plan is not None
+        if plan is None or not t >= plan.t_start:  # also rejects NaN
+            if not self.started:
+                raise RuntimeError("call start() before sample()")
+            raise ValueError(f"t={t} s is before the plan being executed (starts at {self._earliest()} s)")
         self._time = t
         rel = t - self._t0
-        timeline = self.timeline
+        timeline = self._timeline
         q = timeline.phase_at(rel)
-        j = min(max(q - plan.phase0, 0), len(plan.durations) - 1)
-        tau = min(t - plan.starts[j], plan.durations[j])  # past the end of the walk: hold the final state
+        j = q - plan.phase0
+        if j < 0:  # t on a phase boundary, rounded to the phase before the plan's first
+            j = 0
+        elif j >= len(plan.durations):
+            j = len(plan.durations) - 1
+        tau = t - plan.t_start - plan.offsets[j]
+        if tau > plan.durations[j]:  # past the end of the walk: hold the final state
+            tau = plan.durations[j]
         w = self.w
         e = math.exp(w * tau)
         ch, sh = 0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e)
-        h = self.config.cog_height
         out = [0.0] * 21
-        out[2] = h
-        for axis, seg in enumerate(plan.segments[j]):
-            a0, a1, a2, a3, a4, A0, A1, A2, A3, A4, V, W = seg
+        out[2] = self.config.cog_height
+        for axis, coeffs in enumerate(plan.segment(j)):
+            a0, a1, a2, a3, a4, A0, A1, A2, A3, A4, V, W = coeffs
             hom = V * ch + W * sh
             out[axis] = hom + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4)))
             out[3 + axis] = w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4))
@@ -539,29 +607,30 @@ class OnlinePlanner:
                 out[11 + axis] = r0 + tau * (r1 + tau * (r2 + tau * r3))
             else:
                 out[11 + axis] = zmp
-        support = self._feet(q, rel, timeline, out)
-        return out, support, q
+        return out, self._feet(q, rel, out), q
 
-    def _feet(self, q: int, rel: float, timeline: Timeline, out: list[float]) -> str:
+    def _earliest(self) -> float:
+        return self._t0 if self._plan is None else self._plan.t_start
+
+    def _feet(self, q: int, rel: float, out: list[float]) -> str:
+        """Write both feet poses into ``out`` and return the support label."""
         prints = self._prints
-        if q % 2 == 1 and timeline.kind(q) == "single":
-            i = (q + 1) // 2
+        if q & 1 and self._timeline.kind(q) == "single":
+            i = (q + 1) >> 1
             stance = prints[i]
-            s = (rel - timeline.start_time(q)) / self.config.timing.single_support
+            s = (rel - self._timeline.start_time(q)) / self.config.timing.single_support
             swing = swing_pose(prints[i - 1], prints[i + 1], s, self.config.step_height)
-            feet = ((stance.x, stance.y, 0.0, stance.yaw), swing)
-            sides = (stance.side, other_side(stance.side))
-            support = stance.side
-        else:
-            i = min(q // 2, len(prints) - 2)
-            a, b = prints[i], prints[i + 1]
-            feet = ((a.x, a.y, 0.0, a.yaw), (b.x, b.y, 0.0, b.yaw))
-            sides = (a.side, b.side)
-            support = "double"
-        for pose, side in zip(feet, sides, strict=True):
-            offset = 13 if side == "left" else 17
-            out[offset : offset + 4] = pose
-        return support
+            stance_pose = (stance.x, stance.y, 0.0, stance.yaw)
+            if stance.side == "left":
+                out[13:17], out[17:21] = stance_pose, swing
+            else:
+                out[13:17], out[17:21] = swing, stance_pose
+            return stance.side
+        i = min(q >> 1, len(prints) - 2)
+        for foot in (prints[i], prints[i + 1]):
+            offset = 13 if foot.side == "left" else 17
+            out[offset : offset + 4] = (foot.x, foot.y, 0.0, foot.yaw)
+        return "double"
 
     def contact_feet(self, q: int) -> list[Footstep]:
         """Footprints on the ground during phase ``q``."""
