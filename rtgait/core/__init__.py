@@ -1,0 +1,61 @@
+"""The analytical real-time gait planner (numpy/scipy only): importable alone, no robot, no simulator.
+
+Quick start::
+
+    from rtgait.core import OnlinePlanner, PlannerConfig, Timing, straight_walk
+
+    config = PlannerConfig(cog_height=0.8, timing=Timing(single_support=0.8, double_support=0.2))
+    planner = OnlinePlanner(config, straight_walk(config, steps=10, step_length=0.1))
+    planner.start(0.0)
+    sample = planner.sample(1.234)    # COG pos/vel/acc, ZMP, feet poses, support phase
+    planner.change_step(5, length=0.15, through=10)
+"""
+
+from rtgait.core.bvp import BoundaryValueSolver
+from rtgait.core.connect import ConnectionSolver
+from rtgait.core.footsteps import Footstep, SoleRect, Stride, Timeline, Timing, place_footsteps, standing_feet
+from rtgait.core.lipm import GRAVITY, CogTrajectory, omega
+from rtgait.core.online import (
+    CONNECTION_MODES,
+    SAMPLE_FIELDS,
+    GaitSample,
+    OnlinePlanner,
+    PlannerConfig,
+    PlanRecord,
+    StepChangeTooLateError,
+    VelocityCommand,
+    straight_walk,
+)
+from rtgait.core.rollout import Rollout, ScheduledChange, rollout
+from rtgait.core.spline import PiecewisePolynomial
+from rtgait.core.support import signed_margin, support_polygon
+
+__all__ = [
+    "CONNECTION_MODES",
+    "GRAVITY",
+    "SAMPLE_FIELDS",
+    "BoundaryValueSolver",
+    "CogTrajectory",
+    "ConnectionSolver",
+    "Footstep",
+    "GaitSample",
+    "OnlinePlanner",
+    "PiecewisePolynomial",
+    "PlanRecord",
+    "PlannerConfig",
+    "Rollout",
+    "ScheduledChange",
+    "SoleRect",
+    "StepChangeTooLateError",
+    "Stride",
+    "Timeline",
+    "Timing",
+    "VelocityCommand",
+    "omega",
+    "place_footsteps",
+    "rollout",
+    "signed_margin",
+    "standing_feet",
+    "straight_walk",
+    "support_polygon",
+]

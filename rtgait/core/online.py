@@ -27,6 +27,7 @@ import numpy as np
 from rtgait.core.footsteps import (
     Footstep,
     Side,
+    SoleRect,
     Stride,
     Timeline,
     Timing,
@@ -39,6 +40,7 @@ from rtgait.core.footsteps import (
 from rtgait.core.lipm import GRAVITY, CogTrajectory, omega
 from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey, PlanOperator
 from rtgait.core.spline import PiecewisePolynomial
+from rtgait.core.support import signed_margin, support_polygon
 from rtgait.core.swing import swing_pose
 
 ConnectionMode = Literal["real-time", "quasi-real-time"]
@@ -394,8 +396,17 @@ class OnlinePlanner:
         self._rebuild_prints(step)
         self.change_log.append((self._time, step))
 
+    def _check_not_ending(self) -> None:
+        """The phases from the final double support on depend on the walk's length: once the robot is in
+        them, the length of the walk can no longer change."""
+        n = self._n
+        walking = n is not None and self.started and self._time != -math.inf
+        if walking and self._timeline.phase_at(max(self._time - self._t0, 0.0)) >= 2 * n:
+            raise StepChangeTooLateError("the walk is ending (final double support has begun); start a new walk")
+
     def set_strides(self, strides: Sequence[Stride], from_step: int | None = None) -> None:
         """Replace the walk from ``from_step`` (default: the first open step) on; the walk ends after them."""
+        self._check_not_ending()
         start = self.first_open_step() if from_step is None else from_step
         if not isinstance(start, int) or start < 1:
             raise ValueError(f"from_step must be a 1-based step number, got {start!r}")
@@ -432,7 +443,9 @@ class OnlinePlanner:
 
     def set_velocity(self, vx: float = 0.0, vy: float = 0.0, wz: float = 0.0) -> None:
         """Walk by command: forward and lateral speed (m/s), yaw rate (rad/s); open steps follow it."""
-        self._command = VelocityCommand(vx, vy, wz)
+        command = VelocityCommand(vx, vy, wz)
+        self._check_not_ending()
+        self._command = command
         start = self.first_open_step()
         self._ensure_prints(start)
         del self._strides[start - 1 :]
@@ -631,6 +644,11 @@ class OnlinePlanner:
             offset = 13 if foot.side == "left" else 17
             out[offset : offset + 4] = (foot.x, foot.y, 0.0, foot.yaw)
         return "double"
+
+    def zmp_margin(self, sample: GaitSample, sole: SoleRect) -> float:
+        """Signed distance (m) of the sample's planned ZMP to its support polygon; negative = outside."""
+        polygon = support_polygon(self.contact_feet(sample.phase), sole)
+        return float(signed_margin(sample.zmp, polygon)[0])
 
     def contact_feet(self, q: int) -> list[Footstep]:
         """Footprints on the ground during phase ``q``."""
