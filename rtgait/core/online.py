@@ -280,6 +280,22 @@ class OnlinePlanner:
         self._n = n = len(self._strides) if self._finite else None
         if self._timeline.n_steps != n:
             self._timeline = Timeline(self.config.timing, n)
+            if self.started and self._next_replan_phase is not None:
+                self._prepare_layouts(self._next_replan_phase)
+
+    def _plan_span(self, q: int) -> int:
+        """Last phase covered by the plan made at double-support phase ``q``."""
+        n = self._n
+        last = q + 2 * self.config.horizon_steps
+        return 2 * n + 1 if n is not None and last >= 2 * n else last
+
+    def _prepare_layouts(self, first_phase: int) -> None:
+        """Build the operators of every plan shape still to come, so that no replan pays for one (they cost
+        a dense solve, about a millisecond, once per shape)."""
+        n = self._n
+        last_replan = first_phase + 2 if n is None else 2 * n
+        for q in range(first_phase, last_replan + 1, 2):
+            self._layout(q, self._plan_span(q))
 
     @property
     def n_steps(self) -> int | None:
@@ -346,11 +362,11 @@ class OnlinePlanner:
         period = cfg.timing.step_period
         landing: Side = other_side(stance.side)
         toward = 1.0 if landing == "left" else -1.0
-        length = float(np.clip(cmd.vx * period, -cfg.max_step_length, cfg.max_step_length))
-        lateral = 2.0 * cmd.vy * period * toward  # only the foot on the side of motion opens the stance
-        lateral = float(np.clip(lateral, 0.0, cfg.max_step_lateral))
-        turn = 2.0 * cmd.wz * period * toward
-        turn = float(np.clip(turn, 0.0, cfg.max_step_turn))
+        length = min(max(cmd.vx * period, -cfg.max_step_length), cfg.max_step_length)
+        # Only the foot on the side of motion opens the stance (or the turn); the other closes it again, so two
+        # steps move the body by twice the per-step displacement without crossing the feet.
+        lateral = min(max(2.0 * cmd.vy * period * toward, 0.0), cfg.max_step_lateral)
+        turn = min(max(2.0 * cmd.wz * period * toward, 0.0), cfg.max_step_turn)
         return Stride(length=length, width=cfg.step_width + lateral, turn=turn * toward)
 
     # ----- changes --------------------------------------------------------------------------------------
@@ -471,6 +487,7 @@ class OnlinePlanner:
         self.plans.clear()
         self._next_replan_phase = 0  # the first plan is made by the first sample, like every later one
         self._next_replan_time = self._t0
+        self._prepare_layouts(0)
 
     def _layout(self, first: int, last: int) -> _Layout:
         """Operator and anchor bookkeeping for the plan over phases ``first..last`` (cached by plan shape)."""
@@ -537,9 +554,7 @@ class OnlinePlanner:
         q = self._next_replan_phase
         assert q is not None
         n = self._n
-        last = q + 2 * self.config.horizon_steps
-        if n is not None and last >= 2 * n:
-            last = 2 * n + 1
+        last = self._plan_span(q)
         if len(self._prints) < last // 2 + 3:
             self._ensure_prints(last // 2 + 2)
         layout = self._layout(q, last)

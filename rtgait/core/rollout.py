@@ -43,6 +43,8 @@ class Rollout:
         phase: phase index per tick.
         margin: signed ZMP margin to the support polygon per tick (m, positive inside).
         footprints: the footprints ``F[0..N+1]`` as walked.
+        contacts: the footprints on the ground in each phase that was sampled.
+        polygons: the support polygon of each phase that was sampled (counter-clockwise vertices, m).
         plans: every replanning, in order.
         changes: ``(decision time (s), step)`` of every change handed to the planner.
     """
@@ -53,6 +55,8 @@ class Rollout:
     phase: np.ndarray
     margin: np.ndarray
     footprints: list[Footstep]
+    contacts: dict[int, list[Footstep]]
+    polygons: dict[int, np.ndarray]
     plans: list[PlanRecord]
     changes: list[tuple[float, int]]
 
@@ -80,15 +84,13 @@ class Rollout:
         """Replannings that connected to a running plan (all but the initial plan)."""
         return self.plans[1:]
 
-
-def zmp_margins(planner: OnlinePlanner, sole: SoleRect, zmp: np.ndarray, phase: np.ndarray) -> np.ndarray:
-    """Signed margin (m) of each ZMP sample ``(k, 2)`` to the support polygon of its phase."""
-    margin = np.empty(len(zmp))
-    for q in np.unique(phase):
-        mask = phase == q
-        polygon = support_polygon(planner.contact_feet(int(q)), sole)
-        margin[mask] = signed_margin(zmp[mask], polygon)
-    return margin
+    def free_segment_mask(self, plans: Sequence[PlanRecord] | None = None) -> np.ndarray:
+        """Ticks inside the free first segment of ``plans`` (default: the connections), where the ZMP may leave
+        the footsteps' reference to absorb a change."""
+        mask = np.zeros(len(self.times), dtype=bool)
+        for plan in self.connections if plans is None else plans:
+            mask |= (self.times >= plan.t) & (self.times <= plan.first_segment_end)
+        return mask
 
 
 def rollout(
@@ -135,14 +137,24 @@ def rollout(
         values[k] = row
         if progress is not None and k % report_every == 0:
             progress(k / n_ticks)
+    if progress is not None:
+        progress(1.0)
     zmp = values[:, SAMPLE_FIELDS.index("zmp_x") : SAMPLE_FIELDS.index("zmp_y") + 1]
+    contacts = {int(q): planner.contact_feet(int(q)) for q in np.unique(phase)}
+    polygons = {q: support_polygon(feet, sole) for q, feet in contacts.items()}
+    margin = np.empty(n_ticks)
+    for q, polygon in polygons.items():
+        mask = phase == q
+        margin[mask] = signed_margin(zmp[mask], polygon)
     return Rollout(
         times=times,
         values=values,
         support=support.astype(str),
         phase=phase,
-        margin=zmp_margins(planner, sole, zmp, phase),
+        margin=margin,
         footprints=planner.footprints(),
+        contacts=contacts,
+        polygons=polygons,
         plans=list(planner.plans),
         changes=applied,
     )

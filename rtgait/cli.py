@@ -1,0 +1,244 @@
+"""The ``rtgait`` command: list the built-in scenarios, plan a scenario and write its trajectory and figures.
+
+Exit codes: 0 success, 1 the run could not complete (outputs not writable, matplotlib missing), 2 bad input
+(unknown scenario, invalid file, bad option); every error is one ``rtgait: error: ...`` line on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import shutil
+import sys
+import time
+import uuid
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, TextIO
+
+from rtgait import __version__
+from rtgait.core.online import OnlinePlanner
+from rtgait.core.rollout import Rollout, rollout
+from rtgait.report import summarize, write_trajectory_csv
+from rtgait.scenario import Scenario, ScenarioError, builtin_scenarios, load_scenario
+
+PROG = "rtgait"
+# Below this many ticks a rollout takes well under a second: a progress bar would only flicker.
+PROGRESS_MIN_TICKS = 50_000
+
+
+class _RunError(Exception):
+    """The run could not complete for a reason other than the input (missing extra, unwritable folder)."""
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog=PROG,
+        description="Real-time humanoid gait planning (Harada et al.'s analytical method):\nplan walks whose "
+        "footsteps change while walking, and check that the ZMP stays inside\nthe support polygon.",
+        epilog="examples:\n  rtgait scenarios\n  rtgait plan fig4\n"
+        "  rtgait plan my_walk.toml --out results/my_walk --dt 0.001",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND")
+    commands.add_parser("scenarios", help="list the built-in scenarios", description="List the built-in scenarios.")
+    plan = commands.add_parser(
+        "plan",
+        help="plan a scenario and write trajectory.csv, summary.json and figures",
+        description="Roll out a scenario at its control period, handing each footstep change to the planner at "
+        "its connection mode's deadline, and write trajectory.csv, summary.json and four PNG figures.",
+    )
+    plan.add_argument("scenario", metavar="SCENARIO", help="built-in scenario name or path to a scenario .toml file")
+    plan.add_argument("--out", metavar="DIR", type=Path, help="output folder (default: out/<scenario name>)")
+    plan.add_argument("--dt", metavar="S", type=float, help="control period in seconds (default: the scenario's)")
+    plan.add_argument("--no-figures", action="store_true", help="skip the PNG figures (no matplotlib needed)")
+    plan.add_argument("--quiet", action="store_true", help="print nothing on success")
+    return parser
+
+
+# ----- plan -----------------------------------------------------------------------------------------------------
+
+
+def _with_dt(scenario: Scenario, dt: float | None) -> Scenario:
+    if dt is None:
+        return scenario
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise ScenarioError(f"--dt must be a number > 0 s, got {dt}")
+    try:
+        return replace(scenario, dt=dt)
+    except ScenarioError as error:
+        raise ScenarioError(f"--{error}") from None
+
+
+def _progress_printer(stream: TextIO, label: str) -> Callable[[float], None]:
+    def report(fraction: float) -> None:
+        stream.write(f"\r{label} {fraction * 100:3.0f}%")
+        stream.flush()
+
+    return report
+
+
+def _run(scenario: Scenario, quiet: bool) -> tuple[Rollout, float]:
+    """Roll the scenario out; returns the rollout and its wall time (s)."""
+    ticks = scenario.duration / scenario.dt
+    show = not quiet and ticks >= PROGRESS_MIN_TICKS and sys.stderr.isatty()
+    progress = _progress_printer(sys.stderr, f"{PROG}: planning {scenario.name}") if show else None
+    planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
+    began = time.perf_counter()
+    result = rollout(planner, scenario.dt, scenario.sole, scenario.changes, progress=progress)
+    elapsed = time.perf_counter() - began
+    if show:
+        sys.stderr.write("\r\033[K")  # erase the progress line so the summary starts clean
+        sys.stderr.flush()
+    return result, elapsed
+
+
+def _write_outputs(result: Rollout, scenario: Scenario, out: Path, figures: bool) -> dict[str, Any]:
+    """Write everything into a temporary folder beside ``out``, then move it into ``out`` in one go.
+
+    A failure at any point leaves ``out`` as it was (no half-written trajectory next to an old summary).
+    """
+    if out.exists() and not out.is_dir():
+        raise _RunError(f"--out {out} exists and is not a folder")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        # Not tempfile.mkdtemp: its 0700 mode would survive the rename and surprise anyone sharing the results.
+        staging = out.parent / f".{out.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp"
+        staging.mkdir()
+    except OSError as error:
+        raise _RunError(f"cannot create output folder {out}: {error.strerror or error}") from None
+    try:
+        rows = write_trajectory_csv(result, staging / "trajectory.csv")
+        files = ["trajectory.csv"]
+        if figures:
+            from rtgait.viz.figures import FigureInfo, render_all
+
+            info = FigureInfo(
+                title=f"{scenario.name} ({scenario.connection})",
+                sole=scenario.sole,
+                nominal_footprints=scenario.nominal_footprints(),
+            )
+            files += [path.name for path in render_all(result, info, staging)]
+        summary = summarize(result, scenario)
+        summary["rows"] = rows
+        files.insert(1, "summary.json")
+        summary["files"] = files
+        (staging / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+        if out.exists():
+            # Replace file by file: the folder may hold other things the user keeps there.
+            for name in files:
+                os.replace(staging / name, out / name)
+            staging.rmdir()
+        else:
+            staging.rename(out)
+    except OSError as error:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise _RunError(f"cannot write outputs to {out}: {error.strerror or error}") from None
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return summary
+
+
+def _describe_change(change: dict[str, Any]) -> str:
+    parts = []
+    if change["length"] is not None:
+        parts.append(f"length {change['length']:g} m")
+    if change["width"] is not None:
+        parts.append(f"width {change['width']:g} m")
+    if change["yaw"] is not None:
+        parts.append(f"yaw {change['yaw']:g} rad")
+    span = "that step only" if change["through"] == change["step"] else f"steps {change['step']}..{change['through']}"
+    return f"step {change['step']} decided at {change['decided_at']:.3f} s: {', '.join(parts)} ({span})"
+
+
+def _print_summary(summary: dict[str, Any], out: Path, wall_time: float, stream: TextIO) -> None:
+    timing = summary["timing"]
+    outside = summary["zmp_outside"]
+    x, y = summary["zmp_margin_min_position"]
+    times = summary["planning_time_us"]
+    lines = [
+        f"scenario    {summary['scenario']}: {summary['description']}",
+        f"mode        {summary['connection']} connection, T_s {timing['single_support']:g} s, "
+        f"T_dbl {timing['double_support']:g} s, {summary['steps']} steps + 1 closing, dt {summary['dt']:g} s, "
+        f"{summary['duration']:.2f} s walked",
+    ]
+    lines += [f"change      {_describe_change(change)}" for change in summary["changes"]] or ["change      none"]
+    lines += [
+        f"ZMP margin  min {summary['zmp_margin_min']:+.4f} m at t = {summary['zmp_margin_min_time']:.3f} s, "
+        f"ZMP at ({x:.3f}, {y:.3f}) m, {summary['zmp_margin_min_support']} support",
+        f"verdict     {'OUTSIDE the support polygon' if outside else 'inside the support polygon'}"
+        + (f" for {summary['zmp_outside_duration']:.3f} s" if outside else ""),
+    ]
+    if times["replan_median"] is not None:
+        lines.append(
+            f"replans     {summary['replans']} connected replans, planning time per replan "
+            f"median {times['replan_median']:.0f} µs, max {times['replan_max']:.0f} µs "
+            f"(first plan {times['first_plan']:.0f} µs; whole rollout {wall_time:.2f} s)"
+        )
+    else:
+        lines.append(f"replans     none (first plan {times['first_plan']:.0f} µs)")
+    lines.append(f"outputs     {out}{os.sep}: {', '.join(summary['files'])} ({summary['rows']} rows)")
+    stream.write("\n".join(lines) + "\n")
+
+
+def _plan(args: argparse.Namespace) -> int:
+    scenario = _with_dt(load_scenario(args.scenario), args.dt)
+    out: Path = args.out if args.out is not None else Path("out") / scenario.name
+    if not args.no_figures:
+        try:
+            import matplotlib  # noqa: F401  # checked before the run so a missing extra fails fast
+        except ImportError:
+            raise _RunError("figures need matplotlib: pip install 'rtgait[viz]', or pass --no-figures") from None
+    result, wall_time = _run(scenario, args.quiet)
+    summary = _write_outputs(result, scenario, out, figures=not args.no_figures)
+    if not args.quiet:
+        _print_summary(summary, out, wall_time, sys.stdout)
+    return 0
+
+
+def _scenarios() -> int:
+    listing = builtin_scenarios()
+    width = max(len(name) for name in listing)
+    for name, description in listing.items():
+        print(f"{name:<{width}}  {description}")
+    return 0
+
+
+def _error(message: str) -> None:
+    # One line, whatever the message: scripts grep stderr and humans read the first line only.
+    print(f"{PROG}: error: {' '.join(message.split())}", file=sys.stderr)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit code."""
+    parser = _build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as stop:  # argparse reports usage errors (code 2) and --help/--version (0) this way
+        return stop.code if isinstance(stop.code, int) else 2
+    try:
+        if args.command == "scenarios":
+            return _scenarios()
+        if args.command == "plan":
+            return _plan(args)
+        parser.print_usage(sys.stderr)
+        _error("choose a command: scenarios or plan")
+        return 2
+    except ValueError as error:  # ScenarioError and the core's own input checks
+        _error(str(error))
+        return 2
+    except _RunError as error:
+        _error(str(error))
+        return 1
+    except KeyboardInterrupt:
+        _error("interrupted")
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

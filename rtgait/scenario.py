@@ -1,0 +1,380 @@
+"""Walking scenarios: a robot, a timing, a walk and the footstep changes made while walking.
+
+A scenario is a small TOML file. The built-in ones (the paper's Section 5 cases and a few more) ship as package
+data in ``rtgait/scenarios/`` and are loaded by name; any other file is loaded by path::
+
+    name = "my-walk"
+    description = "one line shown by `rtgait scenarios`"
+    connection = "real-time"            # or "quasi-real-time"
+
+    [robot]
+    cog_height = 0.80                   # m, constant COG height above the ground
+    gravity = 9.81                      # m/s^2, optional
+
+    [robot.sole]                        # sole rectangle around the foot frame, m
+    front = 0.13
+    back = 0.10
+    inner = 0.07
+    outer = 0.07
+
+    [timing]
+    single_support = 0.8                # s
+    double_support = 0.2                # s
+    dt = 0.005                          # s, control period of the rollout
+    horizon_steps = 3                   # steps covered by each plan
+    # start, end, settle: optional durations (s) of the first/last double support and of the settling phase
+
+    [walk]
+    steps = 10                          # forward steps; one more step then brings the feet side by side
+    step_length = 0.05                  # m
+    step_width = 0.19                   # m, lateral distance between the feet
+    step_height = 0.05                  # m, swing-foot peak height
+    # yaw = 0.0                         # rad, optional turn of every forward step
+    # first_foot = "right"              # optional, the foot that swings first
+
+    [[walk.change]]                     # any number of these
+    step = 5                            # 1-based step whose stride changes
+    length = 0.15                       # m; optional width (m) and yaw (rad) too
+    # only = false                      # true: this step only; false: this step and all later forward steps
+
+Every problem with a file raises :class:`ScenarioError` with one line naming the offending field.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import sys
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride, Timing, place_footsteps, standing_feet
+from rtgait.core.online import CONNECTION_MODES, ConnectionMode, PlannerConfig
+from rtgait.core.rollout import ScheduledChange
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised only on Python 3.10
+    import tomli as tomllib
+
+__all__ = ["Scenario", "ScenarioError", "builtin_scenarios", "load_scenario", "parse_scenario"]
+
+_NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
+# Stride.turn must stay strictly inside +-pi/2; checking here gives the error a TOML field name.
+_MAX_YAW = math.pi / 2
+
+
+class ScenarioError(ValueError):
+    """A scenario is unknown, unreadable or invalid. The message is one line naming the field."""
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Everything needed to roll out one walk.
+
+    Attributes:
+        name: short identifier, also the default output folder name.
+        description: one line for listings.
+        connection: ``"real-time"`` or ``"quasi-real-time"``.
+        cog_height: constant COG height above the ground (m).
+        gravity: (m/s^2).
+        sole: sole rectangle around the foot frame (m).
+        timing: phase durations (s).
+        dt: control period at which the walk is sampled (s).
+        horizon_steps: steps covered by each plan after its first double support.
+        steps: number of forward steps; one closing step (length 0) follows them.
+        step_length: forward length of each step (m).
+        step_width: lateral distance between the feet (m).
+        step_height: peak swing-foot height (m).
+        changes: footstep changes, each handed to the planner at its connection mode's deadline.
+        yaw: turn of every forward step (rad), positive to the left.
+        first_foot: the foot that swings first.
+        source: where the scenario came from (``"builtin"`` or a file path); informative only.
+    """
+
+    name: str
+    description: str
+    connection: ConnectionMode
+    cog_height: float
+    gravity: float
+    sole: SoleRect
+    timing: Timing
+    dt: float
+    horizon_steps: int
+    steps: int
+    step_length: float
+    step_width: float
+    step_height: float
+    changes: tuple[ScheduledChange, ...] = ()
+    yaw: float = 0.0
+    first_foot: Side = "right"
+    source: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        # The TOML loader already checks every field with its file path; these checks cover scenarios built in
+        # code or modified with dataclasses.replace (e.g. the CLI's --dt).
+        if not _NAME_PATTERN.fullmatch(self.name):
+            raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {self.name!r}")
+        if self.connection not in CONNECTION_MODES:
+            raise ScenarioError(f"connection must be one of {', '.join(CONNECTION_MODES)}, got {self.connection!r}")
+        if not (isinstance(self.dt, (int, float)) and math.isfinite(self.dt) and self.dt > 0.0):
+            raise ScenarioError(f"dt must be a number > 0 s, got {self.dt}")
+        shortest = min(self.timing.single_support, self.timing.double_support, self.timing.start, self.timing.end)
+        if self.dt > shortest:
+            # A period longer than a phase would skip whole phases (and their replans) between two samples.
+            raise ScenarioError(f"dt must not exceed the shortest phase ({shortest} s), got {self.dt}")
+        if not isinstance(self.steps, int) or isinstance(self.steps, bool) or self.steps < 1:
+            raise ScenarioError(f"steps must be an integer >= 1, got {self.steps!r}")
+        for index, change in enumerate(self.changes):
+            if not 1 <= change.step <= self.steps:
+                raise ScenarioError(
+                    f"walk.change[{index}].step must be a step of the walk (1..{self.steps}), got {change.step}"
+                )
+
+    def planner_config(self) -> PlannerConfig:
+        """The online planner's parameters for this scenario."""
+        return PlannerConfig(
+            cog_height=self.cog_height,
+            timing=self.timing,
+            step_width=self.step_width,
+            step_height=self.step_height,
+            horizon_steps=self.horizon_steps,
+            connection=self.connection,
+            gravity=self.gravity,
+            first_side=self.first_foot,
+        )
+
+    def strides(self) -> list[Stride]:
+        """Strides of the walk as planned before any change: ``steps`` forward ones, then a closing one."""
+        forward = Stride(self.step_length, self.step_width, self.yaw)
+        # The closing step lands beside the last footprint so the walk ends standing with parallel feet.
+        return [forward] * self.steps + [Stride(0.0, self.step_width, 0.0)]
+
+    def nominal_footprints(self) -> list[Footstep]:
+        """Footprints ``F[0..steps+1]`` the walk would have without any change (m, rad)."""
+        return place_footsteps(standing_feet(self.step_width, self.first_foot), self.strides())
+
+    @property
+    def duration(self) -> float:
+        """Time from the start until the COG has come to rest (s)."""
+        t = self.timing
+        # steps + 1 steps in all (the closing one), each but the last followed by a double support.
+        n = self.steps + 1
+        return t.start + n * t.single_support + (n - 1) * t.double_support + t.end + t.settle
+
+
+# ----- TOML parsing ---------------------------------------------------------------------------------------------
+
+
+def _table(data: Any, where: str) -> dict[str, Any]:
+    if not isinstance(data, dict):
+        raise ScenarioError(f"{where} must be a table, got {type(data).__name__} {data!r}")
+    return data
+
+
+def _check_keys(data: dict[str, Any], where: str, required: tuple[str, ...], optional: tuple[str, ...]) -> None:
+    prefix = f"{where}." if where else ""
+    allowed = required + optional
+    for key in data:
+        if key not in allowed:
+            # Unknown keys are almost always typos ("singel_support"); silently ignoring them would run a
+            # different walk from the one the user meant.
+            kind = "key" if where else "top-level key"
+            raise ScenarioError(f"unknown {kind} {prefix}{key} (allowed here: {', '.join(allowed)})")
+    for key in required:
+        if key not in data:
+            raise ScenarioError(f"missing required key {prefix}{key}")
+
+
+def _number(data: dict[str, Any], key: str, where: str, *, rule: str = "any", unit: str = "") -> float:
+    """A finite number from ``data[key]`` satisfying ``rule`` ("any", "> 0", ">= 0" or "|x| < pi/2")."""
+    value = data[key]
+    path = f"{where}.{key}" if where else key
+    unit_text = f" {unit}" if unit else ""
+    descriptions = {
+        "any": "a finite number" + (" (in" if unit else ""),
+        "> 0": "a number > 0",
+        ">= 0": "a number >= 0",
+        "yaw": "a number strictly between -pi/2 and pi/2",
+    }
+    # bool is an int subclass in Python: `length = true` must not pass as 1.0.
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if ok:
+        x = float(value)
+        ok = {"any": True, "> 0": x > 0.0, ">= 0": x >= 0.0, "yaw": abs(x) < _MAX_YAW}[rule]
+    if not ok:
+        closing = ")" if rule == "any" and unit else ""
+        raise ScenarioError(f"{path} must be {descriptions[rule]}{unit_text}{closing}, got {value!r}")
+    return float(value)
+
+
+def _integer(data: dict[str, Any], key: str, where: str) -> int:
+    value = data[key]
+    if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+        raise ScenarioError(f"{where}.{key} must be an integer >= 1, got {value!r}")
+    return value
+
+
+def _string(data: dict[str, Any], key: str, where: str = "") -> str:
+    value = data[key]
+    path = f"{where}.{key}" if where else key
+    if not isinstance(value, str):
+        raise ScenarioError(f"{path} must be a string, got {value!r}")
+    return value
+
+
+def _choice(data: dict[str, Any], key: str, where: str, choices: tuple[str, ...]) -> str:
+    value = data[key]
+    path = f"{where}.{key}" if where else key
+    if value not in choices:
+        raise ScenarioError(f"{path} must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
+    return value
+
+
+def _parse_changes(raw: Any, steps: int) -> tuple[ScheduledChange, ...]:
+    if not isinstance(raw, list):
+        raise ScenarioError("walk.change must be an array of tables, written [[walk.change]]")
+    changes = []
+    for index, entry in enumerate(raw):
+        where = f"walk.change[{index}]"
+        entry = _table(entry, where)
+        _check_keys(entry, where, ("step",), ("length", "width", "yaw", "only"))
+        step = _integer(entry, "step", where)
+        if step > steps:
+            raise ScenarioError(f"{where}.step must be a step of the walk (1..{steps}), got {step}")
+        length = _number(entry, "length", where, unit="m") if "length" in entry else None
+        width = _number(entry, "width", where, rule="> 0", unit="m") if "width" in entry else None
+        yaw = _number(entry, "yaw", where, rule="yaw", unit="rad") if "yaw" in entry else None
+        if length is None and width is None and yaw is None:
+            raise ScenarioError(f"{where} changes nothing: give at least one of length, width, yaw")
+        only = entry.get("only", False)
+        if not isinstance(only, bool):
+            raise ScenarioError(f"{where}.only must be true or false, got {only!r}")
+        # By default a change persists (the user now wants longer/wider/turning steps); the closing step
+        # steps + 1 is never touched so the walk still ends with the feet side by side.
+        through = None if only else steps
+        changes.append(ScheduledChange(step, length=length, width=width, turn=yaw, through=through))
+    return tuple(changes)
+
+
+def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
+    """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
+    _check_keys(data, "", ("name", "connection", "robot", "timing", "walk"), ("description",))
+    name = _string(data, "name")
+    if not _NAME_PATTERN.fullmatch(name):
+        raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
+    description = _string(data, "description") if "description" in data else ""
+    if "\n" in description:
+        raise ScenarioError("description must be a single line")
+    connection = _choice(data, "connection", "", CONNECTION_MODES)
+
+    robot = _table(data["robot"], "robot")
+    _check_keys(robot, "robot", ("cog_height", "sole"), ("gravity",))
+    cog_height = _number(robot, "cog_height", "robot", rule="> 0", unit="m")
+    gravity = _number(robot, "gravity", "robot", rule="> 0", unit="m/s^2") if "gravity" in robot else 9.81
+    sole_table = _table(robot["sole"], "robot.sole")
+    sides = ("front", "back", "inner", "outer")
+    _check_keys(sole_table, "robot.sole", sides, ())
+    sole_values = {key: _number(sole_table, key, "robot.sole", rule=">= 0", unit="m") for key in sides}
+    if sole_values["front"] + sole_values["back"] <= 0.0 or sole_values["inner"] + sole_values["outer"] <= 0.0:
+        raise ScenarioError("robot.sole must have a positive length (front + back) and width (inner + outer)")
+    sole = SoleRect(**sole_values)
+
+    timing_table = _table(data["timing"], "timing")
+    durations = ("single_support", "double_support")
+    extra_durations = ("start", "end", "settle")
+    _check_keys(timing_table, "timing", (*durations, "dt", "horizon_steps"), extra_durations)
+    timing_values = {
+        key: _number(timing_table, key, "timing", rule="> 0", unit="s")
+        for key in (*durations, *extra_durations)
+        if key in timing_table
+    }
+    timing = Timing(**timing_values)
+    dt = _number(timing_table, "dt", "timing", rule="> 0", unit="s")
+    horizon_steps = _integer(timing_table, "horizon_steps", "timing")
+
+    walk = _table(data["walk"], "walk")
+    _check_keys(walk, "walk", ("steps", "step_length", "step_width", "step_height"), ("yaw", "first_foot", "change"))
+    steps = _integer(walk, "steps", "walk")
+    step_length = _number(walk, "step_length", "walk", unit="m")
+    step_width = _number(walk, "step_width", "walk", rule="> 0", unit="m")
+    step_height = _number(walk, "step_height", "walk", rule=">= 0", unit="m")
+    yaw = _number(walk, "yaw", "walk", rule="yaw", unit="rad") if "yaw" in walk else 0.0
+    first_foot = _choice(walk, "first_foot", "walk", ("right", "left")) if "first_foot" in walk else "right"
+    changes = _parse_changes(walk["change"], steps) if "change" in walk else ()
+
+    try:
+        return Scenario(
+            name=name,
+            description=description,
+            connection=connection,  # type: ignore[arg-type]  # checked by _choice
+            cog_height=cog_height,
+            gravity=gravity,
+            sole=sole,
+            timing=timing,
+            dt=dt,
+            horizon_steps=horizon_steps,
+            steps=steps,
+            step_length=step_length,
+            step_width=step_width,
+            step_height=step_height,
+            changes=changes,
+            yaw=yaw,
+            first_foot=first_foot,  # type: ignore[arg-type]  # checked by _choice
+            source=source,
+        )
+    except ScenarioError as error:
+        # Cross-field checks in Scenario use bare names; point at the TOML table they live in.
+        message = str(error)
+        if message.startswith("dt "):
+            message = "timing." + message
+        raise ScenarioError(message) from None
+
+
+# ----- finding scenarios ----------------------------------------------------------------------------------------
+
+
+def _builtin_dir() -> Any:
+    return resources.files("rtgait").joinpath("scenarios")
+
+
+def _builtin_names() -> list[str]:
+    return sorted(entry.name[: -len(".toml")] for entry in _builtin_dir().iterdir() if entry.name.endswith(".toml"))
+
+
+def _parse_text(text: str, source: str) -> Scenario:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ScenarioError(f"invalid TOML in {source}: {error}") from None
+    return parse_scenario(data, source)
+
+
+def builtin_scenarios() -> dict[str, str]:
+    """Built-in scenario names mapped to their one-line descriptions."""
+    return {name: load_scenario(name).description for name in _builtin_names()}
+
+
+def load_scenario(name_or_path: str | Path) -> Scenario:
+    """Load a built-in scenario by name, or any scenario TOML file by path.
+
+    A string that is a built-in name wins over a file of the same name in the current folder; anything that
+    looks like a path (a ``.toml`` suffix, a folder separator, or an existing file) is read as a file.
+    """
+    text_arg = str(name_or_path)
+    if not isinstance(name_or_path, Path) and text_arg in _builtin_names():
+        text = _builtin_dir().joinpath(f"{text_arg}.toml").read_text(encoding="utf-8")
+        return _parse_text(text, "builtin")
+    path = Path(name_or_path)
+    looks_like_path = isinstance(name_or_path, Path) or path.suffix == ".toml" or "/" in text_arg or path.exists()
+    if not looks_like_path:
+        known = ", ".join(_builtin_names())
+        raise ScenarioError(f"unknown scenario {text_arg!r}: built-in scenarios are {known} (or give a .toml path)")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+        raise ScenarioError(f"cannot read scenario file {text_arg}: {reason}") from None
+    return _parse_text(text, str(path))
