@@ -39,7 +39,7 @@ def bvp_rhs(particular: np.ndarray, durations: np.ndarray, c_start: np.ndarray, 
     rhs = np.empty((2 * m, d))
     rhs[0] = np.asarray(c_start, dtype=float) - particular[0, 0]
     rhs[1:-1:2] = particular[1:, 0] - end_pos[:-1]
-    rhs[2:-1:2] = particular[1:, 1] - end_vel[:-1]
+    rhs[2:-1:2] = evaluate_polynomials(particular[1:], np.zeros(m - 1), 1) - end_vel[:-1]  # A_1 (0 if degree 0)
     rhs[-1] = np.asarray(c_end, dtype=float) - end_pos[-1]
     return rhs
 
@@ -62,8 +62,13 @@ class BoundaryValueSolver:
 
     def solve(self, zmp: PiecewisePolynomial, c_start: np.ndarray, c_end: np.ndarray) -> CogTrajectory:
         """COG through the ZMP spline with COG position ``c_start`` at its start and ``c_end`` at its end (m)."""
-        if zmp.durations.shape != self.durations.shape or not np.allclose(zmp.durations, self.durations):
+        if zmp.durations.shape != self.durations.shape or not np.allclose(
+            zmp.durations, self.durations, rtol=1e-12, atol=0.0
+        ):
             raise ValueError("the ZMP spline's durations differ from the factored timing pattern")
+        for name, value in (("c_start", c_start), ("c_end", c_end)):
+            if not np.all(np.isfinite(value)):
+                raise ValueError(f"{name} must be a finite COG position (m), got {value}")
         A = np.einsum("ik,jkd->jid", particular_matrix(zmp.degree, self.w), zmp.coeffs)
         VW = lu_solve(self._lu, bvp_rhs(A, self.durations, c_start, c_end))
         return CogTrajectory(zmp=zmp, V=VW[0::2], W=VW[1::2], w=self.w)

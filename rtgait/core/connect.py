@@ -99,7 +99,7 @@ class ConnectionSolver:
         for j in range(1, m):  # junction between segment j and j+1 (0-based j-1, j)
             nxt = slice(STATE_INPUTS + (j - 1) * (n + 1), STATE_INPUTS + j * (n + 1))
             R[row + 2 * j - 1, nxt] += Qa[0]
-            R[row + 2 * j, nxt] += Qa[1]
+            R[row + 2 * j, nxt] += polynomial_derivative_rows(n, 0.0, 1) @ Qa  # A_1, also for degree 0
             if j >= 2:  # segment j (1-based) is a reference segment: its end values move to the rhs
                 cur = slice(STATE_INPUTS + (j - 2) * (n + 1), STATE_INPUTS + (j - 1) * (n + 1))
                 R[row + 2 * j - 1, cur] -= polynomial_derivative_rows(n, self.durations[j - 1], 0) @ Qa

@@ -243,13 +243,21 @@ class Timeline:
         return self.start_time(q) + self.timing.settle
 
     def phase_at(self, t: float) -> int:
-        """Phase index containing time ``t`` (s from the start); clamped to the first and last phase."""
+        """Phase index containing time ``t`` (s from the start); clamped to the first and last phase.
+
+        A time equal to a phase's :meth:`start_time` belongs to that phase, exactly: the floor division gives a
+        first guess that rounding can put one phase off, and comparing with the start times settles it.
+        """
         timing = self.timing
         if t < timing.start:
             return 0
         k = int((t - timing.start) // timing.step_period)
         q = 2 * k + 1 if (t - timing.start) - k * timing.step_period < timing.single_support else 2 * k + 2
-        if self.n_steps is not None and q >= 2 * self.n_steps:
-            end_start = self.start_time(2 * self.n_steps)
-            return 2 * self.n_steps if t < end_start + timing.end else 2 * self.n_steps + 1
+        last = self.last_phase
+        if last is not None and q > last:
+            q = last
+        while q > 0 and t < self.start_time(q):
+            q -= 1
+        while (last is None or q < last) and self.start_time(q + 1) <= t:
+            q += 1
         return q

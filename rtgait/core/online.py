@@ -471,8 +471,13 @@ class OnlinePlanner:
         self.change_log.append((self._time, start))
 
     def stop(self) -> None:
-        """End the walk: the first open step brings the feet side by side, then the COG comes to rest."""
+        """End the walk: the first open step brings the feet side by side, then the COG comes to rest.
+
+        Calling it again once the closing step is committed changes nothing, so a control loop may keep
+        sending "stop"."""
         start = self.first_open_step()
+        if self._n is not None and self._n < start:
+            return
         self._ensure_prints(start)
         self.set_strides([Stride(0.0, self.config.step_width, 0.0)], from_step=start)
 
