@@ -4,10 +4,14 @@ A long walk is driven the way a control loop drives it: one ``sample(t)`` per co
 change at every step (random length and width, handed over within the connection mode's deadline), so every
 replan connects a genuinely new plan (3-step horizon, both axes). Reported:
 
-* ``replan_us``: wall time of one replan as the planner measures it around the whole replan (state of the
-  running plan, anchors, the precomputed-operator product, bookkeeping), excluding the first replan of each plan
-  shape, which builds and caches that shape's operator (reported as ``pattern_build_us``);
-* ``sample_us``: wall time of one ``sample(t)`` call on ticks that do not replan.
+* ``replan_us``: wall time of one replan inside that loop, as the planner measures it around the whole replan
+  (state of the running plan, anchors, the precomputed-operator product, bookkeeping). Between two replans the
+  loop runs hundreds of samples, so the replan starts with cold caches;
+* ``sample_us``: wall time of one ``sample(t)`` call on ticks that do not replan;
+* ``replan_back_to_back_us``: replans of consecutive double supports with nothing in between (warm caches);
+* ``operator_build_us``: building one plan shape's operator, which ``start()`` does once per shape.
+
+Wall times on a shared virtual machine vary from run to run by a factor of two or more: run it a few times.
 
 Usage: ``python benchmarks/replan.py [--json] [--steps N] [--dt S] [--mode real-time|quasi-real-time]``
 """
@@ -24,6 +28,7 @@ import numpy as np
 
 from rtgait.core.footsteps import Timing
 from rtgait.core.online import OnlinePlanner, PlannerConfig, StepChangeTooLateError, straight_walk
+from rtgait.core.pattern import PatternKey, PlanOperator
 
 
 def run(steps: int, dt: float, mode: str, horizon: int, seed: int, collect_garbage: bool = True) -> dict:
@@ -50,26 +55,46 @@ def run(steps: int, dt: float, mode: str, horizon: int, seed: int, collect_garba
         planner.sample(t)
         sample_ns[k] = clock() - began
         replanned[k] = len(planner.plans) != plans_before
-    times = np.array([p.compute_time for p in planner.plans]) * 1e6
-    # A replan whose plan shape was not seen before also builds that shape's operator (once per shape).
-    shapes_seen: set = set()
-    first_of_shape = np.zeros(len(planner.plans), dtype=bool)
-    for i, record in enumerate(planner.plans):
-        shape = (record.phase == 0, record.n_segments)
-        first_of_shape[i] = shape not in shapes_seen
-        shapes_seen.add(shape)
-    steady = times[~first_of_shape]
+    steady = np.array([p.compute_time for p in planner.plans[1:]]) * 1e6  # all but the initial plan
     samples = sample_ns[~replanned] / 1e3
     return {
         "replan_us": {"median": float(np.median(steady)), "p99": float(np.percentile(steady, 99))},
         "sample_us": {"median": float(np.median(samples)), "p99": float(np.percentile(samples, 99))},
-        "pattern_build_us": {"median": float(np.median(times[first_of_shape])), "count": int(first_of_shape.sum())},
+        "replan_back_to_back_us": back_to_back(config, steps),
+        "operator_build_us": operator_build(config),
         "replans": len(steady),
         "samples": len(samples),
         "settings": {
             "steps": steps, "dt": dt, "connection": mode, "horizon_steps": horizon, "gc": collect_garbage,
         },
     }
+
+
+def back_to_back(config: PlannerConfig, steps: int) -> dict:
+    """Replans with nothing in between (one sample per double support): the cost with warm caches."""
+    planner = OnlinePlanner(config, straight_walk(config, steps, 0.1))
+    planner.start(0.0)
+    for k in range(steps):
+        planner.sample(planner.phase_start(2 * k))
+    times = np.array([p.compute_time for p in planner.plans[1:-4]]) * 1e6  # steady walking only
+    return {"median": float(np.median(times)), "p99": float(np.percentile(times, 99))}
+
+
+def operator_build(config: PlannerConfig) -> dict:
+    """Building one plan shape's operator (done in ``start()`` for every shape a walk needs)."""
+    planner = OnlinePlanner(config, straight_walk(config, 10, 0.1))
+    key = PatternKey(
+        kinds=tuple(planner.timeline.kind(q) for q in range(2, 9)),
+        durations=tuple(planner.timeline.duration(q) for q in range(2, 9)),
+        w=planner.w,
+        first_degree=config.first_degree,
+    )
+    times = []
+    for _ in range(50):
+        began = time.perf_counter()
+        PlanOperator(key)
+        times.append((time.perf_counter() - began) * 1e6)
+    return {"median": float(np.median(times))}
 
 
 def main() -> None:
@@ -95,8 +120,9 @@ def main() -> None:
           f"   ({result['replans']} replans)")
     print(f"sample : median {result['sample_us']['median']:7.2f} us   p99 {result['sample_us']['p99']:7.2f} us"
           f"   ({result['samples']} ticks)")
-    print(f"operator build (once per plan shape): median {result['pattern_build_us']['median']:.0f} us, "
-          f"{result['pattern_build_us']['count']} shapes")
+    print(f"replan back to back: median {result['replan_back_to_back_us']['median']:7.2f} us   "
+          f"p99 {result['replan_back_to_back_us']['p99']:7.2f} us")
+    print(f"operator build (once per plan shape, in start()): median {result['operator_build_us']['median']:.0f} us")
 
 
 if __name__ == "__main__":

@@ -36,7 +36,7 @@ def _require_finite(name: str, value: float) -> None:
         raise ValueError(f"{name} must be a finite number, got {value}")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Footstep:
     """A footprint on the ground: foot frame position (m), yaw (rad) and which foot."""
 
@@ -46,8 +46,9 @@ class Footstep:
     side: Side
 
     def __post_init__(self) -> None:
-        for name in ("x", "y", "yaw"):
-            _require_finite(f"footstep {name}", getattr(self, name))
+        if not (math.isfinite(self.x) and math.isfinite(self.y) and math.isfinite(self.yaw)):
+            for name in ("x", "y", "yaw"):
+                _require_finite(f"footstep {name}", getattr(self, name))
         if self.side not in SIDES:
             raise ValueError(f"footstep side must be 'left' or 'right', got {self.side!r}")
 

@@ -224,6 +224,21 @@ class _Layout:
         self.anchor_phases = tuple(k for k, kind in enumerate(kinds) if kind in MOVING_KINDS)
 
 
+class _PhaseInfo(NamedTuple):
+    """The phase being sampled: index, start and end relative to the walk's start (s), support label, the poses
+    of the feet on the ground (both, left then right, in double support; the stance foot in single support) and
+    the swing foot's start and landing footprints (``None`` in double support)."""
+
+    index: int
+    start: float
+    end: float
+    duration: float
+    support: str
+    feet: tuple[float, ...]
+    swing_from: Footstep | None
+    swing_to: Footstep | None
+
+
 class OnlinePlanner:
     """Walking pattern generator that replans at every double-support start and can change steps on the fly.
 
@@ -265,6 +280,7 @@ class OnlinePlanner:
         self._next_replan_phase: int | None = 0
         self._n = len(self._strides) if self._finite else None
         self._timeline = Timeline(config.timing, self._n)
+        self._phase: _PhaseInfo | None = None  # cached facts about the phase last sampled
         self.plans: list[PlanRecord] = []
         self.change_log: list[tuple[float, int]] = []
         """(time, step) of every accepted change."""
@@ -280,6 +296,7 @@ class OnlinePlanner:
         self._n = n = len(self._strides) if self._finite else None
         if self._timeline.n_steps != n:
             self._timeline = Timeline(self.config.timing, n)
+            self._phase = None
             if self.started and self._next_replan_phase is not None:
                 self._prepare_layouts(self._next_replan_phase)
 
@@ -353,6 +370,7 @@ class OnlinePlanner:
 
     def _rebuild_prints(self, from_step: int) -> None:
         """Recompute the footprints that follow a change of ``from_step`` (``F[from_step + 1]`` on)."""
+        self._phase = None  # the swing target of the phase being sampled may have moved
         known = len(self._prints) - 1
         del self._prints[from_step + 1 :]
         self._ensure_prints(known)
@@ -488,6 +506,7 @@ class OnlinePlanner:
             raise ValueError(f"t0 must be finite, got {t0}")
         self._t0 = float(t0)
         self._time = -math.inf
+        self._phase = None
         self._plan = None
         self.plans.clear()
         self._next_replan_phase = 0  # the first plan is made by the first sample, like every later one
@@ -612,8 +631,10 @@ class OnlinePlanner:
             raise ValueError(f"t={t} s is before the plan being executed (starts at {self._earliest()} s)")
         self._time = t
         rel = t - self._t0
-        timeline = self._timeline
-        q = timeline.phase_at(rel)
+        phase = self._phase
+        if phase is None or not phase.start <= rel < phase.end:
+            phase = self._phase = self._phase_info(rel)
+        q = phase.index
         j = q - plan.phase0
         if j < 0:  # t on a phase boundary, rounded to the phase before the plan's first
             j = 0
@@ -640,30 +661,38 @@ class OnlinePlanner:
                 out[11 + axis] = r0 + tau * (r1 + tau * (r2 + tau * r3))
             else:
                 out[11 + axis] = zmp
-        return out, self._feet(q, rel, out), q
+        if phase.swing_from is None:
+            out[13:21] = phase.feet
+        else:
+            swing = swing_pose(
+                phase.swing_from, phase.swing_to, (rel - phase.start) / phase.duration, self.config.step_height
+            )
+            if phase.support == "left":
+                out[13:17], out[17:21] = phase.feet, swing
+            else:
+                out[13:17], out[17:21] = swing, phase.feet
+        return out, phase.support, q
 
     def _earliest(self) -> float:
         return self._t0 if self._plan is None else self._plan.t_start
 
-    def _feet(self, q: int, rel: float, out: list[float]) -> str:
-        """Write both feet poses into ``out`` and return the support label."""
+    def _phase_info(self, rel: float) -> _PhaseInfo:
+        """What sampling needs to know about the phase containing ``rel`` (s from the start of the walk)."""
+        timeline = self._timeline
+        q = timeline.phase_at(rel)
+        start = timeline.start_time(q)
+        last = timeline.last_phase
+        end = math.inf if q == last else timeline.start_time(q + 1)
         prints = self._prints
-        if q & 1 and self._timeline.kind(q) == "single":
+        if q & 1 and timeline.kind(q) == "single":
             i = (q + 1) >> 1
             stance = prints[i]
-            s = (rel - self._timeline.start_time(q)) / self.config.timing.single_support
-            swing = swing_pose(prints[i - 1], prints[i + 1], s, self.config.step_height)
-            stance_pose = (stance.x, stance.y, 0.0, stance.yaw)
-            if stance.side == "left":
-                out[13:17], out[17:21] = stance_pose, swing
-            else:
-                out[13:17], out[17:21] = swing, stance_pose
-            return stance.side
+            pose = (stance.x, stance.y, 0.0, stance.yaw)
+            return _PhaseInfo(q, start, end, end - start, stance.side, pose, prints[i - 1], prints[i + 1])
         i = min(q >> 1, len(prints) - 2)
-        for foot in (prints[i], prints[i + 1]):
-            offset = 13 if foot.side == "left" else 17
-            out[offset : offset + 4] = (foot.x, foot.y, 0.0, foot.yaw)
-        return "double"
+        a, b = (prints[i], prints[i + 1]) if prints[i].side == "left" else (prints[i + 1], prints[i])
+        feet = (a.x, a.y, 0.0, a.yaw, b.x, b.y, 0.0, b.yaw)
+        return _PhaseInfo(q, start, end, end - start, "double", feet, None, None)
 
     def zmp_margin(self, sample: GaitSample, sole: SoleRect) -> float:
         """Signed distance (m) of the sample's planned ZMP to its support polygon; negative = outside."""
