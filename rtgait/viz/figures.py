@@ -181,14 +181,20 @@ def plot_zmp_cog(rollout: Rollout, info: FigureInfo, path: Path) -> Path:
         _mark_outside(ax, rollout, zmp, first)
         _mark_changes(ax, rollout, first)
         ax.set_ylabel(f"{axis} [m]")
+    _finish_time_panels(figure, axes, t, f"{info.title}: ZMP and COG", legend_columns=4)
+    return _save(figure, path)
+
+
+def _finish_time_panels(figure: Figure, axes: Sequence[Axes], t: np.ndarray, title: str, legend_columns: int) -> None:
+    """Grid, time range and labels shared by the x-over-y panels against time."""
+    for ax in axes:
         ax.grid(True, alpha=0.3)
         ax.set_xlim(t[0], t[-1])
     axes[-1].set_xlabel("time [s]")
     axes[0].set_title("sagittal (x)", fontsize=10, loc="left")
     axes[1].set_title("lateral (y)", fontsize=10, loc="left")
-    figure.suptitle(f"{info.title}: ZMP and COG")
-    figure.legend(loc="outside lower center", ncol=4, fontsize=9)
-    return _save(figure, path)
+    figure.suptitle(title)
+    figure.legend(loc="outside lower center", ncol=legend_columns, fontsize=9)
 
 
 def plot_zmp_deviation(rollout: Rollout, info: FigureInfo, path: Path) -> Path:
@@ -233,13 +239,7 @@ def plot_zmp_deviation(rollout: Rollout, info: FigureInfo, path: Path) -> Path:
             )
         _mark_changes(ax, rollout, first)
         ax.set_ylabel(f"{axis} deviation [m]")
-        ax.grid(True, alpha=0.3)
-        ax.set_xlim(t[0], t[-1])
-    axes[-1].set_xlabel("time [s]")
-    axes[0].set_title("sagittal (x)", fontsize=10, loc="left")
-    axes[1].set_title("lateral (y)", fontsize=10, loc="left")
-    figure.suptitle(f"{info.title}: ZMP deviation in the connecting segments")
-    figure.legend(loc="outside lower center", ncol=3, fontsize=9)
+    _finish_time_panels(figure, axes, t, f"{info.title}: ZMP deviation in the connecting segments", legend_columns=3)
     return _save(figure, path)
 
 
