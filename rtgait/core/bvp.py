@@ -31,17 +31,39 @@ def bvp_matrix(durations: np.ndarray, w: float) -> np.ndarray:
     return M
 
 
-def bvp_rhs(particular: np.ndarray, durations: np.ndarray, c_start: np.ndarray, c_end: np.ndarray) -> np.ndarray:
-    """Right-hand side ``(2m, d)`` for polynomial parts ``particular`` ``(m, n + 1, d)`` and end positions (m)."""
-    end_pos = evaluate_polynomials(particular, durations, 0)
-    end_vel = evaluate_polynomials(particular, durations, 1)
-    m, d = particular.shape[0], particular.shape[2]
+def bvp_rhs_from_ends(
+    start_pos: np.ndarray,
+    start_vel: np.ndarray,
+    end_pos: np.ndarray,
+    end_vel: np.ndarray,
+    c_start: np.ndarray,
+    c_end: np.ndarray,
+) -> np.ndarray:
+    """Right-hand side ``(2m, d)`` from the particular solution's position and velocity at the start and end of
+    every segment (each ``(m, d)``, m and m/s) and the prescribed COG positions at both ends (m).
+
+    Any particular solution works (polynomial, Fourier): the homogeneous part makes up the difference.
+    """
+    m, d = start_pos.shape
     rhs = np.empty((2 * m, d))
-    rhs[0] = np.asarray(c_start, dtype=float) - particular[0, 0]
-    rhs[1:-1:2] = particular[1:, 0] - end_pos[:-1]
-    rhs[2:-1:2] = evaluate_polynomials(particular[1:], np.zeros(m - 1), 1) - end_vel[:-1]  # A_1 (0 if degree 0)
+    rhs[0] = np.asarray(c_start, dtype=float) - start_pos[0]
+    rhs[1:-1:2] = start_pos[1:] - end_pos[:-1]
+    rhs[2:-1:2] = start_vel[1:] - end_vel[:-1]
     rhs[-1] = np.asarray(c_end, dtype=float) - end_pos[-1]
     return rhs
+
+
+def bvp_rhs(particular: np.ndarray, durations: np.ndarray, c_start: np.ndarray, c_end: np.ndarray) -> np.ndarray:
+    """Right-hand side ``(2m, d)`` for polynomial parts ``particular`` ``(m, n + 1, d)`` and end positions (m)."""
+    zeros = np.zeros(len(durations))
+    return bvp_rhs_from_ends(
+        start_pos=particular[:, 0],
+        start_vel=evaluate_polynomials(particular, zeros, 1),  # A_1, or 0 for degree 0
+        end_pos=evaluate_polynomials(particular, durations, 0),
+        end_vel=evaluate_polynomials(particular, durations, 1),
+        c_start=c_start,
+        c_end=c_end,
+    )
 
 
 class BoundaryValueSolver:
@@ -70,5 +92,10 @@ class BoundaryValueSolver:
             if not np.all(np.isfinite(value)):
                 raise ValueError(f"{name} must be a finite COG position (m), got {value}")
         A = np.einsum("ik,jkd->jid", particular_matrix(zmp.degree, self.w), zmp.coeffs)
-        VW = lu_solve(self._lu, bvp_rhs(A, self.durations, c_start, c_end))
-        return CogTrajectory(zmp=zmp, V=VW[0::2], W=VW[1::2], w=self.w)
+        V, W = self.homogeneous(bvp_rhs(A, self.durations, c_start, c_end))
+        return CogTrajectory(zmp=zmp, V=V, W=W, w=self.w)
+
+    def homogeneous(self, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``V, W`` (each ``(m, d)``, m) for a right-hand side ``(2m, d)`` from :func:`bvp_rhs_from_ends`."""
+        VW = lu_solve(self._lu, rhs)
+        return VW[0::2], VW[1::2]
