@@ -341,7 +341,13 @@ def _builtin_dir() -> Any:
 
 
 def _builtin_names() -> list[str]:
-    return sorted(entry.name[: -len(".toml")] for entry in _builtin_dir().iterdir() if entry.name.endswith(".toml"))
+    names = (entry.name[: -len(".toml")] for entry in _builtin_dir().iterdir() if entry.name.endswith(".toml"))
+    return sorted(names, key=_natural_key)
+
+
+def _natural_key(name: str) -> list[int | str]:
+    """Sort key that puts fig4 before fig11: digit runs compare as numbers."""
+    return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", name)]
 
 
 def _parse_text(text: str, source: str) -> Scenario:

@@ -13,7 +13,7 @@ from rtgait.core.online import OnlinePlanner
 from rtgait.core.rollout import Rollout, rollout
 from rtgait.scenario import Scenario, ScenarioError, builtin_scenarios, load_scenario
 
-BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "sidestep", "turn")
+BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "sidestep", "turn")
 
 VALID = """\
 name = "probe"
@@ -81,7 +81,7 @@ def edited(old: str, new: str) -> str:
 
 def test_builtin_listing_names_every_file_with_a_one_line_description() -> None:
     listing = builtin_scenarios()
-    assert tuple(listing) == tuple(sorted(BUILTINS))
+    assert tuple(listing) == BUILTINS  # natural order: fig4 before fig11
     for description in listing.values():
         assert description and "\n" not in description
 
@@ -96,6 +96,10 @@ def test_builtin_loads_under_its_own_name_with_the_shared_robot(name: str) -> No
         0.13, 0.10, 0.07, 0.07,
     )  # fmt: skip
     assert (scenario.cog_height, scenario.step_width, scenario.step_height) == (0.80, 0.19, 0.05)
+    if name == "fig11":  # stepping in place: two steps plus the closing one, nothing changes
+        assert (scenario.dt, scenario.horizon_steps, scenario.steps, scenario.step_length) == (0.005, 3, 2, 0.0)
+        assert scenario.changes == ()
+        return
     assert (scenario.dt, scenario.horizon_steps, scenario.steps) == (0.005, 3, 10)
     assert len(scenario.changes) == 1 and scenario.changes[0].step == 5
 
@@ -125,14 +129,14 @@ def test_paper_scenarios_have_the_papers_parameters(
 @pytest.mark.parametrize(
     ("name", "outside"),
     [("fig4", True), ("fig6", False), ("fig7", False), ("fig8", False), ("fig8-real-time", True),
-     ("sidestep", False), ("turn", False)],
+     ("fig11", False), ("sidestep", False), ("turn", False)],
 )  # fmt: skip
 def test_outcome_matches_the_paper_and_the_description(name: str, outside: bool) -> None:
     scenario = load_scenario(name)
     result = run(scenario)
     assert result.zmp_outside is outside
-    change_time = result.changes[0][0]
     if outside:
+        change_time = result.changes[0][0]
         # The failure is the change being absorbed, not something unrelated before it.
         assert result.times[result.worst_index] > change_time
         assert result.zmp_margin_min < -0.05
@@ -280,7 +284,7 @@ def test_bad_input_raises_one_line_naming_the_field(tmp_path: Path, case: str, e
 
 
 def test_unknown_scenario_lists_the_builtins() -> None:
-    with pytest.raises(ScenarioError, match="fig4, fig6, fig7, fig8, fig8-real-time, sidestep, turn"):
+    with pytest.raises(ScenarioError, match="fig4, fig6, fig7, fig8, fig8-real-time, fig11, sidestep, turn"):
         load_scenario("fig5")
 
 
