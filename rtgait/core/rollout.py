@@ -45,6 +45,7 @@ class Rollout:
         footprints: the footprints ``F[0..N+1]`` as walked.
         contacts: the footprints on the ground in each phase that was sampled.
         polygons: the support polygon of each phase that was sampled (counter-clockwise vertices, m).
+        phase_starts: start time (s) of each phase that was sampled, by phase index.
         plans: every replanning, in order.
         changes: ``(decision time (s), step)`` of every change handed to the planner.
     """
@@ -57,6 +58,7 @@ class Rollout:
     footprints: list[Footstep]
     contacts: dict[int, list[Footstep]]
     polygons: dict[int, np.ndarray]
+    phase_starts: dict[int, float]
     plans: list[PlanRecord]
     changes: list[tuple[float, int]]
 
@@ -83,6 +85,11 @@ class Rollout:
     def connections(self) -> list[PlanRecord]:
         """Replannings that connected to a running plan (all but the initial plan)."""
         return self.plans[1:]
+
+    def phase_breaks(self) -> np.ndarray:
+        """Boundaries (s) of the sampled phases, with the end of the rollout last: the segments of the walk."""
+        starts = [self.phase_starts[q] for q in sorted(self.phase_starts)]
+        return np.array([*starts, max(float(self.times[-1]), starts[-1] + 1e-9)])
 
     def free_segment_mask(self, plans: Sequence[PlanRecord] | None = None) -> np.ndarray:
         """Ticks inside the free first segment of ``plans`` (default: the connections), where the ZMP may leave
@@ -155,6 +162,7 @@ def rollout(
         footprints=planner.footprints(),
         contacts=contacts,
         polygons=polygons,
+        phase_starts={q: planner.phase_start(q) for q in contacts},
         plans=list(planner.plans),
         changes=applied,
     )
