@@ -1,0 +1,369 @@
+"""Whole-body inverse kinematics for walking, one control tick at a time.
+
+In the spirit of Resolved Momentum Control (Kajita et al. 2003): the walking pattern prescribes the COG and
+both feet; the whole body (free-floating base, legs, torso) follows with every other joint locked at the
+half-sitting posture. Tasks, all in the world frame:
+
+* COG position (x, y, z), m;
+* each sole frame's position and orientation: the planned (x, y, z) and yaw, sole level (6 per foot);
+* torso orientation: upright, heading along the mean yaw of the feet (3);
+* pelvis (floating base) orientation: likewise, with a small weight (3).
+
+The pelvis task is compatible with the others (the torso joints connect an upright pelvis to an upright torso);
+without it the solution that bends the joints least from half-sitting leans the pelvis back by about 8 degrees
+and pitches the torso joint forward to compensate, a posture no walking robot uses. That makes 21 equations for
+the 6 + n_moving unknowns (20 for Talos), consistent whenever the targets are reachable.
+
+Each iteration is one damped, weighted Gauss-Newton step on the reduced model: the task Jacobians at the
+current configuration are stacked into ``J`` and ``(J^T W J + D) dq = J^T W e + mu (q_posture - q)`` is solved
+by a Cholesky factorisation (LAPACK ``dposv``). ``D`` is a small damping (it keeps the steps bounded near
+singular legs, knees stretched) plus the tiny posture weight ``mu``, which pulls the joints toward half-sitting
+in whatever freedom the tasks leave.
+
+Joint limits are never left: a step that would cross a limit is solved again with those joints pinned at the
+limit, and the result is clipped. The solver is warm-started from the previous tick; since the targets move by
+millimetres per tick, one iteration leaves errors of micrometres, and more iterations are made (up to
+``max_iterations``) only while an error is above the tolerance.
+
+Kinematics and Jacobians at a configuration are computed once (one ``computeJointJacobians``, then the COG
+Jacobian and the frame Jacobians, which reuse it) and kept: the evaluation that measures the errors of the
+returned solution is reused by the next tick's first step when it starts from that solution.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
+import pinocchio as pin
+from scipy.linalg.lapack import dposv
+
+from rtgait.robot.model import RobotModel
+
+__all__ = ["IKErrors", "IKTargets", "IKWeights", "WholeBodyIK"]
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+# Rows of the stacked task vector: COG 0:3, left foot 3:9 (position 3:6, orientation 6:9), right foot 9:15,
+# torso orientation 15:18, pelvis orientation 18:21.
+_N_TASKS = 21
+
+
+class IKTargets(NamedTuple):
+    """What the robot must do at one tick (world frame).
+
+    Attributes:
+        cog: COG position ``(x, y, z)`` (m).
+        left_foot: left sole point ``(x, y, z, yaw)`` (m, rad); the sole is level.
+        right_foot: right sole point ``(x, y, z, yaw)`` (m, rad).
+    """
+
+    cog: np.ndarray | Sequence[float]
+    left_foot: np.ndarray | Sequence[float]
+    right_foot: np.ndarray | Sequence[float]
+
+
+class IKErrors(NamedTuple):
+    """Task errors of a solution, measured by forward kinematics at the returned configuration.
+
+    Attributes:
+        cog: distance from the COG to its target (m).
+        left_position, right_position: distance from each sole point to its target (m).
+        left_orientation, right_orientation: rotation angle from each sole to its target orientation (rad).
+        torso_orientation: rotation angle from the torso to upright with the feet's mean yaw (rad).
+        pelvis_orientation: the same for the pelvis (rad).
+        iterations: Gauss-Newton iterations made at this tick.
+    """
+
+    cog: float
+    left_position: float
+    left_orientation: float
+    right_position: float
+    right_orientation: float
+    torso_orientation: float
+    pelvis_orientation: float
+    iterations: int
+
+    @property
+    def feet_position(self) -> float:
+        """The larger of the two feet position errors (m)."""
+        return max(self.left_position, self.right_position)
+
+    @property
+    def feet_orientation(self) -> float:
+        """The larger of the two feet orientation errors (rad)."""
+        return max(self.left_orientation, self.right_orientation)
+
+
+class IKWeights(NamedTuple):
+    """Weights of the least-squares problem (squared-error weights, per unit of each task).
+
+    The feet come first (a foot that is not where planned changes the support polygon), then the COG (the
+    balance), then the torso and, far behind, the pelvis; the weights matter only when the targets cannot all be
+    reached. The damping and the posture pull are tiny: the damping bounds the steps where the Jacobian is nearly
+    singular, the pull decides whatever the tasks leave free (on robots with more moving joints than tasks), and
+    together they bias the tasks by about ``posture / task weight`` times the distance to the posture (below a
+    micrometre).
+
+    Attributes:
+        cog: per m^2.
+        foot_position: per m^2.
+        foot_orientation: per rad^2.
+        torso: per rad^2.
+        pelvis: per rad^2.
+        damping: on every velocity coordinate (m^2 or rad^2 per unit step).
+        posture: pull of the joints toward half-sitting (per rad^2).
+    """
+
+    cog: float = 1.0
+    foot_position: float = 4.0
+    foot_orientation: float = 1.0
+    torso: float = 1.0
+    pelvis: float = 0.01
+    damping: float = 1e-6
+    posture: float = 1e-8
+
+
+class WholeBodyIK:
+    """Tick-by-tick whole-body IK on a robot's reduced model (see the module docstring).
+
+    Args:
+        robot: the loaded robot.
+        weights: least-squares weights.
+        max_iterations: Gauss-Newton iterations per tick at most.
+        tolerance: iterate while any position error exceeds this (m); orientation errors are compared with
+            ``10 * tolerance`` rad (1 mrad per 0.1 mm: a 0.1 m lever). 0 makes every iteration, which gives a
+            trajectory whose residual errors vary smoothly (for finite differences).
+        max_step: largest norm of one iteration's step (rad and m together); bounds the first steps from far
+            away, irrelevant while tracking.
+    """
+
+    def __init__(
+        self,
+        robot: RobotModel,
+        weights: IKWeights | None = None,
+        max_iterations: int = 3,
+        tolerance: float = 1e-6,
+        max_step: float = 0.2,
+    ) -> None:
+        if max_iterations < 1:
+            raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
+        if not (math.isfinite(tolerance) and tolerance >= 0.0):
+            raise ValueError(f"tolerance must be >= 0 m, got {tolerance}")
+        if not (math.isfinite(max_step) and max_step > 0.0):
+            raise ValueError(f"max_step must be > 0 rad, got {max_step}")
+        self.robot = robot
+        self.model = robot.model
+        self.data = robot.model.createData()
+        self.weights = weights or IKWeights()
+        self.max_iterations = max_iterations
+        self.tolerance = tolerance
+        self.max_step = max_step
+
+        model = self.model
+        nv = model.nv
+        if model.nq != nv + 1 or model.joints[1].nv != 6:
+            # Every joint after the free flyer must have one coordinate (checked by the description loader);
+            # the joint part of q and of v then line up one to one: q[7:] <-> v[6:].
+            raise ValueError("the reduced model must be a free flyer followed by one-coordinate joints")
+        self._lower = model.lowerPositionLimit[7:].copy()
+        self._upper = model.upperPositionLimit[7:].copy()
+        w = self.weights
+        task_weights = (
+            [w.cog] * 3 + ([w.foot_position] * 3 + [w.foot_orientation] * 3) * 2 + [w.torso] * 3 + [w.pelvis] * 3
+        )
+        self._w = np.array(task_weights)
+        diagonal = np.full(nv, w.damping)
+        diagonal[6:] += w.posture
+        self._damping = np.diag(diagonal)
+        self._pull_matrix = np.zeros((nv, model.nq))
+        self._pull_matrix[6:, 7:] = w.posture * np.eye(nv - 6)
+        self._pull_offset = self._pull_matrix @ robot.q_half_sitting
+        self._max_step2 = max_step * max_step
+        self._J = np.zeros((_N_TASKS, nv))
+        self._e: list[float] = [0.0] * _N_TASKS
+
+        data = self.data
+        pin.framesForwardKinematics(model, data, robot.q_half_sitting)
+        # "Upright" is the torso's and the pelvis's orientation at half-sitting (feet heading +x), turned by the
+        # walking yaw.
+        self._torso_rest_t = data.oMf[robot.torso_id].rotation.T.copy()
+        self._pelvis_rest_t = data.oMi[1].rotation.T.copy()
+        self._cached_q: np.ndarray | None = None
+        self._com: list[float] = []
+        self._left: list[list[float]] = []
+        self._right: list[list[float]] = []
+        self._torso: list[list[float]] = []
+        self._pelvis: list[list[float]] = []
+
+    # ----- kinematics at one configuration ----------------------------------------------------------------------
+
+    def _evaluate(self, q: np.ndarray) -> None:
+        """Kinematics, task Jacobians and frame placements at ``q``, kept until the next evaluation."""
+        model, data, J, robot = self.model, self.data, self._J, self.robot
+        pin.computeJointJacobians(model, data, q)
+        # After computeJointJacobians, the COG Jacobian and the frame Jacobians reuse the joint Jacobians; each
+        # frame Jacobian call also updates that frame's placement in data.oMf.
+        J[0:3] = pin.jacobianCenterOfMass(model, data, False)
+        J[3:9] = pin.getFrameJacobian(model, data, robot.left_sole_id, _LWA)
+        J[9:15] = pin.getFrameJacobian(model, data, robot.right_sole_id, _LWA)
+        J[15:18] = pin.getFrameJacobian(model, data, robot.torso_id, _LWA)[3:6]
+        # The free flyer's angular velocity is in the pelvis frame: world-aligned, its Jacobian is [0, R, 0].
+        pelvis = data.oMi[1].rotation
+        J[18:21, 3:6] = pelvis
+        placements = data.oMf
+        # Plain Python floats from here on: the error arithmetic is a few dozen scalar operations, which costs
+        # less in Python than the per-call overhead of numpy on 3x3 arrays.
+        self._com = data.com[0].tolist()
+        self._left = placements[robot.left_sole_id].homogeneous.tolist()
+        self._right = placements[robot.right_sole_id].homogeneous.tolist()
+        # The torso relative to its upright rest orientation: the torso task becomes "this rotation is a yaw".
+        self._torso = (placements[robot.torso_id].rotation @ self._torso_rest_t).tolist()
+        self._pelvis = (pelvis @ self._pelvis_rest_t).tolist()
+        self._cached_q = q
+
+    def _errors(self, targets: IKTargets) -> list[float]:
+        """Fill the stacked task error (target minus current) and return the norms of its 7 groups."""
+        cog, left, right = _floats(targets.cog), _floats(targets.left_foot), _floats(targets.right_foot)
+        com, hl, hr = self._com, self._left, self._right
+        # The mean heading of the feet, safe across the +-pi wrap.
+        yaw = left[3] + 0.5 * math.remainder(right[3] - left[3], 2.0 * math.pi)
+        e = [
+            cog[0] - com[0], cog[1] - com[1], cog[2] - com[2],
+            left[0] - hl[0][3], left[1] - hl[1][3], left[2] - hl[2][3],
+            *_yaw_error(hl, left[3]),
+            right[0] - hr[0][3], right[1] - hr[1][3], right[2] - hr[2][3],
+            *_yaw_error(hr, right[3]),
+            *_yaw_error(self._torso, yaw),
+            *_yaw_error(self._pelvis, yaw),
+        ]  # fmt: skip
+        self._e = e
+        hypot = math.hypot
+        return [hypot(e[0], e[1], e[2]), hypot(e[3], e[4], e[5]), hypot(e[6], e[7], e[8]),
+                hypot(e[9], e[10], e[11]), hypot(e[12], e[13], e[14]), hypot(e[15], e[16], e[17]),
+                hypot(e[18], e[19], e[20])]  # fmt: skip
+
+    # ----- one Gauss-Newton step -------------------------------------------------------------------------------
+
+    def _step(self, q: np.ndarray) -> np.ndarray:
+        """One damped Gauss-Newton step from ``q`` (whose kinematics are evaluated) within the joint limits."""
+        J = self._J
+        JtW = J.T * self._w
+        H = JtW @ J
+        H += self._damping
+        # The posture pull weight * (q_posture - q) on the joint rows, as one affine map of q.
+        g = JtW @ np.array(self._e)
+        g += self._pull_offset - self._pull_matrix @ q
+        _, dq, info = dposv(H, g)
+        if info != 0:  # pragma: no cover - H is symmetric positive definite by construction (damping > 0)
+            raise np.linalg.LinAlgError(f"the IK normal equations are not positive definite (LAPACK info {info})")
+        joints = q[7:] + dq[6:]
+        pinned = np.maximum(self._lower - joints, joints - self._upper).max() > 0.0
+        if pinned:
+            dq = self._pinned_step(q, joints, H, g)
+        size2 = float(dq @ dq)
+        if size2 > self._max_step2:
+            dq *= math.sqrt(self._max_step2 / size2)
+        q_new = pin.integrate(self.model, q, dq)
+        if pinned:
+            # Joint coordinates add exactly (q[7:] + dq[6:]), so a step that passed the check above stays inside
+            # the limits; a pinned solve holds its joints at the limit to about 1e-6 of the step, and clipping
+            # removes that residue.
+            np.clip(q_new[7:], self._lower, self._upper, out=q_new[7:])
+        return q_new
+
+    def _pinned_step(self, q: np.ndarray, joints: np.ndarray, H: np.ndarray, g: np.ndarray) -> np.ndarray:
+        """The step re-solved with every joint that would cross a limit pinned at that limit.
+
+        Clipping alone would leave the other joints' share of the step computed for a motion the pinned joints
+        no longer make; a stiff diagonal term holds each pinned joint's step at its distance to the limit.
+        """
+        below, above = joints < self._lower, joints > self._upper
+        pinned = np.flatnonzero(below | above)
+        limit = np.where(below, self._lower, self._upper)[pinned]
+        stiff = 1e6 * (1.0 + np.abs(H).max())
+        rows = pinned + 6
+        H[rows, rows] += stiff
+        g[rows] += stiff * (limit - q[pinned + 7])
+        _, dq, _ = dposv(H, g)
+        return dq
+
+    # ----- public ----------------------------------------------------------------------------------------------
+
+    def solve(
+        self,
+        targets: IKTargets,
+        q_previous: np.ndarray,
+        max_iterations: int | None = None,
+        tolerance: float | None = None,
+    ) -> tuple[np.ndarray, IKErrors]:
+        """Configuration of the reduced model reaching ``targets``, starting from ``q_previous``.
+
+        Args:
+            targets: COG and feet targets (world frame, m and rad).
+            q_previous: the previous tick's solution (or the half-sitting configuration to start), shape (nq,).
+                Not modified.
+            max_iterations: overrides the solver's setting for this call (e.g. many on the first tick).
+            tolerance: overrides the solver's tolerance for this call (m); 0 makes every iteration.
+
+        Returns:
+            The new configuration (a new array) and its task errors measured by forward kinematics.
+        """
+        iterations = self.max_iterations if max_iterations is None else max_iterations
+        tol = self.tolerance if tolerance is None else tolerance
+        # Orientations: 1 mrad at a 0.1 m lever is 0.1 mm, hence 10x the position tolerance in rad.
+        tol_angle = 10.0 * tol
+        q = self._cached_q
+        # Comparing the bytes is the cheapest exact test that the cached kinematics belong to q_previous.
+        if q is None or not isinstance(q_previous, np.ndarray) or q.tobytes() != q_previous.tobytes():
+            q = np.array(q_previous, dtype=float)
+            if q.shape != (self.model.nq,):
+                raise ValueError(f"q_previous must have shape ({self.model.nq},), got {q.shape}")
+            self._evaluate(q)
+        norms = self._errors(targets)
+        done = 0
+        while done < iterations and (
+            max(norms[0], norms[1], norms[3]) > tol or max(norms[2], norms[4], norms[5]) > tol_angle
+        ):
+            q = self._step(q)
+            self._evaluate(q)
+            norms = self._errors(targets)
+            done += 1
+        # The caller owns the returned array; the cache keeps its own copy so that in-place edits are detected.
+        self._cached_q = q.copy()
+        return q, IKErrors(*norms, done)
+
+    def errors(self, targets: IKTargets, q: np.ndarray) -> IKErrors:
+        """Task errors of configuration ``q`` for ``targets``, without solving (m, rad)."""
+        self._evaluate(np.array(q, dtype=float))
+        return IKErrors(*self._errors(targets), 0)
+
+
+def _floats(values: np.ndarray | Sequence[float]) -> Sequence[float]:
+    """A short vector as Python numbers: scalar arithmetic on numpy scalars is several times slower."""
+    return values.tolist() if isinstance(values, np.ndarray) else values
+
+
+def _yaw_error(h: list[list[float]], yaw: float) -> tuple[float, float, float]:
+    """World-frame rotation vector from rotation ``h[:3][:3]`` to the level rotation of heading ``yaw`` (rad).
+
+    That is log(Rz(yaw) R^T), from the skew part and the trace of ``E = Rz(yaw) R^T`` written out in scalars.
+    """
+    c, s = math.cos(yaw), math.sin(yaw)
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = h[0][:3], h[1][:3], h[2][:3]
+    vx = 0.5 * (r12 - (s * r20 + c * r21))
+    vy = 0.5 * ((c * r20 - s * r21) - r02)
+    vz = 0.5 * ((s * r00 + c * r01) - (c * r10 - s * r11))
+    cos_angle = 0.5 * ((c * r00 - s * r01) + (s * r10 + c * r11) + r22 - 1.0)
+    sin_angle = math.sqrt(vx * vx + vy * vy + vz * vz)
+    if cos_angle < -0.9:
+        # Near a half turn the skew part vanishes and loses the axis; Pinocchio's log recovers it.
+        rz = np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
+        rotation = np.array([row[:3] for row in h[:3]])
+        wx, wy, wz = pin.log3(rz @ rotation.T).tolist()
+        return wx, wy, wz
+    if sin_angle < 1e-12:
+        return vx, vy, vz
+    scale = math.atan2(sin_angle, cos_angle) / sin_angle
+    return scale * vx, scale * vy, scale * vz

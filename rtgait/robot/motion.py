@@ -1,0 +1,223 @@
+"""Whole-body joint trajectories from a planned walk: the planner's COG and feet, tick by tick, through the IK.
+
+The planner holds the COG at its constant height and gives each foot as ``(x, y, z, yaw)`` of its sole point
+(the ankle's projection on the sole) with the sole level; those are exactly the IK's targets. A walk the robot
+cannot follow (a step longer than its legs, a COG higher than it can reach) is detected from the IK's errors and
+raised as :class:`UnreachableError`, never returned as a silently different motion.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rtgait.core.online import SAMPLE_FIELDS
+from rtgait.core.rollout import Rollout
+from rtgait.robot.ik import IKTargets, WholeBodyIK
+from rtgait.robot.model import BASE_COLUMNS, RobotModel
+
+if TYPE_CHECKING:  # the robot layer needs the scenario type for annotations only
+    from rtgait.scenario import Scenario
+
+__all__ = [
+    "ERROR_FIELDS",
+    "ERROR_LIMITS",
+    "JointTrajectory",
+    "UnreachableError",
+    "robot_scenario",
+    "whole_body_motion",
+]
+
+ERROR_FIELDS = (
+    "cog",
+    "left_position",
+    "left_orientation",
+    "right_position",
+    "right_orientation",
+    "torso_orientation",
+    "pelvis_orientation",
+)
+"""Columns of :attr:`JointTrajectory.errors`: COG and feet position errors (m), orientation errors (rad)."""
+
+ERROR_LIMITS = {
+    "cog": 0.01,
+    "left_position": 0.005,
+    "left_orientation": 0.05,
+    "right_position": 0.005,
+    "right_orientation": 0.05,
+    "torso_orientation": 0.1,
+}
+"""Largest IK error (m or rad) a motion may have at any tick before the walk counts as out of reach. A reachable
+walk is tracked to micrometres, so these only separate "reachable" from "not". The pelvis orientation is a soft
+preference of the IK, not a requirement, and has no limit."""
+
+_LABELS = {
+    "cog": "COG error",
+    "left_position": "left foot error",
+    "left_orientation": "left foot orientation error",
+    "right_position": "right foot error",
+    "right_orientation": "right foot orientation error",
+    "torso_orientation": "torso orientation error",
+    "pelvis_orientation": "pelvis orientation error",
+}
+_COLUMNS = {name: SAMPLE_FIELDS.index(name) for name in ("cog_x", "lfoot_x", "rfoot_x")}
+
+
+class UnreachableError(ValueError):
+    """The robot cannot follow the planned walk: the IK's error exceeded its limit. One line says where."""
+
+
+@dataclass(frozen=True, eq=False)
+class JointTrajectory:
+    """A whole-body motion sampled at the rollout's ticks.
+
+    Attributes:
+        robot: the robot it moves.
+        times: tick times (s), shape ``(k,)``.
+        q: configurations of the reduced model (base pose, then :attr:`joint_names`), shape ``(k, nq)``.
+        cog_target: the COG targets the IK tracked (m), shape ``(k, 3)``: the planned COG plus any offset.
+        errors: IK errors per tick measured by forward kinematics, columns :data:`ERROR_FIELDS` (m, rad).
+        iterations: Gauss-Newton iterations per tick.
+    """
+
+    robot: RobotModel
+    times: np.ndarray
+    q: np.ndarray
+    cog_target: np.ndarray
+    errors: np.ndarray
+    iterations: np.ndarray
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """URDF names of the moving joints, in the order of ``q[:, 7:]``."""
+        return self.robot.joint_names
+
+    def error(self, name: str) -> np.ndarray:
+        """One error column by its :data:`ERROR_FIELDS` name (m or rad), shape ``(k,)``."""
+        return self.errors[:, ERROR_FIELDS.index(name)]
+
+    @property
+    def max_errors(self) -> dict[str, float]:
+        """Largest error of each kind over the motion (m or rad), keyed by :data:`ERROR_FIELDS`."""
+        return {name: float(value) for name, value in zip(ERROR_FIELDS, self.errors.max(axis=0), strict=True)}
+
+    @property
+    def q_full(self) -> np.ndarray:
+        """Configurations of the full model (locked joints at half-sitting), shape ``(k, full nq)``."""
+        return self.robot.full_configuration(self.q)
+
+    def table(self, full: bool = True) -> tuple[tuple[str, ...], np.ndarray]:
+        """Header and rows for a CSV file: ``time`` (s), the base (``base_x`` .. ``base_qw``: m and a unit
+        quaternion x, y, z, w), then one column per joint by URDF name (rad or m).
+
+        Args:
+            full: every joint of the URDF (locked ones at their half-sitting angle); ``False``: moving joints only.
+        """
+        if full:
+            names, q = self.robot.full_joint_names, self.q_full
+        else:
+            names, q = self.joint_names, self.q
+        if q.shape[1] != len(BASE_COLUMNS) + len(names):
+            # Continuous joints (two coordinates, cos and sin) have no single angle column.
+            raise ValueError("the model has joints with more than one coordinate; no one-column-per-joint table")
+        return ("time", *BASE_COLUMNS, *names), np.column_stack([self.times, q])
+
+
+def robot_scenario(scenario: Scenario, robot: RobotModel) -> Scenario:
+    """``scenario`` walked by ``robot``: its nominal COG height, its step width at half-sitting and its sole."""
+    return dataclasses.replace(
+        scenario,
+        cog_height=robot.description.cog_height,
+        step_width=robot.step_width,
+        sole=robot.description.sole,
+    )
+
+
+def _where(rollout: Rollout, k: int) -> str:
+    """Which part of the walk tick ``k`` belongs to, in words (phases as in :mod:`rtgait.core.footsteps`)."""
+    phase = int(rollout.phase[k])
+    if phase == 0:
+        return "the start of the walk"
+    # Phase 2i - 1 is step i's single support, 2i the double support after it lands.
+    return f"step {(phase + 1) // 2}"
+
+
+def whole_body_motion(
+    robot: RobotModel,
+    rollout: Rollout,
+    cog_offset: np.ndarray | None = None,
+    *,
+    iterations: int = 2,
+    limits: dict[str, float] | None = None,
+    ik: WholeBodyIK | None = None,
+) -> JointTrajectory:
+    """Joint trajectory of ``robot`` following the planned walk ``rollout``.
+
+    The first tick is solved from half-sitting to convergence; every later tick makes ``iterations`` Gauss-Newton
+    iterations from the previous tick's solution (always the same number, so the residual errors, micrometres,
+    vary smoothly and finite differences of the motion stay clean).
+
+    Args:
+        robot: the robot.
+        rollout: the planned walk (COG at constant height, feet poses per tick).
+        cog_offset: optional ``(k, 2)`` offsets (m) added to the planned COG x and y, e.g. the angular-momentum
+            compensation of the paper's Appendix A.
+        iterations: Gauss-Newton iterations per tick after the first.
+        limits: error limits overriding :data:`ERROR_LIMITS` (m or rad, same keys).
+        ik: the solver to use (default: a :class:`~rtgait.robot.ik.WholeBodyIK` with default weights).
+
+    Raises:
+        UnreachableError: at the first tick whose IK error exceeds its limit, naming the step, time and error.
+        ValueError: ``cog_offset`` of the wrong shape or not finite.
+    """
+    times = np.asarray(rollout.times, dtype=float)
+    n = len(times)
+    cog = rollout.values[:, _COLUMNS["cog_x"] : _COLUMNS["cog_x"] + 3].copy()
+    if cog_offset is not None:
+        offset = np.asarray(cog_offset, dtype=float)
+        if offset.shape != (n, 2):
+            raise ValueError(f"cog_offset must have shape ({n}, 2) (one x, y offset per tick, m), got {offset.shape}")
+        if not np.isfinite(offset).all():
+            raise ValueError("cog_offset must be finite")
+        cog[:, :2] += offset
+    left = rollout.values[:, _COLUMNS["lfoot_x"] : _COLUMNS["lfoot_x"] + 4].tolist()
+    right = rollout.values[:, _COLUMNS["rfoot_x"] : _COLUMNS["rfoot_x"] + 4].tolist()
+    cog_rows = cog.tolist()
+    limit = dict(ERROR_LIMITS)
+    if limits:
+        unknown = set(limits) - set(ERROR_FIELDS)
+        if unknown:
+            raise ValueError(f"unknown error limit {sorted(unknown)[0]!r}: known are {', '.join(ERROR_FIELDS)}")
+        limit.update(limits)
+    limit_row = np.array([limit.get(name, np.inf) for name in ERROR_FIELDS])
+    solver = ik or WholeBodyIK(robot)
+    if solver.robot is not robot:
+        raise ValueError(f"the IK solver was built for robot {solver.robot.name!r}, not this {robot.name!r} model")
+
+    q_out = np.empty((n, robot.model.nq))
+    errors = np.empty((n, len(ERROR_FIELDS)))
+    used = np.empty(n, dtype=int)
+    q = robot.q_half_sitting
+    for k in range(n):
+        targets = IKTargets(cog_rows[k], left[k], right[k])
+        if k == 0:
+            # From half-sitting to the walk's first pose (the COG lowered to the walking height): many steps.
+            q, result = solver.solve(targets, q, max_iterations=200, tolerance=1e-7)
+        else:
+            q, result = solver.solve(targets, q, max_iterations=iterations, tolerance=0.0)
+        q_out[k] = q
+        row = errors[k]
+        row[:] = result[: len(ERROR_FIELDS)]
+        used[k] = result.iterations
+        if (row > limit_row).any():
+            worst = int(np.argmax(row / limit_row))
+            name = ERROR_FIELDS[worst]
+            unit = "rad" if "orientation" in name else "m"
+            raise UnreachableError(
+                f"{_where(rollout, k)} at t={times[k]:.3f} s is out of reach for {robot.name}: "
+                f"{_LABELS[name]} {row[worst]:.3f} {unit} (limit {limit_row[worst]} {unit})"
+            )
+    return JointTrajectory(robot=robot, times=times, q=q_out, cog_target=cog, errors=errors, iterations=used)
