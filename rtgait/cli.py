@@ -17,13 +17,19 @@ import uuid
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
+
+import numpy as np
 
 from rtgait import __version__
 from rtgait.core.online import OnlinePlanner
 from rtgait.core.rollout import Rollout, rollout
-from rtgait.report import summarize, write_trajectory_csv
+from rtgait.report import summarize, write_joints_csv, write_trajectory_csv
 from rtgait.scenario import Scenario, ScenarioError, builtin_scenarios, load_scenario
+
+if TYPE_CHECKING:
+    from rtgait.robot.model import RobotModel
+    from rtgait.robot.pipeline import RobotRun
 
 PROG = "rtgait"
 # Below this many ticks a rollout takes well under a second: a progress bar would only flicker.
@@ -56,6 +62,26 @@ def _build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--out", metavar="DIR", type=Path, help="output folder (default: out/<scenario name>)")
     plan.add_argument("--dt", metavar="S", type=float, help="control period in seconds (default: the scenario's)")
     plan.add_argument("--no-figures", action="store_true", help="skip the PNG figures (no matplotlib needed)")
+    plan.add_argument(
+        "--robot",
+        metavar="NAME_OR_FILE",
+        help="walk it on a humanoid model: a built-in robot (talos, g1) or a robot description .toml; adds "
+        "joints.csv, the multibody check and its figure (the robot's COG height, step width and sole replace the "
+        "scenario's)",
+    )
+    plan.add_argument(
+        "--compensate-angular-momentum",
+        metavar="ORDER",
+        nargs="?",
+        const=3,
+        type=int,
+        dest="compensate",
+        help="correct the COG for the motion's angular momentum (the paper's Appendix A) with a Fourier series of "
+        "ORDER per phase (default 3); implies --robot talos unless --robot is given",
+    )
+    plan.add_argument(
+        "--html", action="store_true", help="write replay.html, a 3D replay of the robot (implies --robot talos)"
+    )
     plan.add_argument("--quiet", action="store_true", help="print nothing on success")
     return parser
 
@@ -97,7 +123,9 @@ def _run(scenario: Scenario, quiet: bool) -> tuple[Rollout, float]:
     return result, elapsed
 
 
-def _write_outputs(result: Rollout, scenario: Scenario, out: Path, figures: bool) -> dict[str, Any]:
+def _write_outputs(
+    result: Rollout, scenario: Scenario, out: Path, figures: bool, robot_run: RobotRun | None, html: bool
+) -> dict[str, Any]:
     """Write everything into a temporary folder beside ``out``, then move it into ``out`` in one go.
 
     A failure at any point leaves ``out`` as it was (no half-written trajectory next to an old summary).
@@ -114,8 +142,13 @@ def _write_outputs(result: Rollout, scenario: Scenario, out: Path, figures: bool
     try:
         rows = write_trajectory_csv(result, staging / "trajectory.csv")
         files = ["trajectory.csv"]
+        summary = summarize(result, scenario)
+        if robot_run is not None:
+            files.append("joints.csv")
+            write_joints_csv(*robot_run.motion.table(), staging / "joints.csv")
+            summary.update(robot_run.summary())
         if figures:
-            from rtgait.viz.figures import FigureInfo, render_all
+            from rtgait.viz.figures import FigureInfo, plot_multibody_zmp, render_all
 
             info = FigureInfo(
                 title=f"{scenario.name} ({scenario.connection})",
@@ -123,7 +156,17 @@ def _write_outputs(result: Rollout, scenario: Scenario, out: Path, figures: bool
                 nominal_footprints=scenario.nominal_footprints(),
             )
             files += [path.name for path in render_all(result, info, staging)]
-        summary = summarize(result, scenario)
+            if robot_run is not None:
+                before = robot_run.uncompensated[1] if robot_run.uncompensated else robot_run.check
+                after = robot_run.check if robot_run.uncompensated else None
+                plot_multibody_zmp(
+                    result, info, staging / "multibody_zmp.png", before.zmp, None if after is None else after.zmp,
+                    robot=robot_run.robot.name,
+                )
+                files.append("multibody_zmp.png")
+        if html and robot_run is not None:
+            _write_replay(result, scenario, robot_run, staging / "replay.html")
+            files.append("replay.html")
         summary["rows"] = rows
         files.insert(1, "summary.json")
         summary["files"] = files
@@ -142,6 +185,26 @@ def _write_outputs(result: Rollout, scenario: Scenario, out: Path, figures: bool
         shutil.rmtree(staging, ignore_errors=True)
         raise
     return summary
+
+
+def _write_replay(result: Rollout, scenario: Scenario, robot_run: RobotRun, path: Path) -> None:
+    from rtgait.robot.pipeline import visual_model
+    from rtgait.viz.replay import write_replay_html
+
+    robot = robot_run.robot
+    motion = robot_run.motion
+    write_replay_html(
+        path,
+        robot.full_model,
+        visual_model(robot),
+        motion.times,
+        motion.q_full,
+        footprints=result.footprints,
+        sole=scenario.sole,
+        cog=robot_run.check.cog,
+        zmp=np.column_stack([result.column("zmp_x"), result.column("zmp_y")]),
+        title=f"rtgait: {scenario.name} on {robot.name}",
+    )
 
 
 def _describe_change(change: dict[str, Any]) -> str:
@@ -182,20 +245,71 @@ def _print_summary(summary: dict[str, Any], out: Path, wall_time: float, stream:
         )
     else:
         lines.append(f"replans     none (first plan {times['first_plan']:.0f} µs)")
+    if "robot" in summary:
+        lines.append(_robot_line(summary))
+        compensation = summary.get("angular_momentum_compensation")
+        if compensation is not None:
+            before, after = compensation["before"], compensation["after"]
+            lines.append(
+                f"compensate  angular momentum, Fourier order {compensation['order']}: multibody ZMP error max "
+                + ", ".join(
+                    f"{axis} {before['multibody_zmp_error_max'][axis] * 1e3:.1f} -> "
+                    f"{after['multibody_zmp_error_max'][axis] * 1e3:.1f} mm"
+                    for axis in "xy"
+                )
+                + "; rms "
+                + ", ".join(
+                    f"{axis} {before['multibody_zmp_error_rms'][axis] * 1e3:.1f} -> "
+                    f"{after['multibody_zmp_error_rms'][axis] * 1e3:.1f} mm"
+                    for axis in "xy"
+                )
+            )
     lines.append(f"outputs     {out}{os.sep}: {', '.join(summary['files'])} ({summary['rows']} rows)")
     stream.write("\n".join(lines) + "\n")
+
+
+def _robot_line(summary: dict[str, Any]) -> str:
+    error = summary["multibody_zmp_error_max"]
+    return (
+        f"robot       {summary['robot']} ({summary['robot_mass']:.1f} kg): IK error max COG "
+        f"{summary['ik_cog_error_max'] * 1e6:.2f} µm, feet {summary['ik_foot_error_max'] * 1e6:.2f} µm, "
+        f"{summary['ik_time_per_tick_us']:.0f} µs per tick; multibody ZMP error max x {error['x'] * 1e3:.1f} mm, "
+        f"y {error['y'] * 1e3:.1f} mm"
+    )
+
+
+def _load_robot(name: str) -> RobotModel:
+    try:
+        from rtgait.robot.model import RobotModel
+    except ImportError:
+        raise _RunError("--robot needs Pinocchio and example-robot-data: pip install 'rtgait[robot]'") from None
+    return RobotModel.load(name)
 
 
 def _plan(args: argparse.Namespace) -> int:
     scenario = _with_dt(load_scenario(args.scenario), args.dt)
     out: Path = args.out if args.out is not None else Path("out") / scenario.name
+    if args.compensate is not None and args.compensate < 0:
+        raise ScenarioError(f"--compensate-angular-momentum ORDER must be an integer >= 0, got {args.compensate}")
     if not args.no_figures:
         try:
             import matplotlib  # noqa: F401  # checked before the run so a missing extra fails fast
         except ImportError:
             raise _RunError("figures need matplotlib: pip install 'rtgait[viz]', or pass --no-figures") from None
+    robot_name = args.robot or ("talos" if args.html or args.compensate is not None else None)
+    robot = None
+    if robot_name is not None:
+        from rtgait.robot.motion import robot_scenario
+
+        robot = _load_robot(robot_name)
+        scenario = robot_scenario(scenario, robot)
     result, wall_time = _run(scenario, args.quiet)
-    summary = _write_outputs(result, scenario, out, figures=not args.no_figures)
+    robot_run = None
+    if robot is not None:
+        from rtgait.robot.pipeline import run_on_robot
+
+        robot_run = run_on_robot(robot, result, scenario.cog_height, scenario.gravity, args.compensate)
+    summary = _write_outputs(result, scenario, out, not args.no_figures, robot_run, args.html)
     if not args.quiet:
         _print_summary(summary, out, wall_time, sys.stdout)
     return 0

@@ -15,7 +15,7 @@ from rtgait.core.online import SAMPLE_FIELDS
 from rtgait.core.rollout import Rollout
 from rtgait.scenario import Scenario
 
-__all__ = ["CSV_COLUMNS", "CSV_HEAD_COLUMNS", "summarize", "write_trajectory_csv"]
+__all__ = ["CSV_COLUMNS", "CSV_HEAD_COLUMNS", "summarize", "write_joints_csv", "write_trajectory_csv"]
 
 CSV_HEAD_COLUMNS = (
     "t", "cog_x", "cog_y", "cog_z", "cog_vx", "cog_vy", "cog_ax", "cog_ay", "zmp_x", "zmp_y",
@@ -31,6 +31,14 @@ CSV_COLUMNS = CSV_HEAD_COLUMNS + CSV_EXTRA_COLUMNS
 
 # 10 significant digits: sub-micrometre for positions within 100 m, exact for the tick times of usual periods.
 _FLOAT_FORMAT = "%.10g"
+
+
+def write_joints_csv(header: tuple[str, ...], rows: np.ndarray, path: Path) -> int:
+    """Write a joint table (``t``, ``base_x`` .. ``base_qw``, one column per joint) to ``path``; returns the rows."""
+    with open(path, "w", encoding="utf-8", newline="") as stream:
+        stream.write(",".join(header) + "\n")
+        np.savetxt(stream, rows, fmt=_FLOAT_FORMAT, delimiter=",")
+    return len(rows)
 
 
 def write_trajectory_csv(rollout: Rollout, path: Path) -> int:

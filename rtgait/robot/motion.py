@@ -110,7 +110,7 @@ class JointTrajectory:
         return self.robot.full_configuration(self.q)
 
     def table(self, full: bool = True) -> tuple[tuple[str, ...], np.ndarray]:
-        """Header and rows for a CSV file: ``time`` (s), the base (``base_x`` .. ``base_qw``: m and a unit
+        """Header and rows for a CSV file: ``t`` (s), the base (``base_x`` .. ``base_qw``: m and a unit
         quaternion x, y, z, w), then one column per joint by URDF name (rad or m).
 
         Args:
@@ -123,7 +123,7 @@ class JointTrajectory:
         if q.shape[1] != len(BASE_COLUMNS) + len(names):
             # Continuous joints (two coordinates, cos and sin) have no single angle column.
             raise ValueError("the model has joints with more than one coordinate; no one-column-per-joint table")
-        return ("time", *BASE_COLUMNS, *names), np.column_stack([self.times, q])
+        return ("t", *BASE_COLUMNS, *names), np.column_stack([self.times, q])
 
 
 def robot_scenario(scenario: Scenario, robot: RobotModel) -> Scenario:

@@ -24,6 +24,7 @@ from rtgait.core.rollout import Rollout
 __all__ = [
     "FIGURE_FILES",
     "FigureInfo",
+    "plot_multibody_zmp",
     "plot_top_view",
     "plot_zmp_cog",
     "plot_zmp_deviation",
@@ -185,7 +186,9 @@ def plot_zmp_cog(rollout: Rollout, info: FigureInfo, path: Path) -> Path:
     return _save(figure, path)
 
 
-def _finish_time_panels(figure: Figure, axes: Sequence[Axes], t: np.ndarray, title: str, legend_columns: int) -> None:
+def _finish_time_panels(
+    figure: Figure, axes: Sequence[Axes], t: np.ndarray, title: str, legend_columns: int, legend: bool = True
+) -> None:
     """Grid, time range and labels shared by the x-over-y panels against time."""
     for ax in axes:
         ax.grid(True, alpha=0.3)
@@ -194,7 +197,8 @@ def _finish_time_panels(figure: Figure, axes: Sequence[Axes], t: np.ndarray, tit
     axes[0].set_title("sagittal (x)", fontsize=10, loc="left")
     axes[1].set_title("lateral (y)", fontsize=10, loc="left")
     figure.suptitle(title)
-    figure.legend(loc="outside lower center", ncol=legend_columns, fontsize=9)
+    if legend:
+        figure.legend(loc="outside lower center", ncol=legend_columns, fontsize=9)
 
 
 def plot_zmp_deviation(rollout: Rollout, info: FigureInfo, path: Path) -> Path:
@@ -339,6 +343,39 @@ def plot_zmp_margin(rollout: Rollout, info: FigureInfo, path: Path) -> Path:
     ax.grid(True, alpha=0.3)
     ax.set_title(f"{info.title}: signed ZMP margin to the support polygon")
     ax.legend(loc="lower right", fontsize=8)
+    return _save(figure, path)
+
+
+def plot_multibody_zmp(
+    rollout: Rollout,
+    info: FigureInfo,
+    path: Path,
+    multibody_zmp: np.ndarray,
+    compensated_zmp: np.ndarray | None = None,
+    robot: str = "robot",
+) -> Path:
+    """Multibody ZMP of the robot's whole-body motion minus the planned ZMP (m), along x and y against time,
+    before and, when given, after the angular-momentum compensation (the paper's Fig. 11)."""
+    figure = _new_figure(11, 6.5)
+    axes = figure.subplots(2, 1, sharex=True)
+    t = rollout.times
+    for index, (ax, axis) in enumerate(zip(axes, "xy", strict=True)):
+        planned = rollout.column(f"zmp_{axis}")
+        before = multibody_zmp[:, index] - planned
+        ax.plot(t, before * 1000, color=COG_COLOR, lw=1.3, zorder=2,
+                label=f"{axis}: without compensation (max {np.abs(before).max() * 1000:.1f} mm)")  # fmt: skip
+        if compensated_zmp is not None:
+            after = compensated_zmp[:, index] - planned
+            label = f"{axis}: with angular-momentum compensation (max {np.abs(after).max() * 1000:.1f} mm)"
+            ax.plot(t, after * 1000, color=ZMP_COLOR, lw=1.3, zorder=3, label=label)
+        ax.axhline(0.0, color="black", lw=0.8, zorder=1)
+        _shade_double_support(ax, rollout, label=False)
+        _mark_changes(ax, rollout, index == 0)
+        ax.set_ylabel(f"{axis} error [mm]")
+        ax.legend(loc="upper right", fontsize=8)
+    _finish_time_panels(
+        figure, axes, t, f"{info.title}: multibody ZMP minus planned ZMP ({robot})", legend_columns=3, legend=False
+    )
     return _save(figure, path)
 
 

@@ -59,7 +59,7 @@ def test_talos_follows_fig8(talos, talos_fig8, talos_fig8_motion):
 
 def test_table_names_joints_by_urdf_name(talos, talos_fig8_motion):
     header, rows = talos_fig8_motion.table()
-    assert header[:8] == ("time", *BASE_COLUMNS)
+    assert header[:8] == ("t", *BASE_COLUMNS)
     assert header[8:] == talos.full_joint_names
     assert "arm_left_1_joint" in header and "leg_right_4_joint" in header
     assert rows.shape == (len(talos_fig8_motion.times), len(header))
