@@ -18,7 +18,10 @@ demo: $(STAMP)
 	$(BIN)/rtgait plan fig6 --out out/fig6
 	$(BIN)/rtgait plan fig7 --out out/fig7
 	$(BIN)/rtgait plan fig8 --out out/fig8
-	@echo "Figures, trajectory.csv and summary.json for each scenario are in out/<scenario>/"
+	$(BIN)/rtgait plan fig11 --robot talos --compensate-angular-momentum --html --out out/fig11-talos
+	$(BIN)/rtgait plan fig8 --robot talos --compensate-angular-momentum --html --out out/fig8-talos
+	@echo "Figures, trajectory.csv and summary.json for each scenario are in out/<scenario>/;"
+	@echo "on Talos also joints.csv, multibody_zmp.png and replay.html (open it in a browser)."
 
 test: $(STAMP)
 	$(BIN)/ruff check .
