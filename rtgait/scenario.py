@@ -44,30 +44,27 @@ from __future__ import annotations
 
 import math
 import re
-import sys
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride, Timing, place_footsteps, standing_feet
 from rtgait.core.online import CONNECTION_MODES, ConnectionMode, PlannerConfig
 from rtgait.core.rollout import ScheduledChange
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised only on Python 3.10
-    import tomli as tomllib
+from rtgait.tomlfile import NumberRule, TomlFiles
 
 __all__ = ["Scenario", "ScenarioError", "builtin_scenarios", "load_scenario", "parse_scenario"]
 
 _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
-# Stride.turn must stay strictly inside +-pi/2; checking here gives the error a TOML field name.
-_MAX_YAW = math.pi / 2
+# Stride.turn must stay strictly inside +-pi/2; checking yaws with this rule gives the error a TOML field name.
+_YAW_RULE: NumberRule = "|x| < pi/2"
 
 
 class ScenarioError(ValueError):
     """A scenario is unknown, unreadable or invalid. The message is one line naming the field."""
+
+
+_FILES = TomlFiles(kind="scenario", folder="scenarios", error=ScenarioError)
 
 
 @dataclass(frozen=True)
@@ -168,60 +165,18 @@ class Scenario:
 # ----- TOML parsing ---------------------------------------------------------------------------------------------
 
 
-def _table(data: Any, where: str) -> dict[str, Any]:
-    if not isinstance(data, dict):
-        raise ScenarioError(f"{where} must be a table, got {type(data).__name__} {data!r}")
-    return data
-
-
-def _check_keys(data: dict[str, Any], where: str, required: tuple[str, ...], optional: tuple[str, ...]) -> None:
-    prefix = f"{where}." if where else ""
-    allowed = required + optional
-    for key in data:
-        if key not in allowed:
-            # Unknown keys are almost always typos ("singel_support"); silently ignoring them would run a
-            # different walk from the one the user meant.
-            kind = "key" if where else "top-level key"
-            raise ScenarioError(f"unknown {kind} {prefix}{key} (allowed here: {', '.join(allowed)})")
-    for key in required:
-        if key not in data:
-            raise ScenarioError(f"missing required key {prefix}{key}")
-
-
-def _number(data: dict[str, Any], key: str, where: str, *, rule: str = "any", unit: str = "") -> float:
-    """A finite number from ``data[key]`` satisfying ``rule`` ("any", "> 0", ">= 0" or "|x| < pi/2")."""
-    value = data[key]
+def _number(data: dict[str, Any], key: str, where: str, *, rule: NumberRule = "any", unit: str = "") -> float:
+    """A finite number from ``data[key]`` of the table ``where`` (empty: the document) satisfying ``rule``."""
     path = f"{where}.{key}" if where else key
-    unit_text = f" {unit}" if unit else ""
-    descriptions = {
-        "any": "a finite number" + (" (in" if unit else ""),
-        "> 0": "a number > 0",
-        ">= 0": "a number >= 0",
-        "yaw": "a number strictly between -pi/2 and pi/2",
-    }
-    # bool is an int subclass in Python: `length = true` must not pass as 1.0.
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-    if ok:
-        x = float(value)
-        ok = {"any": True, "> 0": x > 0.0, ">= 0": x >= 0.0, "yaw": abs(x) < _MAX_YAW}[rule]
-    if not ok:
-        closing = ")" if rule == "any" and unit else ""
-        raise ScenarioError(f"{path} must be {descriptions[rule]}{unit_text}{closing}, got {value!r}")
-    return float(value)
+    # Scenario messages word the unit of an unconstrained number "(in m)"; tests and users rely on that wording.
+    shown_unit = f"(in {unit})" if rule == "any" and unit else unit
+    return _FILES.number(data[key], path, rule=rule, unit=shown_unit)
 
 
 def _integer(data: dict[str, Any], key: str, where: str) -> int:
     value = data[key]
     if not isinstance(value, int) or isinstance(value, bool) or value < 1:
         raise ScenarioError(f"{where}.{key} must be an integer >= 1, got {value!r}")
-    return value
-
-
-def _string(data: dict[str, Any], key: str, where: str = "") -> str:
-    value = data[key]
-    path = f"{where}.{key}" if where else key
-    if not isinstance(value, str):
-        raise ScenarioError(f"{path} must be a string, got {value!r}")
     return value
 
 
@@ -239,14 +194,14 @@ def _parse_changes(raw: Any, steps: int) -> tuple[ScheduledChange, ...]:
     changes = []
     for index, entry in enumerate(raw):
         where = f"walk.change[{index}]"
-        entry = _table(entry, where)
-        _check_keys(entry, where, ("step",), ("length", "width", "yaw", "only"))
+        entry = _FILES.table(entry, where)
+        _FILES.check_keys(entry, where, ("step",), ("length", "width", "yaw", "only"))
         step = _integer(entry, "step", where)
         if step > steps:
             raise ScenarioError(f"{where}.step must be a step of the walk (1..{steps}), got {step}")
         length = _number(entry, "length", where, unit="m") if "length" in entry else None
         width = _number(entry, "width", where, rule="> 0", unit="m") if "width" in entry else None
-        yaw = _number(entry, "yaw", where, rule="yaw", unit="rad") if "yaw" in entry else None
+        yaw = _number(entry, "yaw", where, rule=_YAW_RULE, unit="rad") if "yaw" in entry else None
         if length is None and width is None and yaw is None:
             raise ScenarioError(f"{where} changes nothing: give at least one of length, width, yaw")
         only = entry.get("only", False)
@@ -261,31 +216,31 @@ def _parse_changes(raw: Any, steps: int) -> tuple[ScheduledChange, ...]:
 
 def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
-    _check_keys(data, "", ("name", "connection", "robot", "timing", "walk"), ("description",))
-    name = _string(data, "name")
+    _FILES.check_keys(data, "", ("name", "connection", "robot", "timing", "walk"), ("description",))
+    name = _FILES.string(data, "name")
     if not _NAME_PATTERN.fullmatch(name):
         raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
-    description = _string(data, "description") if "description" in data else ""
+    description = _FILES.string(data, "description") if "description" in data else ""
     if "\n" in description:
         raise ScenarioError("description must be a single line")
     connection = _choice(data, "connection", "", CONNECTION_MODES)
 
-    robot = _table(data["robot"], "robot")
-    _check_keys(robot, "robot", ("cog_height", "sole"), ("gravity",))
+    robot = _FILES.table(data["robot"], "robot")
+    _FILES.check_keys(robot, "robot", ("cog_height", "sole"), ("gravity",))
     cog_height = _number(robot, "cog_height", "robot", rule="> 0", unit="m")
     gravity = _number(robot, "gravity", "robot", rule="> 0", unit="m/s^2") if "gravity" in robot else 9.81
-    sole_table = _table(robot["sole"], "robot.sole")
+    sole_table = _FILES.table(robot["sole"], "robot.sole")
     sides = ("front", "back", "inner", "outer")
-    _check_keys(sole_table, "robot.sole", sides, ())
+    _FILES.check_keys(sole_table, "robot.sole", sides, ())
     sole_values = {key: _number(sole_table, key, "robot.sole", rule=">= 0", unit="m") for key in sides}
     if sole_values["front"] + sole_values["back"] <= 0.0 or sole_values["inner"] + sole_values["outer"] <= 0.0:
         raise ScenarioError("robot.sole must have a positive length (front + back) and width (inner + outer)")
     sole = SoleRect(**sole_values)
 
-    timing_table = _table(data["timing"], "timing")
+    timing_table = _FILES.table(data["timing"], "timing")
     durations = ("single_support", "double_support")
     extra_durations = ("start", "end", "settle")
-    _check_keys(timing_table, "timing", (*durations, "dt", "horizon_steps"), extra_durations)
+    _FILES.check_keys(timing_table, "timing", (*durations, "dt", "horizon_steps"), extra_durations)
     timing_values = {
         key: _number(timing_table, key, "timing", rule="> 0", unit="s")
         for key in (*durations, *extra_durations)
@@ -295,13 +250,14 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     dt = _number(timing_table, "dt", "timing", rule="> 0", unit="s")
     horizon_steps = _integer(timing_table, "horizon_steps", "timing")
 
-    walk = _table(data["walk"], "walk")
-    _check_keys(walk, "walk", ("steps", "step_length", "step_width", "step_height"), ("yaw", "first_foot", "change"))
+    walk = _FILES.table(data["walk"], "walk")
+    walk_required = ("steps", "step_length", "step_width", "step_height")
+    _FILES.check_keys(walk, "walk", walk_required, ("yaw", "first_foot", "change"))
     steps = _integer(walk, "steps", "walk")
     step_length = _number(walk, "step_length", "walk", unit="m")
     step_width = _number(walk, "step_width", "walk", rule="> 0", unit="m")
     step_height = _number(walk, "step_height", "walk", rule=">= 0", unit="m")
-    yaw = _number(walk, "yaw", "walk", rule="yaw", unit="rad") if "yaw" in walk else 0.0
+    yaw = _number(walk, "yaw", "walk", rule=_YAW_RULE, unit="rad") if "yaw" in walk else 0.0
     first_foot = _choice(walk, "first_foot", "walk", ("right", "left")) if "first_foot" in walk else "right"
     changes = _parse_changes(walk["change"], steps) if "change" in walk else ()
 
@@ -336,31 +292,9 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
 # ----- finding scenarios ----------------------------------------------------------------------------------------
 
 
-def _builtin_dir() -> Any:
-    return resources.files("rtgait").joinpath("scenarios")
-
-
-def _builtin_names() -> list[str]:
-    names = (entry.name[: -len(".toml")] for entry in _builtin_dir().iterdir() if entry.name.endswith(".toml"))
-    return sorted(names, key=_natural_key)
-
-
-def _natural_key(name: str) -> list[int | str]:
-    """Sort key that puts fig4 before fig11: digit runs compare as numbers."""
-    return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", name)]
-
-
-def _parse_text(text: str, source: str) -> Scenario:
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise ScenarioError(f"invalid TOML in {source}: {error}") from None
-    return parse_scenario(data, source)
-
-
 def builtin_scenarios() -> dict[str, str]:
     """Built-in scenario names mapped to their one-line descriptions."""
-    return {name: load_scenario(name).description for name in _builtin_names()}
+    return {name: load_scenario(name).description for name in _FILES.builtin_names()}
 
 
 def load_scenario(name_or_path: str | Path) -> Scenario:
@@ -369,18 +303,5 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     A string that is a built-in name wins over a file of the same name in the current folder; anything that
     looks like a path (a ``.toml`` suffix, a folder separator, or an existing file) is read as a file.
     """
-    text_arg = str(name_or_path)
-    if not isinstance(name_or_path, Path) and text_arg in _builtin_names():
-        text = _builtin_dir().joinpath(f"{text_arg}.toml").read_text(encoding="utf-8")
-        return _parse_text(text, "builtin")
-    path = Path(name_or_path)
-    looks_like_path = isinstance(name_or_path, Path) or path.suffix == ".toml" or "/" in text_arg or path.exists()
-    if not looks_like_path:
-        known = ", ".join(_builtin_names())
-        raise ScenarioError(f"unknown scenario {text_arg!r}: built-in scenarios are {known} (or give a .toml path)")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
-        raise ScenarioError(f"cannot read scenario file {text_arg}: {reason}") from None
-    return _parse_text(text, str(path))
+    document = _FILES.load(name_or_path)
+    return parse_scenario(document.data, document.source)

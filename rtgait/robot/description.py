@@ -45,24 +45,17 @@ validated without building the model.
 
 from __future__ import annotations
 
-import math
 import re
-import sys
 import xml.etree.ElementTree as ElementTree
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
 from rtgait.core.footsteps import SoleRect
 from rtgait.robot.data import RobotDataError, robots_dir, share_dir
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised only on Python 3.10
-    import tomli as tomllib
+from rtgait.tomlfile import TomlFiles, is_finite_number
 
 __all__ = ["ERD_PREFIX", "RobotDescription", "RobotError", "builtin_robots", "load_robot", "parse_robot"]
 
@@ -79,6 +72,9 @@ _MOVABLE_TYPES = (*_LIMITED_TYPES, "continuous")
 
 class RobotError(ValueError):
     """A robot description is unknown, unreadable or invalid. The message is one line naming the field."""
+
+
+_FILES = TomlFiles(kind="robot", folder="robots", error=RobotError)
 
 
 @dataclass(frozen=True)
@@ -174,46 +170,6 @@ def _read_urdf_names(path: Path) -> _UrdfNames:
 # ----- TOML parsing ---------------------------------------------------------------------------------------------
 
 
-def _table(data: Any, where: str) -> dict[str, Any]:
-    if not isinstance(data, dict):
-        raise RobotError(f"{where} must be a table, got {type(data).__name__} {data!r}")
-    return data
-
-
-def _check_keys(data: dict[str, Any], where: str, required: tuple[str, ...], optional: tuple[str, ...]) -> None:
-    prefix = f"{where}." if where else ""
-    allowed = required + optional
-    for key in data:
-        if key not in allowed:
-            # A typo ("cog_heigth") silently ignored would walk a different robot from the one described.
-            kind = "key" if where else "top-level key"
-            raise RobotError(f"unknown {kind} {prefix}{key} (allowed here: {', '.join(allowed)})")
-    for key in required:
-        if key not in data:
-            raise RobotError(f"missing required key {prefix}{key}")
-
-
-def _is_number(value: Any) -> bool:
-    # bool is an int subclass in Python: `cog_height = true` must not pass as 1.0.
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-
-
-def _number(value: Any, path: str, *, positive: bool = False, non_negative: bool = False, unit: str = "") -> float:
-    ok = _is_number(value) and (not positive or value > 0) and (not non_negative or value >= 0)
-    if not ok:
-        rule = "a number > 0" if positive else "a number >= 0" if non_negative else "a finite number"
-        raise RobotError(f"{path} must be {rule}{' ' + unit if unit else ''}, got {value!r}")
-    return float(value)
-
-
-def _string(data: dict[str, Any], key: str, where: str = "") -> str:
-    value = data[key]
-    path = f"{where}.{key}" if where else key
-    if not isinstance(value, str) or not value:
-        raise RobotError(f"{path} must be a non-empty string, got {value!r}")
-    return value
-
-
 def _resolve_path(value: str, base: Path | None, path: str) -> Path:
     candidate = Path(value).expanduser()
     if not candidate.is_absolute():
@@ -249,12 +205,12 @@ def _default_package_dirs() -> tuple[Path, ...]:
 
 
 def _joint_values(raw: Any, where: str, names: _UrdfNames, *, unit: str) -> dict[str, float]:
-    table = _table(raw, where)
+    table = _FILES.table(raw, where)
     values = {}
     for joint, value in table.items():
         if joint not in names.joints or names.joints[joint] not in _MOVABLE_TYPES:
             raise RobotError(f"{where}.{joint}: the URDF has no movable joint named {joint!r}")
-        values[joint] = _number(value, f"{where}.{joint}", unit=unit)
+        values[joint] = _FILES.number(value, f"{where}.{joint}", unit=unit)
     return values
 
 
@@ -265,7 +221,7 @@ def _gain(raw: Any, where: str, names: _UrdfNames) -> float | Mapping[str, float
             if value < 0.0:
                 raise RobotError(f"{where}.{joint} must be a number >= 0, got {value!r}")
         return MappingProxyType(values)
-    return _number(raw, where, non_negative=True)
+    return _FILES.number(raw, where, rule=">= 0")
 
 
 def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None) -> RobotDescription:
@@ -276,17 +232,17 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         source: where it came from, for messages.
         base: folder that relative paths are resolved against (the TOML file's folder); ``None`` for built-ins.
     """
-    _check_keys(data, "", ("name", "model", "feet", "walking", "posture"), ("description", "gains"))
-    name = _string(data, "name")
+    _FILES.check_keys(data, "", ("name", "model", "feet", "walking", "posture"), ("description", "gains"))
+    name = _FILES.string(data, "name", non_empty=True)
     if not _NAME_PATTERN.fullmatch(name):
         raise RobotError(f"name must be letters, digits, '.', '_' or '-', got {name!r}")
-    description = _string(data, "description") if "description" in data else ""
+    description = _FILES.string(data, "description", non_empty=True) if "description" in data else ""
     if "\n" in description:
         raise RobotError("description must be a single line")
 
-    model = _table(data["model"], "model")
-    _check_keys(model, "model", ("urdf",), ("package_dirs",))
-    urdf = _resolve_urdf(_string(model, "urdf", "model"), base)
+    model = _FILES.table(data["model"], "model")
+    _FILES.check_keys(model, "model", ("urdf",), ("package_dirs",))
+    urdf = _resolve_urdf(_FILES.string(model, "urdf", "model", non_empty=True), base)
     if "package_dirs" in model:
         raw_dirs = model["package_dirs"]
         if not isinstance(raw_dirs, list) or not all(isinstance(d, str) and d for d in raw_dirs):
@@ -299,9 +255,9 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         package_dirs = _default_package_dirs()
     names = _read_urdf_names(urdf)
 
-    feet = _table(data["feet"], "feet")
-    _check_keys(feet, "feet", ("left_sole_frame", "right_sole_frame", "sole"), ("sole_offset",))
-    frames = {key: _string(feet, key, "feet") for key in ("left_sole_frame", "right_sole_frame")}
+    feet = _FILES.table(data["feet"], "feet")
+    _FILES.check_keys(feet, "feet", ("left_sole_frame", "right_sole_frame", "sole"), ("sole_offset",))
+    frames = {key: _FILES.string(feet, key, "feet", non_empty=True) for key in ("left_sole_frame", "right_sole_frame")}
     for key, frame in frames.items():
         if frame not in names.frames:
             raise RobotError(f"feet.{key}: the URDF {urdf.name} has no link or joint named {frame!r}")
@@ -310,20 +266,20 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
     sole_offset = (0.0, 0.0, 0.0)
     if "sole_offset" in feet:
         raw = feet["sole_offset"]
-        if not (isinstance(raw, list) and len(raw) == 3 and all(_is_number(v) for v in raw)):
+        if not (isinstance(raw, list) and len(raw) == 3 and all(is_finite_number(v) for v in raw)):
             raise RobotError(f"feet.sole_offset must be three finite numbers [x, y, z] in m, got {raw!r}")
         sole_offset = (float(raw[0]), float(raw[1]), float(raw[2]))
-    sole_table = _table(feet["sole"], "feet.sole")
+    sole_table = _FILES.table(feet["sole"], "feet.sole")
     sides = ("front", "back", "inner", "outer")
-    _check_keys(sole_table, "feet.sole", sides, ())
-    sole_values = {key: _number(sole_table[key], f"feet.sole.{key}", non_negative=True, unit="m") for key in sides}
+    _FILES.check_keys(sole_table, "feet.sole", sides, ())
+    sole_values = {key: _FILES.number(sole_table[key], f"feet.sole.{key}", rule=">= 0", unit="m") for key in sides}
     if sole_values["front"] + sole_values["back"] <= 0.0 or sole_values["inner"] + sole_values["outer"] <= 0.0:
         raise RobotError("feet.sole must have a positive length (front + back) and width (inner + outer)")
     sole = SoleRect(**sole_values)
 
-    walking = _table(data["walking"], "walking")
-    _check_keys(walking, "walking", ("cog_height", "moving_joints", "torso_frame"), ())
-    cog_height = _number(walking["cog_height"], "walking.cog_height", positive=True, unit="m")
+    walking = _FILES.table(data["walking"], "walking")
+    _FILES.check_keys(walking, "walking", ("cog_height", "moving_joints", "torso_frame"), ())
+    cog_height = _FILES.number(walking["cog_height"], "walking.cog_height", rule="> 0", unit="m")
     raw_joints = walking["moving_joints"]
     if not isinstance(raw_joints, list) or not raw_joints or not all(isinstance(j, str) for j in raw_joints):
         raise RobotError(f"walking.moving_joints must be a non-empty list of joint names, got {raw_joints!r}")
@@ -340,7 +296,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
                 f"walking.moving_joints: {joint} is a {names.joints[joint]} joint; "
                 f"only {' and '.join(_LIMITED_TYPES)} joints (one coordinate, with limits) can move"
             )
-    torso_frame = _string(walking, "torso_frame", "walking")
+    torso_frame = _FILES.string(walking, "torso_frame", "walking", non_empty=True)
     if torso_frame not in names.frames:
         raise RobotError(f"walking.torso_frame: the URDF {urdf.name} has no link or joint named {torso_frame!r}")
 
@@ -353,8 +309,8 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
 
     kp = kd = None
     if "gains" in data:
-        gains = _table(data["gains"], "gains")
-        _check_keys(gains, "gains", ("kp", "kd"), ())
+        gains = _FILES.table(data["gains"], "gains")
+        _FILES.check_keys(gains, "gains", ("kp", "kd"), ())
         kp = _gain(gains["kp"], "gains.kp", names)
         kd = _gain(gains["kd"], "gains.kd", names)
 
@@ -380,29 +336,10 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
 # ----- finding descriptions -------------------------------------------------------------------------------------
 
 
-def _builtin_dir() -> Any:
-    return resources.files("rtgait").joinpath("robots")
-
-
-def _builtin_names() -> list[str]:
-    return sorted(entry.name[: -len(".toml")] for entry in _builtin_dir().iterdir() if entry.name.endswith(".toml"))
-
-
-def _parse_text(text: str, source: str, base: Path | None) -> RobotDescription:
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise RobotError(f"invalid TOML in {source}: {error}") from None
-    return parse_robot(data, source, base)
-
-
 def builtin_robots() -> dict[str, str]:
     """Built-in robot names mapped to their one-line descriptions (without loading their URDFs)."""
-    result = {}
-    for name in _builtin_names():
-        text = _builtin_dir().joinpath(f"{name}.toml").read_text(encoding="utf-8")
-        result[name] = str(tomllib.loads(text).get("description", ""))
-    return result
+    # Only the raw document is read: parse_robot would resolve and parse every URDF just for a listing.
+    return {name: str(_FILES.load(name).data.get("description", "")) for name in _FILES.builtin_names()}
 
 
 def load_robot(name_or_path: str | Path = DEFAULT_ROBOT) -> RobotDescription:
@@ -414,18 +351,6 @@ def load_robot(name_or_path: str | Path = DEFAULT_ROBOT) -> RobotDescription:
     Raises:
         RobotError: unknown robot, unreadable file, invalid TOML or any invalid field (one line naming it).
     """
-    text_arg = str(name_or_path)
-    if not isinstance(name_or_path, Path) and text_arg in _builtin_names():
-        text = _builtin_dir().joinpath(f"{text_arg}.toml").read_text(encoding="utf-8")
-        return _parse_text(text, "builtin", None)
-    path = Path(name_or_path)
-    looks_like_path = isinstance(name_or_path, Path) or path.suffix == ".toml" or "/" in text_arg or path.exists()
-    if not looks_like_path:
-        known = ", ".join(_builtin_names())
-        raise RobotError(f"unknown robot {text_arg!r}: built-in robots are {known} (or give a .toml path)")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
-        raise RobotError(f"cannot read robot file {text_arg}: {reason}") from None
-    return _parse_text(text, str(path), path.resolve().parent)
+    document = _FILES.load(name_or_path)
+    # Relative paths in a description (model.urdf, model.package_dirs) are relative to its own folder.
+    return parse_robot(document.data, document.source, document.folder)
