@@ -1,0 +1,219 @@
+"""One scenario walked in physics, and its output files: what a command-line ``rtgait sim`` needs.
+
+``simulate(scenario, robot)`` builds the MuJoCo model (or reuses one), plans the scenario with the robot's COG
+height, step width and sole, and runs the closed loop of :mod:`rtgait.sim.loop`. ``write_sim_outputs(result,
+out_dir)`` writes ``sim.csv`` (one row per tick), ``sim_summary.json`` and ``zmp_sim.png`` (planned vs measured
+ZMP), each to a temporary name first and renamed when complete, and returns the summary.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import uuid
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rtgait.core.online import OnlinePlanner, VelocityCommand
+from rtgait.robot.model import RobotModel
+from rtgait.robot.motion import robot_scenario
+from rtgait.scenario import Scenario
+from rtgait.sim.loop import LoopOptions, Push, SimResult, Stabilizer, run_closed_loop
+from rtgait.sim.model import SimConfig, SimModel, build_sim_model
+
+__all__ = ["SIM_CSV_COLUMNS", "SIM_FILES", "simulate", "write_sim_outputs"]
+
+SIM_CSV_COLUMNS = (
+    "t", "zmp_x", "zmp_y", "zmp_planned_x", "zmp_planned_y",
+    "base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw",
+    "cog_x", "cog_y", "cog_z", "left_contact", "right_contact",
+)  # fmt: skip
+"""Columns of ``sim.csv``: time (s), measured and planned ZMP (m; measured is ``nan`` while no foot touches the
+floor), base position (m) and orientation (unit quaternion x, y, z, w), measured COG (m), feet on the floor (0/1)."""
+
+SIM_FILES = ("sim.csv", "sim_summary.json", "zmp_sim.png")
+"""Files written by :func:`write_sim_outputs` (the figure only when asked for)."""
+
+_FLOAT_FORMAT = "%.10g"
+
+
+def simulate(
+    scenario: Scenario,
+    robot: RobotModel | str,
+    *,
+    velocity: VelocityCommand | tuple[float, float, float] | None = None,
+    push: Push | Sequence[Push] | None = None,
+    stabilizer: bool | Stabilizer = False,
+    progress: Callable[[float], None] | None = None,
+    sim: SimModel | None = None,
+    config: SimConfig | None = None,
+    options: LoopOptions | None = None,
+) -> SimResult:
+    """Walk ``scenario`` with ``robot`` in MuJoCo, planner + whole-body IK + physics in closed loop at 1 kHz.
+
+    The scenario is walked with the robot's nominal COG height, its step width at half-sitting and its sole
+    (:func:`rtgait.robot.motion.robot_scenario`); its footstep changes are handed to the planner at their
+    connection mode's deadline.
+
+    Args:
+        scenario: the walk (a built-in scenario or one loaded from a file).
+        robot: a loaded robot, or a built-in robot name / description file path.
+        velocity: walk by velocity command ``(vx, vy, wz)`` (m/s, m/s, rad/s) instead of the scenario's footsteps:
+            ``scenario.steps`` steps, then a closing step; the scenario's changes do not apply.
+        push: external force(s) on the robot, e.g. ``Push(start=5.0, duration=0.1, force=(0, 100, 0))``; times
+            are from the start of the run, whose walk begins after the start transition
+            (:attr:`SimResult.walk_start`).
+        stabilizer: ``True`` for the default ZMP feedback (:class:`~rtgait.sim.loop.Stabilizer`), or one with your
+            gains; ``False`` (default): the planner alone, as in the paper.
+        progress: called now and then with the fraction simulated, for long runs.
+        sim: a MuJoCo model built for this robot, to reuse (building one takes about 0.5 s with meshes).
+        config: physics parameters for a new model (ignored when ``sim`` is given).
+        options: further loop settings (start transition, fall limits); ``changes``, ``pushes``, ``stabilizer``
+            and ``stop_after_steps`` in it are replaced by the ones derived from the arguments above.
+
+    Returns:
+        The per-tick record and the outcome.
+
+    Raises:
+        ValueError: ``sim`` was built for another robot, or a bad push / velocity.
+        rtgait.robot.description.RobotError: the robot cannot be loaded or built.
+    """
+    if not isinstance(robot, RobotModel):
+        robot = RobotModel.load(robot)
+    if sim is None:
+        sim = build_sim_model(robot, config)
+    elif sim.robot is not robot:
+        raise ValueError(f"the simulation model was built for another model of {sim.robot.name!r}")
+    walk = robot_scenario(scenario, robot)
+    config_planner = walk.planner_config()
+    if velocity is None:
+        planner = OnlinePlanner(config_planner, walk.strides())
+        changes, stop_after = walk.changes, None
+    else:
+        command = velocity if isinstance(velocity, VelocityCommand) else VelocityCommand(*velocity)
+        planner = OnlinePlanner(config_planner, None)
+        planner.set_velocity(command.vx, command.vy, command.wz)
+        changes, stop_after = (), walk.steps
+    if push is None:
+        pushes: tuple[Push, ...] = ()
+    elif isinstance(push, Push):
+        pushes = (push,)
+    else:
+        pushes = tuple(push)
+    feedback = stabilizer if isinstance(stabilizer, Stabilizer) else (Stabilizer() if stabilizer else None)
+    loop_options = dataclasses.replace(
+        options or LoopOptions(),
+        stabilizer=feedback,
+        pushes=pushes,
+        changes=tuple(changes),
+        stop_after_steps=stop_after,
+    )
+    return run_closed_loop(sim, planner, loop_options, progress=progress)
+
+
+def _table(result: SimResult) -> np.ndarray:
+    return np.column_stack(
+        [
+            result.times,
+            result.zmp,
+            result.zmp_planned,
+            result.base_position,
+            result.base_quaternion,
+            result.cog,
+            result.contact.astype(float),
+        ]
+    )
+
+
+def _write_atomic(path: Path, write: Callable[[Path], None]) -> None:
+    """Write ``path`` through a temporary file beside it, renamed when complete (never a half-written file)."""
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+    try:
+        write(temporary)
+        os.replace(temporary, path)
+    finally:
+        if temporary.exists():
+            temporary.unlink()
+
+
+def _write_csv(result: SimResult, path: Path) -> None:
+    table = _table(result)
+    with open(path, "w", encoding="utf-8", newline="") as stream:
+        stream.write(",".join(SIM_CSV_COLUMNS) + "\n")
+        # Contacts as integers; every other column in 10 significant digits (sub-micrometre positions).
+        formats = [_FLOAT_FORMAT] * (len(SIM_CSV_COLUMNS) - 2) + ["%d", "%d"]
+        np.savetxt(stream, table, fmt=formats, delimiter=",")
+
+
+def plot_zmp_sim(result: SimResult, path: Path, title: str = "") -> None:
+    """Planned and measured ZMP, x and y against time, with the walk's start, the double supports, and the
+    tip-over and fall marked; written to ``path`` (PNG)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(10.0, 6.0), dpi=100, layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(2, 1, sharex=True)
+    t = result.times
+    double = result.support == 0
+    for axis, ax in enumerate(axes):
+        # Shade the planned double supports: the measured ZMP moves between the feet there.
+        edges = np.flatnonzero(np.diff(np.r_[0, double.astype(int), 0]))
+        for start, stop in zip(edges[::2], edges[1::2], strict=True):
+            ax.axvspan(t[start], t[min(stop, len(t) - 1)], color="0.9", lw=0, zorder=0)
+        ax.plot(t, result.zmp_planned[:, axis], color="tab:blue", lw=1.4, label="planned ZMP")
+        ax.plot(t, result.zmp[:, axis], color="tab:orange", lw=0.8, label="measured ZMP (contact CoP)")
+        ax.plot(t, result.cog[:, axis], color="tab:red", lw=0.8, ls="--", label="measured COG")
+        ax.axvline(result.walk_start, color="0.4", lw=0.8, ls=":", label="walk starts")
+        if result.tip_time is not None:
+            ax.axvline(result.tip_time, color="tab:purple", lw=1.2, ls="--", label=f"tipped ({result.tip_time:.2f} s)")
+        if result.fell and result.fall_time is not None:
+            ax.axvline(result.fall_time, color="tab:red", lw=1.6, label=f"fell ({result.fall_time:.2f} s)")
+        ax.set_ylabel(f"{'xy'[axis]} (m)")
+        ax.grid(True, lw=0.3)
+    axes[0].legend(loc="upper left", fontsize=8, ncols=2)
+    axes[1].set_xlabel("time (s)")
+    outcome = (
+        f"fell at {result.fall_time:.2f} s ({result.fall_cause})"
+        if result.fell
+        else f"walked {result.steps_completed}/{result.steps_planned} steps"
+    )
+    if result.tip_time is not None:
+        outcome += f", a foot tipped over at {result.tip_time:.2f} s"
+    axes[0].set_title(f"{title + ': ' if title else ''}{result.robot} in MuJoCo, {outcome}", fontsize=10)
+    figure.savefig(path, format="png")
+
+
+def write_sim_outputs(
+    result: SimResult, out_dir: str | Path, *, figure: bool = True, title: str = "", extra: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """Write ``sim.csv``, ``sim_summary.json`` and (with ``figure``) ``zmp_sim.png`` into ``out_dir``.
+
+    Args:
+        result: the simulated walk.
+        out_dir: folder, created if missing; files of the same names are replaced, others are left alone.
+        figure: also draw ``zmp_sim.png`` (needs matplotlib).
+        title: prefix of the figure's title (e.g. the scenario's name).
+        extra: more entries for the summary (e.g. the scenario's name).
+
+    Returns:
+        The summary, also written as ``sim_summary.json``: ``fell``, ``fall_time`` (s or null), ``fall_cause``,
+        ``tipped``, ``tip_time``, ``steps_planned``, ``steps_completed``, ``distance_walked`` (m),
+        ``zmp_tracking_error_rms`` and ``_max`` (m, single support), ``simulated_time`` and ``wall_time`` (s),
+        ``real_time_factor``, ``walk_start`` and ``walk_end`` (s), ``rows`` and ``files``.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    files = ["sim.csv", "sim_summary.json"]
+    _write_atomic(out / "sim.csv", lambda path: _write_csv(result, path))
+    if figure:
+        _write_atomic(out / "zmp_sim.png", lambda path: plot_zmp_sim(result, path, title))
+        files.append("zmp_sim.png")
+    summary: dict[str, Any] = {**(extra or {}), **result.summary(), "rows": len(result.times), "files": files}
+    text = json.dumps(summary, indent=2, allow_nan=False) + "\n"
+    _write_atomic(out / "sim_summary.json", lambda path: path.write_text(text, encoding="utf-8"))
+    return summary

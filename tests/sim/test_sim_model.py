@@ -1,0 +1,128 @@
+"""The MuJoCo model built from the robot description: structure, and kinematics identical to Pinocchio's."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+pin = pytest.importorskip("pinocchio")
+
+from rtgait.robot.model import RobotModel  # noqa: E402
+from rtgait.sim.model import SimConfig, build_sim_model  # noqa: E402
+
+
+def test_structure(talos, talos_sim):
+    model = talos_sim.model
+    # A free joint plus the 14 moving joints; every other URDF joint is locked.
+    assert model.nq == 7 + 14 and model.nv == 6 + 14
+    assert model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE
+    assert model.opt.timestep == 0.001
+    assert model.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    assert float(model.body_mass.sum()) == pytest.approx(talos.mass, rel=1e-9)
+    # Actuator i drives joint i of the IK's order, found by name.
+    assert model.nu == len(talos.joint_names)
+    for i, name in enumerate(talos.joint_names):
+        joint = model.actuator_trnid[i, 0]
+        assert mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, joint) == name
+        assert model.jnt_qposadr[joint] == talos_sim.qpos_index[i]
+    # Position servos: force = kp * (ctrl - q) - kd * qdot.
+    np.testing.assert_allclose(model.actuator_gainprm[:, 0], talos_sim.kp)
+    np.testing.assert_allclose(model.actuator_biasprm[:, 1], -talos_sim.kp)
+    np.testing.assert_allclose(model.actuator_biasprm[:, 2], -talos_sim.kd)
+
+
+def test_only_the_soles_touch_the_floor(talos, talos_sim):
+    model = talos_sim.model
+    sole = talos.description.sole
+    colliding = []
+    for a in range(model.ngeom):
+        for b in range(a + 1, model.ngeom):
+            ok = (model.geom_contype[a] & model.geom_conaffinity[b]) or (
+                model.geom_contype[b] & model.geom_conaffinity[a]
+            )
+            if ok:
+                colliding.append({a, b})
+    floor = talos_sim.floor_geom
+    expected = [sorted({floor, talos_sim.left_sole_geom}), sorted({floor, talos_sim.right_sole_geom})]
+    assert sorted(sorted(pair) for pair in colliding) == sorted(expected)
+    for geom in (talos_sim.left_sole_geom, talos_sim.right_sole_geom):
+        assert model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_BOX
+        half = model.geom_size[geom]
+        assert half[0] == pytest.approx(0.5 * (sole.front + sole.back))
+        assert half[1] == pytest.approx(0.5 * (sole.inner + sole.outer))
+
+
+def test_soles_at_half_sitting(talos, talos_sim):
+    # The sole boxes' bottom faces lie on the floor, centred on the described sole rectangle.
+    data = mujoco.MjData(talos_sim.model)
+    data.qpos[:] = talos_sim.qpos_half_sitting
+    mujoco.mj_forward(talos_sim.model, data)
+    sole = talos.description.sole
+    for geom, site, inward in (
+        (talos_sim.left_sole_geom, talos_sim.left_sole_site, -1.0),
+        (talos_sim.right_sole_geom, talos_sim.right_sole_site, 1.0),
+    ):
+        rotation = data.geom_xmat[geom].reshape(3, 3)
+        half = talos_sim.model.geom_size[geom]
+        bottom = data.geom_xpos[geom] - rotation[:, 2] * half[2]
+        assert bottom[2] == pytest.approx(0.0, abs=5e-4)
+        offset = bottom - data.site_xpos[site]
+        assert offset[0] == pytest.approx(0.5 * (sole.front - sole.back), abs=5e-4)
+        assert offset[1] == pytest.approx(inward * 0.5 * (sole.inner - sole.outer), abs=5e-4)
+
+
+def test_kinematics_match_pinocchio(talos, talos_sim):
+    # Random base poses and joint angles: MuJoCo's COG and sole frames must equal Pinocchio's (independent model
+    # of the same URDF), which checks the joint mapping by name, the quaternion order and the locked joints.
+    rng = np.random.default_rng(7)
+    model = talos.model
+    pdata = model.createData()
+    data = mujoco.MjData(talos_sim.model)
+    for _ in range(5):
+        q = pin.randomConfiguration(
+            model, np.maximum(model.lowerPositionLimit, -1.0), np.minimum(model.upperPositionLimit, 1.0)
+        )
+        q[:3] = rng.uniform(-1.0, 1.0, 3)
+        talos_sim.qpos_from_pinocchio(q, out=data.qpos)
+        mujoco.mj_kinematics(talos_sim.model, data)
+        mujoco.mj_comPos(talos_sim.model, data)
+        pin.framesForwardKinematics(model, pdata, q)
+        np.testing.assert_allclose(data.subtree_com[talos_sim.base_body], pin.centerOfMass(model, pdata, q), atol=1e-9)
+        for site, frame in (
+            (talos_sim.left_sole_site, talos.left_sole_id),
+            (talos_sim.right_sole_site, talos.right_sole_id),
+        ):
+            np.testing.assert_allclose(data.site_xpos[site], pdata.oMf[frame].translation, atol=1e-9)
+            np.testing.assert_allclose(data.site_xmat[site].reshape(3, 3), pdata.oMf[frame].rotation, atol=1e-9)
+        np.testing.assert_allclose(talos_sim.pinocchio_from_qpos(data.qpos), q, atol=1e-12)
+
+
+def test_meshes_are_visual_only(talos):
+    sim = build_sim_model(talos)  # with the visual meshes
+    model = sim.model
+    meshes = [g for g in range(model.ngeom) if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH]
+    assert len(meshes) > 20
+    assert all(model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0 for g in meshes)
+
+
+def test_gains_from_the_description(talos):
+    kp = {name: 1000.0 + i for i, name in enumerate(talos.joint_names)}
+    description = dataclasses.replace(talos.description, kp=kp, kd=7.0)
+    sim = build_sim_model(RobotModel.load(description), SimConfig(meshes=False))
+    np.testing.assert_allclose(sim.kp, [kp[name] for name in talos.joint_names])
+    np.testing.assert_allclose(sim.kd, 7.0)
+    # Without [gains]: the default, proportional to the mass.
+    default = SimConfig()
+    np.testing.assert_allclose(build_sim_model(talos, SimConfig(meshes=False)).kp, default.kp_per_kg * talos.mass)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("timestep", 0.0), ("friction", -1.0), ("contact_timeconst", 0.001), ("kp_per_kg", 0.0), ("armature", -0.1)],
+)
+def test_bad_config(field, value):
+    with pytest.raises(ValueError, match=field):
+        SimConfig(**{field: value})
