@@ -83,6 +83,33 @@ def _build_parser() -> argparse.ArgumentParser:
         "--html", action="store_true", help="write replay.html, a 3D replay of the robot (implies --robot talos)"
     )
     plan.add_argument("--quiet", action="store_true", help="print nothing on success")
+    simulate = commands.add_parser(
+        "simulate",
+        help="walk a scenario on a robot in MuJoCo physics (planner + whole-body IK + position servos at 1 kHz)",
+        description="Walk the scenario in closed loop in MuJoCo at 1 kHz: each tick the online planner samples, "
+        "the whole-body IK solves and the joint servos track; the measured ZMP (centre of pressure of the contact "
+        "forces), base pose, COG and contacts are logged, and falls end the run. Writes sim.csv, summary.json "
+        "and zmp_sim.png.",
+    )
+    simulate.add_argument("scenario", metavar="SCENARIO", help="built-in scenario name or scenario .toml file")
+    simulate.add_argument("--robot", metavar="NAME_OR_FILE", default="talos", help="robot (default talos)")
+    simulate.add_argument("--out", metavar="DIR", type=Path, help="output folder (default: out/<scenario>-sim)")
+    simulate.add_argument(
+        "--velocity",
+        metavar="VX,VY,WZ",
+        help="walk the scenario's number of steps by a velocity command instead of its footsteps (m/s, m/s, rad/s)",
+    )
+    simulate.add_argument(
+        "--push",
+        metavar="T,DURATION,FX,FY",
+        action="append",
+        default=[],
+        help="push the base with a horizontal force (N) from time T (s, from the start of the run) for DURATION "
+        "(s); may be repeated",
+    )
+    simulate.add_argument("--stabilizer", action="store_true", help="turn the ZMP/COG feedback stabiliser on")
+    simulate.add_argument("--no-figures", action="store_true", help="skip zmp_sim.png")
+    simulate.add_argument("--quiet", action="store_true", help="print nothing on success")
     return parser
 
 
@@ -130,15 +157,7 @@ def _write_outputs(
 
     A failure at any point leaves ``out`` as it was (no half-written trajectory next to an old summary).
     """
-    if out.exists() and not out.is_dir():
-        raise _RunError(f"--out {out} exists and is not a folder")
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        # Not tempfile.mkdtemp: its 0700 mode would survive the rename and surprise anyone sharing the results.
-        staging = out.parent / f".{out.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp"
-        staging.mkdir()
-    except OSError as error:
-        raise _RunError(f"cannot create output folder {out}: {error.strerror or error}") from None
+    staging = _staging_folder(out)
     try:
         rows = write_trajectory_csv(result, staging / "trajectory.csv")
         files = ["trajectory.csv"]
@@ -171,13 +190,7 @@ def _write_outputs(
         files.insert(1, "summary.json")
         summary["files"] = files
         (staging / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-        if out.exists():
-            # Replace file by file: the folder may hold other things the user keeps there.
-            for name in files:
-                os.replace(staging / name, out / name)
-            staging.rmdir()
-        else:
-            staging.rename(out)
+        _move_into(staging, out, files)
     except OSError as error:
         shutil.rmtree(staging, ignore_errors=True)
         raise _RunError(f"cannot write outputs to {out}: {error.strerror or error}") from None
@@ -315,6 +328,100 @@ def _plan(args: argparse.Namespace) -> int:
     return 0
 
 
+def _numbers(text: str, count: int, option: str) -> tuple[float, ...]:
+    """``count`` finite comma-separated numbers from an option's value."""
+    try:
+        values = tuple(float(part) for part in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise ScenarioError(f"{option} needs {count} finite comma-separated numbers, got {text!r}")
+    return values
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    scenario = load_scenario(args.scenario)
+    out: Path = args.out if args.out is not None else Path("out") / f"{scenario.name}-sim"
+    velocity = None if args.velocity is None else _numbers(args.velocity, 3, "--velocity")
+    try:
+        from rtgait.sim.loop import Push
+        from rtgait.sim.run import simulate, write_sim_outputs
+    except ImportError:
+        raise _RunError("simulate needs MuJoCo and Pinocchio: pip install 'rtgait[robot,sim]'") from None
+    pushes = []
+    for text in args.push:
+        start, duration, fx, fy = _numbers(text, 4, "--push")
+        pushes.append(Push(start=start, duration=duration, force=(fx, fy, 0.0)))
+    robot = _load_robot(args.robot)
+    show = not args.quiet and sys.stderr.isatty()
+    progress = _progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
+    result = simulate(
+        scenario, robot, velocity=velocity, push=pushes or None, stabilizer=args.stabilizer, progress=progress
+    )
+    if show:
+        sys.stderr.write("\r\033[K")
+    extra = {"scenario": scenario.name, "connection": scenario.connection, "stabilizer": args.stabilizer}
+    staging = _staging_folder(out)
+    try:
+        summary = write_sim_outputs(
+            result, staging, figure=not args.no_figures, title=f"{scenario.name} ({scenario.connection})", extra=extra
+        )
+        _move_into(staging, out, summary["files"])
+    except OSError as error:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise _RunError(f"cannot write outputs to {out}: {error.strerror or error}") from None
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    if not args.quiet:
+        if summary["fell"]:
+            outcome = f"FELL at {summary['fall_time']:.2f} s ({summary['fall_cause']})"
+        else:
+            outcome = f"walked {summary['steps_completed']} of {summary['steps_planned']} steps without falling"
+        if summary["tipped"]:
+            outcome += f"; a loaded foot tipped over at {summary['tip_time']:.2f} s"
+        rms = summary["zmp_tracking_error_rms"]
+        print(
+            "\n".join(
+                [
+                    f"scenario    {scenario.name} ({scenario.connection}) on {summary['robot']} in MuJoCo, 1 kHz",
+                    f"outcome     {outcome}",
+                    f"walked      {summary['distance_walked']:.3f} m; measured vs planned ZMP in single support: "
+                    f"RMS {'n/a' if rms is None else f'{rms * 1e3:.1f} mm'}",
+                    f"speed       real-time factor {summary['real_time_factor']:.1f} "
+                    f"({summary['simulated_time']:.1f} s simulated in {summary['wall_time']:.1f} s)",
+                    f"outputs     {out}{os.sep}: {', '.join(summary['files'])} ({summary['rows']} rows)",
+                ]
+            )
+        )
+    return 0
+
+
+def _staging_folder(out: Path) -> Path:
+    """A fresh folder beside ``out`` to write into before moving the results into place."""
+    if out.exists() and not out.is_dir():
+        raise _RunError(f"--out {out} exists and is not a folder")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        # Not tempfile.mkdtemp: its 0700 mode would survive the rename and surprise anyone sharing the results.
+        staging = out.parent / f".{out.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp"
+        staging.mkdir()
+    except OSError as error:
+        raise _RunError(f"cannot create output folder {out}: {error.strerror or error}") from None
+    return staging
+
+
+def _move_into(staging: Path, out: Path, files: Sequence[str]) -> None:
+    """Move finished outputs from ``staging`` into ``out`` (renaming the folder when ``out`` is new)."""
+    if out.exists():
+        # Replace file by file: the folder may hold other things the user keeps there.
+        for name in files:
+            os.replace(staging / name, out / name)
+        staging.rmdir()
+    else:
+        staging.rename(out)
+
+
 def _scenarios() -> int:
     listing = builtin_scenarios()
     width = max(len(name) for name in listing)
@@ -340,8 +447,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _scenarios()
         if args.command == "plan":
             return _plan(args)
+        if args.command == "simulate":
+            return _simulate(args)
         parser.print_usage(sys.stderr)
-        _error("choose a command: scenarios or plan")
+        _error("choose a command: scenarios, plan or simulate")
         return 2
     except ValueError as error:  # ScenarioError and the core's own input checks
         _error(str(error))

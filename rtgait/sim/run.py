@@ -2,7 +2,7 @@
 
 ``simulate(scenario, robot)`` builds the MuJoCo model (or reuses one), plans the scenario with the robot's COG
 height, step width and sole, and runs the closed loop of :mod:`rtgait.sim.loop`. ``write_sim_outputs(result,
-out_dir)`` writes ``sim.csv`` (one row per tick), ``sim_summary.json`` and ``zmp_sim.png`` (planned vs measured
+out_dir)`` writes ``sim.csv`` (one row per tick), ``summary.json`` and ``zmp_sim.png`` (planned vs measured
 ZMP), each to a temporary name first and renamed when complete, and returns the summary.
 """
 
@@ -35,7 +35,7 @@ SIM_CSV_COLUMNS = (
 """Columns of ``sim.csv``: time (s), measured and planned ZMP (m; measured is ``nan`` while no foot touches the
 floor), base position (m) and orientation (unit quaternion x, y, z, w), measured COG (m), feet on the floor (0/1)."""
 
-SIM_FILES = ("sim.csv", "sim_summary.json", "zmp_sim.png")
+SIM_FILES = ("sim.csv", "summary.json", "zmp_sim.png")
 """Files written by :func:`write_sim_outputs` (the figure only when asked for)."""
 
 _FLOAT_FORMAT = "%.10g"
@@ -191,7 +191,7 @@ def plot_zmp_sim(result: SimResult, path: Path, title: str = "") -> None:
 def write_sim_outputs(
     result: SimResult, out_dir: str | Path, *, figure: bool = True, title: str = "", extra: dict[str, Any] | None = None
 ) -> dict[str, Any]:
-    """Write ``sim.csv``, ``sim_summary.json`` and (with ``figure``) ``zmp_sim.png`` into ``out_dir``.
+    """Write ``sim.csv``, ``summary.json`` and (with ``figure``) ``zmp_sim.png`` into ``out_dir``.
 
     Args:
         result: the simulated walk.
@@ -201,19 +201,19 @@ def write_sim_outputs(
         extra: more entries for the summary (e.g. the scenario's name).
 
     Returns:
-        The summary, also written as ``sim_summary.json``: ``fell``, ``fall_time`` (s or null), ``fall_cause``,
+        The summary, also written as ``summary.json``: ``fell``, ``fall_time`` (s or null), ``fall_cause``,
         ``tipped``, ``tip_time``, ``steps_planned``, ``steps_completed``, ``distance_walked`` (m),
         ``zmp_tracking_error_rms`` and ``_max`` (m, single support), ``simulated_time`` and ``wall_time`` (s),
         ``real_time_factor``, ``walk_start`` and ``walk_end`` (s), ``rows`` and ``files``.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    files = ["sim.csv", "sim_summary.json"]
+    files = ["sim.csv", "summary.json"]
     _write_atomic(out / "sim.csv", lambda path: _write_csv(result, path))
     if figure:
         _write_atomic(out / "zmp_sim.png", lambda path: plot_zmp_sim(result, path, title))
         files.append("zmp_sim.png")
     summary: dict[str, Any] = {**(extra or {}), **result.summary(), "rows": len(result.times), "files": files}
     text = json.dumps(summary, indent=2, allow_nan=False) + "\n"
-    _write_atomic(out / "sim_summary.json", lambda path: path.write_text(text, encoding="utf-8"))
+    _write_atomic(out / "summary.json", lambda path: path.write_text(text, encoding="utf-8"))
     return summary

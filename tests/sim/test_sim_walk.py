@@ -104,7 +104,7 @@ def test_outputs(short_walk, tmp_path):
     np.testing.assert_allclose(table[:, 0], result.times, atol=1e-12)
     np.testing.assert_allclose(table[:, 8:12], result.base_quaternion, atol=1e-9)
     assert set(np.unique(table[:, -2:])) <= {0.0, 1.0}
-    saved = json.loads((folder / "sim_summary.json").read_text(encoding="utf-8"))
+    saved = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
     assert saved == summary
     for key in (
         "fell",
@@ -118,7 +118,7 @@ def test_outputs(short_walk, tmp_path):
     assert summary["fell"] is False and summary["fall_time"] is None
     assert math.isfinite(summary["zmp_tracking_error_rms"])
     assert (folder / "zmp_sim.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert sorted(p.name for p in folder.iterdir()) == ["sim.csv", "sim_summary.json", "zmp_sim.png"]
+    assert sorted(p.name for p in folder.iterdir()) == ["sim.csv", "summary.json", "zmp_sim.png"]
 
 
 def test_bad_input(talos, talos_sim, shorten):
