@@ -7,6 +7,7 @@ Exit codes: 0 success, 1 the run could not complete (outputs not writable, matpl
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -14,7 +15,7 @@ import shutil
 import sys
 import time
 import uuid
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
@@ -157,10 +158,9 @@ def _write_outputs(
 
     A failure at any point leaves ``out`` as it was (no half-written trajectory next to an old summary).
     """
-    staging = _staging_folder(out)
-    try:
+    with _staged_outputs(out) as (staging, files):
         rows = write_trajectory_csv(result, staging / "trajectory.csv")
-        files = ["trajectory.csv"]
+        files.append("trajectory.csv")
         summary = summarize(result, scenario)
         if robot_run is not None:
             files.append("joints.csv")
@@ -190,13 +190,6 @@ def _write_outputs(
         files.insert(1, "summary.json")
         summary["files"] = files
         (staging / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-        _move_into(staging, out, files)
-    except OSError as error:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise _RunError(f"cannot write outputs to {out}: {error.strerror or error}") from None
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
     return summary
 
 
@@ -361,18 +354,11 @@ def _simulate(args: argparse.Namespace) -> int:
     if show:
         sys.stderr.write("\r\033[K")
     extra = {"scenario": scenario.name, "connection": scenario.connection, "stabilizer": args.stabilizer}
-    staging = _staging_folder(out)
-    try:
+    with _staged_outputs(out) as (staging, files):
         summary = write_sim_outputs(
             result, staging, figure=not args.no_figures, title=f"{scenario.name} ({scenario.connection})", extra=extra
         )
-        _move_into(staging, out, summary["files"])
-    except OSError as error:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise _RunError(f"cannot write outputs to {out}: {error.strerror or error}") from None
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
+        files.extend(summary["files"])
     if not args.quiet:
         if summary["fell"]:
             outcome = f"FELL at {summary['fall_time']:.2f} s ({summary['fall_cause']})"
@@ -395,6 +381,23 @@ def _simulate(args: argparse.Namespace) -> int:
             )
         )
     return 0
+
+
+@contextlib.contextmanager
+def _staged_outputs(out: Path) -> Iterator[tuple[Path, list[str]]]:
+    """Yield a staging folder beside ``out`` and a list to name the files written there; on success they move
+    into ``out``, on any failure the staging folder is removed and ``out`` is left as it was."""
+    staging = _staging_folder(out)
+    files: list[str] = []
+    try:
+        yield staging, files
+        _move_into(staging, out, files)
+    except OSError as error:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise _RunError(f"cannot write outputs to {out}: {error.strerror or error}") from None
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
 
 
 def _staging_folder(out: Path) -> Path:

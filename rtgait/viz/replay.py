@@ -39,6 +39,8 @@ import zmq
 from meshcat.animation import Animation
 from pinocchio.visualize import MeshcatVisualizer
 
+from rtgait.core.footsteps import SoleRect
+
 __all__ = [
     "COG_COLOR",
     "DEFAULT_FPS",
@@ -46,7 +48,6 @@ __all__ = [
     "FOOT_COLORS",
     "ROOT",
     "ZMP_COLOR",
-    "ReplaySole",
     "write_replay_html",
 ]
 
@@ -81,17 +82,8 @@ class _Sole(Protocol):
     outer: float
 
 
-@dataclass(frozen=True)
-class ReplaySole:
-    """Sole rectangle used when none is given (m from the foot frame): an HRP-2-like 0.23 x 0.14 m sole."""
-
-    front: float = 0.13
-    back: float = 0.10
-    inner: float = 0.07
-    outer: float = 0.07
-
-
-DEFAULT_SOLE = ReplaySole()
+DEFAULT_SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.07)
+"""Sole drawn when none is given (m from the foot frame): an HRP-2-like 0.23 x 0.14 m sole."""
 
 
 def write_replay_html(
@@ -241,7 +233,7 @@ def _footprint(foot: Any, index: int) -> _Foot:
     return _Foot(values["x"], values["y"], values["yaw"], str(side))
 
 
-def _sole(sole: Any) -> ReplaySole:
+def _sole(sole: Any) -> SoleRect:
     values = {}
     for name in ("front", "back", "inner", "outer"):
         value = getattr(sole, name, None)
@@ -252,7 +244,7 @@ def _sole(sole: Any) -> ReplaySole:
         values[name] = float(value)
     if values["front"] + values["back"] <= 0.0 or values["inner"] + values["outer"] <= 0.0:
         raise ValueError("sole rectangle must have a positive length and width (m)")
-    return ReplaySole(**values)
+    return SoleRect(**values)
 
 
 # ---------------------------------------------------------------------------------------------- sampling
@@ -378,7 +370,7 @@ def _render(
     fps: float,
     repetitions: int | None,
     footprints: list[_Foot],
-    sole: ReplaySole,
+    sole: SoleRect,
     cog: np.ndarray | None,
     zmp: np.ndarray | None,
     frame_cog: np.ndarray | None,
@@ -430,7 +422,7 @@ def _render(
         _close(vis)
 
 
-def _draw_footprints(vis: meshcat.Visualizer, footprints: list[_Foot], sole: ReplaySole) -> None:
+def _draw_footprints(vis: meshcat.Visualizer, footprints: list[_Foot], sole: SoleRect) -> None:
     length = sole.front + sole.back
     width = sole.inner + sole.outer
     materials = {s: mg.MeshLambertMaterial(color=c, transparent=True, opacity=0.8) for s, c in FOOT_COLORS.items()}
