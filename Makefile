@@ -20,10 +20,10 @@ demo: $(STAMP)
 	$(BIN)/rtgait plan fig8 --out out/fig8
 	$(BIN)/rtgait plan fig11 --robot talos --compensate-angular-momentum --html --out out/fig11-talos
 	$(BIN)/rtgait plan fig8 --robot talos --compensate-angular-momentum --html --out out/fig8-talos
-	$(BIN)/rtgait simulate fig8 --robot talos --out out/fig8-sim
+	$(BIN)/rtgait simulate fig8 --robot talos --html --out out/fig8-sim
 	@echo "Figures, trajectory.csv and summary.json for each scenario are in out/<scenario>/;"
 	@echo "on Talos also joints.csv, multibody_zmp.png and replay.html (open it in a browser);"
-	@echo "the walk in MuJoCo physics is in out/fig8-sim/ (sim.csv, summary.json, zmp_sim.png)."
+	@echo "the walk in MuJoCo physics is in out/fig8-sim/ (sim.csv, summary.json, zmp_sim.png, replay.html)."
 
 test: $(STAMP)
 	$(BIN)/ruff check .

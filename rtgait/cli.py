@@ -16,7 +16,7 @@ import sys
 import time
 import uuid
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
@@ -90,7 +90,8 @@ def _build_parser() -> argparse.ArgumentParser:
         description="Walk the scenario in closed loop in MuJoCo at 1 kHz: each tick the online planner samples, "
         "the whole-body IK solves and the joint servos track; the measured ZMP (centre of pressure of the contact "
         "forces), base pose, COG and contacts are logged, and falls end the run. Writes sim.csv, summary.json "
-        "and zmp_sim.png.",
+        "and zmp_sim.png (and with --html, replay.html: the simulated motion in 3D). A scenario with a [guide] path "
+        "(e.g. guided) is walked led by the hand: a person pulls the robot's hand along it.",
     )
     simulate.add_argument("scenario", metavar="SCENARIO", help="built-in scenario name or scenario .toml file")
     simulate.add_argument("--robot", metavar="NAME_OR_FILE", default="talos", help="robot (default talos)")
@@ -110,6 +111,9 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     simulate.add_argument("--stabilizer", action="store_true", help="turn the ZMP/COG feedback stabiliser on")
     simulate.add_argument("--no-figures", action="store_true", help="skip zmp_sim.png")
+    simulate.add_argument(
+        "--html", action="store_true", help="write replay.html, a 3D replay of the simulated motion (needs meshcat)"
+    )
     simulate.add_argument("--quiet", action="store_true", help="print nothing on success")
     return parser
 
@@ -348,17 +352,50 @@ def _simulate(args: argparse.Namespace) -> int:
     robot = _load_robot(args.robot)
     show = not args.quiet and sys.stderr.isatty()
     progress = _progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
-    result = simulate(
-        scenario, robot, velocity=velocity, push=pushes or None, stabilizer=args.stabilizer, progress=progress
-    )
+    extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection}
+    extra["stabilizer"] = args.stabilizer
+    if scenario.guide is not None and velocity is None:
+        # Led by the hand: the outcome (where the person led the robot) goes into the summary too.
+        from rtgait.robot.motion import robot_scenario
+        from rtgait.sim.guided import simulate_guided
+        from rtgait.sim.model import build_sim_model
+        from rtgait.sim.run import loop_options
+
+        result, led = simulate_guided(
+            build_sim_model(robot),
+            robot_scenario(scenario, robot),
+            loop_options(pushes or None, args.stabilizer),
+            progress=progress,
+        )
+        extra["guide"] = {**asdict(led), "base_error": led.base_error}
+    else:
+        result = simulate(
+            scenario, robot, velocity=velocity, push=pushes or None, stabilizer=args.stabilizer, progress=progress
+        )
     if show:
         sys.stderr.write("\r\033[K")
-    extra = {"scenario": scenario.name, "connection": scenario.connection, "stabilizer": args.stabilizer}
     with _staged_outputs(out) as (staging, files):
         summary = write_sim_outputs(
             result, staging, figure=not args.no_figures, title=f"{scenario.name} ({scenario.connection})", extra=extra
         )
         files.extend(summary["files"])
+        if args.html:
+            from rtgait.robot.motion import robot_scenario
+            from rtgait.sim.run import write_sim_replay
+
+            # The footprints are drawn with the sole the walk was planned with: the robot's, not the scenario's.
+            write_sim_replay(
+                result,
+                robot,
+                staging / "replay.html",
+                sole=robot_scenario(scenario, robot).sole,
+                title=f"rtgait: {scenario.name} on {robot.name} in MuJoCo",
+            )
+            files.append("replay.html")
+            summary["files"].append("replay.html")
+            # summary.json was written before the replay existed: written again, it lists the replay too.
+            text = json.dumps(summary, indent=2, allow_nan=False) + "\n"
+            (staging / "summary.json").write_text(text, encoding="utf-8")
     if not args.quiet:
         if summary["fell"]:
             outcome = f"FELL at {summary['fall_time']:.2f} s ({summary['fall_cause']})"
@@ -366,6 +403,8 @@ def _simulate(args: argparse.Namespace) -> int:
             outcome = f"walked {summary['steps_completed']} of {summary['steps_planned']} steps without falling"
         if summary["tipped"]:
             outcome += f"; a loaded foot tipped over at {summary['tip_time']:.2f} s"
+        if "guide" in summary:
+            outcome += f"; led by the hand, the base ended {summary['guide']['base_error']:.3f} m from its goal"
         rms = summary["zmp_tracking_error_rms"]
         print(
             "\n".join(

@@ -37,6 +37,16 @@ data in ``rtgait/scenarios/`` and are loaded by name; any other file is loaded b
     length = 0.15                       # m; optional width (m) and yaw (rad) too
     # only = false                      # true: this step only; false: this step and all later forward steps
 
+    [guide]                             # optional: a hand-guided walk (``rtgait simulate``), see GuidePath
+    forward = 1.0                       # m, straight ahead first
+    turn = 1.57                         # rad, then a turn (positive to the left) ...
+    radius = 1.0                        # m, ... on an arc of this radius
+    after = 0.5                         # m, straight on after the turn, then the person stops
+    speed = 0.15                        # m/s, the person's walking speed
+
+With ``[guide]``, ``rtgait simulate`` ignores the walk's footsteps: a person pulls the robot's hand along that path
+and the hand force sets the steps (:mod:`rtgait.sim.guided`); ``walk.steps`` is then the most steps it may take.
+
 Every problem with a file raises :class:`ScenarioError` with one line naming the offending field.
 """
 
@@ -53,7 +63,7 @@ from rtgait.core.online import CONNECTION_MODES, ConnectionMode, PlannerConfig
 from rtgait.core.rollout import ScheduledChange
 from rtgait.tomlfile import NumberRule, TomlFiles
 
-__all__ = ["Scenario", "ScenarioError", "builtin_scenarios", "load_scenario", "parse_scenario"]
+__all__ = ["GuidePath", "Scenario", "ScenarioError", "builtin_scenarios", "load_scenario", "parse_scenario"]
 
 _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 # Stride.turn must stay strictly inside +-pi/2; checking yaws with this rule gives the error a TOML field name.
@@ -62,6 +72,65 @@ _YAW_RULE: NumberRule = "|x| < pi/2"
 
 class ScenarioError(ValueError):
     """A scenario is unknown, unreadable or invalid. The message is one line naming the field."""
+
+
+@dataclass(frozen=True)
+class GuidePath:
+    """The path along which a person leads the robot by the hand: straight, an arc, straight, then a stop.
+
+    The path starts at the robot's hand and heads where the robot faces.
+
+    Attributes:
+        forward: length of the first straight part (m, >= 0).
+        turn: angle of the arc (rad, positive to the left, |turn| <= pi).
+        radius: radius of the arc (m, > 0).
+        after: length of the straight part after the arc (m, >= 0).
+        speed: the person's speed along the path (m/s, > 0).
+    """
+
+    forward: float = 1.0
+    turn: float = math.pi / 2
+    radius: float = 1.0
+    after: float = 0.5
+    speed: float = 0.15
+
+    def __post_init__(self) -> None:
+        checks = {
+            "forward": self.forward >= 0.0,
+            "radius": self.radius > 0.0,
+            "after": self.after >= 0.0,
+            "speed": self.speed > 0.0,
+            "turn": abs(self.turn) <= math.pi,
+        }
+        for name, ok in checks.items():
+            value = getattr(self, name)
+            if not (math.isfinite(value) and ok):
+                raise ScenarioError(f"guide.{name} is out of range, got {value}")
+
+    @property
+    def length(self) -> float:
+        """Length of the whole path (m)."""
+        return self.forward + abs(self.turn) * self.radius + self.after
+
+    @property
+    def duration(self) -> float:
+        """Time the person walks (s)."""
+        return self.length / self.speed
+
+    def at(self, s: float) -> tuple[float, float, float]:
+        """Position ``(x, y)`` (m) and heading (rad) after ``s`` metres along the path, relative to its start
+        (heading +x); ``s`` is clipped to ``[0, length]``."""
+        s = min(max(s, 0.0), self.length)
+        if s <= self.forward:
+            return s, 0.0, 0.0
+        arc = abs(self.turn) * self.radius
+        side = 1.0 if self.turn >= 0.0 else -1.0
+        angle = side * min(s - self.forward, arc) / self.radius
+        # The arc's centre is `radius` to the side of the end of the first straight part.
+        x = self.forward + side * self.radius * math.sin(angle)
+        y = side * self.radius * (1.0 - math.cos(angle))
+        rest = max(s - self.forward - arc, 0.0)
+        return x + rest * math.cos(angle), y + rest * math.sin(angle), angle
 
 
 _FILES = TomlFiles(kind="scenario", folder="scenarios", error=ScenarioError)
@@ -89,6 +158,7 @@ class Scenario:
         yaw: turn of every forward step (rad), positive to the left.
         first_foot: the foot that swings first.
         source: where the scenario came from (``"builtin"`` or a file path); informative only.
+        guide: a hand-guided walk's path (``[guide]``), or ``None``.
     """
 
     name: str
@@ -108,6 +178,7 @@ class Scenario:
     yaw: float = 0.0
     first_foot: Side = "right"
     source: str = field(default="", compare=False)
+    guide: GuidePath | None = None
 
     def __post_init__(self) -> None:
         # The TOML loader already checks every field with its file path; these checks cover scenarios built in
@@ -214,9 +285,18 @@ def _parse_changes(raw: Any, steps: int) -> tuple[ScheduledChange, ...]:
     return tuple(changes)
 
 
+def _parse_guide(raw: Any) -> GuidePath:
+    table = _FILES.table(raw, "guide")
+    keys = ("forward", "turn", "radius", "after", "speed")
+    _FILES.check_keys(table, "guide", (), keys)
+    units = {"forward": "m", "turn": "rad", "radius": "m", "after": "m", "speed": "m/s"}
+    values = {key: _number(table, key, "guide", unit=units[key]) for key in keys if key in table}
+    return GuidePath(**values)
+
+
 def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
-    _FILES.check_keys(data, "", ("name", "connection", "robot", "timing", "walk"), ("description",))
+    _FILES.check_keys(data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide"))
     name = _FILES.string(data, "name")
     if not _NAME_PATTERN.fullmatch(name):
         raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
@@ -260,6 +340,9 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     yaw = _number(walk, "yaw", "walk", rule=_YAW_RULE, unit="rad") if "yaw" in walk else 0.0
     first_foot = _choice(walk, "first_foot", "walk", ("right", "left")) if "first_foot" in walk else "right"
     changes = _parse_changes(walk["change"], steps) if "change" in walk else ()
+    guide = _parse_guide(data["guide"]) if "guide" in data else None
+    if guide is not None and connection != "quasi-real-time":
+        raise ScenarioError("a [guide] walk uses the quasi-real-time connection (the paper's Section 6)")
 
     try:
         return Scenario(
@@ -280,6 +363,7 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
             yaw=yaw,
             first_foot=first_foot,  # type: ignore[arg-type]  # checked by _choice
             source=source,
+            guide=guide,
         )
     except ScenarioError as error:
         # Cross-field checks in Scenario use bare names; point at the TOML table they live in.

@@ -13,7 +13,7 @@ from rtgait.core.online import OnlinePlanner
 from rtgait.core.rollout import Rollout, rollout
 from rtgait.scenario import Scenario, ScenarioError, builtin_scenarios, load_scenario
 
-BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "sidestep", "turn")
+BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "sidestep", "turn")
 
 VALID = """\
 name = "probe"
@@ -99,6 +99,12 @@ def test_builtin_loads_under_its_own_name_with_the_shared_robot(name: str) -> No
     if name == "fig11":  # stepping in place: two steps plus the closing one, nothing changes
         assert (scenario.dt, scenario.horizon_steps, scenario.steps, scenario.step_length) == (0.005, 3, 2, 0.0)
         assert scenario.changes == ()
+        return
+    if name == "guided":  # led by the hand in physics: at most 40 steps, the path in [guide], no changes
+        assert (scenario.dt, scenario.horizon_steps, scenario.steps, scenario.connection) == (
+            0.005, 3, 40, "quasi-real-time",
+        )  # fmt: skip
+        assert scenario.changes == () and scenario.guide is not None
         return
     assert (scenario.dt, scenario.horizon_steps, scenario.steps) == (0.005, 3, 10)
     assert len(scenario.changes) == 1 and scenario.changes[0].step == 5
@@ -284,7 +290,7 @@ def test_bad_input_raises_one_line_naming_the_field(tmp_path: Path, case: str, e
 
 
 def test_unknown_scenario_lists_the_builtins() -> None:
-    with pytest.raises(ScenarioError, match="fig4, fig6, fig7, fig8, fig8-real-time, fig11, sidestep, turn"):
+    with pytest.raises(ScenarioError, match="fig4, fig6, fig7, fig8, fig8-real-time, fig11, guided, sidestep, turn"):
         load_scenario("fig5")
 
 

@@ -36,6 +36,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from rtgait.core.footsteps import Footstep
 from rtgait.core.online import OnlinePlanner
 from rtgait.core.rollout import ScheduledChange
 from rtgait.robot.ik import IKTargets, WholeBodyIK
@@ -162,6 +163,15 @@ class LoopOptions:
         changes: footstep changes, each handed to the planner at its connection mode's deadline.
         stop_after_steps: for a walk by velocity command: ``planner.stop()`` once this many steps are committed,
             so that the walk has ``stop_after_steps + 1`` steps (the last one closes the feet).
+        on_tick: called every tick from the walk's start on, as ``on_tick(t, data)`` with the simulation time
+            ``t`` (s) and the MuJoCo state, before the footstep changes and the planner's sample: a hook for
+            simulated sensors and operators (e.g. a hand pull through ``data.xfrc_applied`` that sets the
+            planner's velocity command, :mod:`rtgait.sim.guided`). It may call ``planner.stop()``.
+        duration: for a walk by command that ``on_tick`` ends: simulate this long (s, from the start of the run)
+            instead of a length known in advance; ``stop_after_steps`` is then not needed.
+        replay_period: the robot's whole configuration is recorded every this many seconds (rounded to whole
+            ticks) for the 3D replay (:attr:`SimResult.replay_q`); 0.04 s is the replay's 25 frames per second, and
+            keeps a minute of walking to 1500 rows.
     """
 
     start_ramp: float = 1.0
@@ -173,8 +183,15 @@ class LoopOptions:
     contact_threshold: float = 0.01
     changes: tuple[ScheduledChange, ...] = ()
     stop_after_steps: int | None = None
+    replay_period: float = 0.04
+    on_tick: Callable[[float, mujoco.MjData], None] | None = None
+    duration: float | None = None
 
     def __post_init__(self) -> None:
+        if self.duration is not None and not (math.isfinite(self.duration) and self.duration > 0.0):
+            raise ValueError(f"duration must be > 0 s, got {self.duration}")
+        if not (math.isfinite(self.replay_period) and self.replay_period > 0.0):
+            raise ValueError(f"replay_period must be a duration > 0 s, got {self.replay_period}")
         for name in ("start_ramp", "start_hold", "after"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
@@ -221,6 +238,13 @@ class SimResult:
         wall_time: wall-clock time of the loop (s).
         robot: the robot's name.
         mass: its mass (kg).
+        replay_index: the ticks at which the configuration was recorded for the replay, every
+            :attr:`LoopOptions.replay_period`, shape ``(m,)``; their times are :attr:`replay_times`.
+        replay_q: the robot's configuration at those ticks in its FULL Pinocchio model (``robot.full_model``:
+            free flyer ``x, y, z, qx, qy, qz, qw``, then every joint; locked joints at half-sitting), shape
+            ``(m, full nq)`` (m, rad), converted from MuJoCo's ``qpos`` by joint name.
+        replay_soles: MuJoCo's left and right sole site positions at those ticks (m), shape ``(m, 2, 3)``.
+        footprints: the planner's footprints ``F[0..]`` as planned at the end of the run.
     """
 
     times: np.ndarray
@@ -247,6 +271,15 @@ class SimResult:
     wall_time: float
     robot: str
     mass: float
+    replay_index: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    replay_q: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    replay_soles: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 3)))
+    footprints: tuple[Footstep, ...] = ()
+
+    @property
+    def replay_times(self) -> np.ndarray:
+        """Times of the replay's configurations (s), shape ``(m,)``."""
+        return self.times[self.replay_index]
 
     @property
     def duration(self) -> float:
@@ -422,8 +455,8 @@ def run_closed_loop(
     stop_after = options.stop_after_steps
     if planner.n_steps is not None:
         stop_after = None  # a walk of footsteps ends by itself
-    elif stop_after is None:
-        raise ValueError("a walk by velocity command needs LoopOptions.stop_after_steps to end")
+    elif stop_after is None and options.duration is None:
+        raise ValueError("a walk by velocity command needs LoopOptions.stop_after_steps or duration to end")
     cog_start, left_start, right_start = _start_pose(planner)
     # The start configuration: half-sitting's COG over the planner's standing feet, soles level. Half-sitting
     # itself may differ from it by a milliradian (a sole not quite level); starting from the IK's own solution
@@ -436,11 +469,18 @@ def run_closed_loop(
         sim.reset(data, q=q)
     dt = sim.timestep
     planner.start(walk_start)
-    # The walk's length is known in advance, also by command: stop() closes the feet after stop_after steps.
-    n_steps = planner.n_steps if stop_after is None else stop_after + 1
-    assert n_steps is not None
-    walk_end = walk_start + _walk_length(planner, n_steps)
-    n_ticks = math.floor((walk_end + options.after) / dt + 1e-9) + 1
+    if options.duration is not None and planner.n_steps is None and stop_after is None:
+        # Ended by on_tick: the number of steps and the walk's end are known only afterwards.
+        n_steps = 0
+        walk_end = options.duration
+        n_ticks = math.floor(options.duration / dt + 1e-9) + 1
+    else:
+        # The walk's length is known in advance, also by command: stop() closes the feet after stop_after steps.
+        n_steps = planner.n_steps if stop_after is None else stop_after + 1  # type: ignore[assignment]
+        assert n_steps is not None
+        walk_end = walk_start + _walk_length(planner, n_steps)
+        n_ticks = math.floor((walk_end + options.after) / dt + 1e-9) + 1
+    on_tick = options.on_tick
 
     # ----- the record, allocated once ----------------------------------------------------------------------------
     times = np.arange(n_ticks) * dt
@@ -453,6 +493,12 @@ def run_closed_loop(
     corners = np.zeros((n_ticks, 2), dtype=np.int8)
     tilt = np.zeros((n_ticks, 2))
     support = np.zeros(n_ticks, dtype=np.int8)
+    # The replay's record: a whole qpos every few ticks only (a 1 kHz record of ~40 coordinates would be 30 times
+    # more than a 25 fps replay shows).
+    replay_every = max(1, round(options.replay_period / sim.timestep))
+    n_replay = (n_ticks - 1) // replay_every + 1
+    replay_qpos = np.empty((n_replay, model.nq))
+    replay_soles = np.empty((n_replay, 2, 3))
 
     # ----- pushes ----------------------------------------------------------------------------------------------
     pushes = sorted(options.pushes, key=lambda p: p.start)
@@ -471,6 +517,7 @@ def run_closed_loop(
     # MuJoCo's arrays of fixed size are views that stay valid; the contact and constraint arrays are reallocated
     # by every step and are fetched each tick.
     ctrl, qpos, subtree_com, site_xmat = data.ctrl, data.qpos, data.subtree_com, data.site_xmat
+    site_xpos = data.site_xpos
     left_site, right_site = sim.left_sole_site, sim.right_sole_site
     base_body = sim.base_body
     left_geom, right_geom = sim.left_sole_geom, sim.right_sole_geom
@@ -532,6 +579,8 @@ def run_closed_loop(
             planned_x, planned_y = target_cog[0], target_cog[1]
             code, phase = 0, -1
         else:
+            if on_tick is not None:
+                on_tick(t, data)
             while pending and t >= planner.change_deadline(pending[0].step):
                 change = pending.pop(0)
                 planner.change_step(
@@ -565,7 +614,14 @@ def run_closed_loop(
         # ----- physics --------------------------------------------------------------------------------------
         row = base[k]
         row[:] = qpos[0:7]  # the state at t, before the step integrates it to t + dt
+        replay_row = k // replay_every if k % replay_every == 0 else -1
+        if replay_row >= 0:
+            replay_qpos[replay_row] = qpos
         mujoco.mj_step(model, data)
+        if replay_row >= 0:
+            # mj_step computed the kinematics of the state it started from, the qpos recorded above.
+            replay_soles[replay_row, 0] = site_xpos[left_site]
+            replay_soles[replay_row, 1] = site_xpos[right_site]
 
         # ----- measurements at t: mj_step computed contacts, forces and COG at the state it started from -------
         com = subtree_com[base_body]
@@ -633,6 +689,10 @@ def run_closed_loop(
         progress(1.0)
 
     contact = normal[:ticks] > threshold
+    if n_steps == 0:  # ended by on_tick: the steps the planner ended up with, and when it came to rest
+        n_steps = planner.n_steps if planner.n_steps is not None else steps_completed
+        walk_end = min(planner.end_time, walk_end)
+    n_recorded = (ticks - 1) // replay_every + 1
     return SimResult(
         times=times[:ticks],
         zmp=zmp[:ticks],
@@ -658,4 +718,8 @@ def run_closed_loop(
         wall_time=wall,
         robot=robot.name,
         mass=robot.mass,
+        replay_index=np.arange(n_recorded) * replay_every,
+        replay_q=sim.full_configurations(replay_qpos[:n_recorded]),
+        replay_soles=replay_soles[:n_recorded],
+        footprints=tuple(planner.footprints()),
     )

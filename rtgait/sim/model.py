@@ -180,6 +180,29 @@ class SimModel:
         q[7:] = qpos[self.qpos_index]
         return q
 
+    def full_configurations(self, qpos: np.ndarray) -> np.ndarray:
+        """Configurations of the robot's FULL Pinocchio model from MuJoCo ``qpos`` rows (for the 3D replay).
+
+        The free joint's quaternion is reordered from ``(qw, qx, qy, qz)`` to ``(qx, qy, qz, qw)``, the moving
+        joints are taken by name (:attr:`qpos_index`), and the joints locked in MuJoCo get their half-sitting
+        angle, at which the model builder locked them.
+
+        Args:
+            qpos: shape ``(model.nq,)`` or ``(k, model.nq)`` (m, unit quaternion, rad).
+
+        Returns:
+            shape ``(full nq,)`` or ``(k, full nq)`` in ``robot.full_model``'s order (m, unit quaternion, rad).
+        """
+        qpos = np.asarray(qpos, dtype=float)
+        if qpos.shape[-1] != self.model.nq:
+            raise ValueError(f"qpos must have {self.model.nq} coordinates per row, got shape {qpos.shape}")
+        q = np.empty((*qpos.shape[:-1], self.robot.model.nq))
+        q[..., 0:3] = qpos[..., 0:3]
+        q[..., 3:6] = qpos[..., 4:7]
+        q[..., 6] = qpos[..., 3]
+        q[..., 7:] = qpos[..., self.qpos_index]
+        return self.robot.full_configuration(q)
+
     def new_data(self, settle: float = SETTLE_TIME, q: np.ndarray | None = None) -> mujoco.MjData:
         """Fresh simulation state at rest with the soles on the floor and the servos holding the posture.
 

@@ -25,7 +25,15 @@ from rtgait.scenario import Scenario
 from rtgait.sim.loop import LoopOptions, Push, SimResult, Stabilizer, run_closed_loop
 from rtgait.sim.model import SimConfig, SimModel, build_sim_model
 
-__all__ = ["SIM_CSV_COLUMNS", "SIM_FILES", "simulate", "write_sim_outputs"]
+__all__ = [
+    "SIM_CSV_COLUMNS",
+    "SIM_FILES",
+    "loop_options",
+    "replay_paths",
+    "simulate",
+    "write_sim_outputs",
+    "write_sim_replay",
+]
 
 SIM_CSV_COLUMNS = (
     "t", "zmp_x", "zmp_y", "zmp_planned_x", "zmp_planned_y",
@@ -39,6 +47,22 @@ SIM_FILES = ("sim.csv", "summary.json", "zmp_sim.png")
 """Files written by :func:`write_sim_outputs` (the figure only when asked for)."""
 
 _FLOAT_FORMAT = "%.10g"
+
+
+def loop_options(
+    push: Push | Sequence[Push] | None = None,
+    stabilizer: bool | Stabilizer = False,
+    options: LoopOptions | None = None,
+) -> LoopOptions:
+    """``options`` (default :class:`LoopOptions`) with these pushes and stabiliser (see :func:`simulate`)."""
+    if push is None:
+        pushes: tuple[Push, ...] = ()
+    elif isinstance(push, Push):
+        pushes = (push,)
+    else:
+        pushes = tuple(push)
+    feedback = stabilizer if isinstance(stabilizer, Stabilizer) else (Stabilizer() if stabilizer else None)
+    return dataclasses.replace(options or LoopOptions(), stabilizer=feedback, pushes=pushes)
 
 
 def simulate(
@@ -63,7 +87,8 @@ def simulate(
         scenario: the walk (a built-in scenario or one loaded from a file).
         robot: a loaded robot, or a built-in robot name / description file path.
         velocity: walk by velocity command ``(vx, vy, wz)`` (m/s, m/s, rad/s) instead of the scenario's footsteps:
-            ``scenario.steps`` steps, then a closing step; the scenario's changes do not apply.
+            ``scenario.steps`` steps, then a closing step; the scenario's changes do not apply. Without it, a
+            scenario with a ``[guide]`` path is walked led by the hand (:func:`rtgait.sim.guided.simulate_guided`).
         push: external force(s) on the robot, e.g. ``Push(start=5.0, duration=0.1, force=(0, 100, 0))``; times
             are from the start of the run, whose walk begins after the start transition
             (:attr:`SimResult.walk_start`).
@@ -88,7 +113,13 @@ def simulate(
         sim = build_sim_model(robot, config)
     elif sim.robot is not robot:
         raise ValueError(f"the simulation model was built for another model of {sim.robot.name!r}")
+    base_options = loop_options(push, stabilizer, options)
     walk = robot_scenario(scenario, robot)
+    if walk.guide is not None and velocity is None:
+        # Led by the hand: the pull sets the steps (rtgait.sim.guided); the scenario's footsteps do not apply.
+        from rtgait.sim.guided import simulate_guided
+
+        return simulate_guided(sim, walk, dataclasses.replace(base_options, changes=()), progress=progress)[0]
     config_planner = walk.planner_config()
     if velocity is None:
         planner = OnlinePlanner(config_planner, walk.strides())
@@ -98,21 +129,8 @@ def simulate(
         planner = OnlinePlanner(config_planner, None)
         planner.set_velocity(command.vx, command.vy, command.wz)
         changes, stop_after = (), walk.steps
-    if push is None:
-        pushes: tuple[Push, ...] = ()
-    elif isinstance(push, Push):
-        pushes = (push,)
-    else:
-        pushes = tuple(push)
-    feedback = stabilizer if isinstance(stabilizer, Stabilizer) else (Stabilizer() if stabilizer else None)
-    loop_options = dataclasses.replace(
-        options or LoopOptions(),
-        stabilizer=feedback,
-        pushes=pushes,
-        changes=tuple(changes),
-        stop_after_steps=stop_after,
-    )
-    return run_closed_loop(sim, planner, loop_options, progress=progress)
+    walk_options = dataclasses.replace(base_options, changes=tuple(changes), stop_after_steps=stop_after)
+    return run_closed_loop(sim, planner, walk_options, progress=progress)
 
 
 def _table(result: SimResult) -> np.ndarray:
@@ -186,6 +204,66 @@ def plot_zmp_sim(result: SimResult, path: Path, title: str = "") -> None:
         outcome += f", a foot tipped over at {result.tip_time:.2f} s"
     axes[0].set_title(f"{title + ': ' if title else ''}{result.robot} in MuJoCo, {outcome}", fontsize=10)
     figure.savefig(path, format="png")
+
+
+def replay_paths(result: SimResult) -> tuple[np.ndarray, np.ndarray]:
+    """The measured COG (m, shape ``(m, 3)``) and ZMP (m, shape ``(m, 2)``) at the replay's ticks.
+
+    The measured ZMP is NaN while no foot touches the floor (and the replay cannot draw NaN): such rows hold the
+    last measured value, or the planned ZMP before the first measurement.
+    """
+    index = result.replay_index
+    cog = result.cog[index]
+    zmp = result.zmp[index].copy()
+    last = result.zmp_planned[index[0]] if len(index) else np.zeros(2)
+    for row in zmp:  # a few hundred rows: a plain loop is clearer than a vectorised forward fill
+        if np.isfinite(row).all():
+            last = row.copy()
+        else:
+            row[:] = last
+    return cog, zmp
+
+
+def write_sim_replay(
+    result: SimResult, robot: RobotModel, path: str | Path, *, sole: Any = None, title: str = ""
+) -> Path:
+    """Write ``path`` (HTML): the 3D replay of the SIMULATED motion, with the planner's footprints, the measured
+    COG and the measured ZMP (needs meshcat; see :func:`rtgait.viz.replay.write_replay_html`).
+
+    Args:
+        result: a simulated walk, with its configurations recorded (:attr:`SimResult.replay_q`).
+        robot: the robot it was simulated with (its full model and visual meshes are drawn).
+        path: the HTML file; its folder must exist.
+        sole: the footprints' sole rectangle (m), e.g. the walked scenario's ``sole``; the replay's default if
+            ``None``.
+        title: the page title.
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: fewer than two configurations were recorded, or they are for another robot.
+    """
+    from rtgait.robot.pipeline import visual_model
+    from rtgait.viz.replay import write_replay_html
+
+    if len(result.replay_index) < 2:
+        raise ValueError("the replay needs at least two recorded configurations (the run was too short)")
+    if result.replay_q.shape[1] != robot.full_model.nq:
+        raise ValueError(f"the recorded configurations are not those of {robot.name}'s full model")
+    cog, zmp = replay_paths(result)
+    return write_replay_html(
+        path,
+        robot.full_model,
+        visual_model(robot),
+        result.replay_times,
+        result.replay_q,
+        footprints=result.footprints,
+        sole=sole,
+        cog=cog,
+        zmp=zmp,
+        title=title or f"rtgait: {result.robot} in MuJoCo",
+    )
 
 
 def write_sim_outputs(
