@@ -213,10 +213,9 @@ class _ActivePlan:
 class _Layout:
     """What a replan needs to know about one plan shape: its operator and where its anchors come from."""
 
-    __slots__ = ("G", "G_eager", "anchor_phases", "durations", "offsets", "operator")
+    __slots__ = ("G", "G_eager", "anchor_phases", "durations", "offsets")
 
     def __init__(self, operator: PlanOperator, kinds: tuple[str, ...]) -> None:
-        self.operator = operator
         self.G = operator.G
         self.G_eager = np.ascontiguousarray(operator.G[: 12 * EAGER_SEGMENTS])
         self.durations = operator.durations.tolist()

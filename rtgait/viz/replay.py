@@ -181,14 +181,7 @@ def _times(times: Sequence[float] | np.ndarray) -> np.ndarray:
 def _configurations(q: np.ndarray, k: int, model: pin.Model) -> np.ndarray:
     """``q`` as float64 ``(k, nq)`` with unit quaternions (an IK's drift from unit length is removed)."""
     nq = model.nq
-    try:
-        arr = np.asarray(q, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"q must be an array of numbers: {exc}") from None
-    if arr.shape != (k, nq):
-        raise ValueError(f"q must have shape (k, nq) = ({k}, {nq}) to match times and the model, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError("q must be finite")
+    arr = _finite_array(q, (k, nq), "q", "an array of numbers", "(k, nq)", "times and the model", "")
     unit = np.array([pin.normalize(model, row) for row in arr]).reshape(k, nq)
     for index, row in enumerate(unit):
         if not pin.isNormalized(model, row, 1e-9):  # normalize leaves a zero-length quaternion at zero
@@ -199,14 +192,21 @@ def _configurations(q: np.ndarray, k: int, model: pin.Model) -> np.ndarray:
 def _path_array(values: np.ndarray | None, k: int, dim: int, name: str) -> np.ndarray | None:
     if values is None:
         return None
+    return _finite_array(values, (k, dim), name, "an array of positions (m)", f"(k, {dim})", "times", " (m)")
+
+
+def _finite_array(
+    values: object, shape: tuple[int, int], name: str, kind: str, symbolic: str, match: str, unit: str
+) -> np.ndarray:
+    """``values`` as a finite float64 array of ``shape``, or a ``ValueError`` naming ``name`` and what it must be."""
     try:
         arr = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an array of positions (m): {exc}") from None
-    if arr.shape != (k, dim):
-        raise ValueError(f"{name} must have shape (k, {dim}) = ({k}, {dim}) to match times, got {arr.shape}")
+        raise ValueError(f"{name} must be {kind}: {exc}") from None
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {symbolic} = {shape} to match {match}, got {arr.shape}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite (m)")
+        raise ValueError(f"{name} must be finite{unit}")
     return arr
 
 

@@ -123,31 +123,10 @@ def test_description_naming_a_missing_frame(tmp_path: Path, capsys: pytest.Captu
     assert not out.exists()
 
 
-def test_unreachable_step_exits_2_and_writes_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    scenario = tmp_path / "giant.toml"
-    scenario.write_text(
-        """name = "giant"
-connection = "quasi-real-time"
-[robot]
-cog_height = 0.8
-[robot.sole]
-front = 0.13
-back = 0.10
-inner = 0.07
-outer = 0.07
-[timing]
-single_support = 0.8
-double_support = 0.2
-dt = 0.01
-horizon_steps = 3
-[walk]
-steps = 3
-step_length = 0.9
-step_width = 0.19
-step_height = 0.05
-""",
-        encoding="utf-8",
-    )
+def test_unreachable_step_exits_2_and_writes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], write_scenario
+) -> None:
+    scenario = write_scenario(name="giant", connection="quasi-real-time", step_length=0.9)
     out = tmp_path / "never"
     code, _, err = run(["plan", str(scenario), "--robot", "talos", "--out", str(out)], capsys)
     assert code == 2

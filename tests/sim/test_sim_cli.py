@@ -13,34 +13,15 @@ pytest.importorskip("pinocchio")
 
 from rtgait.cli import main
 
-SHORT_WALK = """name = "short"
-connection = "quasi-real-time"
-[robot]
-cog_height = 0.8
-[robot.sole]
-front = 0.13
-back = 0.10
-inner = 0.07
-outer = 0.07
-[timing]
-single_support = 0.7
-double_support = 0.1
-dt = 0.005
-horizon_steps = 3
-start = 0.8
-end = 0.8
-settle = 0.8
-[walk]
-steps = 2
-step_length = 0.08
-step_width = 0.19
-step_height = 0.05
-"""
 
-
-def test_simulate_writes_csv_summary_and_figure(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    scenario = tmp_path / "short.toml"
-    scenario.write_text(SHORT_WALK, encoding="utf-8")
+def test_simulate_writes_csv_summary_and_figure(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], write_scenario
+) -> None:
+    # Two 8 cm steps and the closing one at fig8's timing, with short start and end phases.
+    scenario = write_scenario(
+        name="short", connection="quasi-real-time", single_support=0.7, double_support=0.1, dt=0.005,
+        steps=2, step_length=0.08, short_ends=True,
+    )  # fmt: skip
     out = tmp_path / "sim"
     assert main(["simulate", str(scenario), "--out", str(out)]) == 0
     printed = capsys.readouterr().out

@@ -17,31 +17,6 @@ import pinocchio as pin
 from rtgait.cli import main
 from rtgait.sim.run import replay_paths
 
-# One step of 8 cm and the closing step, fig8's timing: a short run for the command line.
-SHORT_WALK = """name = "short"
-connection = "quasi-real-time"
-[robot]
-cog_height = 0.8
-[robot.sole]
-front = 0.13
-back = 0.10
-inner = 0.07
-outer = 0.07
-[timing]
-single_support = 0.7
-double_support = 0.1
-dt = 0.005
-horizon_steps = 3
-start = 0.8
-end = 0.8
-settle = 0.8
-[walk]
-steps = 1
-step_length = 0.08
-step_width = 0.19
-step_height = 0.05
-"""
-
 
 def test_replay_configurations_put_the_soles_where_mujoco_had_them(talos, short_walk):
     """Pinocchio's forward kinematics of the converted full configuration vs MuJoCo's sole sites at the same
@@ -82,9 +57,12 @@ def test_replay_paths_have_no_gaps(short_walk):
     assert np.isfinite(zmp).all() and np.isfinite(cog).all()
 
 
-def test_the_cli_writes_the_replay_of_the_simulated_motion(tmp_path: Path) -> None:
-    scenario = tmp_path / "short.toml"
-    scenario.write_text(SHORT_WALK, encoding="utf-8")
+def test_the_cli_writes_the_replay_of_the_simulated_motion(tmp_path: Path, write_scenario) -> None:
+    # One step of 8 cm and the closing step, fig8's timing: a short run for the command line.
+    scenario = write_scenario(
+        name="short", connection="quasi-real-time", single_support=0.7, double_support=0.1, dt=0.005,
+        steps=1, step_length=0.08, short_ends=True,
+    )  # fmt: skip
     out = tmp_path / "sim"
     assert main(["simulate", str(scenario), "--out", str(out), "--html", "--no-figures", "--quiet"]) == 0
     page = (out / "replay.html").read_text(encoding="utf-8")
