@@ -17,12 +17,15 @@ from rtgait.core.footsteps import Footstep, SoleRect, Stride, Timeline, Timing, 
 from rtgait.core.lipm import GRAVITY, CogTrajectory, omega
 from rtgait.core.online import (
     CONNECTION_MODES,
+    FEEDBACK_MODES,
     SAMPLE_FIELDS,
+    CommandClampedWarning,
     GaitSample,
     OnlinePlanner,
     PlannerConfig,
     PlanRecord,
     StepChangeTooLateError,
+    StopCancelledWarning,
     VelocityCommand,
     straight_walk,
 )
@@ -32,10 +35,12 @@ from rtgait.core.support import signed_margin, support_polygon
 
 __all__ = [
     "CONNECTION_MODES",
+    "FEEDBACK_MODES",
     "GRAVITY",
     "SAMPLE_FIELDS",
     "BoundaryValueSolver",
     "CogTrajectory",
+    "CommandClampedWarning",
     "ConnectionSolver",
     "Footstep",
     "GaitSample",
@@ -47,6 +52,7 @@ __all__ = [
     "ScheduledChange",
     "SoleRect",
     "StepChangeTooLateError",
+    "StopCancelledWarning",
     "Stride",
     "Timeline",
     "Timing",

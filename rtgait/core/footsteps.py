@@ -18,6 +18,8 @@ from typing import Literal
 
 import numpy as np
 
+from rtgait.core.limits import MAX_PHASE_DURATION, MAX_STRIDE, MIN_PHASE_DURATION, check_range
+
 Side = Literal["left", "right"]
 SIDES: tuple[Side, Side] = ("left", "right")
 
@@ -76,6 +78,10 @@ class Stride:
             _require_finite(f"stride {name}", getattr(self, name))
         if self.width <= 0.0:
             raise ValueError(f"stride width must be > 0 m (feet apart), got {self.width}")
+        if abs(self.length) > MAX_STRIDE or self.width > MAX_STRIDE:
+            raise ValueError(
+                f"stride length and width must be at most {MAX_STRIDE:g} m, got {self.length}, {self.width}"
+            )
         if abs(self.turn) >= math.pi / 2:
             raise ValueError(f"stride turn must be within +-pi/2 rad, got {self.turn}")
 
@@ -181,8 +187,9 @@ class Timing:
     def __post_init__(self) -> None:
         for name in ("single_support", "double_support", "start", "end", "settle"):
             value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
                 raise ValueError(f"timing {name} must be a finite duration > 0 s, got {value}")
+            check_range(f"timing {name}", value, MIN_PHASE_DURATION, MAX_PHASE_DURATION, "s")
 
     @property
     def step_period(self) -> float:

@@ -14,6 +14,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from rtgait.core.limits import MAX_COG_HEIGHT, MAX_GRAVITY, MIN_COG_HEIGHT, MIN_GRAVITY, check_range
 from rtgait.core.spline import PiecewisePolynomial, evaluate_polynomials
 
 GRAVITY = 9.81
@@ -21,11 +22,13 @@ GRAVITY = 9.81
 
 
 def omega(cog_height: float, gravity: float = GRAVITY) -> float:
-    """Natural frequency ``w = sqrt(g / zc)`` of the pendulum (1/s); the paper's ``T_c``."""
-    if not (math.isfinite(cog_height) and cog_height > 0.0):
-        raise ValueError(f"cog_height must be a finite positive height in m, got {cog_height}")
-    if not (math.isfinite(gravity) and gravity > 0.0):
-        raise ValueError(f"gravity must be a finite positive acceleration in m/s^2, got {gravity}")
+    """Natural frequency ``w = sqrt(g / zc)`` of the pendulum (1/s); the paper's ``T_c``.
+
+    ``cog_height`` must be within [0.05, 10] m and ``gravity`` within [0.1, 100] m/s^2
+    (:mod:`rtgait.core.limits`): outside them no walking robot exists and the closed form loses its conditioning.
+    """
+    check_range("cog_height", cog_height, MIN_COG_HEIGHT, MAX_COG_HEIGHT, "m")
+    check_range("gravity", gravity, MIN_GRAVITY, MAX_GRAVITY, "m/s^2")
     return math.sqrt(gravity / cog_height)
 
 

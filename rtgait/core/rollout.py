@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rtgait.core.footsteps import Footstep, SoleRect
+from rtgait.core.limits import MAX_ROLLOUT_TICKS, MIN_DT
 from rtgait.core.online import SAMPLE_FIELDS, OnlinePlanner, PlanRecord
 from rtgait.core.support import signed_margin, support_polygon
 
@@ -118,20 +119,30 @@ def rollout(
         duration: how long to run (s); default: until the walk has settled.
         progress: called now and then with the fraction done, for long runs.
     """
-    if not (math.isfinite(dt) and dt > 0.0):
-        raise ValueError(f"dt must be a finite period > 0 s, got {dt}")
-    planner.start(0.0)
-    end = planner.end_time if duration is None else duration
+    if not (math.isfinite(dt) and dt >= MIN_DT):
+        raise ValueError(f"dt must be a finite period >= {MIN_DT:g} s, got {dt}")
+    if duration is not None and not (math.isfinite(duration) and duration >= 0.0):
+        raise ValueError(f"duration must be a finite time >= 0 s, got {duration}")
+    end = planner.timeline.end_time if duration is None else duration
     if not math.isfinite(end):
         raise ValueError("a rollout needs a finite duration: the walk has no planned end")
-    pending = sorted(changes, key=lambda c: planner.change_deadline(c.step))
     n_ticks = math.floor(end / dt + 1e-9) + 1
+    if n_ticks > MAX_ROLLOUT_TICKS:
+        raise ValueError(
+            f"a rollout of {end:g} s at dt = {dt:g} s would take {n_ticks} ticks: at most {MAX_ROLLOUT_TICKS}"
+        )
+    planner.start(0.0)
+    pending = sorted(changes, key=lambda c: planner.change_deadline(c.step))
     values = np.empty((n_ticks, len(SAMPLE_FIELDS)))
     support = np.empty(n_ticks, dtype=object)
     phase = np.empty(n_ticks, dtype=int)
     times = np.arange(n_ticks) * dt
     applied: list[tuple[float, int]] = []
     report_every = max(n_ticks // 20, 1)
+    # Collected as the walk goes: on a walk longer than the planner's history, the oldest would be gone.
+    plans: list[PlanRecord] = []
+    contacts: dict[int, list[Footstep]] = {}
+    last_phase = -1
     for k in range(n_ticks):
         t = float(times[k])
         while pending and t >= planner.change_deadline(pending[0].step):
@@ -140,14 +151,22 @@ def rollout(
                 change.step, length=change.length, width=change.width, turn=change.turn, through=change.through
             )
             applied.append((planner.change_deadline(change.step), change.step))
-        row, support[k], phase[k] = planner.sample_values(t)
+        row, support[k], q = planner.sample_values(t)
+        phase[k] = q
         values[k] = row
+        if q != last_phase:
+            last_phase = q
+            contacts.setdefault(q, planner.contact_feet(q))
+        new_plans = planner.replan_count - len(plans)
+        if new_plans:
+            plans.extend(planner.plans[-i] for i in range(new_plans, 0, -1))
         if progress is not None and k % report_every == 0:
             progress(k / n_ticks)
     if progress is not None:
         progress(1.0)
     zmp = values[:, SAMPLE_FIELDS.index("zmp_x") : SAMPLE_FIELDS.index("zmp_y") + 1]
-    contacts = {int(q): planner.contact_feet(int(q)) for q in np.unique(phase)}
+    # Footprints may still move until their step is committed: take the ones the walk ended with.
+    contacts = {q: _final_contacts(planner, q, feet) for q, feet in contacts.items()}
     polygons = {q: support_polygon(feet, sole) for q, feet in contacts.items()}
     margin = np.empty(n_ticks)
     for q, polygon in polygons.items():
@@ -163,6 +182,14 @@ def rollout(
         contacts=contacts,
         polygons=polygons,
         phase_starts={q: planner.phase_start(q) for q in contacts},
-        plans=list(planner.plans),
+        plans=plans,
         changes=applied,
     )
+
+
+def _final_contacts(planner: OnlinePlanner, q: int, seen: list[Footstep]) -> list[Footstep]:
+    """The feet on the ground in phase ``q`` as the walk ended (those first seen if no longer kept)."""
+    try:
+        return planner.contact_feet(q)
+    except IndexError:
+        return seen

@@ -215,7 +215,9 @@ def check_walk(planner: OnlinePlanner, run: Walk, t0: float = 0.0) -> None:
             continue
         if q % 2 == 1:
             target = prints[(q + 1) // 2].position if q < 2 * n else final_middle
-            np.testing.assert_allclose(values[rows, ZMP], np.tile(target, (rows.sum(), 1)), rtol=0, atol=1e-9)
+            # While settling, a small ZMP bump that vanishes at both ends brings the COG to rest exactly.
+            atol = 1e-9 if q < 2 * n else 2e-3
+            np.testing.assert_allclose(values[rows, ZMP], np.tile(target, (rows.sum(), 1)), rtol=0, atol=atol)
             np.testing.assert_allclose(zmp_ref[rows], values[rows, ZMP], rtol=0, atol=1e-9)
         else:
             i = q // 2
@@ -236,7 +238,7 @@ def check_walk(planner: OnlinePlanner, run: Walk, t0: float = 0.0) -> None:
     middle = 0.5 * (left[:, :2] + right[:, :2])
     np.testing.assert_allclose(final[:, COG], middle, rtol=0, atol=1e-9)
     np.testing.assert_allclose(final[:, ZMP], middle, rtol=0, atol=1e-9)
-    assert np.max(np.abs(final[:, COG_VEL])) < 2e-3
+    assert np.max(np.abs(final[:, COG_VEL])) < 1e-9, "the walk ends at rest"
     assert set(run.support[done]) == {"double"}
 
 

@@ -1,0 +1,97 @@
+"""Parameters of the online planner, checked where they enter (ranges in :mod:`rtgait.core.limits`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+from rtgait.core.footsteps import Side, Timing
+from rtgait.core.limits import MAX_HORIZON_STEPS, MAX_PHASE_W_T, MAX_STRIDE, check_range
+from rtgait.core.lipm import GRAVITY, omega
+
+ConnectionMode = Literal["real-time", "quasi-real-time"]
+CONNECTION_MODES: tuple[ConnectionMode, ConnectionMode] = ("real-time", "quasi-real-time")
+FeedbackMode = Literal["planned", "measured"]
+FEEDBACK_MODES: tuple[FeedbackMode, FeedbackMode] = ("planned", "measured")
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """Parameters of the online planner.
+
+    Attributes:
+        cog_height: constant COG height above the ground ``zc`` (m), within [0.05, 10].
+        timing: phase durations (s); every phase must also satisfy ``w * T <= 20`` (see
+            :data:`~rtgait.core.limits.MAX_PHASE_W_T`; 5.7 s at the default height).
+        step_width: lateral distance between the feet when standing and in straight walking (m).
+        step_height: peak swing-foot height (m).
+        horizon_steps: steps covered by each plan after its first double support, 1..20.
+        connection: ``"real-time"`` or ``"quasi-real-time"``.
+        gravity: (m/s^2), within [0.1, 100].
+        first_degree: degree of the free ZMP polynomial of the first segment, 4 (default: ZMP position and
+            velocity continuous across a replan) or 2 (the paper's minimal variant: ZMP position only).
+        first_side: which foot swings first.
+        max_step_length, max_step_lateral, max_step_turn: bounds applied to strides made from velocity
+            commands (m, m, rad); a command beyond them is clamped, with a warning.
+        history_steps: footprints, strides, plan records and change records kept behind the current step, so an
+            endless walk's memory stays flat; ``None`` keeps everything.
+        feedback: where each new plan starts: ``"planned"`` (the paper's: from the plan being executed) or
+            ``"measured"`` (from the state last given to :meth:`~rtgait.core.online.OnlinePlanner.observe`).
+    """
+
+    cog_height: float = 0.8
+    timing: Timing = field(default_factory=lambda: Timing(0.8, 0.2))
+    step_width: float = 0.19
+    step_height: float = 0.05
+    horizon_steps: int = 3
+    connection: ConnectionMode = "real-time"
+    gravity: float = GRAVITY
+    first_degree: int = 4
+    first_side: Side = "right"
+    max_step_length: float = 0.3
+    max_step_lateral: float = 0.1
+    max_step_turn: float = 0.4
+    history_steps: int | None = 1000
+    feedback: FeedbackMode = "planned"
+
+    def __post_init__(self) -> None:
+        w = omega(self.cog_height, self.gravity)  # validates both ranges
+        if not isinstance(self.timing, Timing):
+            raise ValueError(f"timing must be a Timing, got {type(self.timing).__name__}")
+        for name in ("single_support", "double_support", "start", "end", "settle"):
+            duration = getattr(self.timing, name)
+            if w * duration > MAX_PHASE_W_T:
+                raise ValueError(
+                    f"timing {name} must be at most {MAX_PHASE_W_T / w:.3g} s at this COG height and gravity "
+                    f"(w T <= {MAX_PHASE_W_T:g}, w = {w:.3g} 1/s), got {duration}"
+                )
+        if self.connection not in CONNECTION_MODES:
+            raise ValueError(f"connection must be one of {CONNECTION_MODES}, got {self.connection!r}")
+        if self.feedback not in FEEDBACK_MODES:
+            raise ValueError(f"feedback must be one of {FEEDBACK_MODES}, got {self.feedback!r}")
+        if (
+            not isinstance(self.horizon_steps, int)
+            or isinstance(self.horizon_steps, bool)
+            or not 1 <= self.horizon_steps <= MAX_HORIZON_STEPS
+        ):
+            raise ValueError(f"horizon_steps must be an integer in 1..{MAX_HORIZON_STEPS}, got {self.horizon_steps!r}")
+        if self.first_degree not in (2, 4):
+            raise ValueError(f"first_degree must be 2 or 4, got {self.first_degree!r}")
+        if self.first_side not in ("left", "right"):
+            raise ValueError(f"first_side must be 'left' or 'right', got {self.first_side!r}")
+        for name in ("step_width", "max_step_length", "max_step_lateral"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 < value <= MAX_STRIDE):
+                raise ValueError(f"{name} must be within (0, {MAX_STRIDE:g}] m, got {value}")
+        if not (math.isfinite(self.max_step_turn) and 0.0 < self.max_step_turn < math.pi / 2):
+            raise ValueError(f"max_step_turn must be within (0, pi/2) rad, got {self.max_step_turn}")
+        check_range("step_height", self.step_height, 0.0, MAX_STRIDE, "m")
+        history = self.history_steps
+        if history is not None and (not isinstance(history, int) or isinstance(history, bool) or history < 8):
+            raise ValueError(f"history_steps must be None or an integer >= 8, got {history!r}")
+
+    @property
+    def w(self) -> float:
+        """Pendulum frequency ``sqrt(g / zc)`` (1/s)."""
+        return omega(self.cog_height, self.gravity)
