@@ -9,6 +9,7 @@ from typing import Literal
 from rtgait.core.footsteps import Side, Timing
 from rtgait.core.limits import MAX_HORIZON_STEPS, MAX_PHASE_W_T, MAX_STRIDE, check_range
 from rtgait.core.lipm import GRAVITY, omega
+from rtgait.core.stepping import StepAdjustment
 
 ConnectionMode = Literal["real-time", "quasi-real-time"]
 CONNECTION_MODES: tuple[ConnectionMode, ConnectionMode] = ("real-time", "quasi-real-time")
@@ -38,6 +39,10 @@ class PlannerConfig:
             endless walk's memory stays flat; ``None`` keeps everything.
         feedback: where each new plan starts: ``"planned"`` (the paper's: from the plan being executed) or
             ``"measured"`` (from the state last given to :meth:`~rtgait.core.online.OnlinePlanner.observe`).
+        replan_dcm_error: with ``feedback="measured"``, replan at once (:meth:`~rtgait.core.online.OnlinePlanner.
+            replan_now`) when the observed DCM is farther than this from the plan's (m); ``None``: only at
+            double-support starts.
+        step_adjustment: push recovery by stepping (:mod:`rtgait.core.stepping`); ``None`` (default): off.
     """
 
     cog_height: float = 0.8
@@ -54,6 +59,8 @@ class PlannerConfig:
     max_step_turn: float = 0.4
     history_steps: int | None = 1000
     feedback: FeedbackMode = "planned"
+    replan_dcm_error: float | None = None
+    step_adjustment: StepAdjustment | None = None
 
     def __post_init__(self) -> None:
         w = omega(self.cog_height, self.gravity)  # validates both ranges
@@ -87,6 +94,10 @@ class PlannerConfig:
         if not (math.isfinite(self.max_step_turn) and 0.0 < self.max_step_turn < math.pi / 2):
             raise ValueError(f"max_step_turn must be within (0, pi/2) rad, got {self.max_step_turn}")
         check_range("step_height", self.step_height, 0.0, MAX_STRIDE, "m")
+        if self.replan_dcm_error is not None:
+            check_range("replan_dcm_error", self.replan_dcm_error, 1e-4, 1.0, "m")
+        if self.step_adjustment is not None and not isinstance(self.step_adjustment, StepAdjustment):
+            raise ValueError("step_adjustment must be a StepAdjustment or None")
         history = self.history_steps
         if history is not None and (not isinstance(history, int) or isinstance(history, bool) or history < 8):
             raise ValueError(f"history_steps must be None or an integer >= 8, got {history!r}")

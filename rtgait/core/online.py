@@ -26,15 +26,18 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from rtgait.core.active_plan import ActivePlan, PlanLayout
+from rtgait.core.batch import halfplane_margin, polygon_halfplanes
 from rtgait.core.config import CONNECTION_MODES, FEEDBACK_MODES, ConnectionMode, FeedbackMode, PlannerConfig
 from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride, Timeline, midpoint
 from rtgait.core.limits import MAX_REPLANS_PER_SAMPLE, MAX_STEPS
 from rtgait.core.lipm import CogTrajectory, omega
 from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey, PlanOperator
+from rtgait.core.phases import PhaseInfo, SwingRetarget, phase_info
 from rtgait.core.sample import SAMPLE_FIELDS, GaitSample, PlanRecord
 from rtgait.core.spline import PiecewisePolynomial
+from rtgait.core.stepping import StepDecision, propose_landing
 from rtgait.core.support import signed_margin, support_polygon
-from rtgait.core.swing import swing_pose
 from rtgait.core.walk import (
     CommandClampedWarning,
     StepChangeTooLateError,
@@ -44,10 +47,6 @@ from rtgait.core.walk import (
     Walk,
 )
 
-EAGER_SEGMENTS = 2
-"""Segments evaluated at replan time: the double support that begins and the single support after it. Replans
-happen at every double-support start, so later segments are rarely sampled; they are evaluated on first use."""
-
 MIN_REMAINDER = 0.02
 """Shortest remainder of a phase (s) that :meth:`OnlinePlanner.replan_now` plans over: closer to the phase's end
 the free ZMP polynomial would need implausible speeds, and the regular replan at the next double-support start
@@ -56,93 +55,12 @@ is imminent anyway."""
 OBSERVATION_MAX_AGE = 0.5
 """Oldest observation (s before the connection instant) a measured-state replan still uses."""
 
+AUTO_REPLAN_INTERVAL = 0.05
+"""Least time (s) between two replans triggered by a DCM error (``PlannerConfig.replan_dcm_error``): a replan
+from the measured state zeroes the error, so a new one means a new disturbance."""
+
 _OPERATOR_CACHE_SIZE = 256
 """Operators kept for plans that start mid-phase (their first duration varies continuously)."""
-
-
-class _ActivePlan:
-    """The plan being executed, in the form the per-tick evaluation reads.
-
-    ``segment(j)`` is ``(x, y)``, each ``[a0..a4, A0..A4, V, W]`` of segment ``j`` as Python floats: scalar
-    arithmetic on floats beats numpy calls for one sample.
-    """
-
-    __slots__ = (
-        "durations", "first_reference", "layout", "offsets", "phase0", "reference_offset", "segments", "t_start", "y",
-    )  # fmt: skip
-
-    def __init__(
-        self, t_start: float, phase0: int, layout: _Layout, y: np.ndarray, first_reference, reference_offset: float
-    ) -> None:
-        self.t_start = t_start
-        self.phase0 = phase0
-        self.layout = layout
-        self.y = y
-        self.durations = layout.durations
-        self.offsets = layout.offsets  # segment starts relative to t_start (s)
-        self.first_reference = first_reference  # [axis] -> cubic coefficients of segment 1's reference ZMP
-        self.reference_offset = reference_offset  # time into that cubic at which segment 1 starts (s)
-        x_rows, y_rows = (layout.G_eager @ y).T.tolist()
-        self.segments: list = [None] * len(layout.durations)
-        for j in range(min(EAGER_SEGMENTS, len(self.segments))):
-            self.segments[j] = (x_rows[12 * j : 12 * j + 12], y_rows[12 * j : 12 * j + 12])
-
-    def segment(self, j: int) -> tuple[list[float], list[float]]:
-        seg = self.segments[j]
-        if seg is None:
-            seg = self.segments[j] = tuple((self.layout.G[12 * j : 12 * j + 12] @ self.y).T.tolist())
-        return seg
-
-    def locate(self, t: float) -> tuple[int, float]:
-        """Segment index and local time of absolute time ``t`` (s), clamped to the plan."""
-        rel = t - self.t_start
-        offsets = self.offsets
-        j = len(offsets) - 1
-        while j > 0 and rel < offsets[j]:
-            j -= 1
-        tau = min(max(rel - offsets[j], 0.0), self.durations[j])
-        return j, tau
-
-    def state(self, j: int, tau: float, w: float) -> list[float]:
-        """``[px, py, dpx, dpy, cx, cy, dcx, dcy]`` on segment ``j`` at local time ``tau`` (m, m/s)."""
-        e = math.exp(w * tau)
-        ch, sh = 0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e)
-        state = [0.0] * 8
-        for axis, coeffs in enumerate(self.segment(j)):
-            a0, a1, a2, a3, a4, A0, A1, A2, A3, A4, V, W = coeffs
-            state[axis] = a0 + tau * (a1 + tau * (a2 + tau * (a3 + tau * a4)))
-            state[2 + axis] = a1 + tau * (2.0 * a2 + tau * (3.0 * a3 + tau * 4.0 * a4))
-            state[4 + axis] = V * ch + W * sh + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4)))
-            state[6 + axis] = w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4))
-        return state
-
-
-class _Layout:
-    """What a replan needs to know about one plan shape: its operator and where its anchors come from."""
-
-    __slots__ = ("G", "G_eager", "anchor_phases", "durations", "first_kind", "offsets")
-
-    def __init__(self, operator: PlanOperator, kinds: tuple[str, ...]) -> None:
-        self.G = operator.G
-        self.G_eager = np.ascontiguousarray(operator.G[: 12 * EAGER_SEGMENTS])
-        self.durations = operator.durations.tolist()
-        self.offsets = np.concatenate(([0.0], np.cumsum(operator.durations[:-1]))).tolist()
-        self.first_kind = kinds[0]
-        # Phases (relative to the plan's first) at whose end the reference ZMP rests on an anchor: the first
-        # phase always (its free polynomial ends there), then every phase in which the reference travels.
-        self.anchor_phases = (0, *(k for k, kind in enumerate(kinds) if k > 0 and kind in MOVING_KINDS))
-
-
-class _PhaseInfo:
-    """The phase being sampled: index, start and end relative to the walk's start (s), support label, the poses
-    of the feet on the ground (both, left then right, in double support; the stance foot in single support) and
-    the swing foot's start and landing footprints (``None`` in double support)."""
-
-    __slots__ = ("duration", "end", "feet", "index", "start", "support", "swing_from", "swing_to")
-
-    def __init__(self, index, start, end, support, feet, swing_from, swing_to) -> None:
-        self.index, self.start, self.end, self.duration = index, start, end, end - start
-        self.support, self.feet, self.swing_from, self.swing_to = support, feet, swing_from, swing_to
 
 
 class OnlinePlanner:
@@ -186,14 +104,14 @@ class OnlinePlanner:
             first_side=config.first_side,
             history_steps=config.history_steps,
         )
-        self._layouts: dict[tuple[bool, int, bool], _Layout] = {}
-        self._midphase_layouts: dict[PatternKey, _Layout] = {}
-        self._plan: _ActivePlan | None = None
+        self._layouts: dict[tuple[bool, int, bool], PlanLayout] = {}
+        self._midphase_layouts: dict[PatternKey, PlanLayout] = {}
+        self._plan: ActivePlan | None = None
         self._next_replan_time = math.inf
         self._next_replan_phase: int | None = 0
         self._t0 = math.nan
         self._latest = -math.inf
-        self._phase: _PhaseInfo | None = None  # cached facts about the phase last sampled
+        self._phase: PhaseInfo | None = None  # cached facts about the phase last sampled
         self._start_state: list[float] | None = None
         self._observed: tuple[float, float, float, float, float] | None = None
         history = config.history_steps
@@ -203,6 +121,12 @@ class OnlinePlanner:
         """``(time, step)`` of every accepted change (the last ``history_steps`` of them)."""
         self.replan_count = 0
         """Replannings since :meth:`start` (not bounded by the history)."""
+        self.step_adjustments: deque[StepDecision] = deque(maxlen=history)
+        """Every step adjustment (:mod:`rtgait.core.stepping`), oldest first."""
+        self.step_adjustment_count = 0
+        """Step adjustments since :meth:`start`."""
+        self._swing_retarget: tuple[int, SwingRetarget] | None = None  # the last swing whose landing moved
+        self._last_auto_replan = -math.inf
 
     # ----- the walk ---------------------------------------------------------------------------------------
     @property
@@ -325,14 +249,26 @@ class OnlinePlanner:
         if not all(math.isfinite(v) for v in values):
             raise ValueError(f"observe needs a finite time, COG and COG velocity, got {values}")
         self._observed = values
+        threshold = self.config.replan_dcm_error
+        plan = self._plan
+        if threshold is None or plan is None or self.config.feedback != "measured" or t < self._latest:
+            return
+        planned = plan.state(*plan.locate(t), self.w)
+        w = self.w
+        ex = values[1] + values[3] / w - planned[4] - planned[6] / w
+        ey = values[2] + values[4] / w - planned[5] - planned[7] / w
+        if ex * ex + ey * ey > threshold * threshold and t - self._last_auto_replan >= AUTO_REPLAN_INTERVAL:
+            self._last_auto_replan = t
+            self.replan_now(t, "dcm-error")
 
     def touchdown(self, t: float, side: Side, x: float, y: float, yaw: float) -> int:
         """A foot is on the ground at ``(x, y)`` (m) with heading ``yaw`` (rad): where a swing foot really landed,
         or where a stance foot slipped to. Its footprint is replaced and every later footprint follows it (strides
         stay relative), so errors never accumulate. Returns the footprint index replaced.
 
-        Plans made from now on rest the ZMP on the new footprint; the plan under way keeps its anchors until the
-        next replan (call :meth:`replan_now` to re-anchor at once).
+        The plan under way is remade at once from its own state at ``t`` (:meth:`replan_now`, reason
+        ``"touchdown"``), so the ZMP rests on the new footprint from the end of the phase under way on (unless the
+        phase ends within :data:`MIN_REMAINDER`: then the replan at the next double-support start does it).
         """
         if not self.started:
             raise RuntimeError("call start() before touchdown()")
@@ -346,9 +282,24 @@ class OnlinePlanner:
             n = self.n_steps
             i = q // 2 if n is None else min(q // 2, n)
             index = i if self._walk.footprint(i).side == side else i + 1
+        if kind == "single" and index == (q + 1) // 2 + 1:
+            self._freeze_swing(t)
         self._walk.retarget(index, footprint)
         self._phase = None
+        if self._plan is not None and t >= self._latest and self._next_replan_time > t:
+            self.replan_now(t, "touchdown")  # re-anchor now, unless the replan due at t will
         return index
+
+    def _freeze_swing(self, t: float) -> tuple[float, float, float]:
+        """The landing of the foot swinging now is about to move: remember its pose and velocity at ``t`` so the
+        swing continues smoothly from there (:func:`~rtgait.core.swing.retargeted_swing`). Returns the pose."""
+        self.sample_values(t)
+        phase = self._phase
+        assert phase is not None and phase.swing_from is not None, "no foot is swinging"
+        rel = t - self._t0
+        pose, vel = phase.swing_state(rel, self.config.step_height)
+        self._swing_retarget = (phase.index, (rel, pose, vel))
+        return pose
 
     # ----- planning ---------------------------------------------------------------------------------------
     def start(
@@ -400,9 +351,10 @@ class OnlinePlanner:
         self._prepare_layouts(0)
 
     def _plan_span(self, q: int) -> int:
-        """Last phase covered by the plan made at phase ``q``."""
+        """Last phase covered by a plan made in phase ``q`` (a plan made mid-step looks as far ahead as the one
+        made when the step began, so that a plan from a state on it reproduces it)."""
         n = self.n_steps
-        last = (q if q % 2 == 0 else q + 1) + 2 * self.config.horizon_steps
+        last = (q - (q & 1)) + 2 * self.config.horizon_steps
         return 2 * n + 1 if n is not None and last >= 2 * n else last
 
     def _prepare_layouts(self, first_phase: int) -> None:
@@ -413,7 +365,7 @@ class OnlinePlanner:
         for q in range(first_phase, last_replan + 1, 2):
             self._layout(q, self._plan_span(q))
 
-    def _layout(self, first: int, last: int) -> _Layout:
+    def _layout(self, first: int, last: int) -> PlanLayout:
         """Operator and anchor bookkeeping for the plan over phases ``first..last`` (cached by plan shape)."""
         n = self.n_steps
         # The phase kinds of a plan depend only on these three facts, so they key the cache cheaply.
@@ -428,10 +380,10 @@ class OnlinePlanner:
                 w=self.w,
                 first_degree=self.config.first_degree,
             )
-            layout = self._layouts[shape] = _Layout(PlanOperator(key), kinds)
+            layout = self._layouts[shape] = PlanLayout(PlanOperator(key), kinds)
         return layout
 
-    def _midphase_layout(self, q: int, remainder: float) -> _Layout:
+    def _midphase_layout(self, q: int, remainder: float) -> PlanLayout:
         """Layout of a plan that starts ``remainder`` (s) before the end of phase ``q`` (cached, bounded)."""
         timeline = self.timeline
         last = self._plan_span(q)
@@ -443,36 +395,8 @@ class OnlinePlanner:
         if layout is None:
             if len(cache) >= _OPERATOR_CACHE_SIZE:
                 del cache[next(iter(cache))]  # the oldest: dicts keep insertion order
-            layout = cache[key] = _Layout(PlanOperator(key), kinds)
+            layout = cache[key] = PlanLayout(PlanOperator(key), kinds)
         return layout
-
-    def _anchors(self, q: int, layout: _Layout) -> list[float]:
-        """Where the reference ZMP rests at the end of each anchor phase of a plan starting at phase ``q`` (m).
-
-        At the end of phase ``p`` it rests on the stance foot of the single support that follows (for a single
-        support itself: its own stance foot); after the final double support, between the feet.
-        Returned flat: ``[x_0, y_0, x_1, y_1, ...]``.
-        """
-        walk = self._walk
-        n = walk.n_steps
-        anchors = []
-        for k in layout.anchor_phases:
-            p = q + k
-            i = (p + 1) >> 1  # stance footprint F[i + 1] after double support p = 2i; F[i] for single p = 2i - 1
-            if p & 1 == 0:
-                i = p >> 1
-                if i == n:
-                    anchors.extend(midpoint(walk.footprint(n), walk.footprint(n + 1)))
-                    continue
-                foot = walk.footprint(i + 1)
-            elif n is not None and p == 2 * n + 1:
-                anchors.extend(midpoint(walk.footprint(n), walk.footprint(n + 1)))
-                continue
-            else:
-                foot = walk.footprint(i)
-            anchors.append(foot.x)
-            anchors.append(foot.y)
-        return anchors
 
     def _state_at_phase_start(self, q: int) -> list[float]:
         """``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]`` at the start of phase ``q`` (m, m/s).
@@ -505,25 +429,27 @@ class OnlinePlanner:
             state[4 + axis] += e * ch + de / w * sh
             state[6 + axis] += e * w * sh + de * ch
 
-    def _connect(self, t_start: float, q: int, layout: _Layout, state: list[float], elapsed: float) -> None:
+    def _connect(self, t_start: float, q: int, layout: PlanLayout, state: list[float], elapsed: float) -> None:
         """Make the plan of ``layout`` from ``state`` at ``t_start`` (``elapsed`` s into phase ``q``)."""
-        y = state + self._anchors(q, layout)
+        y = state + self._walk.anchors(q, layout.anchor_phases)
         # Reference of the free segment: the cubic transfer the footsteps alone would ask for over the whole
         # phase (for a plan made mid-phase: the one of the plan made when the phase began).
         px, py, ax, ay = y[0], y[1], y[8], y[9]
         offset = 0.0
+        previous = self._plan
         if elapsed == 0.0 and layout.first_kind in MOVING_KINDS:
             duration = layout.durations[0]
             k2, k3 = 3.0 / duration**2, -2.0 / duration**3
             reference = ((px, 0.0, k2 * (ax - px), k3 * (ax - px)), (py, 0.0, k2 * (ay - py), k3 * (ay - py)))
-        elif layout.first_kind in MOVING_KINDS and self._plan is not None and self._plan.phase0 == q:
-            reference, offset = self._plan.first_reference, elapsed
+        elif layout.first_kind in MOVING_KINDS and previous is not None and previous.phase0 == q:
+            reference, offset = previous.first_reference, elapsed
         else:
             reference = ((ax, 0.0, 0.0, 0.0), (ay, 0.0, 0.0, 0.0))
-        self._plan = _ActivePlan(t_start, q, layout, np.array(y).reshape(-1, 2), reference, offset)
+        self._plan = ActivePlan(t_start, q, layout, np.array(y).reshape(-1, 2), reference, offset, elapsed)
 
-    def _replan(self) -> None:
-        """Make and connect the plan of the double support that begins now (phase ``_next_replan_phase``)."""
+    def _replan(self, t: float) -> None:
+        """Make and connect the plan of the double support that begins now (phase ``_next_replan_phase``), for
+        the sample at ``t`` (s)."""
         began = time.perf_counter()
         q = self._next_replan_phase
         assert q is not None
@@ -540,8 +466,10 @@ class OnlinePlanner:
         else:
             self._next_replan_phase, self._next_replan_time = None, math.inf
         self._record(t_start, q, layout, began, "start" if q == 0 else "double-support")
+        if self.config.step_adjustment is not None:
+            self._adjust_step(t)
 
-    def _record(self, t_start: float, q: int, layout: _Layout, began: float, reason: str) -> None:
+    def _record(self, t_start: float, q: int, layout: PlanLayout, began: float, reason: str) -> None:
         elapsed = time.perf_counter() - began
         end = t_start + layout.durations[0]
         self.plans.append(PlanRecord(t_start, q, end, len(layout.durations), elapsed, reason))
@@ -576,7 +504,71 @@ class OnlinePlanner:
         layout = self._midphase_layout(q, remainder)
         self._connect(t, q, layout, state, rel - phase.start)
         self._record(t, q, layout, began, reason)
-        return self.plans[-1]
+        record = self.plans[-1]
+        if self.config.step_adjustment is not None:
+            self._adjust_step(t)
+        return record
+
+    # ----- step adjustment -------------------------------------------------------------------------------
+    def _free_segment_margin(self, halfplanes) -> tuple[np.ndarray, np.ndarray, float]:
+        """The plan's free segment: its layout's ZMP rows ``M``, its ZMP at the sample times and its margin."""
+        plan = self._plan
+        rows = plan.layout.zmp_rows(self.config.step_adjustment.samples)
+        zmp = rows @ plan.y
+        return rows, zmp, float(halfplane_margin(zmp, *halfplanes).min())
+
+    def _adjust_step(self, t: float) -> StepDecision | None:
+        """After a replan: if its free segment asks for a ZMP outside the support polygon, move the landing of the
+        next step that can still change to the candidate that keeps it inside with the least departure
+        (:mod:`rtgait.core.stepping`); with none, the best one, and the walk stops after it."""
+        adjust = self.config.step_adjustment
+        plan = self._plan
+        q = plan.phase0
+        walk = self._walk
+        if self.timeline.kind(q) in ("end", "settle"):
+            return None
+        halfplanes = polygon_halfplanes(support_polygon(walk.contact_feet(q), adjust.sole))
+        rows, zmp, before = self._free_segment_margin(halfplanes)
+        if before >= adjust.required_margin:
+            return None
+        proposal = propose_landing(
+            adjust, walk, q, t, self.phase_start, rows, zmp, halfplanes, plan.layout.anchor_phases,
+            lambda: self._freeze_swing(t)[:2],
+        )  # fmt: skip
+        if proposal is None:
+            return None
+        k, nominal, landing = proposal.step, proposal.nominal, proposal.landing
+        walk.move_landing(k, *landing)
+        moved = math.hypot(landing[0] - nominal.x, landing[1] - nominal.y)
+        reason = f"ZMP margin {before * 1e3:+.1f} mm: step {k} lands {moved:.3f} m away"
+        n = walk.n_steps
+        if not proposal.enough and (n is None or k < n):
+            walk.set_strides([Stride(0.0, self.config.step_width, 0.0)], from_step=k + 1)
+            reason += (
+                f"; no landing keeps the ZMP inside (best {proposal.margin * 1e3:+.1f} mm): emergency stop after it"
+            )
+        self._phase = None
+        self._reconnect()
+        after = self._free_segment_margin(halfplanes)[2]
+        decision = StepDecision(
+            t, k, (nominal.x, nominal.y), landing, before, after, proposal.candidates, not proposal.enough, reason
+        )
+        self.step_adjustments.append(decision)
+        self.step_adjustment_count += 1
+        return decision
+
+    def _reconnect(self) -> None:
+        """Remake the plan under way from its own initial state at its own start, after its footprints (or the
+        walk's length) changed at that instant."""
+        plan = self._plan
+        q, elapsed = plan.phase0, plan.elapsed
+        if self._next_replan_phase is not None:
+            self._prepare_layouts(self._next_replan_phase)
+        if elapsed == 0.0 and self.timeline.kind(q) in MOVING_KINDS:
+            layout = self._layout(q, self._plan_span(q))
+        else:
+            layout = self._midphase_layout(q, plan.durations[0])
+        self._connect(plan.t_start, q, layout, plan.y[:4].ravel().tolist(), elapsed)
 
     def _advance(self, t: float) -> None:
         """Replan at every double-support start up to ``t``, each from the state of the plan before it."""
@@ -590,7 +582,7 @@ class OnlinePlanner:
                 f"per step (one call replans at most {MAX_REPLANS_PER_SAMPLE} times)"
             )
         while self._next_replan_phase is not None and self.phase_start(self._next_replan_phase) <= t:
-            self._replan()
+            self._replan(t)
 
     @property
     def current_plan(self) -> CogTrajectory:
@@ -622,7 +614,7 @@ class OnlinePlanner:
         rel = t - self._t0
         phase = self._phase
         if phase is None or not phase.start <= rel < phase.end:
-            phase = self._phase = self._phase_info(rel)
+            phase = self._phase = phase_info(self._walk, self.timeline, rel, self._swing_retarget)
         q = phase.index
         if t > self._latest:
             self._latest = t
@@ -661,9 +653,7 @@ class OnlinePlanner:
         if phase.swing_from is None:
             out[13:21] = phase.feet
         else:
-            swing = swing_pose(
-                phase.swing_from, phase.swing_to, (rel - phase.start) / phase.duration, self.config.step_height
-            )
+            swing = phase.swing(rel, self.config.step_height)
             if phase.support == "left":
                 out[13:17], out[17:21] = phase.feet, swing
             else:
@@ -672,25 +662,6 @@ class OnlinePlanner:
 
     def _earliest(self) -> float:
         return self._t0 if self._plan is None else self._plan.t_start
-
-    def _phase_info(self, rel: float) -> _PhaseInfo:
-        """What sampling needs to know about the phase containing ``rel`` (s from the start of the walk)."""
-        timeline = self.timeline
-        q = timeline.phase_at(rel)
-        start = timeline.start_time(q)
-        last = timeline.last_phase
-        end = math.inf if q == last else timeline.start_time(q + 1)
-        walk = self._walk
-        if q & 1 and timeline.kind(q) == "single":
-            i = (q + 1) >> 1
-            stance = walk.footprint(i)
-            pose = (stance.x, stance.y, 0.0, stance.yaw)
-            return _PhaseInfo(q, start, end, stance.side, pose, walk.footprint(i - 1), walk.footprint(i + 1))
-        a, b = walk.contact_feet(q)
-        if a.side != "left":
-            a, b = b, a
-        feet = (a.x, a.y, 0.0, a.yaw, b.x, b.y, 0.0, b.yaw)
-        return _PhaseInfo(q, start, end, "double", feet, None, None)
 
     def zmp_margin(self, sample: GaitSample, sole: SoleRect) -> float:
         """Signed distance (m) of the sample's planned ZMP to its support polygon; negative = outside."""

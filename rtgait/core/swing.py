@@ -48,3 +48,29 @@ def swing_velocity(start: Footstep, end: Footstep, s: float, height: float, dura
         dk * wrap_angle(end.yaw - start.yaw) * scale,
     )
 
+
+
+def retargeted_swing(
+    start: tuple[float, float, float],
+    velocity: tuple[float, float, float],
+    end: Footstep,
+    s: float,
+    duration: float,
+) -> tuple[float, float, float]:
+    """Horizontal pose ``(x, y, yaw)`` (m, rad) of a swing foot sent to a new landing ``end`` mid-swing.
+
+    From the pose ``start`` and velocity ``velocity`` (m/s, rad/s) it had when the landing changed, a quintic over
+    the ``duration`` (s) left reaches ``end`` with zero velocity and acceleration: ``x(s) = x0 + (x1 - x0) b(s) +
+    T v0 h(s)`` with the blend ``b`` and ``h(s) = s - 6 s^3 + 8 s^4 - 3 s^5`` (``h(0) = 0``, ``h'(0) = 1``, and
+    ``h``, ``h'``, ``h''`` zero at 1), so position and velocity are continuous at the change.
+    """
+    s = min(max(s, 0.0), 1.0)
+    k, _ = blend(s)
+    s3 = s * s * s
+    h = duration * (s - 6.0 * s3 + 8.0 * s3 * s - 3.0 * s3 * s * s)
+    x0, y0, yaw0 = start
+    return (
+        x0 + k * (end.x - x0) + h * velocity[0],
+        y0 + k * (end.y - y0) + h * velocity[1],
+        wrap_angle(yaw0 + k * wrap_angle(end.yaw - yaw0) + h * velocity[2]),
+    )

@@ -178,6 +178,40 @@ class Walk:
         i = q // 2 if n is None else min(q // 2, n)
         return [self.footprint(i), self.footprint(i + 1)]
 
+    def anchor_sources(self, q: int, anchor_phases: Sequence[int]) -> list[tuple[int, int]]:
+        """The footprints the reference ZMP rests on at the end of each anchor phase ``q + k`` of a plan: ``(i, i)``
+        for ``F[i]``, ``(n, n + 1)`` for the point between the final feet.
+
+        At the end of a double support ``2i`` it rests on ``F[i + 1]`` (the next stance foot); at the end of a
+        single support ``2i - 1`` on its own stance foot ``F[i]``; from the final double support on, between the
+        final feet.
+        """
+        n = self.n_steps
+        sources = []
+        for k in anchor_phases:
+            p = q + k
+            if (p & 1 == 0 and p >> 1 == n) or (n is not None and p == 2 * n + 1):
+                sources.append((n, n + 1))
+            else:
+                i = (p >> 1) + 1 if p & 1 == 0 else (p + 1) >> 1
+                sources.append((i, i))
+        return sources
+
+    def anchors(self, q: int, anchor_phases: Sequence[int]) -> list[float]:
+        """Where the reference ZMP rests at the end of each anchor phase (:meth:`anchor_sources`), flat:
+        ``[x_0, y_0, x_1, y_1, ...]`` (m)."""
+        anchors = []
+        for a, b in self.anchor_sources(q, anchor_phases):
+            fa = self.footprint(a)
+            if a == b:
+                anchors.append(fa.x)
+                anchors.append(fa.y)
+            else:
+                fb = self.footprint(b)
+                anchors.append(0.5 * (fa.x + fb.x))
+                anchors.append(0.5 * (fa.y + fb.y))
+        return anchors
+
     # ----- deadlines ---------------------------------------------------------------------------------------
     def first_open_step(self) -> int:
         """The first step that may still be changed, given the latest phase reached."""
@@ -347,6 +381,18 @@ class Walk:
         self.set_strides([Stride(0.0, self.step_width, 0.0)], from_step=start)
         self.stopping = True
         return start
+
+    def move_landing(self, step: int, x: float, y: float) -> None:
+        """Land ``step`` at ``(x, y)`` (m), keeping its heading: later footprints follow (strides unchanged).
+
+        For step adjustment, which the controller decides past the connection mode's deadline (the robot must
+        step there to keep its balance), so no deadline applies; the landing must not have happened yet.
+        """
+        if self.latest_phase is not None and 2 * step <= self.latest_phase:
+            raise StepChangeTooLateError(f"step {step} has already landed")
+        stance, old = self.footprint(step), self.footprint(step + 1)
+        self._strides[step - 1 - self.base] = stride_between(stance, Footstep(x, y, old.yaw, old.side))
+        self._rebuild(step)
 
     def retarget(self, index: int, footprint: Footstep) -> None:
         """Replace ``F[index]`` by ``footprint`` (where a foot really is); later footprints follow it, their

@@ -1,0 +1,109 @@
+"""The plan being executed, in the form a control tick reads, and the shape of a plan (its operator).
+
+A replan is ``G @ y`` (:mod:`rtgait.core.pattern`): ``y`` holds the state the plan starts from and the anchors the
+reference ZMP rests on. :class:`ActivePlan` keeps the result as Python floats per segment, evaluated lazily: one
+sample is scalar arithmetic, cheaper than any numpy call.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rtgait.core.batch import segment_zmp_rows
+from rtgait.core.pattern import MOVING_KINDS, PlanOperator
+
+EAGER_SEGMENTS = 2
+"""Segments evaluated at replan time: the double support that begins and the single support after it. Replans
+happen at every double-support start, so later segments are rarely sampled; they are evaluated on first use."""
+
+
+class ActivePlan:
+    """The plan being executed, in the form the per-tick evaluation reads.
+
+    ``segment(j)`` is ``(x, y)``, each ``[a0..a4, A0..A4, V, W]`` of segment ``j`` as Python floats: scalar
+    arithmetic on floats beats numpy calls for one sample.
+    """
+
+    __slots__ = (
+        "durations", "elapsed", "first_reference", "layout", "offsets", "phase0", "reference_offset", "segments",
+        "t_start", "y",
+    )  # fmt: skip
+
+    def __init__(
+        self,
+        t_start: float,
+        phase0: int,
+        layout: PlanLayout,
+        y: np.ndarray,
+        first_reference,
+        reference_offset: float,
+        elapsed: float = 0.0,
+    ) -> None:
+        self.t_start = t_start
+        self.phase0 = phase0
+        self.elapsed = elapsed  # time into phase0 at which the plan starts (s): 0 unless made mid-phase
+        self.layout = layout
+        self.y = y
+        self.durations = layout.durations
+        self.offsets = layout.offsets  # segment starts relative to t_start (s)
+        self.first_reference = first_reference  # [axis] -> cubic coefficients of segment 1's reference ZMP
+        self.reference_offset = reference_offset  # time into that cubic at which segment 1 starts (s)
+        x_rows, y_rows = (layout.G_eager @ y).T.tolist()
+        self.segments: list = [None] * len(layout.durations)
+        for j in range(min(EAGER_SEGMENTS, len(self.segments))):
+            self.segments[j] = (x_rows[12 * j : 12 * j + 12], y_rows[12 * j : 12 * j + 12])
+
+    def segment(self, j: int) -> tuple[list[float], list[float]]:
+        seg = self.segments[j]
+        if seg is None:
+            seg = self.segments[j] = tuple((self.layout.G[12 * j : 12 * j + 12] @ self.y).T.tolist())
+        return seg
+
+    def locate(self, t: float) -> tuple[int, float]:
+        """Segment index and local time of absolute time ``t`` (s), clamped to the plan."""
+        rel = t - self.t_start
+        offsets = self.offsets
+        j = len(offsets) - 1
+        while j > 0 and rel < offsets[j]:
+            j -= 1
+        tau = min(max(rel - offsets[j], 0.0), self.durations[j])
+        return j, tau
+
+    def state(self, j: int, tau: float, w: float) -> list[float]:
+        """``[px, py, dpx, dpy, cx, cy, dcx, dcy]`` on segment ``j`` at local time ``tau`` (m, m/s)."""
+        e = math.exp(w * tau)
+        ch, sh = 0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e)
+        state = [0.0] * 8
+        for axis, coeffs in enumerate(self.segment(j)):
+            a0, a1, a2, a3, a4, A0, A1, A2, A3, A4, V, W = coeffs
+            state[axis] = a0 + tau * (a1 + tau * (a2 + tau * (a3 + tau * a4)))
+            state[2 + axis] = a1 + tau * (2.0 * a2 + tau * (3.0 * a3 + tau * 4.0 * a4))
+            state[4 + axis] = V * ch + W * sh + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4)))
+            state[6 + axis] = w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4))
+        return state
+
+
+class PlanLayout:
+    """What a replan needs to know about one plan shape: its operator and where its anchors come from."""
+
+    __slots__ = ("G", "G_eager", "_zmp_rows", "anchor_phases", "durations", "first_kind", "offsets")
+
+    def __init__(self, operator: PlanOperator, kinds: tuple[str, ...]) -> None:
+        self.G = operator.G
+        self.G_eager = np.ascontiguousarray(operator.G[: 12 * EAGER_SEGMENTS])
+        self.durations = operator.durations.tolist()
+        self.offsets = np.concatenate(([0.0], np.cumsum(operator.durations[:-1]))).tolist()
+        self.first_kind = kinds[0]
+        # Phases (relative to the plan's first) at whose end the reference ZMP rests on an anchor: the first
+        # phase always (its free polynomial ends there), then every phase in which the reference travels.
+        self.anchor_phases = (0, *(k for k, kind in enumerate(kinds) if k > 0 and kind in MOVING_KINDS))
+        self._zmp_rows: dict[int, np.ndarray] = {}
+
+    def zmp_rows(self, samples: int) -> np.ndarray:
+        """``M`` ``(samples, n_inputs)``: the first segment's ZMP at ``samples`` evenly spaced times is ``M @ y``."""
+        rows = self._zmp_rows.get(samples)
+        if rows is None:
+            rows = self._zmp_rows[samples] = segment_zmp_rows(self.G, self.durations[0], samples)[1]
+        return rows

@@ -1,0 +1,241 @@
+"""Step adjustment: push recovery by stepping, decided in one vectorised batch through the plan's operator.
+
+When the plan made from the measured state asks for a ZMP outside the support polygon (its free first segment is
+the only part of a plan that may leave the footprints), the ankle alone cannot recover: the robot must step
+elsewhere. The landing point of the next step that can still change is chosen among a grid of candidates:
+
+* within limits a robot description can set: a stride box in the stance foot's frame (forward/backward reach,
+  least and largest distance between the feet, so the feet never cross), the largest average swing speed over the
+  time left, and no change in the last ``min_time_to_touchdown`` seconds before touch-down (the foot is landing);
+* with the ZMP margin at least ``required_margin``, and among those the least departure from the commanded walk;
+  if no candidate reaches it, the one with the largest margin, and the walk stops after that step (an emergency:
+  capture step, then stop), with the reason logged.
+
+Why it is cheap: moving the landing ``F[k+1]`` by ``delta`` moves every later footprint by ``delta`` too (strides
+are relative), so every anchor of the plan moves by ``w_a delta`` with ``w_a`` in {0, 1/2, 1}, and the ZMP of the
+free segment at time ``t_i`` moves by ``g_i delta`` with ``g_i = sum_a M[i, a] w_a``. For ``C`` candidates and
+``T`` sample times the margins are one ``(C, T, 2)`` array against the polygon's half-planes: a thousand
+candidates in a few hundred microseconds. (Changing the single-support duration too, as Morisawa et al. 2006
+do, needs a different operator per duration; it is not done here.)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+
+from rtgait.core.footsteps import Footstep, SoleRect
+
+if TYPE_CHECKING:
+    from rtgait.core.walk import Walk
+
+
+@dataclass(frozen=True)
+class StepAdjustment:
+    """Limits and preferences of step adjustment (``PlannerConfig(step_adjustment=...)``).
+
+    Attributes:
+        sole: the sole rectangle, for the support polygons (m).
+        max_length: forward and backward reach of a landing from the stance foot, along its heading (m).
+        min_width, max_width: least and largest lateral distance from the stance foot to the landing (m): the
+            feet never cross.
+        max_swing_speed: largest average horizontal speed of the swing foot over the time left (m/s).
+        min_time_to_touchdown: no landing changes closer than this to touch-down (s).
+        required_margin: ZMP margin a plan must keep to need no adjustment, and that a candidate must reach (m).
+        grid: candidates per axis of the stride box (``grid**2`` in all).
+        samples: sample times of the free segment at which the margin is checked.
+    """
+
+    sole: SoleRect
+    max_length: float = 0.35
+    min_width: float = 0.12
+    max_width: float = 0.45
+    max_swing_speed: float = 1.5
+    min_time_to_touchdown: float = 0.2
+    required_margin: float = 0.005
+    grid: int = 32
+    samples: int = 16
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.sole, SoleRect):
+            raise ValueError("step_adjustment.sole must be a SoleRect")
+        positive = ("max_length", "min_width", "max_width", "max_swing_speed")
+        for name in positive:
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 < value <= 2.0):
+                raise ValueError(f"step_adjustment.{name} must be within (0, 2], got {value}")
+        if self.min_width >= self.max_width:
+            raise ValueError(f"step_adjustment.min_width ({self.min_width}) must be < max_width ({self.max_width})")
+        for name in ("min_time_to_touchdown", "required_margin"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value <= 1.0):
+                raise ValueError(f"step_adjustment.{name} must be within [0, 1], got {value}")
+        for name, low, high in (("grid", 2, 200), ("samples", 2, 200)):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and low <= value <= high):
+                raise ValueError(f"step_adjustment.{name} must be an integer in {low}..{high}, got {value!r}")
+
+
+class StepDecision(NamedTuple):
+    """One step adjustment.
+
+    Attributes:
+        t: when it was decided (s).
+        step: the step whose landing moved (1-based).
+        nominal: where it was to land ``(x, y)`` (m).
+        landing: where it lands now ``(x, y)`` (m).
+        margin_before, margin_after: the free segment's ZMP margin before and after (m, half-plane measure).
+        candidates: candidates evaluated.
+        emergency: no candidate kept the ZMP inside; the walk stops after this step.
+        reason: one line for the log.
+    """
+
+    t: float
+    step: int
+    nominal: tuple[float, float]
+    landing: tuple[float, float]
+    margin_before: float
+    margin_after: float
+    candidates: int
+    emergency: bool
+    reason: str
+
+
+def candidate_landings(adjust: StepAdjustment, stance: Footstep, nominal: Footstep) -> np.ndarray:
+    """Grid of landing points ``(grid**2, 2)`` (m) in the stride box around ``stance``, oriented along the mean
+    heading of the stance and the nominal landing (as :func:`~rtgait.core.footsteps.place_step` measures a
+    stride)."""
+    g = adjust.grid
+    along = np.linspace(-adjust.max_length, adjust.max_length, g)
+    lateral = np.linspace(adjust.min_width, adjust.max_width, g)
+    if nominal.side == "right":
+        lateral = -lateral
+    a, b = np.meshgrid(along, lateral, indexing="ij")
+    heading = stance.yaw + 0.5 * math.remainder(nominal.yaw - stance.yaw, 2.0 * math.pi)
+    c, s = math.cos(heading), math.sin(heading)
+    local = np.stack([a.ravel(), b.ravel()], axis=1)
+    return local @ np.array([[c, s], [-s, c]]) + np.array([stance.x, stance.y])
+
+
+def choose_landing(
+    adjust: StepAdjustment,
+    candidates: np.ndarray,
+    nominal: tuple[float, float],
+    zmp: np.ndarray,
+    gain: np.ndarray,
+    halfplanes: tuple[np.ndarray, np.ndarray],
+    swing_from: tuple[float, float],
+    time_left: float,
+) -> tuple[np.ndarray, float, bool] | None:
+    """The landing to take among ``candidates`` ``(C, 2)``, its margin (m) and whether it reaches the required one.
+
+    Args:
+        nominal: the landing of the walk as commanded (m).
+        zmp: the free segment's ZMP with the nominal landing, at the sample times, ``(T, 2)`` (m).
+        gain: how much that ZMP moves per metre the landing moves, ``(T,)``.
+        halfplanes: the support polygon of the free segment (:func:`~rtgait.core.batch.polygon_halfplanes`).
+        swing_from: where the swing foot is now (m); time_left: until its touch-down (s).
+
+    Returns ``None`` when no candidate can be reached in the time left.
+    """
+    reach = adjust.max_swing_speed * time_left
+    reachable = np.hypot(candidates[:, 0] - swing_from[0], candidates[:, 1] - swing_from[1]) <= reach
+    if not reachable.any():
+        return None
+    options = candidates[reachable]
+    delta = options - np.asarray(nominal)
+    # margin(c, t, k) = b_k - n_k . (zmp_t + g_t delta_c) = A[t, k] - g_t D[c, k]: two small products, one
+    # broadcast, instead of moving every (candidate, time) point through the polygon.
+    normals, offsets = halfplanes
+    base = offsets[None, :] - zmp @ normals.T  # (T, K)
+    along = delta @ normals.T  # (C, K)
+    margin = np.full(len(options), np.inf)
+    for k in range(base.shape[1]):  # per edge: (C, T) stays in cache; a (C, T, K) broadcast is twice as slow
+        np.minimum(margin, (base[None, :, k] - np.multiply.outer(along[:, k], gain)).min(axis=1), out=margin)
+    departure = np.einsum("cd,cd->c", delta, delta)
+    enough = margin >= adjust.required_margin
+    if enough.any():
+        best = int(np.argmin(np.where(enough, departure, np.inf)))
+    else:
+        # Nothing is enough: the largest margin, and of landings within a millimetre of it the nearest one (the
+        # margin is often flat along one axis of the box).
+        near_best = margin >= margin.max() - 1e-3
+        best = int(np.argmin(np.where(near_best, departure, np.inf)))
+    return options[best], float(margin[best]), bool(enough[best])
+
+
+class LandingProposal(NamedTuple):
+    """Where step adjustment would land ``step``: the landing ``(x, y)`` (m), the margin it predicts (m), whether
+    that reaches the required margin, how many candidates were weighed, and whether the step is swinging now."""
+
+    step: int
+    nominal: Footstep
+    landing: tuple[float, float]
+    margin: float
+    enough: bool
+    candidates: int
+    swinging: bool
+
+
+def propose_landing(
+    adjust: StepAdjustment,
+    walk: Walk,
+    q: int,
+    t: float,
+    phase_start: Callable[[int], float],
+    rows: np.ndarray,
+    zmp: np.ndarray,
+    halfplanes: tuple[np.ndarray, np.ndarray],
+    anchor_phases: Sequence[int],
+    swing_position: Callable[[], tuple[float, float]],
+) -> LandingProposal | None:
+    """The landing of the next step that can still change, for a plan starting at phase ``q`` whose free segment's
+    ZMP at the sample times is ``zmp = rows @ y`` (m); ``None`` if no step can move (the last one has landed, or no
+    candidate can be reached in time).
+
+    The step is the one swinging in a single support, unless it lands within ``min_time_to_touchdown`` of ``t``
+    (s), else the next one to lift off. ``phase_start(p)`` is the absolute start of phase ``p`` (s);
+    ``swing_position()`` where the swinging foot is now (m).
+    """
+    kind = walk.timeline.kind(q)
+    k = (q + 1) // 2 if kind == "single" else q // 2 + 1
+    touchdown = phase_start(2 * k)
+    if kind == "single" and touchdown - t < adjust.min_time_to_touchdown:
+        k += 1
+        touchdown = phase_start(2 * k)
+    n = walk.n_steps
+    if n is not None and k > n:
+        return None
+    swinging = kind == "single" and k == (q + 1) // 2
+    if swinging:
+        swing_from = swing_position()
+    else:
+        origin = walk.footprint(k - 1)
+        swing_from = (origin.x, origin.y)
+    nominal = walk.footprint(k + 1)
+    # Every anchor resting on F[k + 1] or later moves with the landing; one between the final feet, half as much.
+    weights = np.array([(a >= k + 1) + (b >= k + 1) for a, b in walk.anchor_sources(q, anchor_phases)]) * 0.5
+    candidates = candidate_landings(adjust, walk.footprint(k), nominal)
+    choice = choose_landing(
+        adjust, candidates, (nominal.x, nominal.y), zmp, rows[:, 4:] @ weights, halfplanes, swing_from, touchdown - t
+    )
+    if choice is None:
+        return None
+    landing, margin, enough = choice
+    return LandingProposal(
+        k, nominal, (float(landing[0]), float(landing[1])), margin, enough, len(candidates), swinging
+    )
+
+
+__all__ = [
+    "LandingProposal",
+    "StepAdjustment",
+    "StepDecision",
+    "candidate_landings",
+    "choose_landing",
+    "propose_landing",
+]
