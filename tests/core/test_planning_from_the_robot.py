@@ -150,12 +150,13 @@ def test_replan_now_from_a_perturbed_state_starts_exactly_there_and_obeys_the_pe
     t = p.phase_start(5) + 0.25  # mid single support
     _walk_until(p, t)
     s = p.sample(t)
-    p.observe(t, s.cog[:2] + [0.005, 0.01], s.cog_vel[:2] + [0.02, -0.03])
+    dc, dv = np.array([0.005, 0.01]), np.array([0.02, -0.03])
+    p.observe(t, s.cog[:2] + dc, s.cog_vel[:2] + dv)
     zmp_before = p.current_plan.zmp.evaluate(t)[0], p.current_plan.zmp.evaluate(t, derivative=1)[0]
     p.replan_now(t)
     after = p.sample(t)
-    assert after.cog[:2] == pytest.approx(s.cog[:2] + [0.005, 0.01], abs=1e-12)
-    assert after.cog_vel[:2] == pytest.approx(s.cog_vel[:2] + [0.02, -0.03], abs=1e-12)
+    assert after.cog[:2] == pytest.approx(s.cog[:2] + dc, abs=1e-12)
+    assert after.cog_vel[:2] == pytest.approx(s.cog_vel[:2] + dv, abs=1e-12)
     assert after.zmp == pytest.approx(zmp_before[0], abs=1e-12)
     assert p.current_plan.zmp.evaluate(t, derivative=1)[0] == pytest.approx(zmp_before[1], abs=1e-9)
     times = np.linspace(t, p.end_time, 500)
@@ -183,9 +184,9 @@ def test_a_large_dcm_error_replans_by_itself():
     _walk_until(p, t)
     s = p.sample(t)
     count = p.replan_count
-    p.observe(t, s.cog[:2], s.cog_vel[:2] + [0.0, 0.03])  # DCM error 9 mm: below the threshold
+    p.observe(t, s.cog[:2], s.cog_vel[:2] + np.array([0.0, 0.03]))  # DCM error 9 mm: below the threshold
     assert p.replan_count == count
-    p.observe(t, s.cog[:2], s.cog_vel[:2] + [0.0, 0.1])  # 29 mm: above
+    p.observe(t, s.cog[:2], s.cog_vel[:2] + np.array([0.0, 0.1]))  # 29 mm: above
     assert p.replan_count == count + 1 and p.plans[-1].reason == "dcm-error"
 
 
