@@ -55,7 +55,7 @@ def run(steps: int, dt: float, mode: str, horizon: int, seed: int, collect_garba
         planner.sample(t)
         sample_ns[k] = clock() - began
         replanned[k] = len(planner.plans) != plans_before
-    steady = np.array([p.compute_time for p in planner.plans[1:]]) * 1e6  # all but the initial plan
+    steady = np.array([p.compute_time for p in list(planner.plans)[1:]]) * 1e6  # all but the initial plan
     samples = sample_ns[~replanned] / 1e3
     return {
         "replan_us": {"median": float(np.median(steady)), "p99": float(np.percentile(steady, 99))},
@@ -76,7 +76,7 @@ def back_to_back(config: PlannerConfig, steps: int) -> dict:
     planner.start(0.0)
     for k in range(steps):
         planner.sample(planner.phase_start(2 * k))
-    times = np.array([p.compute_time for p in planner.plans[1:-4]]) * 1e6  # steady walking only
+    times = np.array([p.compute_time for p in list(planner.plans)[1:-4]]) * 1e6  # steady walking only
     return {"median": float(np.median(times)), "p99": float(np.percentile(times, 99))}
 
 

@@ -1,21 +1,39 @@
-"""Plain-file outputs of a rollout: the per-tick trajectory as CSV and a JSON-ready summary.
+"""Plain-file outputs of a rollout: the per-tick trajectory as CSV, a JSON-ready summary, and the few lines the
+command line prints from a summary.
 
-Kept apart from the command-line tool so that scripts driving the planner can write the same files.
+Kept apart from the command-line tool so that scripts driving the planner can write the same files. Every file
+is written through a temporary name (:func:`rtgait.outputs.write_atomic`), so none is ever seen half written.
 """
 
 from __future__ import annotations
 
+import json
+import os
 import statistics
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rtgait.core.online import SAMPLE_FIELDS
 from rtgait.core.rollout import Rollout
+from rtgait.outputs import Staging, staged_outputs, write_atomic
 from rtgait.scenario import Scenario
 
-__all__ = ["CSV_COLUMNS", "CSV_HEAD_COLUMNS", "summarize", "write_joints_csv", "write_trajectory_csv"]
+if TYPE_CHECKING:  # the robot layer is optional (the [robot] extra)
+    from rtgait.robot.pipeline import RobotRun
+
+__all__ = [
+    "CSV_COLUMNS",
+    "CSV_HEAD_COLUMNS",
+    "plan_files",
+    "plan_report",
+    "simulation_report",
+    "summarize",
+    "write_joints_csv",
+    "write_plan_outputs",
+    "write_trajectory_csv",
+]
 
 CSV_HEAD_COLUMNS = (
     "t", "cog_x", "cog_y", "cog_z", "cog_vx", "cog_vy", "cog_ax", "cog_ay", "zmp_x", "zmp_y",
@@ -35,9 +53,13 @@ _FLOAT_FORMAT = "%.10g"
 
 def write_joints_csv(header: tuple[str, ...], rows: np.ndarray, path: Path) -> int:
     """Write a joint table (``t``, ``base_x`` .. ``base_qw``, one column per joint) to ``path``; returns the rows."""
-    with open(path, "w", encoding="utf-8", newline="") as stream:
-        stream.write(",".join(header) + "\n")
-        np.savetxt(stream, rows, fmt=_FLOAT_FORMAT, delimiter=",")
+
+    def write(temporary: Path) -> None:
+        with open(temporary, "w", encoding="utf-8", newline="") as stream:
+            stream.write(",".join(header) + "\n")
+            np.savetxt(stream, rows, fmt=_FLOAT_FORMAT, delimiter=",")
+
+    write_atomic(path, write)
     return len(rows)
 
 
@@ -56,9 +78,13 @@ def write_trajectory_csv(rollout: Rollout, path: Path) -> int:
             # Vectorised formatting: a Python-level loop over every value would dominate long runs.
             columns.append(np.char.mod(_FLOAT_FORMAT, numeric[name]))
     table = np.stack(columns, axis=1)
-    with open(path, "w", encoding="utf-8", newline="") as stream:
-        stream.write(",".join(CSV_COLUMNS) + "\n")
-        stream.writelines(",".join(row) + "\n" for row in table.tolist())
+
+    def write(temporary: Path) -> None:
+        with open(temporary, "w", encoding="utf-8", newline="") as stream:
+            stream.write(",".join(CSV_COLUMNS) + "\n")
+            stream.writelines(",".join(row) + "\n" for row in table.tolist())
+
+    write_atomic(path, write)
     return len(table)
 
 
@@ -135,3 +161,195 @@ def summarize(rollout: Rollout, scenario: Scenario) -> dict[str, Any]:
         "changes": _changes(rollout, scenario),
         "footprints": [{"x": f.x, "y": f.y, "yaw": f.yaw, "side": f.side} for f in rollout.footprints],
     }
+
+
+# ----- the whole set of a plan's outputs ------------------------------------------------------------------------
+
+
+def plan_files(figures: bool, robot: bool, html: bool) -> list[str]:
+    """The files :func:`write_plan_outputs` writes with these options, in the order the summary lists them."""
+    names = ["trajectory.csv", "summary.json"] + (["joints.csv"] if robot else [])
+    if figures:
+        from rtgait.viz.figures import FIGURE_FILES
+
+        names += [*FIGURE_FILES, *(["multibody_zmp.png"] if robot else [])]
+    return names + (["replay.html"] if robot and html else [])
+
+
+def write_plan_outputs(
+    result: Rollout,
+    scenario: Scenario,
+    out: Path,
+    *,
+    figures: bool = True,
+    robot_run: RobotRun | None = None,
+    html: bool = False,
+) -> dict[str, Any]:
+    """Write what ``rtgait plan`` writes into the folder ``out``, replacing the previous outputs of the same names
+    together or not at all (:func:`rtgait.outputs.staged_outputs`); returns the summary.
+
+    Args:
+        result: the rollout.
+        scenario: the scenario rolled out (as the robot walks it, with a robot).
+        out: the output folder, created if missing.
+        figures: the four figures and, with a robot, the multibody ZMP figure (needs matplotlib).
+        robot_run: the walk on a robot: adds ``joints.csv`` and the robot's numbers to the summary.
+        html: with a robot, also the 3D replay ``replay.html`` (needs meshcat).
+
+    Raises:
+        rtgait.outputs.OutputError: the outputs could not be written; ``out`` is unchanged.
+    """
+    with staged_outputs(out) as staging:
+        rows = write_trajectory_csv(result, staging.add("trajectory.csv"))
+        summary_path = staging.add("summary.json")
+        summary = summarize(result, scenario)
+        if robot_run is not None:
+            write_joints_csv(*robot_run.motion.table(), staging.add("joints.csv"))
+            summary.update(robot_run.summary())
+        if figures:
+            _write_figures(result, scenario, robot_run, staging)
+        if html and robot_run is not None:
+            _write_replay(result, scenario, robot_run, staging.add("replay.html"))
+        summary["rows"] = rows
+        summary["files"] = list(staging.files)
+        summary_path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    return summary
+
+
+def _write_figures(result: Rollout, scenario: Scenario, robot_run: RobotRun | None, staging: Staging) -> None:
+    from rtgait.viz.figures import FigureInfo, plot_multibody_zmp, render_all
+
+    info = FigureInfo(
+        title=f"{scenario.name} ({scenario.connection})",
+        sole=scenario.sole,
+        nominal_footprints=scenario.nominal_footprints(),
+    )
+    for path in render_all(result, info, staging.folder):
+        staging.add(path.name)
+    if robot_run is not None:
+        before = robot_run.uncompensated[1] if robot_run.uncompensated else robot_run.check
+        after = robot_run.check if robot_run.uncompensated else None
+        plot_multibody_zmp(
+            result, info, staging.add("multibody_zmp.png"), before.zmp, None if after is None else after.zmp,
+            robot=robot_run.robot.name,
+        )  # fmt: skip
+
+
+def _write_replay(result: Rollout, scenario: Scenario, robot_run: RobotRun, path: Path) -> None:
+    from rtgait.robot.pipeline import visual_model
+    from rtgait.viz.replay import write_replay_html
+
+    robot = robot_run.robot
+    motion = robot_run.motion
+    write_replay_html(
+        path,
+        robot.full_model,
+        visual_model(robot),
+        motion.times,
+        motion.q_full,
+        footprints=result.footprints,
+        sole=scenario.sole,
+        cog=robot_run.check.cog,
+        zmp=np.column_stack([result.column("zmp_x"), result.column("zmp_y")]),
+        title=f"rtgait: {scenario.name} on {robot.name}",
+    )
+
+
+# ----- what the command line prints -----------------------------------------------------------------------------
+
+
+def _describe_change(change: dict[str, Any]) -> str:
+    parts = []
+    if change["length"] is not None:
+        parts.append(f"length {change['length']:g} m")
+    if change["width"] is not None:
+        parts.append(f"width {change['width']:g} m")
+    if change["yaw"] is not None:
+        parts.append(f"yaw {change['yaw']:g} rad")
+    span = "that step only" if change["through"] == change["step"] else f"steps {change['step']}..{change['through']}"
+    return f"step {change['step']} decided at {change['decided_at']:.3f} s: {', '.join(parts)} ({span})"
+
+
+def _robot_lines(summary: dict[str, Any]) -> list[str]:
+    error = summary["multibody_zmp_error_max"]
+    lines = [
+        f"robot       {summary['robot']} ({summary['robot_mass']:.1f} kg): IK error max COG "
+        f"{summary['ik_cog_error_max'] * 1e6:.2f} µm, feet {summary['ik_foot_error_max'] * 1e6:.2f} µm, "
+        f"{summary['ik_time_per_tick_us']:.0f} µs per tick; multibody ZMP error max x {error['x'] * 1e3:.1f} mm, "
+        f"y {error['y'] * 1e3:.1f} mm"
+    ]
+    compensation = summary.get("angular_momentum_compensation")
+    if compensation is not None:
+        before, after = compensation["before"], compensation["after"]
+        changes = [
+            ", ".join(
+                f"{axis} {before[key][axis] * 1e3:.1f} -> {after[key][axis] * 1e3:.1f} mm" for axis in "xy"
+            )
+            for key in ("multibody_zmp_error_max", "multibody_zmp_error_rms")
+        ]
+        lines.append(
+            f"compensate  angular momentum, Fourier order {compensation['order']}: multibody ZMP error max "
+            f"{changes[0]}; rms {changes[1]}"
+        )
+    return lines
+
+
+def plan_report(summary: dict[str, Any], out: Path, wall_time: float) -> str:
+    """The lines ``rtgait plan`` prints for the summary of a run written to ``out`` whose rollout took
+    ``wall_time`` (s): scenario, mode, changes, worst ZMP margin and verdict, replanning times, robot, outputs."""
+    timing = summary["timing"]
+    outside = summary["zmp_outside"]
+    x, y = summary["zmp_margin_min_position"]
+    times = summary["planning_time_us"]
+    lines = [
+        f"scenario    {summary['scenario']}: {summary['description']}",
+        f"mode        {summary['connection']} connection, T_s {timing['single_support']:g} s, "
+        f"T_dbl {timing['double_support']:g} s, {summary['steps']} steps + 1 closing, dt {summary['dt']:g} s, "
+        f"{summary['duration']:.2f} s walked",
+    ]
+    lines += [f"change      {_describe_change(change)}" for change in summary["changes"]] or ["change      none"]
+    lines += [
+        f"ZMP margin  min {summary['zmp_margin_min']:+.4f} m at t = {summary['zmp_margin_min_time']:.3f} s, "
+        f"ZMP at ({x:.3f}, {y:.3f}) m, {summary['zmp_margin_min_support']} support",
+        f"verdict     {'OUTSIDE the support polygon' if outside else 'inside the support polygon'}"
+        + (f" for {summary['zmp_outside_duration']:.3f} s" if outside else ""),
+    ]
+    if times["replan_median"] is not None:
+        lines.append(
+            f"replans     {summary['replans']} connected replans, planning time per replan "
+            f"median {times['replan_median']:.0f} µs, max {times['replan_max']:.0f} µs "
+            f"(first plan {times['first_plan']:.0f} µs; whole rollout {wall_time:.2f} s)"
+        )
+    else:
+        lines.append(f"replans     none (first plan {times['first_plan']:.0f} µs)")
+    if "robot" in summary:
+        lines += _robot_lines(summary)
+    lines.append(f"outputs     {out}{os.sep}: {', '.join(summary['files'])} ({summary['rows']} rows)")
+    return "\n".join(lines) + "\n"
+
+
+def simulation_report(summary: dict[str, Any], out: Path) -> str:
+    """The lines ``rtgait simulate`` prints for the summary of a run written to ``out``: outcome, distance, ZMP
+    tracking, speed, MuJoCo's warnings if any, outputs."""
+    if summary["fell"]:
+        outcome = f"FELL at {summary['fall_time']:.2f} s ({summary['fall_cause']})"
+    else:
+        outcome = f"walked {summary['steps_completed']} of {summary['steps_planned']} steps without falling"
+    if summary["tipped"]:
+        outcome += f"; a loaded foot tipped over at {summary['tip_time']:.2f} s"
+    if "guide" in summary:
+        outcome += f"; led by the hand, the base ended {summary['guide']['base_error']:.3f} m from its goal"
+    rms = summary["zmp_tracking_error_rms"]
+    lines = [
+        f"scenario    {summary['scenario']} ({summary['connection']}) on {summary['robot']} in MuJoCo, 1 kHz",
+        f"outcome     {outcome}",
+        f"walked      {summary['distance_walked']:.3f} m; measured vs planned ZMP in single support: "
+        f"RMS {'n/a' if rms is None else f'{rms * 1e3:.1f} mm'}",
+        f"speed       real-time factor {summary['real_time_factor']:.1f} "
+        f"({summary['simulated_time']:.1f} s simulated in {summary['wall_time']:.1f} s)",
+    ]
+    warnings = summary.get("mujoco_warnings") or []
+    if warnings:
+        lines.append(f"warnings    MuJoCo: {warnings[0]} ({len(warnings)} in all, listed in summary.json)")
+    lines.append(f"outputs     {out}{os.sep}: {', '.join(summary['files'])} ({summary['rows']} rows)")
+    return "\n".join(lines) + "\n"

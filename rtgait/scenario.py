@@ -47,7 +47,10 @@ data in ``rtgait/scenarios/`` and are loaded by name; any other file is loaded b
 With ``[guide]``, ``rtgait simulate`` ignores the walk's footsteps: a person pulls the robot's hand along that path
 and the hand force sets the steps (:mod:`rtgait.sim.guided`); ``walk.steps`` is then the most steps it may take.
 
-Every problem with a file raises :class:`ScenarioError` with one line naming the offending field.
+Every problem with a file raises :class:`ScenarioError` with one line naming the offending field. Sizes and
+physical quantities are bounded by :mod:`rtgait.core.limits` (steps, phase durations and ``w T``, the control
+period and the number of samples it makes, the horizon, COG height, gravity, stride lengths), checked here so that
+the message names the TOML field; two ``[[walk.change]]`` entries for the same step are refused.
 """
 
 from __future__ import annotations
@@ -59,15 +62,50 @@ from pathlib import Path
 from typing import Any
 
 from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride, Timing, place_footsteps, standing_feet
+from rtgait.core.limits import (
+    MAX_COG_HEIGHT,
+    MAX_GRAVITY,
+    MAX_HORIZON_STEPS,
+    MAX_PHASE_DURATION,
+    MAX_PHASE_W_T,
+    MAX_ROLLOUT_TICKS,
+    MAX_STEPS,
+    MAX_STRIDE,
+    MIN_COG_HEIGHT,
+    MIN_DT,
+    MIN_GRAVITY,
+    MIN_PHASE_DURATION,
+    check_range,
+)
 from rtgait.core.online import CONNECTION_MODES, ConnectionMode, PlannerConfig
 from rtgait.core.rollout import ScheduledChange
-from rtgait.tomlfile import NumberRule, TomlFiles
+from rtgait.tomlfile import NumberRule, TomlFiles, is_finite_number
 
-__all__ = ["GuidePath", "Scenario", "ScenarioError", "builtin_scenarios", "load_scenario", "parse_scenario"]
+__all__ = [
+    "MAX_WALK_STEPS",
+    "PHASES",
+    "GuidePath",
+    "Scenario",
+    "ScenarioError",
+    "builtin_scenarios",
+    "load_scenario",
+    "parse_scenario",
+]
 
 _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 # Stride.turn must stay strictly inside +-pi/2; checking yaws with this rule gives the error a TOML field name.
 _YAW_RULE: NumberRule = "|x| < pi/2"
+PHASES = ("single_support", "double_support", "start", "end", "settle")
+"""The :class:`Timing` fields, each a phase duration (s)."""
+MAX_WALK_STEPS = MAX_STEPS - 1
+"""Most forward steps of a scenario: the closing step makes :data:`~rtgait.core.limits.MAX_STEPS`."""
+_STEPS_WHY = f"one closing step is added and a walk has at most {MAX_STEPS} steps"
+_HORIZON_WHY = "the size and cost of every plan grow with it"
+_COG_HEIGHT_BOUNDS = (MIN_COG_HEIGHT, MAX_COG_HEIGHT)
+_GRAVITY_BOUNDS = (MIN_GRAVITY, MAX_GRAVITY)
+_PHASE_BOUNDS = (MIN_PHASE_DURATION, MAX_PHASE_DURATION)
+_LENGTH_BOUNDS = (-MAX_STRIDE, MAX_STRIDE)
+_WIDTH_BOUNDS = (0.0, MAX_STRIDE)
 
 
 class ScenarioError(ValueError):
@@ -182,24 +220,37 @@ class Scenario:
 
     def __post_init__(self) -> None:
         # The TOML loader already checks every field with its file path; these checks cover scenarios built in
-        # code or modified with dataclasses.replace (e.g. the CLI's --dt).
+        # code or modified with dataclasses.replace (the CLI's --dt, a robot's COG height and step width). The
+        # limits (rtgait.core.limits) are checked here, before any work, so no accepted scenario can exhaust
+        # memory or time or leave the range where the closed form is well conditioned.
         if not _NAME_PATTERN.fullmatch(self.name):
             raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {self.name!r}")
         if self.connection not in CONNECTION_MODES:
             raise ScenarioError(f"connection must be one of {', '.join(CONNECTION_MODES)}, got {self.connection!r}")
-        if not (isinstance(self.dt, (int, float)) and math.isfinite(self.dt) and self.dt > 0.0):
-            raise ScenarioError(f"dt must be a number > 0 s, got {self.dt}")
-        shortest = min(self.timing.single_support, self.timing.double_support, self.timing.start, self.timing.end)
-        if self.dt > shortest:
-            # A period longer than a phase would skip whole phases (and their replans) between two samples.
-            raise ScenarioError(f"dt must not exceed the shortest phase ({shortest} s), got {self.dt}")
-        if not isinstance(self.steps, int) or isinstance(self.steps, bool) or self.steps < 1:
-            raise ScenarioError(f"steps must be an integer >= 1, got {self.steps!r}")
+        _within("cog_height", self.cog_height, _COG_HEIGHT_BOUNDS, "m")
+        _within("gravity", self.gravity, _GRAVITY_BOUNDS, "m/s^2")
+        self._check_period()
+        _FILES.count(self.steps, "steps", high=MAX_WALK_STEPS, why=_STEPS_WHY)
+        _FILES.count(self.horizon_steps, "horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY)
+        _check_phase_lengths(self.timing, self.cog_height, self.gravity)
+        _check_ticks(self.duration, self.dt)
         for index, change in enumerate(self.changes):
             if not 1 <= change.step <= self.steps:
                 raise ScenarioError(
                     f"walk.change[{index}].step must be a step of the walk (1..{self.steps}), got {change.step}"
                 )
+        _check_distinct_steps([change.step for change in self.changes], "walk.change")
+
+    def _check_period(self) -> None:
+        """``dt`` is a number within [MIN_DT, the shortest phase]."""
+        if not (isinstance(self.dt, (int, float)) and math.isfinite(self.dt) and self.dt > 0.0):
+            raise ScenarioError(f"dt must be a number > 0 s, got {self.dt}")
+        if self.dt < MIN_DT:
+            raise ScenarioError(f"dt must be at least {MIN_DT:g} s, got {self.dt}")
+        shortest = min(self.timing.single_support, self.timing.double_support, self.timing.start, self.timing.end)
+        if self.dt > shortest:
+            # A period longer than a phase would skip whole phases (and their replans) between two samples.
+            raise ScenarioError(f"dt must not exceed the shortest phase ({shortest} s), got {self.dt}")
 
     def planner_config(self) -> PlannerConfig:
         """The online planner's parameters for this scenario."""
@@ -233,21 +284,75 @@ class Scenario:
         return t.start + n * t.single_support + (n - 1) * t.double_support + t.end + t.settle
 
 
+# ----- checks shared by the file loader and the dataclass -------------------------------------------------------
+
+
+def _within(name: str, value: float, bounds: tuple[float, float], unit: str) -> None:
+    """``value`` is a finite number within ``bounds`` (inclusive), in the core's wording of the message."""
+    if not is_finite_number(value):
+        raise ScenarioError(f"{name} must be a finite number ({unit}), got {value!r}")
+    try:
+        check_range(name, value, *bounds, unit)
+    except ValueError as error:
+        raise ScenarioError(str(error)) from None
+
+
+def _check_phase_lengths(timing: Timing, cog_height: float, gravity: float) -> None:
+    """Every phase satisfies ``w T <= MAX_PHASE_W_T``: beyond it the cosh/sinh terms of the closed form cancel
+    with too much round-off (:mod:`rtgait.core.limits`)."""
+    w = math.sqrt(gravity / cog_height)
+    for name in PHASES:
+        duration = getattr(timing, name)
+        if w * duration > MAX_PHASE_W_T:
+            raise ScenarioError(
+                f"timing.{name} = {duration:g} s is too long for a COG {cog_height:g} m high: w*T = {w * duration:.3g}"
+                f" must be at most {MAX_PHASE_W_T:g} (w = sqrt(gravity / cog_height) = {w:.3g} 1/s), i.e. phases of "
+                f"at most {MAX_PHASE_W_T / w:.3g} s"
+            )
+
+
+def _check_ticks(duration: float, dt: float) -> None:
+    """A rollout of ``duration`` (s) sampled every ``dt`` (s) holds at most MAX_ROLLOUT_TICKS rows in memory."""
+    ticks = math.floor(duration / dt + 1e-9) + 1  # as rtgait.core.rollout counts them
+    if ticks > MAX_ROLLOUT_TICKS:
+        raise ScenarioError(
+            f"dt {dt:g} s is too short for a walk of {duration:g} s: duration / dt + 1 = {ticks} samples, at most "
+            f"{MAX_ROLLOUT_TICKS}; use a longer dt or fewer walk.steps"
+        )
+
+
+def _check_distinct_steps(steps: list[int], where: str) -> None:
+    """No two changes of the same step: which one should win would be a guess (the last one silently did)."""
+    first: dict[int, int] = {}
+    for index, step in enumerate(steps):
+        if step in first:
+            raise ScenarioError(
+                f"{where}[{first[step]}] and {where}[{index}] both change step {step}: give each step one entry "
+                "(with all of its length, width and yaw)"
+            )
+        first[step] = index
+
+
 # ----- TOML parsing ---------------------------------------------------------------------------------------------
 
 
-def _number(data: dict[str, Any], key: str, where: str, *, rule: NumberRule = "any", unit: str = "") -> float:
-    """A finite number from ``data[key]`` of the table ``where`` (empty: the document) satisfying ``rule``."""
+def _number(
+    data: dict[str, Any],
+    key: str,
+    where: str,
+    *,
+    rule: NumberRule = "any",
+    unit: str = "",
+    bounds: tuple[float, float] | None = None,
+) -> float:
+    """A finite number from ``data[key]`` of the table ``where`` (empty: the document) satisfying ``rule`` and
+    lying within ``bounds`` (inclusive)."""
     path = f"{where}.{key}" if where else key
     # Scenario messages word the unit of an unconstrained number "(in m)"; tests and users rely on that wording.
     shown_unit = f"(in {unit})" if rule == "any" and unit else unit
-    return _FILES.number(data[key], path, rule=rule, unit=shown_unit)
-
-
-def _integer(data: dict[str, Any], key: str, where: str) -> int:
-    value = data[key]
-    if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-        raise ScenarioError(f"{where}.{key} must be an integer >= 1, got {value!r}")
+    value = _FILES.number(data[key], path, rule=rule, unit=shown_unit)
+    if bounds is not None:
+        _within(path, value, bounds, unit)
     return value
 
 
@@ -267,11 +372,11 @@ def _parse_changes(raw: Any, steps: int) -> tuple[ScheduledChange, ...]:
         where = f"walk.change[{index}]"
         entry = _FILES.table(entry, where)
         _FILES.check_keys(entry, where, ("step",), ("length", "width", "yaw", "only"))
-        step = _integer(entry, "step", where)
+        step = _FILES.count(entry["step"], f"{where}.step")
         if step > steps:
             raise ScenarioError(f"{where}.step must be a step of the walk (1..{steps}), got {step}")
-        length = _number(entry, "length", where, unit="m") if "length" in entry else None
-        width = _number(entry, "width", where, rule="> 0", unit="m") if "width" in entry else None
+        length = _number(entry, "length", where, unit="m", bounds=_LENGTH_BOUNDS) if "length" in entry else None
+        width = _number(entry, "width", where, rule="> 0", unit="m", bounds=_WIDTH_BOUNDS) if "width" in entry else None
         yaw = _number(entry, "yaw", where, rule=_YAW_RULE, unit="rad") if "yaw" in entry else None
         if length is None and width is None and yaw is None:
             raise ScenarioError(f"{where} changes nothing: give at least one of length, width, yaw")
@@ -282,7 +387,7 @@ def _parse_changes(raw: Any, steps: int) -> tuple[ScheduledChange, ...]:
         # steps + 1 is never touched so the walk still ends with the feet side by side.
         through = None if only else steps
         changes.append(ScheduledChange(step, length=length, width=width, turn=yaw, through=through))
-    return tuple(changes)
+    return tuple(changes)  # Scenario refuses two changes of one step, naming both entries
 
 
 def _parse_guide(raw: Any) -> GuidePath:
@@ -307,8 +412,10 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
 
     robot = _FILES.table(data["robot"], "robot")
     _FILES.check_keys(robot, "robot", ("cog_height", "sole"), ("gravity",))
-    cog_height = _number(robot, "cog_height", "robot", rule="> 0", unit="m")
-    gravity = _number(robot, "gravity", "robot", rule="> 0", unit="m/s^2") if "gravity" in robot else 9.81
+    cog_height = _number(robot, "cog_height", "robot", rule="> 0", unit="m", bounds=_COG_HEIGHT_BOUNDS)
+    gravity = 9.81
+    if "gravity" in robot:
+        gravity = _number(robot, "gravity", "robot", rule="> 0", unit="m/s^2", bounds=_GRAVITY_BOUNDS)
     sole_table = _FILES.table(robot["sole"], "robot.sole")
     sides = ("front", "back", "inner", "outer")
     _FILES.check_keys(sole_table, "robot.sole", sides, ())
@@ -322,20 +429,22 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     extra_durations = ("start", "end", "settle")
     _FILES.check_keys(timing_table, "timing", (*durations, "dt", "horizon_steps"), extra_durations)
     timing_values = {
-        key: _number(timing_table, key, "timing", rule="> 0", unit="s")
+        key: _number(timing_table, key, "timing", rule="> 0", unit="s", bounds=_PHASE_BOUNDS)
         for key in (*durations, *extra_durations)
         if key in timing_table
     }
     timing = Timing(**timing_values)
-    dt = _number(timing_table, "dt", "timing", rule="> 0", unit="s")
-    horizon_steps = _integer(timing_table, "horizon_steps", "timing")
+    dt = _number(timing_table, "dt", "timing", rule="> 0", unit="s", bounds=(MIN_DT, MAX_PHASE_DURATION))
+    horizon_steps = _FILES.count(
+        timing_table["horizon_steps"], "timing.horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY
+    )
 
     walk = _FILES.table(data["walk"], "walk")
     walk_required = ("steps", "step_length", "step_width", "step_height")
     _FILES.check_keys(walk, "walk", walk_required, ("yaw", "first_foot", "change"))
-    steps = _integer(walk, "steps", "walk")
-    step_length = _number(walk, "step_length", "walk", unit="m")
-    step_width = _number(walk, "step_width", "walk", rule="> 0", unit="m")
+    steps = _FILES.count(walk["steps"], "walk.steps", high=MAX_WALK_STEPS, why=_STEPS_WHY)
+    step_length = _number(walk, "step_length", "walk", unit="m", bounds=_LENGTH_BOUNDS)
+    step_width = _number(walk, "step_width", "walk", rule="> 0", unit="m", bounds=_WIDTH_BOUNDS)
     step_height = _number(walk, "step_height", "walk", rule=">= 0", unit="m")
     yaw = _number(walk, "yaw", "walk", rule=_YAW_RULE, unit="rad") if "yaw" in walk else 0.0
     first_foot = _choice(walk, "first_foot", "walk", ("right", "left")) if "first_foot" in walk else "right"

@@ -139,6 +139,22 @@ class TomlFiles:
             raise self.error(f"{path} must be {requirement}{unit_text}, got {value!r}")
         return float(value)
 
+    def count(self, value: Any, path: str, *, high: int | None = None, why: str = "") -> int:
+        """``value``, after checking that it is an integer >= 1 and, if ``high`` is given, at most ``high``.
+
+        Args:
+            value: the TOML value.
+            path: its dotted name, for the message.
+            high: the largest value accepted.
+            why: a short clause explaining ``high``, shown in the message.
+        """
+        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+            raise self.error(f"{path} must be an integer >= 1, got {value!r}")
+        if high is not None and value > high:
+            reason = f" ({why})" if why else ""
+            raise self.error(f"{path} must be at most {high}{reason}, got {value!r}")
+        return value
+
     # ----- finding files -------------------------------------------------------------------------------------
 
     def _builtin_dir(self) -> Traversable:

@@ -14,6 +14,7 @@ import pytest
 
 from rtgait import cli
 from rtgait.cli import main
+from rtgait.report import plan_files
 from rtgait.scenario import load_scenario
 
 HEAD_LINE = (
@@ -151,6 +152,16 @@ def test_no_leftovers_beside_the_output_folder(fig4_run: tuple[Path, str]) -> No
     assert [p.name for p in out.parent.iterdir()] == [out.name]
 
 
+def test_the_files_checked_before_the_run_are_the_files_written(fig4_run: tuple[Path, str], tmp_path: Path) -> None:
+    # The destination is checked for these names before the run: a name missing there would be checked too late.
+    out, _ = fig4_run
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["files"] == plan_files(figures=True, robot=False, html=False)
+    assert main(["plan", "fig6", "--out", str(tmp_path / "o"), "--no-figures", "--quiet"]) == 0
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text(encoding="utf-8"))
+    assert summary["files"] == plan_files(figures=False, robot=False, html=False)
+
+
 @pytest.mark.parametrize("name", ["fig6", "fig7", "fig8"])
 def test_paper_walks_that_keep_balance_are_reported_inside(
     name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
@@ -249,6 +260,9 @@ BAD_FILES = [
     ("invalid TOML", ("[walk]", "[walk"), "invalid TOML"),
     ("unknown key", ("step_width = 0.19", "step_widht = 0.19"), "walk.step_widht"),
     ("dt longer than a phase", ("dt = 0.01", "dt = 0.3"), "timing.dt"),
+    ("dt below the limit", ("dt = 0.01", "dt = 1e-6"), "timing.dt must be within [1e-05, 60] s"),
+    ("two changes of one step", ("length = 0.12\n", "length = 0.12\n\n[[walk.change]]\nstep = 2\nwidth = 0.2\n"),
+     "walk.change[0] and walk.change[1] both change step 2"),
 ]
 
 
@@ -287,6 +301,8 @@ def test_bad_scenario_file_exits_2_with_one_line_and_writes_nothing(
         (["plan", "fig4", "--dt", "-0.01"], "--dt must be a number > 0 s"),
         (["plan", "fig4", "--dt", "nan"], "--dt must be a number > 0 s"),
         (["plan", "fig4", "--dt", "0.5"], "--dt must not exceed the shortest phase"),
+        (["plan", "fig4", "--dt", "1e-7"], "--dt must be at least 1e-05 s"),
+        (["plan", "fig4", "--dt", "-1e-3"], "--dt must be a number > 0 s"),  # not taken for an option
     ],
 )
 def test_bad_arguments_exit_2_with_one_line_and_write_nothing(
@@ -306,11 +322,23 @@ def test_unreadable_scenario_file_is_bad_input(
 
 
 @pytest.mark.parametrize(
-    "argv", [[], ["plan"], ["plan", "fig4", "--dt", "fast"], ["plan", "fig4", "--bogus"], ["walk"]]
+    ("argv", "expected"),
+    [
+        ([], "choose a command"),
+        (["plan"], "the following arguments are required: SCENARIO"),
+        (["plan", "fig4", "--dt", "fast"], "--dt: invalid float value: 'fast'"),
+        (["plan", "fig4", "--bogus"], "unrecognized arguments: --bogus"),
+        (["plan", "fig4", "--out"], "--out: expected one argument"),
+        (["walk"], "invalid choice: 'walk'"),
+        (["simulate", "fig8", "--robot"], "--robot: expected one argument"),
+    ],
 )
-def test_usage_errors_exit_2(argv: list[str], capsys: pytest.CaptureFixture[str]) -> None:
+def test_usage_errors_exit_2_with_one_line(argv: list[str], expected: str, capsys: pytest.CaptureFixture[str]) -> None:
+    # argparse's own errors too: one line naming the problem and where help is, no usage block.
     assert main(argv) == 2
-    assert "usage: rtgait" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.startswith("rtgait: error: ") and len(err.splitlines()) == 1, err
+    assert expected in err and "--help" in err and "usage:" not in err
 
 
 def test_help_exits_0(capsys: pytest.CaptureFixture[str]) -> None:

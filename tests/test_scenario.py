@@ -9,8 +9,17 @@ from pathlib import Path
 
 import pytest
 
+from rtgait.core.limits import (
+    MAX_COG_HEIGHT,
+    MAX_HORIZON_STEPS,
+    MAX_PHASE_W_T,
+    MAX_STEPS,
+    MIN_COG_HEIGHT,
+    MIN_DT,
+    MIN_GRAVITY,
+)
 from rtgait.core.online import OnlinePlanner
-from rtgait.core.rollout import Rollout, rollout
+from rtgait.core.rollout import Rollout, ScheduledChange, rollout
 from rtgait.scenario import Scenario, ScenarioError, builtin_scenarios, load_scenario
 
 BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "sidestep", "turn")
@@ -269,6 +278,20 @@ BAD = [
     ("name", ('name = "probe"', 'name = "../escape"'), "name must be"),
     ("change table", (CHANGES, "[walk.change]\nstep = 3\nlength = 0.1\n"), "walk.change must be an array of tables"),
     ("missing file", "no-such-file.toml", "cannot read scenario file"),
+    # The limits of rtgait.core.limits, each named by its field and stated.
+    ("steps limit", ("steps = 4", "steps = 10000"), "walk.steps must be at most 9999 (one closing step is added"),
+    ("horizon limit", ("horizon_steps = 2", "horizon_steps = 21"), "timing.horizon_steps must be at most 20"),
+    ("phase too long", ("settle = 1.5", "settle = 61"), "timing.settle must be within [0.001, 60] s"),
+    ("phase too short", ("double_support = 0.1", "double_support = 5e-4"), "timing.double_support must be within"),
+    ("dt limit", ("dt = 0.01", "dt = 1e-6"), "timing.dt must be within [1e-05, 60] s"),
+    ("cog height limit", ("cog_height = 0.75", "cog_height = 11"), "robot.cog_height must be within [0.05, 10] m"),
+    ("gravity limit", ("gravity = 9.8", "gravity = 0.05"), "robot.gravity must be within [0.1, 100] m/s^2"),
+    # w = sqrt(9.8 / 0.75) = 3.61 1/s: a 5.8 s phase is w*T = 21.
+    ("w T limit", ("settle = 1.5", "settle = 5.8"), "timing.settle = 5.8 s is too long for a COG 0.75 m high: w*T"),
+    ("stride limit", ("step_length = 0.1", "step_length = -2.1"), "walk.step_length must be within [-2, 2] m"),
+    ("change stride limit", ("width = 0.22", "width = 2.5"), "walk.change[0].width must be within [0, 2] m"),
+    # Two entries for one step: the last one used to win silently.
+    ("two changes of a step", ("step = 3\n", "step = 2\n"), "walk.change[0] and walk.change[1] both change step 2"),
 ]
 """(case, edit of VALID or a scenario argument, text the one-line error must contain)."""
 
@@ -304,3 +327,37 @@ def test_scenario_built_in_code_is_validated_too() -> None:
         replace(scenario, steps=4)
     with pytest.raises(ScenarioError, match="connection"):
         replace(scenario, connection="fast")
+
+
+@pytest.mark.parametrize(
+    ("changes", "expected"),
+    [
+        ({"cog_height": 1e-6}, r"cog_height must be within \[0.05, 10\] m"),
+        ({"gravity": 1e9}, r"gravity must be within \[0.1, 100\] m/s\^2"),
+        ({"dt": 1e-7}, r"dt must be at least 1e-05 s"),
+        ({"steps": MAX_STEPS}, r"steps must be at most 9999"),
+        ({"horizon_steps": MAX_HORIZON_STEPS + 1}, r"horizon_steps must be at most 20"),
+        # w = sqrt(9.81 / 0.05) = 14 1/s: fig4's 2 s settling phase is w*T = 28 (a robot this small settles faster).
+        ({"cog_height": 0.05}, r"timing.settle = 2 s is too long for a COG 0.05 m high"),
+        # fig4 walks 14.8 s (148001 samples every 0.1 ms); with 210 steps it walks 214.8 s: 2148001 samples.
+        ({"steps": 210, "dt": 1e-4}, r"dt 0.0001 s is too short for a walk of .* at most 1000000"),
+        ({"changes": (ScheduledChange(3, length=0.1), ScheduledChange(3, width=0.2))}, r"both change step 3"),
+    ],
+)
+def test_limits_hold_for_scenarios_built_in_code(changes: dict[str, object], expected: str) -> None:
+    # The CLI's --dt and a robot's COG height reach the scenario this way, not through a file.
+    with pytest.raises(ScenarioError, match=expected):
+        replace(load_scenario("fig4"), **changes)
+
+
+def test_values_at_the_limits_are_accepted(tmp_path: Path) -> None:
+    scenario = load_scenario(write(tmp_path, VALID))  # 7.1 s long
+    assert replace(scenario, steps=MAX_STEPS - 1).steps == MAX_STEPS - 1
+    assert replace(scenario, horizon_steps=MAX_HORIZON_STEPS).horizon_steps == MAX_HORIZON_STEPS
+    assert replace(scenario, dt=MIN_DT).dt == MIN_DT  # 710001 samples
+    assert replace(scenario, cog_height=MAX_COG_HEIGHT, gravity=MIN_GRAVITY).cog_height == MAX_COG_HEIGHT
+    w = math.sqrt(scenario.gravity / scenario.cog_height)
+    longest = replace(scenario.timing, settle=MAX_PHASE_W_T / w * (1.0 - 1e-12))
+    assert replace(scenario, timing=longest).timing.settle == longest.settle
+    low = replace(scenario, cog_height=MIN_COG_HEIGHT, timing=replace(scenario.timing, settle=1.0))
+    assert low.cog_height == MIN_COG_HEIGHT

@@ -1,24 +1,31 @@
-"""One scenario walked in physics, and its output files: what a command-line ``rtgait sim`` needs.
+"""One scenario walked in physics, and its output files: what the command line's ``rtgait simulate`` needs.
 
 ``simulate(scenario, robot)`` builds the MuJoCo model (or reuses one), plans the scenario with the robot's COG
 height, step width and sole, and runs the closed loop of :mod:`rtgait.sim.loop`. ``write_sim_outputs(result,
 out_dir)`` writes ``sim.csv`` (one row per tick), ``summary.json`` and ``zmp_sim.png`` (planned vs measured
 ZMP), each to a temporary name first and renamed when complete, and returns the summary.
+
+Before a long run, :func:`planned_walk` gives the walk the robot will be asked to follow (to check that it can,
+kinematically) and :func:`simulated_time` how long the run will be; :func:`mujoco_messages` collects MuJoCo's
+warnings, which it would otherwise append to a file in the working folder.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import inspect
 import json
-import os
-import uuid
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+import mujoco
 import numpy as np
 
 from rtgait.core.online import OnlinePlanner, VelocityCommand
+from rtgait.core.rollout import Rollout, ScheduledChange, rollout
+from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario import Scenario
@@ -29,8 +36,11 @@ __all__ = [
     "SIM_CSV_COLUMNS",
     "SIM_FILES",
     "loop_options",
+    "mujoco_messages",
+    "planned_walk",
     "replay_paths",
     "simulate",
+    "simulated_time",
     "write_sim_outputs",
     "write_sim_replay",
 ]
@@ -81,7 +91,9 @@ def simulate(
 
     The scenario is walked with the robot's nominal COG height, its step width at half-sitting and its sole
     (:func:`rtgait.robot.motion.robot_scenario`); its footstep changes are handed to the planner at their
-    connection mode's deadline.
+    connection mode's deadline. The walk is not checked for reach first (``rtgait simulate`` does, with
+    :func:`planned_walk`), and MuJoCo's warnings go to its default handler unless the call is wrapped in
+    :func:`mujoco_messages`.
 
     Args:
         scenario: the walk (a built-in scenario or one loaded from a file).
@@ -120,17 +132,80 @@ def simulate(
         from rtgait.sim.guided import simulate_guided
 
         return simulate_guided(sim, walk, dataclasses.replace(base_options, changes=()), progress=progress)[0]
-    config_planner = walk.planner_config()
-    if velocity is None:
-        planner = OnlinePlanner(config_planner, walk.strides())
-        changes, stop_after = walk.changes, None
-    else:
-        command = velocity if isinstance(velocity, VelocityCommand) else VelocityCommand(*velocity)
-        planner = OnlinePlanner(config_planner, None)
-        planner.set_velocity(command.vx, command.vy, command.wz)
-        changes, stop_after = (), walk.steps
-    walk_options = dataclasses.replace(base_options, changes=tuple(changes), stop_after_steps=stop_after)
+    planner, changes, stop_after = _planner(walk, velocity)
+    walk_options = dataclasses.replace(base_options, changes=changes, stop_after_steps=stop_after)
     return run_closed_loop(sim, planner, walk_options, progress=progress)
+
+
+def _planner(
+    walk: Scenario, velocity: VelocityCommand | tuple[float, float, float] | None
+) -> tuple[OnlinePlanner, tuple[ScheduledChange, ...], int | None]:
+    """The planner of ``walk`` (by its footsteps, or by the ``velocity`` command), the changes to hand it and,
+    for a walk by command, the steps after which it stops."""
+    config = walk.planner_config()
+    if velocity is None:
+        return OnlinePlanner(config, walk.strides()), walk.changes, None
+    command = velocity if isinstance(velocity, VelocityCommand) else VelocityCommand(*velocity)
+    planner = OnlinePlanner(config, None)
+    planner.set_velocity(command.vx, command.vy, command.wz)
+    return planner, (), walk.steps
+
+
+def planned_walk(
+    scenario: Scenario, robot: RobotModel, velocity: VelocityCommand | tuple[float, float, float] | None = None
+) -> Rollout:
+    """The walk :func:`simulate` asks ``robot`` to follow, planned alone (no physics) at the scenario's period.
+
+    Hand it to :func:`rtgait.robot.motion.whole_body_motion` to refuse, before simulating, a walk the robot cannot
+    reach, exactly as ``rtgait plan --robot`` does. A walk of footsteps is planned whole, with its changes; a walk
+    by ``velocity`` command over its ``steps`` steps (the closing step and the settling add nothing a walk of
+    footsteps would not check); a hand-guided walk, whose steps the pull sets only while walking, over its start
+    and one step in place: the robot's COG height and stance.
+    """
+    walk = robot_scenario(scenario, robot)
+    guided = walk.guide is not None and velocity is None
+    planner, changes, stop_after = _planner(walk, VelocityCommand() if guided else velocity)
+    if stop_after is None:
+        return rollout(planner, walk.dt, walk.sole, changes)
+    steps = 1 if guided else stop_after
+    return rollout(planner, walk.dt, walk.sole, duration=walk.timing.start + steps * walk.timing.step_period)
+
+
+def simulated_time(
+    scenario: Scenario,
+    *,
+    velocity: VelocityCommand | tuple[float, float, float] | None = None,
+    options: LoopOptions | None = None,
+) -> float:
+    """How much time (s) :func:`simulate` will simulate: the start transition, the walk until its COG is at rest
+    and ``options.after``; for a hand-guided walk, the start transition, the person's walk and the time the robot
+    is given to catch up with them (:func:`rtgait.sim.guided.guided_options`)."""
+    options = options or LoopOptions()
+    lead = options.start_ramp + options.start_hold
+    if scenario.guide is not None and velocity is None:
+        from rtgait.sim.guided import guided_options
+
+        # guided_options owns the catch-up margin; reading its default keeps one source for the number.
+        catch_up = inspect.signature(guided_options).parameters["margin"].default
+        return lead + scenario.guide.duration + catch_up
+    return lead + scenario.duration + options.after
+
+
+@contextlib.contextmanager
+def mujoco_messages() -> Iterator[list[str]]:
+    """Collect MuJoCo's warnings while the block runs into the list it yields, and print none.
+
+    Without a handler MuJoCo prints each warning and appends it to ``MUJOCO_LOG.TXT`` in the working folder, a
+    file outside any run's outputs. (Its errors reach Python as exceptions and write nothing.) The handler is
+    global to the process: the previous one is restored when the block ends.
+    """
+    previous = mujoco.get_mju_user_warning()
+    messages: list[str] = []
+    mujoco.set_mju_user_warning(messages.append)
+    try:
+        yield messages
+    finally:
+        mujoco.set_mju_user_warning(previous)
 
 
 def _table(result: SimResult) -> np.ndarray:
@@ -145,17 +220,6 @@ def _table(result: SimResult) -> np.ndarray:
             result.contact.astype(float),
         ]
     )
-
-
-def _write_atomic(path: Path, write: Callable[[Path], None]) -> None:
-    """Write ``path`` through a temporary file beside it, renamed when complete (never a half-written file)."""
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
-    try:
-        write(temporary)
-        os.replace(temporary, path)
-    finally:
-        if temporary.exists():
-            temporary.unlink()
 
 
 def _write_csv(result: SimResult, path: Path) -> None:
@@ -267,16 +331,27 @@ def write_sim_replay(
 
 
 def write_sim_outputs(
-    result: SimResult, out_dir: str | Path, *, figure: bool = True, title: str = "", extra: dict[str, Any] | None = None
+    result: SimResult,
+    out_dir: str | Path,
+    *,
+    figure: bool = True,
+    title: str = "",
+    extra: dict[str, Any] | None = None,
+    replay: RobotModel | None = None,
+    sole: Any = None,
 ) -> dict[str, Any]:
-    """Write ``sim.csv``, ``summary.json`` and (with ``figure``) ``zmp_sim.png`` into ``out_dir``.
+    """Write ``sim.csv``, ``summary.json``, with ``figure`` ``zmp_sim.png`` and with ``replay`` ``replay.html``
+    into ``out_dir``.
 
     Args:
         result: the simulated walk.
         out_dir: folder, created if missing; files of the same names are replaced, others are left alone.
         figure: also draw ``zmp_sim.png`` (needs matplotlib).
-        title: prefix of the figure's title (e.g. the scenario's name).
+        title: prefix of the figure's and the replay's title (e.g. the scenario's name).
         extra: more entries for the summary (e.g. the scenario's name).
+        replay: the robot simulated, to write the 3D replay of the simulated motion (:func:`write_sim_replay`,
+            needs meshcat).
+        sole: the replay's footprint rectangle (m): the sole the walk was planned with.
 
     Returns:
         The summary, also written as ``summary.json``: ``fell``, ``fall_time`` (s or null), ``fall_cause``,
@@ -287,11 +362,14 @@ def write_sim_outputs(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     files = ["sim.csv", "summary.json"]
-    _write_atomic(out / "sim.csv", lambda path: _write_csv(result, path))
+    write_atomic(out / "sim.csv", lambda path: _write_csv(result, path))
     if figure:
-        _write_atomic(out / "zmp_sim.png", lambda path: plot_zmp_sim(result, path, title))
+        write_atomic(out / "zmp_sim.png", lambda path: plot_zmp_sim(result, path, title))
         files.append("zmp_sim.png")
+    if replay is not None:
+        label = f"{title} on {replay.name}" if title else replay.name
+        write_sim_replay(result, replay, out / "replay.html", sole=sole, title=f"rtgait: {label} in MuJoCo")
+        files.append("replay.html")
     summary: dict[str, Any] = {**(extra or {}), **result.summary(), "rows": len(result.times), "files": files}
-    text = json.dumps(summary, indent=2, allow_nan=False) + "\n"
-    _write_atomic(out / "summary.json", lambda path: path.write_text(text, encoding="utf-8"))
+    write_text_atomic(out / "summary.json", json.dumps(summary, indent=2, allow_nan=False) + "\n")
     return summary

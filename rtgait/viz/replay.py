@@ -24,7 +24,6 @@ import io
 import math
 import numbers
 import os
-import uuid
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +39,7 @@ from meshcat.animation import Animation
 from pinocchio.visualize import MeshcatVisualizer
 
 from rtgait.core.footsteps import SoleRect
+from rtgait.outputs import write_text_atomic
 
 __all__ = [
     "COG_COLOR",
@@ -157,7 +157,7 @@ def write_replay_html(
         frame_zmp=_interpolate(t, zmp_arr, frame_times),
     )
     page = page.replace("<title>MeshCat</title>", f"<title>{html.escape(title or 'rtgait replay')}</title>", 1)
-    _write_atomic(out, page)
+    write_text_atomic(out, page)
     return out
 
 
@@ -508,17 +508,3 @@ def _close(vis: meshcat.Visualizer) -> None:
         for stream in (proc.stdout, proc.stderr):
             if stream is not None:
                 stream.close()
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to a hidden temporary file beside ``path``, then rename it over ``path``."""
-    # Not mkstemp: its 0600 mode would survive the rename; open(..., "x") honours the umask like any new file.
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
-    try:
-        with open(tmp, "x", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise

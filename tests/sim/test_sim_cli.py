@@ -59,3 +59,163 @@ def test_bad_simulate_input_exits_2_with_one_line(
 def test_unknown_scenario(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["simulate", "fig99", "--out", str(tmp_path / "x")]) == 2
     assert "fig4" in capsys.readouterr().err
+
+
+# ----- the same checks as `plan`, before any physics ------------------------------------------------------------
+
+
+@pytest.fixture
+def no_physics(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Fail the test if a closed loop starts: the input must be refused before."""
+    import rtgait.sim.guided as guided
+    import rtgait.sim.run as run
+
+    def simulated(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the simulation started before the input was refused")
+
+    monkeypatch.setattr(run, "run_closed_loop", simulated)
+    monkeypatch.setattr(guided, "run_closed_loop", simulated)
+
+
+def tall_talos(folder: Path) -> Path:
+    """Talos's description with a COG 1.2 m high: above anything its legs reach."""
+    text = (Path(__file__).parents[2] / "rtgait" / "robots" / "talos.toml").read_text(encoding="utf-8")
+    assert "cog_height = 0.84" in text
+    path = folder / "tall.toml"
+    path.write_text(text.replace("cog_height = 0.84", "cog_height = 1.2"), encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("scenario", ["fig8", "guided"])
+@pytest.mark.usefixtures("no_physics")
+def test_a_robot_that_cannot_reach_its_cog_height_is_refused_as_by_plan(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], scenario: str
+) -> None:
+    robot = str(tall_talos(tmp_path))
+    out = tmp_path / "never"
+    assert main(["plan", scenario, "--robot", robot, "--no-figures", "--out", str(out)]) == 2
+    refused_by_plan = capsys.readouterr().err
+    assert main(["simulate", scenario, "--robot", robot, "--no-figures", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err == refused_by_plan and "out of reach for talos: COG error" in err and len(err.splitlines()) == 1
+    assert not out.exists()
+
+
+@pytest.mark.usefixtures("no_physics")
+def test_a_step_the_robot_cannot_reach_is_refused_before_simulating(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], write_scenario
+) -> None:
+    scenario = write_scenario(name="giant", connection="quasi-real-time", step_length=0.9)
+    out = tmp_path / "never"
+    assert main(["simulate", str(scenario), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "step 1 at t=" in err and "out of reach" in err and len(err.splitlines()) == 1
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("extra", "words"),
+    [
+        (["--push", "1,0.2,50,0", "--push", "1.1,0.1,-50,0"], "--push 1,0.2,50,0 and --push 1.1,0.1,-50,0 overlap"),
+        (["--push", "20,0.1,50,0"], "--push 20,0.1,50,0 starts after the run has ended (at 14.70 s)"),
+    ],
+)
+def test_pushes_that_would_silently_not_act_are_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], extra: list[str], words: str
+) -> None:
+    from rtgait import cli
+
+    monkeypatch.setattr(cli, "_load_robot", lambda name: pytest.fail("the robot was loaded"))
+    assert main(["simulate", "fig8", "--out", str(tmp_path / "never"), *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rtgait: error:") and words in err and len(err.splitlines()) == 1
+
+
+def test_a_run_longer_than_the_tick_limit_is_refused_before_anything_loads(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], write_scenario
+) -> None:
+    from rtgait import cli
+
+    monkeypatch.setattr(cli, "_load_robot", lambda name: pytest.fail("the robot was loaded"))
+    # 1000 steps of 1 s: planned every 10 ms, 100 thousand samples; simulated every 1 ms, too many. The run lasts
+    # the walk (1004.8 s), the 1.5 s start transition and 0.5 s after.
+    scenario = write_scenario(name="long", steps=1000)
+    assert main(["simulate", str(scenario), "--out", str(tmp_path / "never")]) == 2
+    err = capsys.readouterr().err
+    assert "1006.8 s" in err and "physics step dt 0.001 s" in err and "1006801 ticks, at most 1000000" in err, err
+    guided = scenario.read_text(encoding="utf-8").replace("real-time", "quasi-real-time")
+    guided += "[guide]\nspeed = 0.001\n"  # the person walks 3.1 m at 1 mm/s: almost an hour
+    scenario.write_text(guided, encoding="utf-8")
+    assert main(["simulate", str(scenario), "--out", str(tmp_path / "never")]) == 2
+    assert "ticks, at most 1000000" in capsys.readouterr().err
+
+
+def test_an_out_that_is_a_file_is_refused_before_simulating(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from rtgait import cli
+
+    monkeypatch.setattr(cli, "_load_robot", lambda name: pytest.fail("the robot was loaded"))
+    out = tmp_path / "o"
+    out.write_text("a file", encoding="utf-8")
+    assert main(["simulate", "fig8", "--out", str(out)]) == 1
+    assert capsys.readouterr().err == f"rtgait: error: cannot write outputs to {out}: it exists and is not a folder\n"
+
+
+# ----- nothing outside --out, MuJoCo's warnings, negative commands ----------------------------------------------
+
+
+def test_mujoco_warnings_are_collected_instead_of_written_to_the_working_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import mujoco
+    import numpy as np
+
+    from rtgait.sim.run import mujoco_messages
+
+    monkeypatch.chdir(tmp_path)
+    model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body>"
+                                           "</worldbody></mujoco>")  # fmt: skip
+    data = mujoco.MjData(model)
+    data.qpos[0] = np.nan  # MuJoCo warns of a bad position, then resets the state
+    previous = mujoco.get_mju_user_warning()
+    with mujoco_messages() as messages:
+        assert mujoco.get_mju_user_warning() is not None
+        mujoco.mj_step(model, data)
+    assert mujoco.get_mju_user_warning() is previous
+    assert len(messages) == 1 and "QPOS" in messages[0]
+    assert list(tmp_path.iterdir()) == []  # no MUJOCO_LOG.TXT
+
+
+def test_simulate_writes_nothing_outside_out_and_reports_mujocos_warnings(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], write_scenario
+) -> None:
+    scenario = write_scenario(name="short", connection="quasi-real-time", single_support=0.7, double_support=0.1,
+                              dt=0.005, steps=1, step_length=0.08, short_ends=True)  # fmt: skip
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    # A 10^12 N shove makes the physics blow up at once: MuJoCo warns (and the robot falls), in a tenth of a second.
+    args = ["simulate", str(scenario), "--out", "out", "--push", "0.1,0.01,1e12,0", "--no-figures"]
+    assert main(args) == 0
+    assert "warnings    MuJoCo: Nan, Inf or huge value in QACC" in capsys.readouterr().out
+    assert [p.name for p in work.iterdir()] == ["out"]
+    assert sorted(p.name for p in (work / "out").iterdir()) == ["sim.csv", "summary.json"]
+    summary = json.loads((work / "out" / "summary.json").read_text(encoding="utf-8"))
+    assert summary["fell"] is True and any("unstable" in text for text in summary["mujoco_warnings"])
+
+
+def test_a_negative_velocity_command_walks_backward(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], write_scenario
+) -> None:
+    scenario = write_scenario(name="back", connection="quasi-real-time", single_support=0.7, double_support=0.1,
+                              dt=0.005, steps=2, step_length=0.08, short_ends=True)  # fmt: skip
+    out = tmp_path / "sim"
+    assert main(["simulate", str(scenario), "--velocity", "-0.1,0,0", "--out", str(out), "--no-figures"]) == 0
+    assert "walked 3 of 3 steps without falling" in capsys.readouterr().out
+    with open(out / "sim.csv", encoding="utf-8") as stream:
+        rows = list(csv.DictReader(stream))
+    # 0.1 m/s over 0.8 s steps: two 8 cm steps backward, then the feet close.
+    assert float(rows[-1]["base_x"]) - float(rows[0]["base_x"]) == pytest.approx(-0.16, abs=0.04)
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["mujoco_warnings"] == []
