@@ -12,11 +12,11 @@ import math
 import numpy as np
 
 from rtgait.core.batch import segment_zmp_rows
-from rtgait.core.pattern import MOVING_KINDS, PlanOperator
+from rtgait.core.pattern import DEGREE, MOVING_KINDS, PlanOperator
 
-EAGER_SEGMENTS = 2
-"""Segments evaluated at replan time: the double support that begins and the single support after it. Replans
-happen at every double-support start, so later segments are rarely sampled; they are evaluated on first use."""
+EAGER_SEGMENTS = 1
+"""Segments evaluated at replan time: the one that begins. Later ones are evaluated by the first sample that needs
+them (a few microseconds, spread over the ticks instead of added to the replan's latency)."""
 
 
 class ActivePlan:
@@ -71,6 +71,10 @@ class ActivePlan:
         tau = min(max(rel - offsets[j], 0.0), self.durations[j])
         return j, tau
 
+    def end_state(self, j: int, w: float) -> list[float]:
+        """:meth:`state` at the end of segment ``j``: one precomputed product, as every replan needs it."""
+        return (self.layout.end_state_rows(j, w) @ self.y).ravel().tolist()
+
     def state(self, j: int, tau: float, w: float) -> list[float]:
         """``[px, py, dpx, dpy, cx, cy, dcx, dcy]`` on segment ``j`` at local time ``tau`` (m, m/s)."""
         e = math.exp(w * tau)
@@ -88,7 +92,10 @@ class ActivePlan:
 class PlanLayout:
     """What a replan needs to know about one plan shape: its operator and where its anchors come from."""
 
-    __slots__ = ("G", "G_eager", "_zmp_rows", "anchor_phases", "durations", "first_kind", "offsets")
+    __slots__ = (
+        "G", "G_eager", "_end_rows", "_zmp_rows", "anchor_phases", "anchor_sources", "durations", "first_kind",
+        "offsets",
+    )  # fmt: skip
 
     def __init__(self, operator: PlanOperator, kinds: tuple[str, ...]) -> None:
         self.G = operator.G
@@ -100,6 +107,23 @@ class PlanLayout:
         # phase always (its free polynomial ends there), then every phase in which the reference travels.
         self.anchor_phases = (0, *(k for k, kind in enumerate(kinds) if k > 0 and kind in MOVING_KINDS))
         self._zmp_rows: dict[int, np.ndarray] = {}
+        self._end_rows: dict[int, np.ndarray] = {}
+        self.anchor_sources: tuple[tuple[int, int], ...] | None = None  # relative to F[q // 2], set on first use
+
+    def end_state_rows(self, j: int, w: float) -> np.ndarray:
+        """``S`` ``(4, n_inputs)``: ``S @ y`` holds ZMP, ZMP velocity, COG and COG velocity (rows, axes as columns)
+        at the end of segment ``j`` (m, m/s)."""
+        rows = self._end_rows.get(j)
+        if rows is None:
+            T = self.durations[j]
+            powers = T ** np.arange(DEGREE + 1)
+            slopes = np.arange(DEGREE + 1) * np.concatenate(([0.0], powers[:-1]))
+            ch, sh = math.cosh(w * T), math.sinh(w * T)
+            block = self.G[12 * j : 12 * j + 12]
+            a, A, V, W = block[: DEGREE + 1], block[DEGREE + 1 : 2 * DEGREE + 2], block[-2], block[-1]
+            rows = np.array([powers @ a, slopes @ a, ch * V + sh * W + powers @ A, w * (sh * V + ch * W) + slopes @ A])
+            self._end_rows[j] = rows
+        return rows
 
     def zmp_rows(self, samples: int) -> np.ndarray:
         """``M`` ``(samples, n_inputs)``: the first segment's ZMP at ``samples`` evenly spaced times is ``M @ y``."""

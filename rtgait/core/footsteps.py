@@ -227,16 +227,14 @@ class Timeline:
 
     def start_time(self, q: int) -> float:
         """Start of phase ``q`` relative to the walk's start (s)."""
-        t = self.timing
         if q == 0:
             return 0.0
-        step = (q + 1) // 2  # step whose single support is phase 2*step - 1
-        time = t.start + (step - 1) * t.step_period
-        if q % 2 == 0:
-            time += t.single_support
-        if self.n_steps is not None and q == 2 * self.n_steps + 1:
-            time = self.start_time(q - 1) + t.end
-        return time
+        t = self.timing
+        # Step (q + 1) // 2 has its single support in phase 2 step - 1; the settling phase follows the end phase.
+        if q & 1 and self.n_steps is not None and q == 2 * self.n_steps + 1:
+            return t.start + (self.n_steps - 1) * (t.single_support + t.double_support) + t.single_support + t.end
+        time = t.start + ((q + 1) // 2 - 1) * (t.single_support + t.double_support)
+        return time if q & 1 else time + t.single_support
 
     @property
     def last_phase(self) -> int | None:

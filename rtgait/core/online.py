@@ -406,8 +406,7 @@ class OnlinePlanner:
         if self._plan is None:
             return list(self._start_state or [0.0] * 8)
         plan = self._plan
-        j = q - 1 - plan.phase0
-        return plan.state(j, plan.durations[j], self.w)
+        return plan.end_state(q - 1 - plan.phase0, self.w)
 
     def _measured_cog(self, t: float, state: list[float]) -> None:
         """Replace the COG part of ``state`` (the planned state at ``t``) by the observed one carried to ``t``.
@@ -431,7 +430,10 @@ class OnlinePlanner:
 
     def _connect(self, t_start: float, q: int, layout: PlanLayout, state: list[float], elapsed: float) -> None:
         """Make the plan of ``layout`` from ``state`` at ``t_start`` (``elapsed`` s into phase ``q``)."""
-        y = state + self._walk.anchors(q, layout.anchor_phases)
+        sources = layout.anchor_sources
+        if sources is None:
+            sources = layout.anchor_sources = self._walk.relative_anchor_sources(q, layout.anchor_phases)
+        y = state + self._walk.anchors_from(q >> 1, sources)
         # Reference of the free segment: the cubic transfer the footsteps alone would ask for over the whole
         # phase (for a plan made mid-phase: the one of the plan made when the phase began).
         px, py, ax, ay = y[0], y[1], y[8], y[9]
@@ -456,7 +458,7 @@ class OnlinePlanner:
         n = self.n_steps
         layout = self._layout(q, self._plan_span(q))
         state = self._state_at_phase_start(q)
-        t_start = self._t0 + self.timeline.start_time(q)
+        t_start = self._next_replan_time
         if self.config.feedback == "measured":
             self._measured_cog(t_start, state)
         self._connect(t_start, q, layout, state, 0.0)
@@ -575,13 +577,18 @@ class OnlinePlanner:
         q_next = self._next_replan_phase
         if q_next is None:
             return
-        due = (self.timeline.phase_at(t - self._t0) - q_next) // 2 + 1
+        timeline = self.timeline
+        # Usually one replan is due; count them (a phase lookup) only when t is past the one after it.
+        if t - self._t0 >= timeline.start_time(q_next + 2) and (timeline.last_phase or math.inf) > q_next:
+            due = (timeline.phase_at(t - self._t0) - q_next) // 2 + 1
+        else:
+            due = 1
         if due > MAX_REPLANS_PER_SAMPLE:
             raise ValueError(
                 f"t={t} s is {due} double supports ahead of the plan under way: sample the planner at least once "
                 f"per step (one call replans at most {MAX_REPLANS_PER_SAMPLE} times)"
             )
-        while self._next_replan_phase is not None and self.phase_start(self._next_replan_phase) <= t:
+        while self._next_replan_time <= t:
             self._replan(t)
 
     @property

@@ -200,16 +200,29 @@ class Walk:
     def anchors(self, q: int, anchor_phases: Sequence[int]) -> list[float]:
         """Where the reference ZMP rests at the end of each anchor phase (:meth:`anchor_sources`), flat:
         ``[x_0, y_0, x_1, y_1, ...]`` (m)."""
+        return self.anchors_from(q >> 1, self.relative_anchor_sources(q, anchor_phases))
+
+    def relative_anchor_sources(self, q: int, anchor_phases: Sequence[int]) -> tuple[tuple[int, int], ...]:
+        """:meth:`anchor_sources` relative to ``F[q // 2]``: the same for every plan of one shape, so a plan layout
+        can keep it."""
+        i0 = q >> 1
+        return tuple((a - i0, b - i0) for a, b in self.anchor_sources(q, anchor_phases))
+
+    def anchors_from(self, i0: int, relative: Sequence[tuple[int, int]]) -> list[float]:
+        """Anchors ``[x_0, y_0, ...]`` (m) from sources relative to ``F[i0]`` (:meth:`relative_anchor_sources`)."""
+        last = i0 + relative[-1][1]
+        prints = self._prints
+        if self.base + len(prints) <= last:
+            self.ensure(last)
+        start = i0 - self.base
         anchors = []
-        for a, b in self.anchor_sources(q, anchor_phases):
-            fa = self.footprint(a)
+        for a, b in relative:
+            fa = prints[start + a]
             if a == b:
-                anchors.append(fa.x)
-                anchors.append(fa.y)
+                anchors += (fa.x, fa.y)
             else:
-                fb = self.footprint(b)
-                anchors.append(0.5 * (fa.x + fb.x))
-                anchors.append(0.5 * (fa.y + fb.y))
+                fb = prints[start + b]
+                anchors += (0.5 * (fa.x + fb.x), 0.5 * (fa.y + fb.y))
         return anchors
 
     # ----- deadlines ---------------------------------------------------------------------------------------
