@@ -41,9 +41,10 @@ CSV_HEAD_COLUMNS = (
 )  # fmt: skip
 """The first columns of ``trajectory.csv``, a stable interface for downstream tools (SI units, yaw in rad)."""
 
-CSV_EXTRA_COLUMNS = ("zmp_ref_x", "zmp_ref_y", "zmp_margin", "phase", "cog_vz", "cog_az")
+CSV_EXTRA_COLUMNS = ("zmp_ref_x", "zmp_ref_y", "zmp_margin", "phase", "cog_vz", "cog_az", "dcm_x", "dcm_y")
 """Columns after :data:`CSV_HEAD_COLUMNS`: reference ZMP (m), signed ZMP margin (m, > 0 inside), phase
-index, and the vertical COG velocity and acceleration (zero for the constant-height model)."""
+index, the vertical COG velocity and acceleration (zero for the constant-height model), and the divergent
+component of motion (capture point) ``xi = c + c'/w`` (m)."""
 
 CSV_COLUMNS = CSV_HEAD_COLUMNS + CSV_EXTRA_COLUMNS
 
