@@ -1,0 +1,141 @@
+"""Cost of closing the loop through the planner (run on demand, not in the test suite).
+
+* ``tick_us``: one 1 kHz control tick of planner and feedback with ``feedback="measured"``: ``observe`` (the COG
+  state measured), ``sample_values`` (replans at double-support starts included) and ``DcmFeedback.update``, over a
+  10-step walk of the paper's fig8 timing (0.7 / 0.1 s);
+* ``adjust_us``: one ``replan_now`` that needs a step adjustment (a push at mid single support, 24 directions and
+  sizes): the plan from the measured state, the decision over ``grid**2`` candidates, the plan remade with the new
+  landing; operators warm (each case is run twice and the second timed);
+* ``decision_us`` and ``candidates_per_s``: the decision alone (:func:`rtgait.core.stepping.propose_landing`).
+
+Wall times on a shared virtual machine vary between runs: run it a few times.
+
+Usage: ``python benchmarks/stepping.py [--json] [--grid N]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import time
+
+import numpy as np
+
+from rtgait.core import stepping
+from rtgait.core.feedback import DcmFeedback
+from rtgait.core.footsteps import SoleRect, Timing
+from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
+from rtgait.core.stepping import StepAdjustment
+from rtgait.core.support import support_polygon
+
+SOLE = SoleRect(0.13, 0.10, 0.07, 0.07)
+DT = 0.001
+
+
+def _config(grid: int) -> PlannerConfig:
+    return PlannerConfig(
+        timing=Timing(0.7, 0.1), connection="quasi-real-time", feedback="measured",
+        step_adjustment=StepAdjustment(SOLE, grid=grid),
+    )  # fmt: skip
+
+
+def tick_cost(grid: int) -> dict:
+    config = _config(grid)
+    planner = OnlinePlanner(config, straight_walk(config, 10, 0.1))
+    feedback = DcmFeedback(planner.w)
+    planner.start(0.0)
+    n = int(planner.end_time / DT)
+    cost = np.empty(n)
+    clock = time.perf_counter_ns
+    polygons: dict[int, np.ndarray] = {}
+    cog, vel, dcm, phase = (0.0, 0.0), (0.0, 0.0), (0.0, 0.0), 0
+    for k in range(n):
+        t = k * DT
+        began = clock()
+        planner.observe(t, cog, vel)
+        values, _support, phase = planner.sample_values(t)
+        polygon = polygons.get(phase)
+        if polygon is None:  # once per phase, as a loop caches it
+            polygon = polygons[phase] = support_polygon(planner.contact_feet(phase), SOLE)
+        feedback.update((values[9], values[10]), (values[21], values[22]), dcm, polygon, DT)
+        cost[k] = clock() - began
+        # The robot follows the plan (the benchmark times the loop, not a disturbance).
+        cog, vel, dcm = (values[0], values[1]), (values[3], values[4]), (values[21], values[22])
+    us = cost / 1e3
+    return {"median": float(np.median(us)), "p99": float(np.percentile(us, 99)), "ticks": n}
+
+
+def _pushed_planner(config: PlannerConfig, push: tuple[float, float]) -> tuple[OnlinePlanner, float]:
+    planner = OnlinePlanner(config, straight_walk(config, 8, 0.1))
+    planner.start(0.0)
+    t_push = planner.phase_start(5) + 0.25
+    t = 0.0
+    while t < t_push:
+        s = planner.sample_values(t)[0]
+        planner.observe(t, s[0:2], s[3:5])
+        t += DT
+    s = planner.sample_values(t)[0]
+    planner.observe(t, s[0:2], (s[3] + push[0], s[4] + push[1]))
+    return planner, t
+
+
+def adjust_cost(grid: int) -> dict:
+    config = _config(grid)
+    total, decision = [], []
+    original = stepping.propose_landing
+
+    def timed(*args, **kwargs):
+        began = time.perf_counter()
+        result = original(*args, **kwargs)
+        decision.append(time.perf_counter() - began)
+        return result
+
+    import rtgait.core.online as online  # the planner calls it through its own module's name
+
+    online.propose_landing = timed
+    try:
+        for angle in np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False):
+            for speed in (0.12, 0.2):
+                push = (speed * np.cos(angle), speed * np.sin(angle))
+                for attempt in range(2):
+                    planner, t = _pushed_planner(config, push)
+                    decision.clear()
+                    began = time.perf_counter()
+                    planner.replan_now(t)
+                    elapsed = time.perf_counter() - began
+                    if attempt == 1 and planner.step_adjustment_count:
+                        total.append((elapsed, decision[-1]))
+    finally:
+        online.propose_landing = original
+    whole = np.array([a for a, _ in total]) * 1e6
+    alone = np.array([b for _, b in total]) * 1e6
+    return {
+        "adjust_us": {"median": float(np.median(whole)), "p99": float(np.percentile(whole, 99))},
+        "decision_us": {"median": float(np.median(alone)), "p99": float(np.percentile(alone, 99))},
+        "candidates_per_s": float(grid * grid / (np.median(alone) * 1e-6)),
+        "adjustments": len(total),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--grid", type=int, default=32, help="candidates per axis (default 32: 1,024 candidates)")
+    args = parser.parse_args()
+    gc.collect()
+    result = {"tick_us": tick_cost(args.grid), **adjust_cost(args.grid), "candidates": args.grid**2}
+    if args.json:
+        print(json.dumps(result))
+        return
+    tick, adjust, decide = result["tick_us"], result["adjust_us"], result["decision_us"]
+    print(f"tick (observe + sample + DCM feedback), 1 kHz, feedback=measured: median {tick['median']:.2f} us, "
+          f"p99 {tick['p99']:.2f} us over {tick['ticks']} ticks")
+    print(f"replan_now with a step adjustment over {result['candidates']} candidates: median {adjust['median']:.0f} us, "
+          f"p99 {adjust['p99']:.0f} us ({result['adjustments']} pushes)")
+    print(f"the decision alone: median {decide['median']:.0f} us, p99 {decide['p99']:.0f} us: "
+          f"{result['candidates_per_s']:.3g} candidates/s")
+
+
+if __name__ == "__main__":
+    main()
