@@ -131,8 +131,8 @@ def main() -> None:
     tick, adjust, decide = result["tick_us"], result["adjust_us"], result["decision_us"]
     print(f"tick (observe + sample + DCM feedback), 1 kHz, feedback=measured: median {tick['median']:.2f} us, "
           f"p99 {tick['p99']:.2f} us over {tick['ticks']} ticks")
-    print(f"replan_now with a step adjustment over {result['candidates']} candidates: median {adjust['median']:.0f} us, "
-          f"p99 {adjust['p99']:.0f} us ({result['adjustments']} pushes)")
+    print(f"replan_now with a step adjustment over {result['candidates']} candidates: "
+          f"median {adjust['median']:.0f} us, p99 {adjust['p99']:.0f} us ({result['adjustments']} pushes)")
     print(f"the decision alone: median {decide['median']:.0f} us, p99 {decide['p99']:.0f} us: "
           f"{result['candidates_per_s']:.3g} candidates/s")
 
