@@ -67,6 +67,26 @@ class GaitSample(NamedTuple):
         """Divergent component of motion (capture point) ``xi = c + c'/w`` of the plan, horizontal (m)."""
         return self.values[21:23]
 
+    # The centre of mass under the name most libraries use (placo, Pinocchio, mc_rtc): the same values.
+    com = cog
+    com_vel = cog_vel
+    com_acc = cog_acc
+
+    def left_foot_transform(self) -> np.ndarray:
+        """Left foot pose as a 4x4 homogeneous transform (world from foot; m), as placo and Pinocchio give poses."""
+        return foot_transform(self.values[13:17])
+
+    def right_foot_transform(self) -> np.ndarray:
+        """Right foot pose as a 4x4 homogeneous transform (world from foot; m)."""
+        return foot_transform(self.values[17:21])
+
+
+def foot_transform(pose: np.ndarray) -> np.ndarray:
+    """4x4 homogeneous transform of a foot pose ``(x, y, z, yaw)`` (m, rad): rotation about z, then translation."""
+    x, y, z, yaw = (float(v) for v in pose)
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.array([[c, -s, 0.0, x], [s, c, 0.0, y], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]])
+
 
 class PlanRecord(NamedTuple):
     """One replanning.
