@@ -10,6 +10,7 @@ data in ``rtgait/scenarios/`` and are loaded by name; any other file is loaded b
     [robot]
     cog_height = 0.80                   # m, constant COG height above the ground
     gravity = 9.81                      # m/s^2, optional
+    mass = 57.0                         # kg, optional: pushes act on it in `rtgait simulate --model lipm`
 
     [robot.sole]                        # sole rectangle around the foot frame, m
     front = 0.13
@@ -106,6 +107,7 @@ _GRAVITY_BOUNDS = (MIN_GRAVITY, MAX_GRAVITY)
 _PHASE_BOUNDS = (MIN_PHASE_DURATION, MAX_PHASE_DURATION)
 _LENGTH_BOUNDS = (-MAX_STRIDE, MAX_STRIDE)
 _WIDTH_BOUNDS = (0.0, MAX_STRIDE)
+_MASS_BOUNDS = (1.0, 500.0)  # kg: from a toy biped to the heaviest humanoid built
 
 
 class ScenarioError(ValueError):
@@ -197,6 +199,8 @@ class Scenario:
         first_foot: the foot that swings first.
         source: where the scenario came from (``"builtin"`` or a file path); informative only.
         guide: a hand-guided walk's path (``[guide]``), or ``None``.
+        mass: the robot's mass (kg, ``[robot] mass``) for pendulum-level simulations, where pushes act on it;
+            ``None``: not given (``rtgait simulate --model lipm`` then takes an HRP-2-like 57 kg).
     """
 
     name: str
@@ -217,6 +221,7 @@ class Scenario:
     first_foot: Side = "right"
     source: str = field(default="", compare=False)
     guide: GuidePath | None = None
+    mass: float | None = None
 
     def __post_init__(self) -> None:
         # The TOML loader already checks every field with its file path; these checks cover scenarios built in
@@ -229,6 +234,8 @@ class Scenario:
             raise ScenarioError(f"connection must be one of {', '.join(CONNECTION_MODES)}, got {self.connection!r}")
         _within("cog_height", self.cog_height, _COG_HEIGHT_BOUNDS, "m")
         _within("gravity", self.gravity, _GRAVITY_BOUNDS, "m/s^2")
+        if self.mass is not None:
+            _within("mass", self.mass, _MASS_BOUNDS, "kg")
         self._check_period()
         _FILES.count(self.steps, "steps", high=MAX_WALK_STEPS, why=_STEPS_WHY)
         _FILES.count(self.horizon_steps, "horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY)
@@ -411,11 +418,12 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     connection = _choice(data, "connection", "", CONNECTION_MODES)
 
     robot = _FILES.table(data["robot"], "robot")
-    _FILES.check_keys(robot, "robot", ("cog_height", "sole"), ("gravity",))
+    _FILES.check_keys(robot, "robot", ("cog_height", "sole"), ("gravity", "mass"))
     cog_height = _number(robot, "cog_height", "robot", rule="> 0", unit="m", bounds=_COG_HEIGHT_BOUNDS)
     gravity = 9.81
     if "gravity" in robot:
         gravity = _number(robot, "gravity", "robot", rule="> 0", unit="m/s^2", bounds=_GRAVITY_BOUNDS)
+    mass = _number(robot, "mass", "robot", rule="> 0", unit="kg", bounds=_MASS_BOUNDS) if "mass" in robot else None
     sole_table = _FILES.table(robot["sole"], "robot.sole")
     sides = ("front", "back", "inner", "outer")
     _FILES.check_keys(sole_table, "robot.sole", sides, ())
@@ -473,6 +481,7 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
             first_foot=first_foot,  # type: ignore[arg-type]  # checked by _choice
             source=source,
             guide=guide,
+            mass=mass,
         )
     except ScenarioError as error:
         # Cross-field checks in Scenario use bare names; point at the TOML table they live in.

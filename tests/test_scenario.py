@@ -361,3 +361,14 @@ def test_values_at_the_limits_are_accepted(tmp_path: Path) -> None:
     assert replace(scenario, timing=longest).timing.settle == longest.settle
     low = replace(scenario, cog_height=MIN_COG_HEIGHT, timing=replace(scenario.timing, settle=1.0))
     assert low.cog_height == MIN_COG_HEIGHT
+
+
+def test_robot_mass_is_optional_and_bounded(write_scenario) -> None:
+    path = write_scenario(name="massive")
+    base = path.read_text(encoding="utf-8")
+    assert load_scenario(path).mass is None
+    path.write_text(base.replace("cog_height = 0.8\n", "cog_height = 0.8\nmass = 57.0\n"), encoding="utf-8")
+    assert load_scenario(path).mass == 57.0
+    path.write_text(base.replace("cog_height = 0.8\n", "cog_height = 0.8\nmass = 5000.0\n"), encoding="utf-8")
+    with pytest.raises(ScenarioError, match=r"mass must be within \[1, 500\] kg"):
+        load_scenario(path)
