@@ -4,9 +4,22 @@ Unknowns are ordered ``[V_1, W_1, ..., V_m, W_m]``. Rows: the initial COG positi
 continuity at each of the ``m - 1`` junctions, the terminal COG position. The matrix depends on the segment
 durations and ``w`` only, so it is factored once per timing pattern (:class:`BoundaryValueSolver`) and the
 factorisation is reused for any ZMP spline of that timing, for both axes at once.
+
+The same block-bidiagonal system also decouples exactly into two first-order recursions
+(:func:`component_propagators`), which the plan operators of :mod:`rtgait.core.pattern` use to avoid a dense
+solve: with the divergent and convergent components of the COG
+
+    xi = c + c'/w = U_j e^{w tau} + (A_j + A_j'/w)(tau),      U_j = V_j + W_j,
+    zeta = c - c'/w = S_j e^{-w tau} + (A_j - A_j'/w)(tau),    S_j = V_j - W_j,
+
+COG position and velocity are continuous exactly when ``xi`` and ``zeta`` are. ``zeta`` decays forward in time
+and ``xi`` backward, so ``S`` is swept forward from ``zeta(t_0)`` and ``U`` backward from ``xi(t_m)``, each with
+weights ``e^{-w (later - earlier)} <= 1``: no growing exponential is ever formed, unlike shooting on ``c``.
 """
 
 from __future__ import annotations
+
+from functools import lru_cache
 
 import numpy as np
 from scipy.linalg import lu_factor, lu_solve
@@ -29,6 +42,54 @@ def bvp_matrix(durations: np.ndarray, w: float) -> np.ndarray:
         M[row + 1, v], M[row + 1, wcol], M[row + 1, wcol + 2] = w * sh[j], w * ch[j], -w
     M[-1, -2], M[-1, -1] = ch[-1], sh[-1]
     return M
+
+
+@lru_cache(maxsize=64)
+def _sweep_intervals(m: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(spans, K)``, read-only, for ``m`` segments: with durations ``T`` ``(..., m)``, ``T @ spans`` (reshaped to
+    ``(..., 2, m, m)``) is the time between the two instants of each entry of ``[F, B]`` (a sum of durations),
+    and ``K`` is 0 on the kept triangles and ``-inf`` on the discarded ones, whose entries come out exactly 0."""
+    i, j, k = np.ogrid[:m, :m, :m]
+    forward = (k <= i) & (i < j)  # F[j, k]: from t_k to t_j covers segments k..j-1
+    backward = (j <= i) & (i <= k)  # B[j, k]: from t_j to t_{k+1} covers segments j..k
+    spans = np.stack([forward, backward], axis=1).astype(float).reshape(m, 2 * m * m)
+    jj, kk = np.ogrid[:m, :m]
+    K = np.where(np.stack([kk <= jj, kk >= jj]), 0.0, -np.inf).reshape(2 * m * m)
+    spans.setflags(write=False)
+    K.setflags(write=False)
+    return spans, K
+
+
+@lru_cache(maxsize=256)
+def _sweep_exponents(m: int, w: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(-w spans, K)`` of :func:`_sweep_intervals`: ``[F, B] = exp(T @ C + K)``."""
+    spans, K = _sweep_intervals(m)
+    C = -w * spans
+    C.setflags(write=False)
+    return C, K
+
+
+def component_propagators(durations: np.ndarray, w: float) -> tuple[np.ndarray, np.ndarray]:
+    """Forward and backward sweep matrices ``(F, B)``, each ``(..., m, m)``, for segment ``durations``
+    ``(..., m)`` (s, positive; leading axes batch several timings) and frequency ``w`` (1/s).
+
+    With ``t_j`` the start of segment ``j`` (0-based, ``t_0 = 0``, ``T_j = t_{j+1} - t_j``):
+
+    * convergent part: ``S_0 = e_0`` and ``S_{j+1} = e^{-w T_j} S_j + e_{j+1}``, i.e. ``S = F @ e`` with
+      ``F[j, k] = e^{-w (t_j - t_k)}`` for ``k <= j``. Here ``e_0 = zeta(t_0) - P^-_0(0)`` and
+      ``e_k = P^-_{k-1}(T_{k-1}) - P^-_k(0)`` (jumps of the particular part ``P^- = A - A'/w``);
+    * divergent part: ``U_{m-1} = e^{-w T_{m-1}} d_{m-1}`` and ``U_j = e^{-w T_j} (U_{j+1} + d_j)``, i.e.
+      ``U = B @ d`` with ``B[j, k] = e^{-w (t_{k+1} - t_j)}`` for ``k >= j``. Here ``d_k = P^+_{k+1}(0) -
+      P^+_k(T_k)`` for ``k < m - 1`` and ``d_{m-1} = xi(t_m) - P^+_{m-1}(T_{m-1})`` with ``P^+ = A + A'/w``.
+
+    Every kept entry is ``e^{-w * (a sum of durations)}``, in ``(0, 1]``; ``B[-1, -1] = e^{-w T_{m-1}}``.
+    """
+    durations = np.asarray(durations, dtype=float)
+    m = durations.shape[-1]
+    C, K = _sweep_exponents(m, float(w))
+    # Sums of durations, not differences of break times: no cancellation, however long the horizon.
+    both = np.exp(durations @ C + K).reshape(*durations.shape[:-1], 2, m, m)
+    return both[..., 0, :, :], both[..., 1, :, :]
 
 
 def bvp_rhs_from_ends(

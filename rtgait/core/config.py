@@ -8,6 +8,7 @@ from typing import Literal
 
 from rtgait.core.footsteps import Side, Timing
 from rtgait.core.limits import MAX_HORIZON_STEPS, MAX_PHASE_W_T, MAX_STRIDE, check_range
+from rtgait.core.connect import MIN_REST_W_T
 from rtgait.core.lipm import GRAVITY, omega
 from rtgait.core.stepping import StepAdjustment
 
@@ -73,6 +74,12 @@ class PlannerConfig:
                     f"timing {name} must be at most {MAX_PHASE_W_T / w:.3g} s at this COG height and gravity "
                     f"(w T <= {MAX_PHASE_W_T:g}, w = {w:.3g} 1/s), got {duration}"
                 )
+        if w * self.timing.settle < MIN_REST_W_T:
+            raise ValueError(
+                f"timing settle must be at least {MIN_REST_W_T / w:.3g} s at this COG height and gravity (w T >= "
+                f"{MIN_REST_W_T:g}: shorter, the ZMP would have to leave the feet to bring the COG to rest), "
+                f"got {self.timing.settle}"
+            )
         if self.connection not in CONNECTION_MODES:
             raise ValueError(f"connection must be one of {CONNECTION_MODES}, got {self.connection!r}")
         if self.feedback not in FEEDBACK_MODES:

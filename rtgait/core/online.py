@@ -47,13 +47,17 @@ from rtgait.core.walk import (
     Walk,
 )
 
-MIN_REMAINDER = 0.02
+MIN_REMAINDER = 0.05
 """Shortest remainder of a phase (s) that :meth:`OnlinePlanner.replan_now` plans over: closer to the phase's end
-the free ZMP polynomial would need implausible speeds, and the regular replan at the next double-support start
-is imminent anyway."""
+the free ZMP polynomial would need implausible speeds (its coefficients grow as ``1/T^4``; from 50 ms down the
+connection conditions hold only to ~1e-7 m), and the next phase's replan is imminent anyway."""
 
 OBSERVATION_MAX_AGE = 0.5
 """Oldest observation (s before the connection instant) a measured-state replan still uses."""
+
+AUTO_MIN_REMAINDER = 0.1
+"""Shortest remainder of a phase (s) over which a DCM error triggers a replan by itself; closer to the phase's end
+the replan waits for the next phase (the error persists until a plan starts from the measured state)."""
 
 AUTO_REPLAN_INTERVAL = 0.05
 """Least time (s) between two replans triggered by a DCM error (``PlannerConfig.replan_dcm_error``): a replan
@@ -258,6 +262,9 @@ class OnlinePlanner:
         ex = values[1] + values[3] / w - planned[4] - planned[6] / w
         ey = values[2] + values[4] / w - planned[5] - planned[7] / w
         if ex * ex + ey * ey > threshold * threshold and t - self._last_auto_replan >= AUTO_REPLAN_INTERVAL:
+            phase, rel = self._phase, t - self._t0
+            if phase is not None and phase.start <= rel < phase.end and phase.end - rel < AUTO_MIN_REMAINDER:
+                return  # a free segment this short would need wild ZMP swings: the next phase's first tick replans
             self._last_auto_replan = t
             self.replan_now(t, "dcm-error")
 
@@ -273,6 +280,8 @@ class OnlinePlanner:
         if not self.started:
             raise RuntimeError("call start() before touchdown()")
         footprint = Footstep(float(x), float(y), float(yaw), side)
+        if self._plan is not None and t >= self._latest:
+            self.sample_values(t)  # the landing may begin a double support: make its plan, then re-anchor it
         q = self._walk.latest_phase or 0
         kind = self.timeline.kind(q)
         if kind == "single":
@@ -295,7 +304,8 @@ class OnlinePlanner:
         swing continues smoothly from there (:func:`~rtgait.core.swing.retargeted_swing`). Returns the pose."""
         self.sample_values(t)
         phase = self._phase
-        assert phase is not None and phase.swing_from is not None, "no foot is swinging"
+        if phase is None or phase.swing_from is None:
+            raise RuntimeError(f"no foot is swinging at t={t} s")
         rel = t - self._t0
         pose, vel = phase.swing_state(rel, self.config.step_height)
         self._swing_retarget = (phase.index, (rel, pose, vel))
@@ -555,8 +565,13 @@ class OnlinePlanner:
         decision = StepDecision(
             t, k, (nominal.x, nominal.y), landing, before, after, proposal.candidates, not proposal.enough, reason
         )
-        self.step_adjustments.append(decision)
-        self.step_adjustment_count += 1
+        last = self.step_adjustments[-1] if self.step_adjustments else None
+        repeated = (
+            last is not None and last.step == k and math.dist(last.landing, landing) < 1e-3 and last.emergency
+        )
+        if not repeated:  # a disturbance that persists re-decides the same emergency: log it once
+            self.step_adjustments.append(decision)
+            self.step_adjustment_count += 1
         return decision
 
     def _reconnect(self) -> None:

@@ -16,9 +16,9 @@ from hypothesis import strategies as st
 from numpy.polynomial import polynomial as npoly
 from scipy.integrate import solve_ivp
 
-from rtgait.core.bvp import BoundaryValueSolver, bvp_matrix
+from rtgait.core.bvp import BoundaryValueSolver, bvp_matrix, component_propagators
 from rtgait.core.lipm import GRAVITY, CogTrajectory, omega, particular_matrix
-from rtgait.core.spline import PiecewisePolynomial
+from rtgait.core.spline import PiecewisePolynomial, evaluate_polynomials
 
 SETTINGS = settings(max_examples=40, deadline=None)
 
@@ -280,6 +280,74 @@ def test_bvp_matrix_is_invertible_for_positive_durations(durations, w):
     M = bvp_matrix(np.array(durations), w)
     assert M.shape == (2 * len(durations), 2 * len(durations))
     assert np.linalg.matrix_rank(M) == M.shape[0]
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.floats(0.01, 3.0), min_size=1, max_size=12), st.floats(1.0, 6.0), st.integers(0, 2**32 - 1))
+def test_component_propagators_are_the_two_first_order_recursions(durations, w, seed):
+    durations = np.array(durations)
+    m = durations.size
+    forward, backward = component_propagators(durations, w)
+    assert forward.shape == backward.shape == (m, m)
+    assert np.all(np.triu(forward, 1) == 0.0) and np.all(np.tril(backward, -1) == 0.0)
+    kept = np.concatenate([forward[np.tril_indices(m)], backward[np.triu_indices(m)]])
+    assert np.all((kept > 0.0) & (kept <= 1.0))
+    # S_0 = e_0, S_{j+1} = e^{-w T_j} S_j + e_{j+1}; U_{m-1} = e^{-w T_{m-1}} d_{m-1}, U_j = e^{-w T_j} (U_{j+1} + d_j).
+    e, d = np.random.default_rng(seed).uniform(-1.0, 1.0, (2, m))
+    S, U = np.empty(m), np.empty(m)
+    S[0] = e[0]
+    for j in range(m - 1):
+        S[j + 1] = math.exp(-w * durations[j]) * S[j] + e[j + 1]
+    U[-1] = math.exp(-w * durations[-1]) * d[-1]
+    for j in range(m - 2, -1, -1):
+        U[j] = math.exp(-w * durations[j]) * (U[j + 1] + d[j])
+    np.testing.assert_allclose(forward @ e, S, rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(backward @ d, U, rtol=1e-13, atol=1e-15)
+    # A leading batch axis gives each timing its own matrices (the sums of w T in another order: round-off only).
+    batched = component_propagators(np.stack([durations, 2.0 * durations]), w)
+    np.testing.assert_allclose(batched[0][0], forward, rtol=1e-13, atol=0)
+    np.testing.assert_allclose(batched[1][1], component_propagators(2.0 * durations, w)[1], rtol=1e-13, atol=0)
+
+
+@SETTINGS
+@given(spline_problems())
+def test_bvp_solved_by_divergent_and_convergent_sweeps_equals_the_dense_solve(problem):
+    """Eqs. 8-12 rewritten in xi = c + c'/w and zeta = c - c'/w: two sweeps and a 2 x 2 system for the unknown
+    zeta(t_0) and xi(t_m), with (xi + zeta)/2 = c at both ends. Same V, W as the factored dense matrix."""
+    zmp, w, c_start, c_end = problem
+    cog = BoundaryValueSolver(zmp.durations, w).solve(zmp, c_start, c_end)
+    A = cog.particular
+    zeros = np.zeros(zmp.durations.size)
+    start = A[:, 0], evaluate_polynomials(A, zeros, 1)
+    end = evaluate_polynomials(A, zmp.durations, 0), evaluate_polynomials(A, zmp.durations, 1)
+    xi_start, zeta_start = start[0] + start[1] / w, start[0] - start[1] / w
+    xi_end, zeta_end = end[0] + end[1] / w, end[0] - end[1] / w
+    forward, backward = component_propagators(zmp.durations, w)
+    decay = math.exp(-w * zmp.durations[-1])
+
+    def sweeps(zeta0: np.ndarray, xi_final: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        jumps = np.vstack([zeta0 - zeta_start[0], zeta_end[:-1] - zeta_start[1:]])
+        defects = np.vstack([xi_start[1:] - xi_end[:-1], xi_final - xi_end[-1]])
+        return forward @ jumps, backward @ defects
+
+    def ends(zeta0: np.ndarray, xi_final: np.ndarray) -> np.ndarray:
+        S, U = sweeps(zeta0, xi_final)
+        c0 = 0.5 * (U[0] + xi_start[0] + zeta0)
+        c1 = 0.5 * (xi_final + S[-1] * decay + zeta_end[-1])
+        return np.array([c0, c1])
+
+    # The end positions are affine in (zeta0, xi_final), per axis: solve for them from three evaluations.
+    zero, one = np.zeros(2), np.ones(2)
+    base = ends(zero, zero)
+    by_zeta, by_xi = ends(one, zero) - base, ends(zero, one) - base
+    target = np.array([c_start, c_end]) - base
+    det = by_zeta[0] * by_xi[1] - by_xi[0] * by_zeta[1]
+    zeta0 = (target[0] * by_xi[1] - by_xi[0] * target[1]) / det
+    xi_final = (by_zeta[0] * target[1] - target[0] * by_zeta[1]) / det
+    S, U = sweeps(zeta0, xi_final)
+    scale = 1.0 + np.max(np.abs(cog.V)) + np.max(np.abs(cog.W))
+    np.testing.assert_allclose(0.5 * (U + S), cog.V, rtol=0, atol=1e-10 * scale)
+    np.testing.assert_allclose(0.5 * (U - S), cog.W, rtol=0, atol=1e-10 * scale)
 
 
 def test_solver_reuses_its_factorisation_for_different_splines():
