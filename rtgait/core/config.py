@@ -6,9 +6,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal
 
+from rtgait.core.connect import MIN_REST_W_T
 from rtgait.core.footsteps import Side, Timing
 from rtgait.core.limits import MAX_HORIZON_STEPS, MAX_PHASE_W_T, MAX_STRIDE, check_range
-from rtgait.core.connect import MIN_REST_W_T
 from rtgait.core.lipm import GRAVITY, omega
 from rtgait.core.stepping import StepAdjustment
 

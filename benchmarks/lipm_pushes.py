@@ -1,0 +1,260 @@
+"""Largest push each controller level survives on the point-mass pendulum, against the capturability bounds.
+
+For every controller level (:mod:`rtgait.core.closed_loop`) and every horizontal direction (every 45 degrees, world
+frame, 0 = the walking direction +x, 90 = to the left), the largest impulse that is survived is found by bisection:
+"survived" means no fall and the walk ends at rest. The push is a constant force for 0.1 s on the mass, at one of
+two instants of a step in the middle of the walk (step ``(n + 1) // 2`` of ``n``, the closing step counted):
+
+* ``single``: centred on the middle of its single support;
+* ``double``: starting when the double support after its landing begins (fig8's 0.1 s double support is then all
+  inside the push).
+
+For comparison, the capturability bounds of :mod:`rtgait.core.capturability` (Koolen et al. 2012) in that direction,
+for the same instant and the step limits of the adaptive level's :class:`~rtgait.core.stepping.StepAdjustment`:
+
+* ``r_max``: reach of the stance sole from its ankle along the direction (:func:`reach_along`); in double support,
+  the sole of the foot that carries the next single support;
+* ``l_max``: the farthest landing of the stride box along the direction (its support function; 0 when the box lies
+  behind, e.g. across the stance foot, where the feet would cross);
+* first landing after ``max(remaining swing, min_time_to_touchdown)``, later ones every ``T_s + T_dbl``;
+* the planned DCM's offset from the stance ankle at the push's centre.
+
+``bound_1`` is the one-step bound, ``bound_N`` the bound for any number of steps. They treat the push as an impulse
+at its centre (for a 0.1 s push the DCM moves ``sinh(w T / 2) / (w T / 2)`` = 1.005 times as far), the foot and the
+reach as discs, and the ZMP as jumping to the new foot at touch-down (no double support): a guide, not a hard limit,
+most of all across the stance foot, where the other foot's sole cannot be used before it lands. ``share`` is the
+largest impulse survived divided by ``bound_1``.
+
+A walk that the pendulum does not survive even unpushed gets 0 (the point mass is unstable: ``open-loop`` on fig8,
+12.7 s long, falls at about 10 s from round-off amplified by ``e^{w t}``; see :mod:`rtgait.core.closed_loop`).
+
+Usage: ``python benchmarks/lipm_pushes.py [--json] [--controller C ...] [--scenario fig8] [--mass 57] [--dt 0.002]
+[--phase single|double ...] [--tolerance 0.25]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+import time
+from collections.abc import Sequence
+
+import numpy as np
+
+from rtgait.core.capturability import max_capturable_impulse, reach_along
+from rtgait.core.closed_loop import CONTROLLERS, DEFAULT_MASS, run_closed_loop
+from rtgait.core.footsteps import Footstep
+from rtgait.core.online import OnlinePlanner
+from rtgait.core.plant import Push
+from rtgait.core.rollout import rollout
+from rtgait.core.stepping import StepAdjustment
+from rtgait.scenario import Scenario, load_scenario
+
+PUSH_DURATION = 0.1
+"""Length of every push (s)."""
+DIRECTIONS = tuple(range(0, 360, 45))
+"""Push directions (degrees, world frame, counter-clockwise from +x)."""
+PHASES = ("single", "double")
+
+
+@dataclasses.dataclass(frozen=True)
+class PushSite:
+    """Where and when a push acts: its window start (s), its centre (s), the stance foot of the capture, the side
+    of the next landing and the time until it."""
+
+    phase: str
+    step: int
+    start: float
+    centre: float
+    stance: Footstep
+    remaining: float
+    dcm: np.ndarray
+
+
+def push_site(scenario: Scenario, phase: str, dt: float) -> PushSite:
+    """The push instant of ``phase`` on the middle step of ``scenario``, and the planned state there."""
+    step = (len(scenario.strides()) + 1) // 2
+    timing = scenario.timing
+    planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
+    planner.start(0.0)
+    single_start = planner.phase_start(2 * step - 1)  # footstep changes move footprints, never phase times
+    if phase == "single":
+        centre = single_start + 0.5 * timing.single_support
+        start = centre - 0.5 * PUSH_DURATION
+        stance_index = step  # F[step] carries step `step`'s single support
+        remaining = single_start + timing.single_support - centre
+    else:
+        start = single_start + timing.single_support
+        centre = start + 0.5 * PUSH_DURATION
+        stance_index = step + 1  # the foot that just landed carries the next single support
+        remaining = start + timing.double_support + timing.single_support - centre
+    # The plan as walked unpushed (changes at their deadlines), up to the push's centre.
+    walked = rollout(planner, dt, scenario.sole, scenario.changes, duration=centre)
+    dcm = np.array([walked.column("dcm_x")[-1], walked.column("dcm_y")[-1]])
+    stance = walked.footprints[stance_index]
+    return PushSite(phase, step, start, centre, stance, remaining, dcm)
+
+
+def landing_reach(adjust: StepAdjustment, stance: Footstep, direction: np.ndarray) -> float:
+    """``l_max`` along ``direction``: the largest ``L . u`` over the stride box of ``adjust`` around ``stance`` (m),
+    at least 0. The box is ``|along| <= max_length``, ``min_width <= lateral <= max_width`` on the landing's side."""
+    c, s = math.cos(stance.yaw), math.sin(stance.yaw)
+    along = c * direction[0] + s * direction[1]  # the direction in the stance frame
+    lateral = -s * direction[0] + c * direction[1]
+    side = -1.0 if stance.side == "left" else 1.0  # the landing foot is the other one
+    lateral *= side
+    reach = adjust.max_length * abs(along) + max(adjust.min_width * lateral, adjust.max_width * lateral)
+    return max(reach, 0.0)
+
+
+def bounds(scenario: Scenario, site: PushSite, mass: float, direction_deg: float) -> tuple[float, float]:
+    """One-step and any-number-of-steps capturability bounds (N s) of an impulse at ``site`` along the direction."""
+    adjust = StepAdjustment(sole=scenario.sole)
+    u = np.array([math.cos(math.radians(direction_deg)), math.sin(math.radians(direction_deg))])
+    stance = site.stance
+    r_max = reach_along(scenario.sole.corners(stance), stance.position, u)
+    l_max = landing_reach(adjust, stance, u)
+    w = math.sqrt(scenario.gravity / scenario.cog_height)
+    common = dict(
+        mass=mass, omega=w, r_max=r_max, l_max=l_max, step_time=scenario.timing.step_period,
+        remaining=site.remaining, min_remaining=adjust.min_time_to_touchdown,
+    )  # fmt: skip
+    offset = site.dcm - stance.position
+    one = float(max_capturable_impulse(offset, u, steps=1, **common))
+    many = float(max_capturable_impulse(offset, u, steps=math.inf, **common))
+    return one, many
+
+
+def survives(scenario: Scenario, controller: str, mass: float, dt: float, push: Push | None) -> bool:
+    """Whether the walk with ``push`` ends at rest without a fall."""
+    result = run_closed_loop(
+        scenario.planner_config(), scenario.strides(), scenario.sole, controller=controller, mass=mass, dt=dt,
+        pushes=() if push is None else (push,), changes=scenario.changes,
+    )  # fmt: skip
+    return not result.fell and result.ended_at_rest
+
+
+def largest_impulse(
+    scenario: Scenario,
+    controller: str,
+    mass: float,
+    dt: float,
+    site: PushSite,
+    direction_deg: float,
+    ceiling: float,
+    tolerance: float,
+) -> tuple[float, int]:
+    """Bisection for the largest impulse (N s) survived along the direction, within ``tolerance``; and the runs."""
+    u = (math.cos(math.radians(direction_deg)), math.sin(math.radians(direction_deg)))
+
+    def ok(impulse: float) -> bool:
+        force = impulse / PUSH_DURATION
+        return survives(scenario, controller, mass, dt, Push(site.start, PUSH_DURATION, (force * u[0], force * u[1])))
+
+    low, high, runs = 0.0, ceiling, 0
+    while ok(high):  # the ceiling should fail; widen it if not
+        runs += 1
+        low, high = high, 2.0 * high
+    runs += 1
+    while high - low > tolerance:
+        middle = 0.5 * (low + high)
+        runs += 1
+        if ok(middle):
+            low = middle
+        else:
+            high = middle
+    return low, runs
+
+
+def run(
+    scenario: Scenario, controllers: Sequence[str], phases: Sequence[str], mass: float, dt: float, tolerance: float
+) -> list[dict]:
+    cases = []
+    sites = {phase: push_site(scenario, phase, dt) for phase in phases}
+    for controller in controllers:
+        unpushed = survives(scenario, controller, mass, dt, None)
+        for phase in phases:
+            site = sites[phase]
+            for direction in DIRECTIONS:
+                one, many = bounds(scenario, site, mass, direction)
+                began = time.perf_counter()
+                if unpushed:
+                    # A ceiling that no controller can survive: twice the any-steps bound, at least 20 N s.
+                    best, runs = largest_impulse(
+                        scenario, controller, mass, dt, site, direction, max(2.0 * many, 20.0), tolerance
+                    )
+                else:
+                    best, runs = 0.0, 0
+                cases.append(
+                    {
+                        "controller": controller,
+                        "phase": phase,
+                        "direction_deg": direction,
+                        "step": site.step,
+                        "push_start": site.start,
+                        "push_duration": PUSH_DURATION,
+                        "max_impulse_Ns": best,
+                        "capturability_bound_Ns": one,
+                        "n_step_bound_Ns": many,
+                        "recovered_share": best / one if one > 0.0 else None,
+                        "recovered_share_n_step": best / many if many > 0.0 else None,
+                        "unpushed_survives": unpushed,
+                        "runs": runs,
+                        "seconds": time.perf_counter() - began,
+                    }
+                )
+    return cases
+
+
+def table(cases: list[dict]) -> str:
+    lines = [
+        f"{'controller':<11} {'phase':<7} {'dir':>4} {'max J':>7} {'bound_1':>8} {'bound_N':>8} {'share':>6}",
+        f"{'':<11} {'':<7} {'deg':>4} {'N s':>7} {'N s':>8} {'N s':>8} {'':>6}",
+    ]
+    for case in cases:
+        share = case["recovered_share"]
+        lines.append(
+            f"{case['controller']:<11} {case['phase']:<7} {case['direction_deg']:>4} {case['max_impulse_Ns']:>7.1f} "
+            f"{case['capturability_bound_Ns']:>8.1f} {case['n_step_bound_Ns']:>8.1f} "
+            f"{'-' if share is None else f'{share:.2f}':>6}"
+            + ("" if case["unpushed_survives"] else "  (falls unpushed)")
+        )
+    return "\n".join(lines)
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--controller", action="append", choices=CONTROLLERS, help="level(s) to test (default all)")
+    parser.add_argument("--scenario", default="fig8", help="built-in scenario name or TOML path (default fig8)")
+    parser.add_argument("--mass", type=float, default=DEFAULT_MASS, help="point mass in kg (default 57)")
+    parser.add_argument("--dt", type=float, default=0.002, help="control period in s (default 0.002)")
+    parser.add_argument("--phase", action="append", choices=PHASES, help="push instant(s) (default both)")
+    parser.add_argument("--tolerance", type=float, default=0.25, help="bisection resolution in N s (default 0.25)")
+    args = parser.parse_args(argv)
+    scenario = load_scenario(args.scenario)
+    controllers = args.controller or list(CONTROLLERS)
+    phases = args.phase or list(PHASES)
+    began = time.perf_counter()
+    cases = run(scenario, controllers, phases, args.mass, args.dt, args.tolerance)
+    elapsed = time.perf_counter() - began
+    if args.json:
+        settings = {
+            "scenario": scenario.name, "mass": args.mass, "dt": args.dt, "tolerance_Ns": args.tolerance,
+            "push_duration": PUSH_DURATION, "seconds": elapsed,
+        }  # fmt: skip
+        json.dump({"settings": settings, "cases": cases}, sys.stdout, indent=2)
+        print()
+    else:
+        print(
+            f"{scenario.name}: {args.mass:g} kg point mass, dt {args.dt * 1e3:g} ms, 0.1 s pushes on step "
+            f"{cases[0]['step'] if cases else '-'}, bisection to {args.tolerance:g} N s ({elapsed:.0f} s)"
+        )
+        print(table(cases))
+
+
+if __name__ == "__main__":
+    main()
