@@ -469,7 +469,9 @@ class OnlinePlanner:
         layout = self._layout(q, self._plan_span(q))
         state = self._state_at_phase_start(q)
         t_start = self._next_replan_time
+        planned = None
         if self.config.feedback == "measured":
+            planned = list(state)
             self._measured_cog(t_start, state)
         self._connect(t_start, q, layout, state, 0.0)
         if n is None or q + 2 <= 2 * n:
@@ -479,7 +481,7 @@ class OnlinePlanner:
             self._next_replan_phase, self._next_replan_time = None, math.inf
         self._record(t_start, q, layout, began, "start" if q == 0 else "double-support")
         if self.config.step_adjustment is not None:
-            self._adjust_step(t)
+            self._adjust_step(t, planned)
 
     def _record(self, t_start: float, q: int, layout: PlanLayout, began: float, reason: str) -> None:
         elapsed = time.perf_counter() - began
@@ -511,14 +513,16 @@ class OnlinePlanner:
         if remainder < MIN_REMAINDER or self.timeline.kind(q) == "settle":
             return None
         state = self._plan.state(*self._plan.locate(t), self.w)
+        planned = None
         if self.config.feedback == "measured":
+            planned = list(state)
             self._measured_cog(t, state)
         layout = self._midphase_layout(q, remainder)
         self._connect(t, q, layout, state, rel - phase.start)
         self._record(t, q, layout, began, reason)
         record = self.plans[-1]
         if self.config.step_adjustment is not None:
-            self._adjust_step(t)
+            self._adjust_step(t, planned)
         return record
 
     # ----- step adjustment -------------------------------------------------------------------------------
@@ -529,10 +533,18 @@ class OnlinePlanner:
         zmp = rows @ plan.y
         return rows, zmp, float(halfplane_margin(zmp, *halfplanes).min())
 
-    def _adjust_step(self, t: float) -> StepDecision | None:
+    def _adjust_step(self, t: float, planned: list[float] | None) -> StepDecision | None:
         """After a replan: if its free segment asks for a ZMP outside the support polygon, move the landing of the
         next step that can still change to the candidate that keeps it inside with the least departure
-        (:mod:`rtgait.core.stepping`); with none, the best one, and the walk stops after it."""
+        (:mod:`rtgait.core.stepping`).
+
+        With none, the landing with the largest margin is taken all the same (a capture step), and
+        ``StepAdjustment.on_failure`` decides what follows: ``"continue"`` walks on, ``"stop"`` stops after that
+        step. A plan made from the measured state is then replaced by the one from the planned state
+        ``planned``, with the new landing: a plan no foot can realise would ask the feedback law to follow it, while
+        from the planned state it asks only for what the ankle can do and the law, saturated at the sole's edge,
+        recovers the rest (at the pendulum level this recovers 5-25 % more impulse than the measured plan).
+        """
         adjust = self.config.step_adjustment
         plan = self._plan
         q = plan.phase0
@@ -548,35 +560,38 @@ class OnlinePlanner:
             lambda: self._freeze_swing(t)[:2],
         )  # fmt: skip
         if proposal is None:
+            if planned is not None:
+                self._connect(plan.t_start, q, plan.layout, planned, plan.elapsed)
             return None
         k, nominal, landing = proposal.step, proposal.nominal, proposal.landing
         walk.move_landing(k, *landing)
         moved = math.hypot(landing[0] - nominal.x, landing[1] - nominal.y)
         reason = f"ZMP margin {before * 1e3:+.1f} mm: step {k} lands {moved:.3f} m away"
         n = walk.n_steps
-        if not proposal.enough and (n is None or k < n):
-            walk.set_strides([Stride(0.0, self.config.step_width, 0.0)], from_step=k + 1)
-            reason += (
-                f"; no landing keeps the ZMP inside (best {proposal.margin * 1e3:+.1f} mm): emergency stop after it"
-            )
+        if not proposal.enough:
+            reason += f"; no landing keeps the ZMP inside (best {proposal.margin * 1e3:+.1f} mm)"
+            if adjust.on_failure == "stop" or planned is None:
+                if n is None or k < n:
+                    walk.set_strides([Stride(0.0, self.config.step_width, 0.0)], from_step=k + 1)
+                reason += ": emergency stop after it"
+            else:
+                reason += ": walking on from the planned state, the feedback law recovers"
         self._phase = None
-        self._reconnect()
+        self._reconnect(planned if planned is not None and not proposal.enough else None)
         after = self._free_segment_margin(halfplanes)[2]
         decision = StepDecision(
             t, k, (nominal.x, nominal.y), landing, before, after, proposal.candidates, not proposal.enough, reason
         )
         last = self.step_adjustments[-1] if self.step_adjustments else None
-        repeated = (
-            last is not None and last.step == k and math.dist(last.landing, landing) < 1e-3 and last.emergency
-        )
-        if not repeated:  # a disturbance that persists re-decides the same emergency: log it once
+        repeated = last is not None and last.step == k and math.dist(last.landing, landing) < 1e-3 and last.emergency
+        if not repeated:  # a disturbance that persists re-decides the same capture step: log it once
             self.step_adjustments.append(decision)
             self.step_adjustment_count += 1
         return decision
 
-    def _reconnect(self) -> None:
-        """Remake the plan under way from its own initial state at its own start, after its footprints (or the
-        walk's length) changed at that instant."""
+    def _reconnect(self, state: list[float] | None = None) -> None:
+        """Remake the plan under way at its own start, after its footprints (or the walk's length) changed at that
+        instant: from its own initial state, or from ``state`` (``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]``)."""
         plan = self._plan
         q, elapsed = plan.phase0, plan.elapsed
         if self._next_replan_phase is not None:
@@ -585,7 +600,7 @@ class OnlinePlanner:
             layout = self._layout(q, self._plan_span(q))
         else:
             layout = self._midphase_layout(q, plan.durations[0])
-        self._connect(plan.t_start, q, layout, plan.y[:4].ravel().tolist(), elapsed)
+        self._connect(plan.t_start, q, layout, plan.y[:4].ravel().tolist() if state is None else state, elapsed)
 
     def _advance(self, t: float) -> None:
         """Replan at every double-support start up to ``t``, each from the state of the plan before it."""

@@ -8,8 +8,8 @@ elsewhere. The landing point of the next step that can still change is chosen am
   least and largest distance between the feet, so the feet never cross), the largest average swing speed over the
   time left, and no change in the last ``min_time_to_touchdown`` seconds before touch-down (the foot is landing);
 * with the ZMP margin at least ``required_margin``, and among those the least departure from the commanded walk;
-  if no candidate reaches it, the one with the largest margin, and the walk stops after that step (an emergency:
-  capture step, then stop), with the reason logged.
+  if no candidate reaches it, the one with the largest margin (a capture step), after which the walk goes on or
+  stops (``on_failure``), with the reason logged.
 
 Why it is cheap: moving the landing ``F[k+1]`` by ``delta`` moves every later footprint by ``delta`` too (strides
 are relative), so every anchor of the plan moves by ``w_a delta`` with ``w_a`` in {0, 1/2, 1}, and the ZMP of the
@@ -48,6 +48,9 @@ class StepAdjustment:
         required_margin: ZMP margin a plan must keep to need no adjustment, and that a candidate must reach (m).
         grid: candidates per axis of the stride box (``grid**2`` in all).
         samples: sample times of the free segment at which the margin is checked.
+        on_failure: when no candidate reaches ``required_margin``, the best one is taken and then ``"continue"``
+            walks on (the default: at the pendulum level it recovers more, see ``docs/closed_loop.md``) or
+            ``"stop"`` stops the walk after that step (an emergency sequence: capture step, then stop).
     """
 
     sole: SoleRect
@@ -59,6 +62,7 @@ class StepAdjustment:
     required_margin: float = 0.005
     grid: int = 32
     samples: int = 16
+    on_failure: str = "continue"
 
     def __post_init__(self) -> None:
         if not isinstance(self.sole, SoleRect):
@@ -74,6 +78,8 @@ class StepAdjustment:
             value = getattr(self, name)
             if not (math.isfinite(value) and 0.0 <= value <= 1.0):
                 raise ValueError(f"step_adjustment.{name} must be within [0, 1], got {value}")
+        if self.on_failure not in ("continue", "stop"):
+            raise ValueError(f"step_adjustment.on_failure must be 'continue' or 'stop', got {self.on_failure!r}")
         for name, low, high in (("grid", 2, 200), ("samples", 2, 200)):
             value = getattr(self, name)
             if not (isinstance(value, int) and low <= value <= high):

@@ -276,12 +276,22 @@ def test_step_adjustment_keeps_the_zmp_inside_where_the_ankle_alone_cannot(push)
     assert poses[-1][:2] == pytest.approx(decision.landing, abs=1e-9)
 
 
-def test_a_push_no_step_can_catch_ends_in_an_emergency_stop():
-    adjust = StepAdjustment(SOLE)
-    p, _ = _pushed((0.0, 0.6), adjust)  # outward on the left stance foot: the right foot cannot cross over
+@pytest.mark.parametrize("on_failure", ["continue", "stop"])
+def test_a_push_no_step_can_catch_takes_the_best_capture_step(on_failure):
+    adjust = StepAdjustment(SOLE, on_failure=on_failure)
+    p, t = _pushed((0.0, 0.6), adjust)  # outward on the left stance foot: the right foot cannot cross over
     decision = p.step_adjustments[-1]
-    assert decision.emergency and "emergency stop" in decision.reason
-    assert p.n_steps == decision.step + 1, "the walk stops with the step after the capture step"
+    assert decision.emergency and decision.margin_before < -0.1
+    assert decision.margin_after >= 0.0, "the plan under way is the realisable one, from the planned state"
+    moved = np.subtract(decision.landing, decision.nominal)
+    assert moved[1] > 0.0, "the capture step goes toward the push"
+    if on_failure == "stop":
+        assert "emergency stop" in decision.reason
+        assert p.n_steps == decision.step + 1, "the walk stops with the step after the capture step"
+    else:
+        assert "walking on" in decision.reason and p.n_steps == 9
+        # The plan under way starts from the planned state again, not the measured one (0.6 m/s faster sideways).
+        assert p.sample(t).cog_vel[1] < 0.3
 
 
 def test_step_adjustment_respects_the_stride_box():
