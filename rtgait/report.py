@@ -354,3 +354,29 @@ def simulation_report(summary: dict[str, Any], out: Path) -> str:
         lines.append(f"warnings    MuJoCo: {warnings[0]} ({len(warnings)} in all, listed in summary.json)")
     lines.append(f"outputs     {out}{os.sep}: {', '.join(summary['files'])} ({summary['rows']} rows)")
     return "\n".join(lines) + "\n"
+
+
+def pendulum_report(summary: dict[str, Any], out: Path) -> str:
+    """The lines ``rtgait simulate --model lipm`` prints: outcome, step adjustments, pushes, tracking, speed,
+    outputs."""
+    if summary["fell"]:
+        outcome = f"FELL at {summary['fall_time']:.2f} s"
+    else:
+        rest = "ended at rest" if summary["ended_at_rest"] else "did NOT end at rest"
+        outcome = f"walked {summary['steps_completed']} of {summary['steps_planned']} steps, {rest}"
+    pushes = summary["pushes"]
+    lines = [
+        f"scenario    {summary['scenario']} ({summary['connection']}) on a {summary['mass']:g} kg point mass (LIPM), "
+        f"{summary['controller']}, control period {summary['dt'] * 1e3:g} ms",
+        f"outcome     {outcome}",
+        "pushes      "
+        + (", ".join(f"{p['impulse_norm']:.1f} N s at {p['start']:.2f} s" for p in pushes) if pushes else "none"),
+        f"stepping    {summary['step_adjustments']} step adjustment(s)"
+        + "".join(f"; first at {entry['t']:.2f} s: {entry['reason']}" for entry in summary["step_adjustment_log"][:1]),
+        f"tracking    commanded vs planned ZMP RMS {summary['zmp_tracking_error_rms'] * 1e3:.1f} mm, "
+        f"{summary['replans']} replans",
+        f"speed       real-time factor {summary['real_time_factor']:.0f} ({summary['simulated_time']:.1f} s simulated "
+        f"in {summary['wall_time']:.2f} s)",
+        f"outputs     {out}{os.sep}: {', '.join(summary['files'])} ({summary['rows']} rows)",
+    ]
+    return "\n".join(lines) + "\n"

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rtgait import cli
 from rtgait.cli import main
+from rtgait.commands import plan as plan_command
 from rtgait.report import plan_files
 from rtgait.scenario import load_scenario
 
@@ -217,7 +217,7 @@ def test_failed_write_leaves_nothing_behind(
 def test_progress_is_shown_only_on_a_terminal(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setattr(cli, "PROGRESS_MIN_TICKS", 0)
+    monkeypatch.setattr(plan_command, "PROGRESS_MIN_TICKS", 0)
     assert main(["plan", "fig6", "--out", str(tmp_path / "a"), "--no-figures"]) == 0
     assert capsys.readouterr().err == ""  # captured stderr is not a terminal
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)

@@ -15,6 +15,7 @@ import pytest
 
 from rtgait import cli, outputs
 from rtgait.cli import main
+from rtgait.commands import plan as plan_command
 from rtgait.core import limits
 
 BASE = """\
@@ -61,7 +62,7 @@ def no_planning(monkeypatch: pytest.MonkeyPatch) -> None:
     def planned(*args: object, **kwargs: object) -> None:
         raise AssertionError("the rollout started before the input was refused")
 
-    monkeypatch.setattr(cli, "rollout", planned)
+    monkeypatch.setattr(plan_command, "rollout", planned)
 
 
 # ----- 1. every size is bounded before any work -----------------------------------------------------------------
@@ -164,14 +165,14 @@ def test_a_destination_that_turns_into_a_folder_during_the_run_changes_nothing(
 ) -> None:
     out = tmp_path / "o"
     before = old_outputs(out)
-    real_rollout = cli.rollout
+    real_rollout = plan_command.rollout
 
     def rollout_then_block(*args: Any, **kwargs: Any) -> Any:
         (out / "summary.json").unlink()
         (out / "summary.json").mkdir()  # after the check made before the run
         return real_rollout(*args, **kwargs)
 
-    monkeypatch.setattr(cli, "rollout", rollout_then_block)
+    monkeypatch.setattr(plan_command, "rollout", rollout_then_block)
     assert main(["plan", "fig6", "--out", str(out), "--no-figures"]) == 1
     assert "summary.json is a folder" in one_error_line(capsys)
     assert contents(out) == {name: text for name, text in before.items() if name != "summary.json"}

@@ -123,9 +123,9 @@ def test_a_step_the_robot_cannot_reach_is_refused_before_simulating(
 def test_pushes_that_would_silently_not_act_are_refused(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], extra: list[str], words: str
 ) -> None:
-    from rtgait import cli
+    from rtgait.commands import simulate as simulate_command
 
-    monkeypatch.setattr(cli, "_load_robot", lambda name: pytest.fail("the robot was loaded"))
+    monkeypatch.setattr(simulate_command, "load_robot", lambda name: pytest.fail("the robot was loaded"))
     assert main(["simulate", "fig8", "--out", str(tmp_path / "never"), *extra]) == 2
     err = capsys.readouterr().err
     assert err.startswith("rtgait: error:") and words in err and len(err.splitlines()) == 1
@@ -134,9 +134,9 @@ def test_pushes_that_would_silently_not_act_are_refused(
 def test_a_run_longer_than_the_tick_limit_is_refused_before_anything_loads(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], write_scenario
 ) -> None:
-    from rtgait import cli
+    from rtgait.commands import simulate as simulate_command
 
-    monkeypatch.setattr(cli, "_load_robot", lambda name: pytest.fail("the robot was loaded"))
+    monkeypatch.setattr(simulate_command, "load_robot", lambda name: pytest.fail("the robot was loaded"))
     # 1000 steps of 1 s: planned every 10 ms, 100 thousand samples; simulated every 1 ms, too many. The run lasts
     # the walk (1004.8 s), the 1.5 s start transition and 0.5 s after.
     scenario = write_scenario(name="long", steps=1000)
@@ -153,9 +153,9 @@ def test_a_run_longer_than_the_tick_limit_is_refused_before_anything_loads(
 def test_an_out_that_is_a_file_is_refused_before_simulating(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from rtgait import cli
+    from rtgait.commands import simulate as simulate_command
 
-    monkeypatch.setattr(cli, "_load_robot", lambda name: pytest.fail("the robot was loaded"))
+    monkeypatch.setattr(simulate_command, "load_robot", lambda name: pytest.fail("the robot was loaded"))
     out = tmp_path / "o"
     out.write_text("a file", encoding="utf-8")
     assert main(["simulate", "fig8", "--out", str(out)]) == 1

@@ -1,0 +1,1 @@
+"""The ``rtgait`` subcommands, one module each; :mod:`rtgait.cli` parses and dispatches."""

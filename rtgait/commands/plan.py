@@ -1,0 +1,131 @@
+"""``rtgait plan``: roll a scenario out and write its trajectory, summary and figures (on a robot, its joints)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from rtgait.commands.common import (
+    PROG,
+    load_robot,
+    out_folder,
+    progress_printer,
+    require_extras,
+    robot_walk,
+)
+from rtgait.core.online import OnlinePlanner
+from rtgait.core.rollout import Rollout, rollout
+from rtgait.outputs import check_destination
+from rtgait.report import plan_files, plan_report, write_plan_outputs
+from rtgait.scenario import PHASES, Scenario, ScenarioError, load_scenario
+
+PROGRESS_MIN_TICKS = 50_000
+"""Below this many ticks a rollout takes well under a second: a progress bar would only flicker."""
+
+
+def add_parser(commands: Any) -> None:
+    plan = commands.add_parser(
+        "plan",
+        help="plan a scenario and write trajectory.csv, summary.json and figures",
+        description="Roll out a scenario at its control period, handing each footstep change to the planner at "
+        "its connection mode's deadline, and write trajectory.csv, summary.json and four PNG figures.",
+    )
+    plan.add_argument("scenario", metavar="SCENARIO", help="built-in scenario name or path to a scenario .toml file")
+    plan.add_argument("--out", metavar="DIR", type=out_folder, help="output folder (default: out/<scenario name>)")
+    plan.add_argument("--dt", metavar="S", type=float, help="control period in seconds (default: the scenario's)")
+    plan.add_argument("--no-figures", action="store_true", help="skip the PNG figures (no matplotlib needed)")
+    plan.add_argument(
+        "--robot",
+        metavar="NAME_OR_FILE",
+        help="walk it on a humanoid model: a built-in robot (talos, g1) or a robot description .toml; adds "
+        "joints.csv, the multibody check and its figure (the robot's COG height, step width and sole replace the "
+        "scenario's)",
+    )
+    plan.add_argument(
+        "--compensate-angular-momentum",
+        metavar="ORDER",
+        nargs="?",
+        const=3,
+        type=int,
+        dest="compensate",
+        help="correct the COG for the motion's angular momentum (the paper's Appendix A) with a Fourier series of "
+        "ORDER per phase (default 3); implies --robot talos unless --robot is given",
+    )
+    plan.add_argument(
+        "--html", action="store_true", help="write replay.html, a 3D replay of the robot (implies --robot talos)"
+    )
+    plan.add_argument("--quiet", action="store_true", help="print nothing on success")
+
+
+def _with_dt(scenario: Scenario, dt: float | None) -> Scenario:
+    if dt is None:
+        return scenario
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise ScenarioError(f"--dt must be a number > 0 s, got {dt}")
+    try:
+        return replace(scenario, dt=dt)
+    except ScenarioError as error:  # the period's checks (limits, tick count) word it "dt ..."
+        raise ScenarioError(f"--{error}") from None
+
+
+def _check_order(order: int | None, scenario: Scenario) -> None:
+    """The Fourier order of the angular-momentum compensation: >= 0, and few enough coefficients that every phase
+    has the samples to fit them (this also bounds the fit's memory by the rollout's)."""
+    if order is None:
+        return
+    option = "--compensate-angular-momentum ORDER"
+    if order < 0:
+        raise ScenarioError(f"{option} must be an integer >= 0, got {order}")
+    shortest = min(getattr(scenario.timing, name) for name in PHASES)
+    samples = math.floor(shortest / scenario.dt + 1e-9) + 1
+    if 2 * order + 1 > samples:
+        raise ScenarioError(
+            f"{option} {order} needs {2 * order + 1} samples per phase; the shortest phase ({shortest:g} s at dt "
+            f"{scenario.dt:g} s) has at most {samples}"
+        )
+
+
+def _run(scenario: Scenario, quiet: bool) -> tuple[Rollout, float]:
+    """Roll the scenario out; returns the rollout and its wall time (s)."""
+    ticks = scenario.duration / scenario.dt
+    show = not quiet and ticks >= PROGRESS_MIN_TICKS and sys.stderr.isatty()
+    progress = progress_printer(sys.stderr, f"{PROG}: planning {scenario.name}") if show else None
+    planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
+    began = time.perf_counter()
+    result = rollout(planner, scenario.dt, scenario.sole, scenario.changes, progress=progress)
+    elapsed = time.perf_counter() - began
+    if show:
+        sys.stderr.write("\r\033[K")  # erase the progress line so the summary starts clean
+        sys.stderr.flush()
+    return result, elapsed
+
+
+def run(args: argparse.Namespace) -> int:
+    scenario = _with_dt(load_scenario(args.scenario), args.dt)
+    out: Path = args.out if args.out is not None else Path("out") / scenario.name
+    _check_order(args.compensate, scenario)
+    figures = not args.no_figures
+    robot_name = args.robot or ("talos" if args.html or args.compensate is not None else None)
+    require_extras(figures, args.html)
+    check_destination(out, plan_files(figures, robot_name is not None, args.html))
+    robot = None
+    if robot_name is not None:
+        robot = load_robot(robot_name)
+        scenario = robot_walk(scenario, robot)
+    result, wall_time = _run(scenario, args.quiet)
+    robot_run = None
+    if robot is not None:
+        from rtgait.robot.pipeline import run_on_robot
+
+        # The robot's check: an IK error beyond its limit anywhere (UnreachableError) refuses the walk.
+        robot_run = run_on_robot(robot, result, scenario.cog_height, scenario.gravity, args.compensate)
+    summary = write_plan_outputs(result, scenario, out, figures=figures, robot_run=robot_run, html=args.html)
+    if not args.quiet:
+        sys.stdout.write(plan_report(summary, out, wall_time))
+    return 0
+
