@@ -12,8 +12,13 @@ if TYPE_CHECKING:
 
 @pytest.fixture(scope="session")
 def talos() -> Talos:
-    """Talos with its visual meshes, loaded once per test session."""
+    """Talos with its visual meshes, loaded once per test session; skips without example-robot-data's files."""
     pytest.importorskip("pinocchio")
     from walks import load_talos
 
-    return load_talos()
+    from rtgait.robot.data import RobotDataError
+
+    try:
+        return load_talos()
+    except RobotDataError as exc:
+        pytest.skip(f"Talos' URDF and meshes are not installed (example-robot-data): {exc}")

@@ -54,6 +54,12 @@ class Walk:
     sole: Sole
     cog: np.ndarray  # (k, 3) m
     zmp: np.ndarray  # (k, 2) m
+    phases: tuple[str, ...]  # (k,) support phase per sample
+
+
+def phase_at(walk: Walk, t: float) -> str:
+    """The phase label of the sample at or just before ``t`` (s)."""
+    return walk.phases[int(np.searchsorted(walk.times, t + 1e-9, side="right")) - 1]
 
 
 def load_talos() -> Talos:
@@ -99,4 +105,6 @@ def make_walk(talos: Talos, steps: int, dt: float = 0.01) -> Walk:
         feet.append(Foot(x, talos.foot_y if side == "left" else -talos.foot_y, 0.0, side))
     cog = np.column_stack([q[:, 0], q[:, 1] * 0.8, np.full(len(times), 0.87)])
     zmp = np.column_stack([q[:, 0], 0.08 * np.sin(phase)])
-    return Walk(times, q, tuple(feet), Sole(), cog, zmp)
+    # The left leg swings while swing > 0 (standing on the right foot), the right one while swing < 0.
+    phases = tuple("right support" if s > 0.05 else "left support" if s < -0.05 else "double support" for s in swing)
+    return Walk(times, q, tuple(feet), Sole(), cog, zmp, phases)
