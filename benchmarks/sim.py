@@ -1,18 +1,22 @@
-"""Speed of the closed loop in physics: planner + whole-body IK + MuJoCo at 1 kHz (run on demand, not in tests).
+"""Speed of the closed loop in physics: planner + whole-body IK + MuJoCo (run on demand, not in tests).
 
 Walks a built-in scenario (fig8 by default) with the robot in MuJoCo via :func:`rtgait.sim.run.simulate` a few
-times and reports the real-time factor (simulated seconds per wall-clock second) and the wall time per tick; then
-times the parts of one tick separately on the same walk: the planner's sample, the IK solve, ``mj_step`` alone
-(with the IK's joint targets replayed), and the contact measurement.
+times and reports the real-time factor (simulated seconds per wall-clock second) and the wall time per control
+tick; then times the parts of one tick separately on the same walk: the planner's sample, the IK solve, one
+``mj_step`` (with the IK's joint references replayed; a tick takes ``control_dt / physics_dt`` of them), the
+contact measurement, and ``mj_step`` again without the no-slip solver and without the leg collision boxes, to
+show what each costs.
 
 Wall times on a shared virtual machine vary from run to run: run it a few times.
 
-Usage: ``python benchmarks/sim.py [--json] [--robot NAME] [--scenario NAME] [--repeat N]``
+Usage: ``python benchmarks/sim.py [--json] [--robot NAME] [--scenario NAME] [--repeat N] [--control-dt S]
+[--physics-dt S]``
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import gc
 import json
 import statistics
@@ -31,18 +35,38 @@ from rtgait.sim.model import SimConfig, build_sim_model
 from rtgait.sim.run import simulate
 
 
-def parts(robot: RobotModel, scenario_name: str) -> dict[str, float]:
+def _step_times(robot: RobotModel, config: SimConfig, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Wall time of each ``mj_step`` and of each contact measurement (s) with ``targets`` replayed, one row per
+    control tick, ``substeps`` physics steps each."""
+    sim = build_sim_model(robot, config)
+    data = sim.new_data()
+    clock = time.perf_counter
+    steps, contacts = [], np.empty(len(targets))
+    for k, row in enumerate(targets):
+        data.ctrl[:] = row
+        for _ in range(sim.substeps):
+            began = clock()
+            mujoco.mj_step(sim.model, data)
+            steps.append(clock() - began)
+        began = clock()
+        measure_contacts(data, sim.left_sole_geom, sim.right_sole_geom)
+        contacts[k] = clock() - began
+    return np.array(steps), contacts
+
+
+def parts(robot: RobotModel, scenario_name: str, config: SimConfig) -> dict[str, float]:
     """Median wall time (us) of each part of a tick, each timed in a loop of its own over the same walk."""
-    sim = build_sim_model(robot, SimConfig(meshes=False))
+    sim = build_sim_model(robot, config)
     walk = robot_scenario(load_scenario(scenario_name), robot)
     planner = OnlinePlanner(walk.planner_config(), walk.strides())
     planner.start(0.0)
-    n = round(planner.end_time / sim.timestep)
+    dt = sim.control_dt
+    n = round(planner.end_time / dt)
     clock = time.perf_counter
     samples, rows = np.empty(n), []
     for k in range(n):
         began = clock()
-        values, _, _ = planner.sample_values(k * sim.timestep)
+        values, _, _ = planner.sample_values(k * dt)
         samples[k] = clock() - began
         rows.append(values)
     ik = WholeBodyIK(robot)
@@ -53,20 +77,18 @@ def parts(robot: RobotModel, scenario_name: str) -> dict[str, float]:
         q, _ = ik.solve(IKTargets(row[0:3], row[13:17], row[17:21]), q, max_iterations=1, tolerance=0.0)
         solves[k] = clock() - began
         targets[k] = q[7:]
-    data = sim.new_data()
-    steps, contacts = np.empty(n), np.empty(n)
-    for k in range(n):
-        data.ctrl[:] = targets[k]
-        began = clock()
-        mujoco.mj_step(sim.model, data)
-        steps[k] = clock() - began
-        began = clock()
-        measure_contacts(data, sim.left_sole_geom, sim.right_sole_geom)
-        contacts[k] = clock() - began
+    steps, contacts = _step_times(robot, config, targets)
+    plain, _ = _step_times(robot, dataclasses.replace(config, noslip_iterations=0), targets)
+    no_legs, _ = _step_times(robot, dataclasses.replace(config, leg_collisions=False), targets)
     return {
+        "control_dt_s": dt,
+        "physics_dt_s": sim.timestep,
+        "substeps": sim.substeps,
         "planner_sample_us": float(np.median(samples) * 1e6),
         "ik_solve_us": float(np.median(solves) * 1e6),
         "mj_step_us": float(np.median(steps) * 1e6),
+        "mj_step_without_noslip_us": float(np.median(plain) * 1e6),
+        "mj_step_without_leg_collisions_us": float(np.median(no_legs) * 1e6),
         "measure_contacts_us": float(np.median(contacts) * 1e6),
     }
 
@@ -77,9 +99,12 @@ def main() -> None:
     parser.add_argument("--robot", default="talos")
     parser.add_argument("--scenario", default="fig8")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--control-dt", type=float, default=None, help="control period (s); default the robot's")
+    parser.add_argument("--physics-dt", type=float, default=0.001, help="physics step (s); default 0.001")
     args = parser.parse_args()
     robot = RobotModel.load(args.robot)
-    sim = build_sim_model(robot)
+    config = SimConfig(control_dt=args.control_dt, physics_dt=args.physics_dt)
+    sim = build_sim_model(robot, config)
     scenario = load_scenario(args.scenario)
     factors, per_tick = [], []
     for _ in range(args.repeat):
@@ -94,15 +119,24 @@ def main() -> None:
         "real_time_factor": factors,
         "tick_us_median_of_runs": statistics.median(per_tick),
         "fell": result.fell,
-        **parts(robot, args.scenario),
+        **parts(robot, args.scenario, dataclasses.replace(config, meshes=False)),
     }
     if args.json:
         print(json.dumps(report))
         return
     print(f"{robot.name}, {args.scenario}: {report['simulated_time_s']:.1f} s simulated per run")
     print("real-time factor per run: " + ", ".join(f"{f:.1f}" for f in factors))
-    print(f"wall time per 1 ms tick (median of runs): {report['tick_us_median_of_runs']:.0f} us")
-    for key in ("planner_sample_us", "ik_solve_us", "mj_step_us", "measure_contacts_us"):
+    control, physics = report["control_dt_s"] * 1000, report["physics_dt_s"] * 1000
+    tick = f"{control:g} ms tick, {report['substeps']} physics step(s) of {physics:g} ms"
+    print(f"wall time per {tick} (median of runs): {report['tick_us_median_of_runs']:.0f} us")
+    for key in (
+        "planner_sample_us",
+        "ik_solve_us",
+        "mj_step_us",
+        "mj_step_without_noslip_us",
+        "mj_step_without_leg_collisions_us",
+        "measure_contacts_us",
+    ):
         print(f"  {key[:-3].replace('_', ' ')}: {report[key]:.1f} us (median)")
 
 

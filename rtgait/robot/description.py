@@ -38,6 +38,20 @@ loaded by name (``load_robot("talos")``); any other file is loaded by path. Ever
     kp = 500.0                           # joint name -> value (N m/rad and N m s/rad for revolute joints)
     kd = 5.0
 
+    [actuation]                          # optional, for the physics layer (docs/robots.md has every key)
+    control_dt = 0.001                   # s: the period at which the controller sends joint references
+    natural_frequency = 10.0             # Hz: target of the derived kp on the inertia the joint carries
+    damping_ratio = 1.0                  # of the derived kd, on the joint's drive and the limb beyond it
+    armature_per_torque = 5e-4           # s^2: default armature per N m of effort limit
+
+    [[actuation.joints]]                 # joints matched by fnmatch patterns; a later group wins
+    match = ["leg_*_joint"]
+    rotor_inertia = 1e-5                 # kg m^2; armature = rotor_inertia * gear_ratio^2 (or give armature)
+    gear_ratio = 100.0                   # also: kp, kd, effort_limit, natural_frequency, damping_ratio
+
+A joint's actuation is resolved key by key: the last matching ``[[actuation.joints]]`` group that sets the key,
+else ``[gains]`` (kp, kd), else a default derived from the URDF by :mod:`rtgait.sim.actuation`.
+
 Every problem with a description raises :class:`RobotError` with one line naming the field. The URDF is read
 with the standard library's XML parser (not Pinocchio) to check frame and joint names, so a description can be
 validated without building the model.
@@ -45,6 +59,7 @@ validated without building the model.
 
 from __future__ import annotations
 
+import fnmatch
 import re
 import xml.etree.ElementTree as ElementTree
 from collections.abc import Mapping
@@ -57,7 +72,17 @@ from rtgait.core.footsteps import SoleRect
 from rtgait.robot.data import RobotDataError, robots_dir, share_dir
 from rtgait.tomlfile import TomlFiles, is_finite_number
 
-__all__ = ["ERD_PREFIX", "RobotDescription", "RobotError", "builtin_robots", "load_robot", "parse_robot"]
+__all__ = [
+    "ERD_PREFIX",
+    "ActuationSpec",
+    "ActuatorGroup",
+    "JointActuationSpec",
+    "RobotDescription",
+    "RobotError",
+    "builtin_robots",
+    "load_robot",
+    "parse_robot",
+]
 
 ERD_PREFIX = "example-robot-data:"
 """Prefix of ``model.urdf`` values that name a file below example-robot-data's ``robots/`` folder."""
@@ -75,6 +100,77 @@ class RobotError(ValueError):
 
 
 _FILES = TomlFiles(kind="robot", folder="robots", error=RobotError)
+
+DEFAULT_CONTROL_DT = 0.001
+"""Control period (s) without ``actuation.control_dt``: 1 kHz, the usual rate of a humanoid's joint loop."""
+DEFAULT_NATURAL_FREQUENCY = 10.0
+"""Loaded natural frequency (Hz) of the derived gains (see :mod:`rtgait.sim.actuation`)."""
+DEFAULT_DAMPING_RATIO = 1.0
+"""Damping ratio of the derived kd on the joint's drive and limb: critical."""
+DEFAULT_ARMATURE_PER_TORQUE = 5e-4
+"""Default armature per N m of effort limit (s^2): rotor inertia J of a motor of torque T behind a gear of ratio N
+gives ``J N^2 = (J / T) N effort``; brushless motors have ``J / T`` near 1e-5 s^2, so this is a gear of ratio 50
+(Unitree's planetary gears of ratio 10-25: 1.2e-4 to 1.8e-4 s^2; harmonic drives of ratio 100: about 1e-3)."""
+
+
+@dataclass(frozen=True)
+class ActuatorGroup:
+    """One ``[[actuation.joints]]`` entry: values for the joints whose names match one of its patterns.
+
+    Attributes:
+        match: ``fnmatch`` patterns on URDF joint names (``*``, ``?``, ``[seq]``).
+        kp: position gain (N m/rad), or ``None`` to derive it.
+        kd: damping gain (N m s/rad), or ``None`` to derive it.
+        armature: rotor inertia reflected to the joint (kg m^2), given or as ``rotor_inertia * gear_ratio^2``.
+        effort_limit: torque limit (N m), or ``None`` for the URDF's.
+        natural_frequency: this group's target natural frequency (Hz) for derived gains, or ``None``.
+        damping_ratio: this group's damping ratio for a derived kd, or ``None``.
+    """
+
+    match: tuple[str, ...]
+    kp: float | None = None
+    kd: float | None = None
+    armature: float | None = None
+    effort_limit: float | None = None
+    natural_frequency: float | None = None
+    damping_ratio: float | None = None
+
+    def matches(self, joint: str) -> bool:
+        """Whether ``joint`` matches one of the group's patterns (case-sensitive)."""
+        return any(fnmatch.fnmatchcase(joint, pattern) for pattern in self.match)
+
+
+@dataclass(frozen=True)
+class JointActuationSpec:
+    """What a description says about one joint's actuator (units as :class:`ActuatorGroup`'s); ``None``: derive
+    it from the URDF; ``armature_per_torque`` (s^2) gives the armature when none is given."""
+
+    kp: float | None
+    kd: float | None
+    armature: float | None
+    effort_limit: float | None
+    natural_frequency: float
+    damping_ratio: float
+    armature_per_torque: float
+
+
+@dataclass(frozen=True)
+class ActuationSpec:
+    """The ``[actuation]`` table (all optional; the defaults when a description has none).
+
+    Attributes:
+        control_dt: period at which the controller sends joint references (s).
+        natural_frequency: default target natural frequency of a loaded joint (Hz).
+        damping_ratio: default damping ratio of the derived kd.
+        armature_per_torque: default armature per N m of effort limit (s^2), :data:`DEFAULT_ARMATURE_PER_TORQUE`.
+        groups: the ``[[actuation.joints]]`` entries, in file order (a later one wins).
+    """
+
+    control_dt: float = DEFAULT_CONTROL_DT
+    natural_frequency: float = DEFAULT_NATURAL_FREQUENCY
+    damping_ratio: float = DEFAULT_DAMPING_RATIO
+    armature_per_torque: float = DEFAULT_ARMATURE_PER_TORQUE
+    groups: tuple[ActuatorGroup, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -94,7 +190,9 @@ class RobotDescription:
         moving_joints: joints the walking motion may move, in the order given.
         torso_frame: frame kept upright while walking.
         posture: half-sitting posture, joint name -> angle (rad; m for prismatic joints); other joints at 0.
-        kp, kd: optional joint gains for the physics layer, one number for all joints or joint name -> value.
+        kp, kd: optional joint gains for the physics layer (``[gains]``), one number for all joints or joint name ->
+            value.
+        actuation: the ``[actuation]`` table (defaults when absent); :meth:`joint_actuation` resolves one joint.
         source: where the description came from (``"builtin"`` or a file path); informative only.
     """
 
@@ -112,6 +210,7 @@ class RobotDescription:
     posture: Mapping[str, float]
     kp: float | Mapping[str, float] | None = None
     kd: float | Mapping[str, float] | None = None
+    actuation: ActuationSpec = field(default_factory=ActuationSpec)
     source: str = field(default="", compare=False)
 
     def posture_angle(self, joint: str) -> float:
@@ -127,6 +226,18 @@ class RobotDescription:
         if kp is None or kd is None:
             return None
         return kp, kd
+
+    def joint_actuation(self, joint: str) -> JointActuationSpec:
+        """What the description gives for ``joint``'s actuator, key by key (see the module docstring): the last
+        matching ``[[actuation.joints]]`` group that sets a key wins, then ``[gains]`` for kp and kd."""
+        spec, gains = self.actuation, self.gains(joint)
+        values: dict[str, float | None] = {"kp": None, "kd": None, "armature": None, "effort_limit": None}
+        if gains is not None:
+            values["kp"], values["kd"] = gains
+        values.update(natural_frequency=spec.natural_frequency, damping_ratio=spec.damping_ratio)
+        for group in (g for g in spec.groups if g.matches(joint)):
+            values.update({key: getattr(group, key) for key in values if getattr(group, key) is not None})
+        return JointActuationSpec(armature_per_torque=spec.armature_per_torque, **values)  # type: ignore[arg-type]
 
 
 # ----- the URDF's names -----------------------------------------------------------------------------------------
@@ -224,6 +335,56 @@ def _gain(raw: Any, where: str, names: _UrdfNames) -> float | Mapping[str, float
     return _FILES.number(raw, where, rule=">= 0")
 
 
+_GROUP_KEYS = ("kp", "kd", "armature", "rotor_inertia", "gear_ratio", "effort_limit", "natural_frequency",
+               "damping_ratio")  # fmt: skip
+_TABLE_KEYS = ("control_dt", "natural_frequency", "damping_ratio", "armature_per_torque")
+_UNITS = {"kp": "N m/rad", "kd": "N m s/rad", "armature": "kg m^2", "rotor_inertia": "kg m^2", "effort_limit": "N m",
+          "natural_frequency": "Hz", "control_dt": "s", "armature_per_torque": "s^2"}  # fmt: skip
+_MAY_BE_ZERO = ("kd", "armature", "rotor_inertia", "armature_per_torque")
+
+
+def _numbers(table: dict[str, Any], where: str, keys: tuple[str, ...]) -> dict[str, float]:
+    return {
+        key: _FILES.number(
+            table[key], f"{where}.{key}", rule=">= 0" if key in _MAY_BE_ZERO else "> 0", unit=_UNITS.get(key, "")
+        )
+        for key in keys
+        if key in table
+    }
+
+
+def _actuator_group(raw: Any, where: str, names: _UrdfNames) -> ActuatorGroup:
+    table = _FILES.table(raw, where)
+    _FILES.check_keys(table, where, ("match",), _GROUP_KEYS)
+    patterns = [table["match"]] if isinstance(table["match"], str) else table["match"]
+    if not (isinstance(patterns, list) and patterns and all(isinstance(p, str) and p for p in patterns)):
+        raise RobotError(f"{where}.match must be a joint name pattern or a non-empty list of them, got {patterns!r}")
+    movable = [j for j, kind in names.joints.items() if kind in _MOVABLE_TYPES]
+    for pattern in patterns:
+        # A pattern that matches nothing is a typo: the group would silently not apply.
+        if not any(fnmatch.fnmatchcase(joint, pattern) for joint in movable):
+            raise RobotError(f"{where}.match: {pattern!r} matches no movable joint of the URDF")
+    values = _numbers(table, where, _GROUP_KEYS)
+    rotor = "rotor_inertia" in values, "gear_ratio" in values
+    if any(rotor) and not all(rotor):
+        raise RobotError(f"{where}: rotor_inertia and gear_ratio go together (armature = rotor_inertia * gear_ratio^2)")
+    if all(rotor):
+        if "armature" in values:
+            raise RobotError(f"{where}: give armature or rotor_inertia and gear_ratio, not both")
+        values["armature"] = values.pop("rotor_inertia") * values.pop("gear_ratio") ** 2
+    return ActuatorGroup(match=tuple(patterns), **values)
+
+
+def _actuation(raw: Any, names: _UrdfNames) -> ActuationSpec:
+    table = _FILES.table(raw, "actuation")
+    _FILES.check_keys(table, "actuation", (), (*_TABLE_KEYS, "joints"))
+    raw_groups = table.get("joints", [])
+    if not isinstance(raw_groups, list):
+        raise RobotError("actuation.joints must be an array of tables ([[actuation.joints]])")
+    groups = tuple(_actuator_group(g, f"actuation.joints[{i}]", names) for i, g in enumerate(raw_groups))
+    return ActuationSpec(groups=groups, **_numbers(table, "actuation", _TABLE_KEYS))
+
+
 def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None) -> RobotDescription:
     """Build a :class:`RobotDescription` from a parsed TOML document (see the module docstring).
 
@@ -232,7 +393,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         source: where it came from, for messages.
         base: folder that relative paths are resolved against (the TOML file's folder); ``None`` for built-ins.
     """
-    _FILES.check_keys(data, "", ("name", "model", "feet", "walking", "posture"), ("description", "gains"))
+    _FILES.check_keys(data, "", ("name", "model", "feet", "walking", "posture"), ("description", "gains", "actuation"))
     name = _FILES.string(data, "name", non_empty=True)
     if not _NAME_PATTERN.fullmatch(name):
         raise RobotError(f"name must be letters, digits, '.', '_' or '-', got {name!r}")
@@ -313,6 +474,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         _FILES.check_keys(gains, "gains", ("kp", "kd"), ())
         kp = _gain(gains["kp"], "gains.kp", names)
         kd = _gain(gains["kd"], "gains.kd", names)
+    actuation = _actuation(data["actuation"], names) if "actuation" in data else ActuationSpec()
 
     return RobotDescription(
         name=name,
@@ -329,6 +491,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         posture=MappingProxyType(posture),
         kp=kp,
         kd=kd,
+        actuation=actuation,
         source=source,
     )
 

@@ -179,7 +179,7 @@ class HandPull:
         body = self._body
         # The hand at the state's kinematics (computed by the last step); its velocity by a finite difference.
         hand = data.xpos[body] + data.xmat[body].reshape(3, 3) @ self._local
-        dt = self.sim.timestep
+        dt = self.sim.control_dt  # called once per control tick
         hand_velocity = (hand[:2] - self._hand_previous) / dt
         self._hand_previous = hand[:2].copy()
         target, target_velocity, path_heading = self.person(t)

@@ -1,22 +1,23 @@
-"""The closed loop at the physics rate: planner -> whole-body IK -> joint servos -> MuJoCo, and what is measured.
+"""The closed loop: planner -> whole-body IK -> joint servos -> MuJoCo, once per control period, and what is measured.
 
-Every tick (1 ms by default):
+Every control tick (``sim.control_dt``: 1 ms for Talos, 2 ms for G1):
 
 1. footstep changes due at this time are handed to the planner (at their connection mode's deadline, as
    :func:`rtgait.core.rollout.rollout` does), and the planner is sampled: COG, ZMP, both feet;
 2. the whole-body IK, warm-started from the previous tick, turns the COG and feet into joint angles (always one
    Gauss-Newton iteration, so the solution varies smoothly from tick to tick and its finite difference is a
    clean joint velocity);
-3. the servos' targets are set to those angles plus a velocity lead ``kd/kp * qdot``, which makes the servo
-   ``kp (q* - q) + kd (qdot* - qdot)``: its damping then acts on the tracking error, not on the motion itself;
-4. ``mj_step`` advances the physics by one step.
+3. those angles and their velocity become the joint references of the PD servos (:mod:`rtgait.sim.actuation`),
+   interpolated linearly over the physics substeps of the period;
+4. ``mj_step`` advances the physics by ``sim.substeps`` steps, the servo torques recomputed at each.
 
-Measured each tick: the ZMP as the centre of pressure of the sole-floor contact forces, the base pose, the COG,
-which feet touch the floor, on how many corners of their sole boxes, and how far each sole is tilted. The run
-ends early when the robot falls (:class:`FallLimits`). A foot that carries most of the load and tilts beyond
-:attr:`FallLimits.tip_angle` has *tipped over*: it stands on an edge with the opposite edge lifted, the robot has
-lost flat contact. That is recorded (:attr:`SimResult.tipped`) but does not end the run, since a robot may
-recover from it.
+Measured each tick, at the tick's time (the first substep's contacts): the ZMP as the centre of pressure of the
+sole-floor contact forces, the base pose, the COG, which feet touch the floor, on how many corners of their sole
+boxes, how far each sole is tilted, whether the legs touch each other (:mod:`rtgait.sim.contact`), and the joint
+torques (their mean over the period's substeps). The run ends early when the robot falls (:class:`FallLimits`).
+A foot that carries most of the load and tilts beyond :attr:`FallLimits.tip_angle` has *tipped over*: it stands
+on an edge with the opposite edge lifted, the robot has lost flat contact. That is recorded
+(:attr:`SimResult.tipped`) but does not end the run, since a robot may recover from it.
 
 The walk starts from half-sitting, whose COG is higher than the planner's constant COG height: a short
 transition (:attr:`LoopOptions.start_ramp`, then :attr:`LoopOptions.start_hold` at rest) moves the IK's COG target
@@ -40,6 +41,8 @@ from rtgait.core.footsteps import Footstep
 from rtgait.core.online import OnlinePlanner
 from rtgait.core.rollout import ScheduledChange
 from rtgait.robot.ik import IKTargets, WholeBodyIK
+from rtgait.sim.actuation import ReferenceInterpolator
+from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Push, Pushes, measure_contacts
 from rtgait.sim.model import SimModel
 
 __all__ = [
@@ -60,31 +63,6 @@ SUPPORT_CODES = {"double": 0, "left": 1, "right": 2}
 LANDING_WINDOW = 0.5
 """Longest time after a step's planned touch-down (s) in which its foot must be found on the floor; the double
 support that follows the landing, when shorter, is the window."""
-
-
-@dataclass(frozen=True)
-class Push:
-    """An external force on a body of the robot, constant over a time window (e.g. a push at the pelvis).
-
-    Attributes:
-        start: when it begins (s, simulation time from the start of the run).
-        duration: how long it lasts (s); the impulse is ``force * duration`` (N s).
-        force: world-frame force ``(fx, fy, fz)`` (N), applied at the body's centre of mass.
-        body: MuJoCo body name; ``None`` for the floating base.
-    """
-
-    start: float
-    duration: float
-    force: tuple[float, float, float]
-    body: str | None = None
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.start) and self.start >= 0.0):
-            raise ValueError(f"push start must be a time >= 0 s, got {self.start}")
-        if not (math.isfinite(self.duration) and self.duration > 0.0):
-            raise ValueError(f"push duration must be > 0 s, got {self.duration}")
-        if len(self.force) != 3 or not all(math.isfinite(f) for f in self.force):
-            raise ValueError(f"push force must be three finite numbers (fx, fy, fz) in N, got {self.force!r}")
 
 
 @dataclass(frozen=True)
@@ -122,33 +100,6 @@ class Stabilizer:
 
 
 @dataclass(frozen=True)
-class FallLimits:
-    """When the robot has fallen (any of the first three ends the run) or tipped over (recorded only).
-
-    Attributes:
-        base_height_fraction: fallen: the base below this fraction of its height at the start.
-        tilt: fallen: the base tilted from upright beyond this angle (rad).
-        airborne: fallen: no foot on the floor for longer than this (s).
-        tip_angle: tipped over: a foot carrying more than half the load tilted from level beyond this angle (rad).
-            The default, 0.02 rad, lifts the far edge of a 0.13 m wide sole by 2.6 mm; on flat ground the soles of a
-            walk that keeps its ZMP inside tilt a few milliradians at most (the contact's softness).
-    """
-
-    base_height_fraction: float = 0.6
-    tilt: float = math.radians(45.0)
-    airborne: float = 0.2
-    tip_angle: float = 0.02
-
-    def __post_init__(self) -> None:
-        if not 0.0 < self.base_height_fraction < 1.0:
-            raise ValueError(f"base_height_fraction must be in (0, 1), got {self.base_height_fraction}")
-        for name in ("tilt", "airborne", "tip_angle"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ValueError(f"fall limit {name} must be finite and > 0, got {value}")
-
-
-@dataclass(frozen=True)
 class LoopOptions:
     """Settings of the closed loop.
 
@@ -170,8 +121,8 @@ class LoopOptions:
         duration: for a walk by command that ``on_tick`` ends: simulate this long (s, from the start of the run)
             instead of a length known in advance; ``stop_after_steps`` is then not needed.
         replay_period: the robot's whole configuration is recorded every this many seconds (rounded to whole
-            ticks) for the 3D replay (:attr:`SimResult.replay_q`); 0.04 s is the replay's 25 frames per second, and
-            keeps a minute of walking to 1500 rows.
+            control ticks) for the 3D replay (:attr:`SimResult.replay_q`); 0.04 s is the replay's 25 frames per
+            second, and keeps a minute of walking to 1500 rows.
     """
 
     start_ramp: float = 1.0
@@ -206,9 +157,9 @@ class LoopOptions:
 
 @dataclass(frozen=True, eq=False)
 class SimResult:
-    """A walk in physics, tick by tick, and its outcome. Times are simulation times (s) from the start of the
-    run; the planner's clock starts at :attr:`walk_start`. ``k`` ticks were simulated (fewer than planned after
-    a fall); every array has ``k`` rows and describes the state at the tick's time.
+    """A walk in physics, control tick by control tick, and its outcome. Times are simulation times (s) from the
+    start of the run; the planner's clock starts at :attr:`walk_start`. ``k`` ticks were simulated (fewer than
+    planned after a fall); every array has ``k`` rows and describes the state at the tick's time.
 
     Attributes:
         times: tick times (s), shape ``(k,)``.
@@ -225,6 +176,12 @@ class SimResult:
         corners: corners of each sole box touching the floor (0 to 4), shape ``(k, 2)``.
         sole_tilt: angle between each sole's normal and the vertical (rad), shape ``(k, 2)``.
         support: planned support per tick, codes :data:`SUPPORT_CODES` (the start transition is double).
+        torque: the joint torques the servos applied (N m), mean over the tick's physics substeps, shape ``(k, n)``,
+            columns in :attr:`joint_names` order; within each joint's torque limit.
+        joint_names: the actuated joints, the columns of :attr:`torque`.
+        legs_touch: whether the legs' collision boxes touched each other at the tick, shape ``(k,)``.
+        control_dt: the control period, the interval between two ticks (s).
+        physics_dt: the physics step (s).
         walk_start: simulation time at which the planner's walk begins (s).
         walk_end: simulation time at which the planned walk has come to rest (s).
         steps_planned: steps of the walk (the closing step included).
@@ -275,6 +232,11 @@ class SimResult:
     replay_q: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     replay_soles: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 3)))
     footprints: tuple[Footstep, ...] = ()
+    torque: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    joint_names: tuple[str, ...] = ()
+    legs_touch: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    control_dt: float = 0.001
+    physics_dt: float = 0.001
 
     @property
     def replay_times(self) -> np.ndarray:
@@ -284,7 +246,13 @@ class SimResult:
     @property
     def duration(self) -> float:
         """Simulated time (s)."""
-        return float(self.times[-1] + (self.times[1] - self.times[0])) if len(self.times) > 1 else 0.0
+        return float(self.times[-1] + self.control_dt) if len(self.times) else 0.0
+
+    @property
+    def legs_touched(self) -> bool:
+        """Whether the legs touched each other at any tick (a step that crossed the feet, a swing foot that hit the
+        stance leg)."""
+        return bool(self.legs_touch.any())
 
     @property
     def real_time_factor(self) -> float:
@@ -346,6 +314,9 @@ class SimResult:
             "real_time_factor": self.real_time_factor,
             "walk_start": self.walk_start,
             "walk_end": self.walk_end,
+            "legs_touched": self.legs_touched,
+            "control_dt": self.control_dt,
+            "physics_dt": self.physics_dt,
         }
 
 
@@ -377,45 +348,6 @@ def _start_pose(planner: OnlinePlanner) -> tuple[list[float], list[float], list[
     left, right = (first, second) if first.side == "left" else (second, first)
     cog = [0.5 * (left.x + right.x), 0.5 * (left.y + right.y), planner.config.cog_height]
     return cog, [left.x, left.y, 0.0, left.yaw], [right.x, right.y, 0.0, right.yaw]
-
-
-def measure_contacts(
-    data: mujoco.MjData, left_geom: int, right_geom: int
-) -> tuple[float, float, float, float, int, int]:
-    """Vertical contact forces of the soles on the floor, from the last ``mj_step`` (or ``mj_forward``).
-
-    Returns:
-        ``(sx, sy, f_left, f_right, corners_left, corners_right)``: the sums ``sum(p_x f_z)`` and ``sum(p_y f_z)``
-        over all contact points (N m), so that the centre of pressure is ``(sx, sy) / (f_left + f_right)``; the
-        vertical force on each sole (N); and how many corners of each sole box touch the floor.
-
-    The floor is flat, so each contact's normal is vertical and its normal force is the vertical force. With
-    MuJoCo's pyramidal friction cones (the default) a contact of dimension 3 has four edge forces in
-    ``efc_force``, each with a unit normal component, and the normal force is their sum; this equals the first
-    component of ``mujoco.mj_contactForce`` without a call per contact.
-    """
-    fl = fr = sx = sy = 0.0
-    cl = cr = 0
-    n = data.ncon
-    if n:
-        # Both arrays are reallocated by every step: they are fetched at each call. Python floats: a handful of
-        # contacts costs less as scalar arithmetic than as numpy calls.
-        efc_force = data.efc_force.tolist()
-        contacts = data.contact
-        # The contact list holds the ncon active contacts (its arrays have ncon rows).
-        for a, p, g in zip(contacts.efc_address.tolist(), contacts.pos.tolist(), contacts.geom.tolist(), strict=True):
-            if a < 0:  # inside the collision margin but not active: no force
-                continue
-            fz = efc_force[a] + efc_force[a + 1] + efc_force[a + 2] + efc_force[a + 3]
-            sx += p[0] * fz
-            sy += p[1] * fz
-            if left_geom in g:
-                fl += fz
-                cl += 1
-            elif right_geom in g:
-                fr += fz
-                cr += 1
-    return sx, sy, fl, fr, cl, cr
 
 
 def run_closed_loop(
@@ -460,14 +392,15 @@ def run_closed_loop(
     cog_start, left_start, right_start = _start_pose(planner)
     # The start configuration: half-sitting's COG over the planner's standing feet, soles level. Half-sitting
     # itself may differ from it by a milliradian (a sole not quite level); starting from the IK's own solution
-    # keeps the first ticks free of a step in the servo targets, which the velocity lead would amplify.
+    # keeps the first ticks free of a step in the servo references, which the velocity reference would amplify.
     cog_half_sitting = robot.cog_half_sitting.tolist()
     q, _ = ik.solve(IKTargets(cog_half_sitting, left_start, right_start), robot.q_half_sitting, 200, 1e-9)
     if data is None:
         data = sim.new_data(q=q)
     else:
         sim.reset(data, q=q)
-    dt = sim.timestep
+    dt = sim.control_dt
+    n_sub = sim.substeps
     planner.start(walk_start)
     if options.duration is not None and planner.n_steps is None and stop_after is None:
         # Ended by on_tick: the number of steps and the walk's end are known only afterwards.
@@ -484,55 +417,34 @@ def run_closed_loop(
 
     # ----- the record, allocated once ----------------------------------------------------------------------------
     times = np.arange(n_ticks) * dt
-    zmp = np.full((n_ticks, 2), np.nan)
     zmp_planned = np.empty((n_ticks, 2))
     cog = np.empty((n_ticks, 3))
     cog_planned = np.empty((n_ticks, 3))
     base = np.empty((n_ticks, 7))  # MuJoCo's order (x, y, z, qw, qx, qy, qz); reordered at the end
-    normal = np.zeros((n_ticks, 2))
-    corners = np.zeros((n_ticks, 2), dtype=np.int8)
-    tilt = np.zeros((n_ticks, 2))
     support = np.zeros(n_ticks, dtype=np.int8)
+    torque = np.empty((n_ticks, model.nu))
     # The replay's record: a whole qpos every few ticks only (a 1 kHz record of ~40 coordinates would be 30 times
     # more than a 25 fps replay shows).
-    replay_every = max(1, round(options.replay_period / sim.timestep))
+    replay_every = max(1, round(options.replay_period / dt))
     n_replay = (n_ticks - 1) // replay_every + 1
     replay_qpos = np.empty((n_replay, model.nq))
     replay_soles = np.empty((n_replay, 2, 3))
-
-    # ----- pushes ----------------------------------------------------------------------------------------------
-    pushes = sorted(options.pushes, key=lambda p: p.start)
-    push_bodies = []
-    for push in pushes:
-        body = sim.base_body if push.body is None else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, push.body)
-        if body < 0:
-            raise ValueError(f"push body {push.body!r}: the MuJoCo model of {robot.name} has no such body")
-        push_bodies.append(int(body))
-    push_windows = [(p.start, p.start + p.duration, p.force, b) for p, b in zip(pushes, push_bodies, strict=True)]
-    xfrc = data.xfrc_applied
-    active_push: tuple[float, float, tuple[float, float, float], int] | None = None
-    next_push = 0
-
-    # ----- loop state --------------------------------------------------------------------------------------------
-    # MuJoCo's arrays of fixed size are views that stay valid; the contact and constraint arrays are reallocated
-    # by every step and are fetched each tick.
-    ctrl, qpos, subtree_com, site_xmat = data.ctrl, data.qpos, data.subtree_com, data.site_xmat
-    site_xpos = data.site_xpos
-    left_site, right_site = sim.left_sole_site, sim.right_sole_site
-    base_body = sim.base_body
-    left_geom, right_geom = sim.left_sole_geom, sim.right_sole_geom
     if model.opt.cone != mujoco.mjtCone.mjCONE_PYRAMIDAL:  # pragma: no cover - the model builder keeps the default
         raise ValueError("the closed loop measures contact forces of pyramidal friction cones only")
-    # measure_contacts reads pyramidal contacts of dimension 3; the sole boxes and the floor are the only geoms
-    # that collide (condim 3).
     threshold = options.contact_threshold * robot.mass * float(-model.opt.gravity[2])
-    falls = options.falls
-    z_low = falls.base_height_fraction * float(qpos[2])
-    cos_tilt = math.cos(falls.tilt)
-    airborne_ticks = max(1, round(falls.airborne / dt))
-    cos_tip = math.cos(falls.tip_angle)
+    contacts = ContactMonitor(
+        data, sim.left_sole_geom, sim.right_sole_geom, sim.left_sole_site, sim.right_sole_site, n_ticks, threshold,
+        options.falls, dt,
+    )  # fmt: skip
+    pushes = Pushes(sim, data, options.pushes)
 
-    lead = sim.kd / (sim.kp * dt)  # the velocity lead kd/kp * qdot, qdot by a finite difference over one tick
+    # ----- loop state --------------------------------------------------------------------------------------------
+    # MuJoCo's arrays of fixed size are views that stay valid.
+    ctrl, qpos, subtree_com, site_xpos, actuator_force = (
+        data.ctrl, data.qpos, data.subtree_com, data.site_xpos, data.actuator_force
+    )  # fmt: skip
+    left_site, right_site, base_body = sim.left_sole_site, sim.right_sole_site, sim.base_body
+    servo = ReferenceInterpolator(sim.actuation, q[7:])
     joints_previous = q[7:].copy()
     pending = sorted(options.changes, key=lambda c: planner.change_deadline(c.step))
     stabilizer = options.stabilizer
@@ -545,33 +457,19 @@ def run_closed_loop(
     measured_x = measured_y = math.nan
     ramp = options.start_ramp
 
-    steps_completed = 0
-    landing: tuple[int, float] | None = None  # (foot index, end of the window in which it must touch the floor)
-    window = max(min(planner.config.timing.double_support, LANDING_WINDOW), dt)
-    last_phase = -1
-    last_code = 0
-    airborne = 0
+    landings = Landings(max(min(planner.config.timing.double_support, LANDING_WINDOW), dt), threshold)
     fell, fall_time, fall_cause = False, None, None
-    tip_time: float | None = None
     stopped = stop_after is None
     report_every = max(n_ticks // 50, 1)
     ticks = n_ticks
+    step = mujoco.mj_step
 
     began = time.perf_counter()
     for k in range(n_ticks):
         t = k * dt
-        # ----- external forces ------------------------------------------------------------------------------
-        if active_push is not None and t >= active_push[1]:
-            xfrc[active_push[3], 0:3] = 0.0
-            active_push = None
-        if next_push < len(push_windows) and t >= push_windows[next_push][0]:
-            if active_push is not None:
-                xfrc[active_push[3], 0:3] = 0.0
-            active_push = push_windows[next_push]
-            xfrc[active_push[3], 0:3] = active_push[2]
-            next_push += 1
+        pushes.update(t)
 
-        # ----- targets --------------------------------------------------------------------------------------
+        # ----- references -----------------------------------------------------------------------------------
         if t < walk_start:
             s = _minimum_jerk(t / ramp) if ramp > 0.0 else 1.0
             target_cog = [a + s * (b - a) for a, b in zip(cog_half_sitting, cog_start, strict=True)]
@@ -608,113 +506,78 @@ def run_closed_loop(
 
         q, _ = ik.solve(IKTargets(target_cog, left_foot, right_foot), q, max_iterations=1, tolerance=0.0)
         joints = q[7:]
-        ctrl[:] = joints + lead * (joints - joints_previous)
+        servo.command(joints, (joints - joints_previous) / dt)
         joints_previous = joints
 
-        # ----- physics --------------------------------------------------------------------------------------
+        # ----- physics: the control period's substeps ---------------------------------------------------------
         row = base[k]
-        row[:] = qpos[0:7]  # the state at t, before the step integrates it to t + dt
+        row[:] = qpos[0:7]  # the state at t, before the steps integrate it to t + dt
         replay_row = k // replay_every if k % replay_every == 0 else -1
         if replay_row >= 0:
             replay_qpos[replay_row] = qpos
-        mujoco.mj_step(model, data)
+        tau = torque[k]
+        servo.apply(0, ctrl)
+        step(model, data)
+        # mj_step computed the kinematics, contacts and forces of the state it started from: the state at t.
+        tau[:] = actuator_force
         if replay_row >= 0:
-            # mj_step computed the kinematics of the state it started from, the qpos recorded above.
             replay_soles[replay_row, 0] = site_xpos[left_site]
             replay_soles[replay_row, 1] = site_xpos[right_site]
-
-        # ----- measurements at t: mj_step computed contacts, forces and COG at the state it started from -------
         com = subtree_com[base_body]
         cog[k] = com
         cog_x, cog_y = float(com[0]), float(com[1])
-        sx, sy, fl, fr, cl, cr = measure_contacts(data, left_geom, right_geom)
-        total = fl + fr
-        if total > threshold:
-            measured_x, measured_y = sx / total, sy / total
-            zmp[k, 0] = measured_x
-            zmp[k, 1] = measured_y
-            airborne = 0
-        else:
-            measured_x = measured_y = math.nan
-            airborne += 1
-        normal[k, 0] = fl
-        normal[k, 1] = fr
-        corners[k, 0] = cl
-        corners[k, 1] = cr
-        # The z-z entry of a sole's orientation is the cosine of its tilt from level.
-        cos_left = tilt[k, 0] = site_xmat[left_site, 8]
-        cos_right = tilt[k, 1] = site_xmat[right_site, 8]
+        measured_x, measured_y, fl, fr = contacts.measure(k, t)
+        for i in range(1, n_sub):
+            servo.apply(i, ctrl)
+            step(model, data)
+            tau += actuator_force
+        if n_sub > 1:
+            tau *= 1.0 / n_sub
         zmp_planned[k, 0] = planned_x
         zmp_planned[k, 1] = planned_y
         cog_planned[k] = target_cog
         support[k] = code
 
-        # ----- steps: a single support (odd phase) ends with its swing foot's landing -----------------------
-        if phase != last_phase:
-            if last_phase >= 1 and last_phase & 1:
-                swing = 1 if last_code == 1 else 0  # left support: the right foot (index 1) was swinging
-                landing = (swing, t + window)
-            last_phase = phase
-        last_code = code
-        if landing is not None:
-            if (fr if landing[0] else fl) > threshold:
-                steps_completed += 1
-                landing = None
-            elif t >= landing[1]:
-                landing = None
-
-        # ----- tipping over: the loaded foot turned onto an edge of its sole ---------------------------------
-        loaded_tilted = (fl > 0.5 * total and cos_left < cos_tip) or (fr > 0.5 * total and cos_right < cos_tip)
-        if loaded_tilted and tip_time is None:
-            tip_time = t
+        landings.update(t, phase, code, fl, fr)
 
         # ----- falls ----------------------------------------------------------------------------------------
-        bx, by = row[4], row[5]
-        upright = 1.0 - 2.0 * (bx * bx + by * by)  # z component of the base's z axis
-        if row[2] < z_low:
-            fall_cause = "base too low"
-        elif upright < cos_tilt:
-            fall_cause = "base tilted"
-        elif airborne >= airborne_ticks:
-            fall_cause = "no foot on the floor"
+        fall_cause = contacts.fall(row)
         if fall_cause is not None:
             fell, fall_time, ticks = True, t, k + 1
             break
         if progress is not None and k % report_every == 0:
             progress(k / n_ticks)
     wall = time.perf_counter() - began
-    if active_push is not None:
-        xfrc[active_push[3], 0:3] = 0.0
+    pushes.clear()
     if progress is not None:
         progress(1.0)
 
-    contact = normal[:ticks] > threshold
     if n_steps == 0:  # ended by on_tick: the steps the planner ended up with, and when it came to rest
-        n_steps = planner.n_steps if planner.n_steps is not None else steps_completed
+        n_steps = planner.n_steps if planner.n_steps is not None else landings.count
         walk_end = min(planner.end_time, walk_end)
     n_recorded = (ticks - 1) // replay_every + 1
     return SimResult(
         times=times[:ticks],
-        zmp=zmp[:ticks],
+        zmp=contacts.zmp(ticks),
         zmp_planned=zmp_planned[:ticks],
         cog=cog[:ticks],
         cog_planned=cog_planned[:ticks],
         base_position=base[:ticks, 0:3].copy(),
         base_quaternion=base[:ticks][:, [4, 5, 6, 3]],
-        contact=contact,
-        normal_force=normal[:ticks],
-        corners=corners[:ticks],
-        sole_tilt=np.arccos(np.clip(tilt[:ticks], -1.0, 1.0)),
+        contact=contacts.normal_force(ticks) > threshold,
+        normal_force=contacts.normal_force(ticks),
+        corners=contacts.corners(ticks),
+        sole_tilt=contacts.sole_tilt(ticks),
         support=support[:ticks],
         walk_start=walk_start,
         walk_end=walk_end,
         steps_planned=n_steps,
-        steps_completed=steps_completed,
+        steps_completed=landings.count,
         fell=fell,
         fall_time=fall_time,
         fall_cause=fall_cause,
-        tipped=tip_time is not None,
-        tip_time=tip_time,
+        tipped=contacts.tip_time is not None,
+        tip_time=contacts.tip_time,
         wall_time=wall,
         robot=robot.name,
         mass=robot.mass,
@@ -722,4 +585,9 @@ def run_closed_loop(
         replay_q=sim.full_configurations(replay_qpos[:n_recorded]),
         replay_soles=replay_soles[:n_recorded],
         footprints=tuple(planner.footprints()),
+        torque=torque[:ticks],
+        joint_names=sim.joint_names,
+        legs_touch=contacts.legs_touch(ticks),
+        control_dt=dt,
+        physics_dt=sim.timestep,
     )

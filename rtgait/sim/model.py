@@ -8,18 +8,17 @@ What the importer gets from the URDF and what is changed, and why:
   so both see the same mass distribution.
 * Mesh geoms are visual only (no collision): the URDF's collision meshes overlap at the joints (dozens of
   self-contacts at the start) and a walking foot must touch the floor through its sole, not a mesh. The collision
-  meshes are dropped; one thin box per sole, the described sole rectangle with its bottom face on the sole point,
-  is the only thing that touches the floor.
+  meshes are dropped; what touches what is built by :mod:`rtgait.sim.contact_model`: one box per sole (the
+  described sole rectangle), the only thing that touches the floor, and boxes around the leg links, which collide
+  with the other leg's.
 * The root link gets a free joint (the URDF has a fixed base).
 * Every joint outside ``walking.moving_joints`` is locked at its half-sitting angle (its body is turned by the
   angle and the joint removed): the whole-body IK treats them the same way, and the model gets fewer degrees of
   freedom, which makes every physics step cheaper.
-* Each moving joint gets a position servo ``tau = kp (q_target - q) - kd qdot``, limited to the URDF's effort
-  limit, and the rotor inertia :attr:`SimConfig.armature`. The gains are the description's ``[gains]`` when
-  given, else a default proportional to the robot's mass (the torques a leg joint must resist grow with the
-  weight it carries: in single support, the whole robot's).
-* 1 ms steps with the ``implicitfast`` integrator: the servo damping is integrated implicitly, which keeps stiff
-  servos stable at that step.
+* Each moving joint gets a PD servo limited to its torque limit and its armature (:mod:`rtgait.sim.actuation`),
+  from the description's ``[actuation]`` table or derived from the URDF.
+* The ``implicitfast`` integrator: the servo damping is integrated implicitly, which keeps stiff, heavily damped
+  servos on light links stable at a millisecond step.
 
 Configurations: Pinocchio's free flyer is ``(x, y, z, qx, qy, qz, qw)``, MuJoCo's free joint ``(x, y, z, qw, qx,
 qy, qz)``; joints are matched by URDF name, never by order.
@@ -34,10 +33,11 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
-import pinocchio as pin
 
 from rtgait.robot.description import RobotDescription, RobotError
 from rtgait.robot.model import RobotModel
+from rtgait.sim.actuation import Actuation, add_actuators, resolve_actuation, substeps
+from rtgait.sim.contact_model import add_floor, add_leg_shapes, add_sole, exclude_pairs, touching_pairs
 
 __all__ = ["SETTLE_TIME", "SimConfig", "SimModel", "build_sim_model"]
 
@@ -45,75 +45,85 @@ SETTLE_TIME = 0.2
 """Physics time (s) a fresh state stands still before its clock starts (see :meth:`SimModel.reset`)."""
 
 _PACKAGE = "package://"
-# Collision bits: the floor (type 1) collides with the soles (affinity 1), and nothing else collides with
-# anything: not sole with sole, not a visual mesh with either.
-_FLOOR_CONTYPE, _FLOOR_CONAFFINITY = 1, 0
-_SOLE_CONTYPE, _SOLE_CONAFFINITY = 0, 1
 
 
 @dataclass(frozen=True)
 class SimConfig:
     """Physics parameters of the simulated robot and its floor.
 
-    Why the defaults (checked on Talos, 90 kg, with the built-in scenarios; the closed loop is the planner alone,
-    with no stabiliser, so the servos and the soles decide how faithfully the robot follows the plan):
+    Why the defaults:
 
-    * Stiff servos, ``kp = 1000 N m/rad`` per kg (90 kN m/rad on Talos), ``kd = kp / 100 s``: position-controlled
-      humanoids run their joints stiff; the largest walking torque (the knee, about 180 N m of its 300 N m
-      limit) then deflects a joint by 2 mrad. At half these gains the robot rocks more on its soles: the measured
-      ZMP strays up to twice as far from the plan.
-    * A soft, well-damped sole: contact time constant 10 ms, damping ratio 2, which sinks about 1 mm under the
-      robot's weight, like a rubber sole. On a stiffer or less damped contact (MuJoCo's default damping ratio
-      is 1) the stiff robot rocks more from one sole edge to the other after landings; rubber soles absorb that.
-    * ``armature = 0.1 kg m^2`` per joint: geared motors add their rotor's inertia times the squared gear ratio
-      (tenths of a kg m^2 for a humanoid's leg joints); it also keeps the stiff servos of light links (the feet)
-      stable at a 1 ms step.
+    * ``physics_dt = 1 ms``, the control period of Talos (G1's 2 ms period gets two physics steps): a shorter step
+      costs wall time in proportion and changes no outcome of the built-in scenarios (``python
+      benchmarks/physics_ensemble.py`` runs them at 0.5 ms too).
+    * A contact time constant of 10 ms (10 physics steps at the default step) with critical damping (ratio 1,
+      MuJoCo's default): Talos's soles sink 0.16 mm under its weight, like a thin rubber sole on a hard floor,
+      and settle without ringing. Stiffer contacts (2-5 ms) make the stiff robot rock harder on its sole edges
+      after landings.
+    * 10 no-slip iterations: they remove the creep of a loaded foot (see :mod:`rtgait.sim.contact_model`; with 2
+      iterations a pushed foot still creeps 0.5 mm in 3 s); the no-slip pass costs about 3 us per step in all
+      (``python benchmarks/sim.py``), most of it independent of the iteration count.
+    * Friction 1: rubber on a dry floor.
 
     Attributes:
-        timestep: physics step (s); also the control period of the closed loop.
+        physics_dt: physics step (s); must divide the control period.
+        control_dt: control period (s): a new joint reference every period; ``None``: the description's
+            ``actuation.control_dt`` (1 ms for Talos, 2 ms for G1).
         friction: sliding friction coefficient between soles and floor.
-        contact_timeconst: time constant of the soft contact (s); MuJoCo's ``solref[0]``, at least two steps.
+        contact_timeconst: time constant of the soft contact (s); MuJoCo's ``solref[0]``, at least two physics steps.
         contact_dampratio: damping ratio of the soft contact; MuJoCo's ``solref[1]``.
         contact_impedance: MuJoCo's ``solimp[0:2]``, the contact's impedance at zero and at 1 mm penetration.
         sole_thickness: height of the sole contact boxes (m); their bottom face is on the sole point.
-        kp_per_kg: default position gain per kg of robot mass (N m/rad/kg), for joints without ``[gains]``.
-        kd_per_kg: default damping gain per kg of robot mass (N m s/rad/kg).
-        armature: rotor inertia reflected to each moving joint (kg m^2): a geared motor's rotor, seen through a
-            gear ratio r, adds r^2 times its inertia to the joint; the URDF has none.
+        noslip_iterations: iterations of MuJoCo's no-slip solver per step (0: none; the feet then creep).
+        leg_collisions: give the legs boxes that collide with the other leg's.
+        gain_scale: factor on every joint's kp and kd (1: the description's or derived gains); for ensembles.
+        armature_scale: factor on every joint's armature; for ensembles.
         meshes: keep the visual meshes (for viewing); without them the model builds faster and simulates the same.
     """
 
-    timestep: float = 0.001
+    physics_dt: float = 0.001
+    control_dt: float | None = None
     friction: float = 1.0
     contact_timeconst: float = 0.01
-    contact_dampratio: float = 2.0
+    contact_dampratio: float = 1.0
     contact_impedance: tuple[float, float] = (0.9, 0.95)
     sole_thickness: float = 0.01
-    kp_per_kg: float = 1000.0
-    kd_per_kg: float = 10.0
-    armature: float = 0.1
+    noslip_iterations: int = 10
+    leg_collisions: bool = True
+    gain_scale: float = 1.0
+    armature_scale: float = 1.0
     meshes: bool = True
 
     def __post_init__(self) -> None:
         rules = {
-            "timestep": (self.timestep > 0.0, "> 0 s"),
+            "physics_dt": (self.physics_dt > 0.0, "> 0 s"),
             "friction": (self.friction > 0.0, "> 0"),
-            "contact_timeconst": (self.contact_timeconst >= 2.0 * self.timestep, ">= 2 timesteps (s)"),
+            "contact_timeconst": (self.contact_timeconst >= 2.0 * self.physics_dt, ">= 2 physics steps (s)"),
             "contact_dampratio": (self.contact_dampratio > 0.0, "> 0"),
             "sole_thickness": (self.sole_thickness > 0.0, "> 0 m"),
-            "kp_per_kg": (self.kp_per_kg > 0.0, "> 0 N m/rad/kg"),
-            "kd_per_kg": (self.kd_per_kg >= 0.0, ">= 0 N m s/rad/kg"),
-            "armature": (self.armature >= 0.0, ">= 0 kg m^2"),
+            "gain_scale": (self.gain_scale > 0.0, "> 0"),
+            "armature_scale": (self.armature_scale > 0.0, "> 0"),
         }
         for name, (ok, rule) in rules.items():
             value = getattr(self, name)
             if not (math.isfinite(value) and ok):
                 raise ValueError(f"SimConfig.{name} must be finite and {rule}, got {value}")
+        if self.control_dt is not None:
+            substeps(self.control_dt, self.physics_dt)  # raises on a step longer than, or not dividing, the period
+        if not (isinstance(self.noslip_iterations, int) and 0 <= self.noslip_iterations <= 1000):
+            raise ValueError(
+                f"SimConfig.noslip_iterations must be an integer in [0, 1000], got {self.noslip_iterations}"
+            )
         low, high = self.contact_impedance
         if not 0.0 < low <= high < 1.0:
             raise ValueError(
                 f"SimConfig.contact_impedance must be (low, high) with 0 < low <= high < 1, got {(low, high)}"
             )
+
+    @property
+    def timestep(self) -> float:
+        """The physics step (s), :attr:`physics_dt`."""
+        return self.physics_dt
 
 
 @dataclass(frozen=True, eq=False)
@@ -127,11 +137,15 @@ class SimModel:
         joint_names: the moving joints, in the order of ``robot.joint_names`` (Pinocchio's reduced model).
         qpos_index: MuJoCo ``qpos`` address of each joint of ``joint_names``.
         dof_index: MuJoCo ``qvel`` address of each joint of ``joint_names``.
-        kp, kd: servo gains per joint of ``joint_names`` (N m/rad, N m s/rad); actuator ``i`` drives joint ``i``.
+        actuation: the joint servos (gains, armature, torque limits, control period and physics step); actuator
+            ``i`` drives joint ``i`` of ``joint_names``.
         base_body: MuJoCo body id of the floating base (the URDF's root link).
         left_sole_geom, right_sole_geom: geom ids of the sole contact boxes.
         left_sole_site, right_sole_site: site ids at the sole points (the description's sole frames).
         floor_geom: geom id of the floor plane.
+        leg_geoms: geom ids of the leg boxes, left leg's then right leg's (empty without leg collisions).
+        excluded_leg_pairs: MuJoCo body names of the left and right leg links whose boxes touch at half-sitting and
+            are therefore excluded from colliding.
         qpos_half_sitting: MuJoCo configuration at half-sitting, soles on the floor (m, unit quaternion, rad).
     """
 
@@ -141,8 +155,7 @@ class SimModel:
     joint_names: tuple[str, ...]
     qpos_index: np.ndarray
     dof_index: np.ndarray
-    kp: np.ndarray
-    kd: np.ndarray
+    actuation: Actuation
     base_body: int
     left_sole_geom: int
     right_sole_geom: int
@@ -150,11 +163,33 @@ class SimModel:
     right_sole_site: int
     floor_geom: int
     qpos_half_sitting: np.ndarray
+    leg_geoms: tuple[int, ...] = ()
+    excluded_leg_pairs: tuple[tuple[str, str], ...] = ()
 
     @property
     def timestep(self) -> float:
         """Physics step (s)."""
         return float(self.model.opt.timestep)
+
+    @property
+    def control_dt(self) -> float:
+        """Control period (s): the closed loop's tick."""
+        return self.actuation.control_dt
+
+    @property
+    def substeps(self) -> int:
+        """Physics steps per control period."""
+        return self.actuation.substeps
+
+    @property
+    def kp(self) -> np.ndarray:
+        """Position gains per joint of ``joint_names`` (N m/rad)."""
+        return self.actuation.kp
+
+    @property
+    def kd(self) -> np.ndarray:
+        """Damping gains per joint of ``joint_names`` (N m s/rad)."""
+        return self.actuation.kd
 
     def qpos_from_pinocchio(self, q: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """MuJoCo ``qpos`` from a configuration of the robot's reduced Pinocchio model.
@@ -337,55 +372,21 @@ def _lock_joint(spec: mujoco.MjSpec, joint: mujoco.MjsJoint, angle: float) -> No
         joint.delete()
 
 
-def _sole_placement(robot: RobotModel, frame_id: int) -> tuple[str | None, pin.SE3]:
-    """The URDF joint a sole frame hangs from (``None``: the root link) and the frame's placement in it."""
-    full = robot.full_model
-    frame = full.frames[frame_id]
-    # Pinocchio's joint frame is the child link's frame, which is MuJoCo's body frame for that link.
-    joint = full.names[frame.parentJoint]
-    return (None if frame.parentJoint == 1 else joint), frame.placement
+def _compile(spec: mujoco.MjSpec, description: RobotDescription) -> mujoco.MjModel:
+    try:
+        return spec.compile()
+    except ValueError as error:
+        raise RobotError(f"model.urdf {description.urdf}: MuJoCo cannot compile the robot: {error}") from None
 
 
-def _add_sole(
-    spec: mujoco.MjSpec, robot: RobotModel, side: str, root: mujoco.MjsBody, config: SimConfig
-) -> tuple[str, str]:
-    """Add a sole contact box and a site at the sole point; returns their names."""
-    frame_id = robot.full_left_sole_id if side == "left" else robot.full_right_sole_id
-    joint, placement = _sole_placement(robot, frame_id)
-    body = root if joint is None else spec.joint(joint).parent
-    sole = robot.description.sole
-    # `inner` is toward the other foot: -y for the left foot, +y for the right one.
-    toward_other = -1.0 if side == "left" else 1.0
-    half = np.array([0.5 * (sole.front + sole.back), 0.5 * (sole.inner + sole.outer), 0.5 * config.sole_thickness])
-    centre = np.array(
-        [0.5 * (sole.front - sole.back), toward_other * 0.5 * (sole.inner - sole.outer), half[2]]
-    )  # in the sole frame: the box stands on the sole point's plane
-    rotation = placement.rotation
-    quat = pin.Quaternion(rotation).coeffs()  # (x, y, z, w)
-    wxyz = np.array([quat[3], quat[0], quat[1], quat[2]])
-    geom_name, site_name = f"{side}_sole_contact", f"{side}_sole"
-    body.add_geom(
-        name=geom_name,
-        type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=half,
-        pos=placement.translation + rotation @ centre,
-        quat=wxyz,
-        contype=_SOLE_CONTYPE,
-        conaffinity=_SOLE_CONAFFINITY,
-        condim=3,
-        friction=[config.friction, 0.005, 0.0001],
-        solref=[config.contact_timeconst, config.contact_dampratio],
-        solimp=[*config.contact_impedance, 0.001, 0.5, 2.0],
-        mass=0.0,
-        group=3,
-        rgba=[0.9, 0.5, 0.1, 0.6],
-    )
-    body.add_site(name=site_name, pos=placement.translation, quat=wxyz, size=[0.01, 0.01, 0.01])
-    return geom_name, site_name
-
-
-def _default_gains(robot: RobotModel, config: SimConfig) -> tuple[float, float]:
-    return config.kp_per_kg * robot.mass, config.kd_per_kg * robot.mass
+def _half_sitting_qpos(model: mujoco.MjModel, robot: RobotModel) -> np.ndarray:
+    """MuJoCo ``qpos`` of the half-sitting configuration, joints by name (before a :class:`SimModel` exists)."""
+    qpos = np.zeros(model.nq)
+    q = robot.q_half_sitting
+    qpos[0:3], qpos[3], qpos[4:7] = q[0:3], q[6], q[3:6]
+    for i, name in enumerate(robot.joint_names):
+        qpos[model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)]] = q[7 + i]
+    return qpos
 
 
 def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) -> SimModel:
@@ -393,6 +394,8 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
 
     Raises:
         RobotError: the URDF cannot be read or MuJoCo cannot compile the edited model (message names the cause).
+        ValueError: the control period (``config.control_dt`` or the description's) and the physics step do not
+            fit (:func:`rtgait.sim.actuation.substeps`), or a joint's resolved kp is not > 0.
     """
     if not isinstance(robot, RobotModel):
         robot = RobotModel.load(robot)
@@ -414,42 +417,23 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
     root = spec.worldbody.first_body()
     root.add_freejoint(name="root")
     for side in ("left", "right"):
-        _add_sole(spec, robot, side, root, config)
-    spec.worldbody.add_geom(
-        name="floor",
-        type=mujoco.mjtGeom.mjGEOM_PLANE,
-        size=[0.0, 0.0, 0.05],  # infinite plane (size 0); the 0.05 is the grid spacing for viewers
-        contype=_FLOOR_CONTYPE,
-        conaffinity=_FLOOR_CONAFFINITY,
-        friction=[config.friction, 0.005, 0.0001],
-        solref=[config.contact_timeconst, config.contact_dampratio],
-        solimp=[*config.contact_impedance, 0.001, 0.5, 2.0],
-        rgba=[0.8, 0.8, 0.8, 1.0],
-    )
+        add_sole(spec, robot, side, root, config)
+    add_floor(spec, config)
+    shapes = add_leg_shapes(spec, robot) if config.leg_collisions else []
+    actuation = resolve_actuation(robot, config.control_dt, config.physics_dt)
+    actuation = actuation.scaled(config.gain_scale, config.armature_scale)
+    add_actuators(spec, actuation)
 
-    default_kp, default_kd = _default_gains(robot, config)
-    kp, kd = [], []
-    for name in robot.joint_names:
-        joint = spec.joint(name)
-        joint.armature = config.armature
-        gains = description.gains(name)
-        joint_kp, joint_kd = gains if gains is not None else (default_kp, default_kd)
-        kp.append(joint_kp)
-        kd.append(joint_kd)
-        # MuJoCo's position servo spelt out (what <position kp kv> compiles to, in every MuJoCo version):
-        # force = kp * ctrl - kp * q - kd * qdot; implicitfast integrates the -kd * qdot part implicitly.
-        actuator = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-        actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
-        actuator.biastype = mujoco.mjtBias.mjBIAS_AFFINE
-        actuator.gainprm = [joint_kp] + [0.0] * 9
-        actuator.biasprm = [0.0, -joint_kp, -joint_kd] + [0.0] * 7
-
-    spec.option.timestep = config.timestep
+    spec.option.timestep = config.physics_dt
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    try:
-        model = spec.compile()
-    except ValueError as error:
-        raise RobotError(f"model.urdf {description.urdf}: MuJoCo cannot compile the robot: {error}") from None
+    spec.option.noslip_iterations = config.noslip_iterations
+    model = _compile(spec, description)
+    excluded: list[tuple[str, str]] = []
+    if shapes:
+        excluded = touching_pairs(model, _half_sitting_qpos(model, robot), shapes)
+        if excluded:
+            exclude_pairs(spec, excluded)
+            model = _compile(spec, description)
 
     def ident(kind: mujoco.mjtObj, name: str) -> int:
         index = mujoco.mj_name2id(model, kind, name)
@@ -468,8 +452,7 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
         joint_names=robot.joint_names,
         qpos_index=qpos_index,
         dof_index=dof_index,
-        kp=np.array(kp),
-        kd=np.array(kd),
+        actuation=actuation,
         base_body=base_body,
         left_sole_geom=ident(mujoco.mjtObj.mjOBJ_GEOM, "left_sole_contact"),
         right_sole_geom=ident(mujoco.mjtObj.mjOBJ_GEOM, "right_sole_contact"),
@@ -477,6 +460,8 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
         right_sole_site=ident(mujoco.mjtObj.mjOBJ_SITE, "right_sole"),
         floor_geom=ident(mujoco.mjtObj.mjOBJ_GEOM, "floor"),
         qpos_half_sitting=np.empty(0),
+        leg_geoms=tuple(ident(mujoco.mjtObj.mjOBJ_GEOM, shape.geom_name) for shape in shapes),
+        excluded_leg_pairs=tuple(excluded),
     )
     qpos = sim.qpos_from_pinocchio(robot.q_half_sitting)
     object.__setattr__(sim, "qpos_half_sitting", qpos)

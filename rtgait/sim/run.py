@@ -1,9 +1,10 @@
 """One scenario walked in physics, and its output files: what the command line's ``rtgait simulate`` needs.
 
 ``simulate(scenario, robot)`` builds the MuJoCo model (or reuses one), plans the scenario with the robot's COG
-height, step width and sole, and runs the closed loop of :mod:`rtgait.sim.loop`. ``write_sim_outputs(result,
-out_dir)`` writes ``sim.csv`` (one row per tick), ``summary.json`` and ``zmp_sim.png`` (planned vs measured
-ZMP), each to a temporary name first and renamed when complete, and returns the summary.
+height, step width and sole, and runs the closed loop of :mod:`rtgait.sim.loop`, one tick per control period
+(``control_dt``) with ``physics_dt`` steps of physics in it. ``write_sim_outputs(result, out_dir)`` writes
+``sim.csv`` (one row per control tick, with the joint torques), ``summary.json`` and ``zmp_sim.png`` (planned vs
+measured ZMP), each to a temporary name first and renamed when complete, and returns the summary.
 
 Before a long run, :func:`planned_walk` gives the walk the robot will be asked to follow (to check that it can,
 kinematically) and :func:`simulated_time` how long the run will be; :func:`mujoco_messages` collects MuJoCo's
@@ -35,10 +36,13 @@ from rtgait.sim.model import SimConfig, SimModel, build_sim_model
 __all__ = [
     "SIM_CSV_COLUMNS",
     "SIM_FILES",
+    "TORQUE_COLUMN_PREFIX",
     "loop_options",
     "mujoco_messages",
     "planned_walk",
     "replay_paths",
+    "sim_config",
+    "sim_csv_columns",
     "simulate",
     "simulated_time",
     "write_sim_outputs",
@@ -50,8 +54,13 @@ SIM_CSV_COLUMNS = (
     "base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw",
     "cog_x", "cog_y", "cog_z", "left_contact", "right_contact",
 )  # fmt: skip
-"""Columns of ``sim.csv``: time (s), measured and planned ZMP (m; measured is ``nan`` while no foot touches the
-floor), base position (m) and orientation (unit quaternion x, y, z, w), measured COG (m), feet on the floor (0/1)."""
+"""The first columns of ``sim.csv``: time (s), measured and planned ZMP (m; measured is ``nan`` while no foot
+touches the floor), base position (m) and orientation (unit quaternion x, y, z, w), measured COG (m), feet on the
+floor (0/1). Then one column ``tau_<joint>`` per actuated joint (:data:`TORQUE_COLUMN_PREFIX`): the joint torque
+the servo applied (N m), its mean over the tick's physics substeps. One row per control tick."""
+
+TORQUE_COLUMN_PREFIX = "tau_"
+"""Prefix of the joint torque columns of ``sim.csv``, followed by the URDF joint name."""
 
 SIM_FILES = ("sim.csv", "summary.json", "zmp_sim.png")
 """Files written by :func:`write_sim_outputs` (the figure only when asked for)."""
@@ -86,8 +95,11 @@ def simulate(
     sim: SimModel | None = None,
     config: SimConfig | None = None,
     options: LoopOptions | None = None,
+    control_dt: float | None = None,
+    physics_dt: float | None = None,
 ) -> SimResult:
-    """Walk ``scenario`` with ``robot`` in MuJoCo, planner + whole-body IK + physics in closed loop at 1 kHz.
+    """Walk ``scenario`` with ``robot`` in MuJoCo, planner + whole-body IK + physics in closed loop, one tick per
+    control period (the robot's: 1 kHz for Talos, 500 Hz for G1).
 
     The scenario is walked with the robot's nominal COG height, its step width at half-sitting and its sole
     (:func:`rtgait.robot.motion.robot_scenario`); its footstep changes are handed to the planner at their
@@ -111,20 +123,27 @@ def simulate(
         config: physics parameters for a new model (ignored when ``sim`` is given).
         options: further loop settings (start transition, fall limits); ``changes``, ``pushes``, ``stabilizer``
             and ``stop_after_steps`` in it are replaced by the ones derived from the arguments above.
+        control_dt: the control period (s), overriding ``config`` and the robot description's
+            ``actuation.control_dt``; with ``sim``, it must be the model's.
+        physics_dt: the physics step (s), overriding ``config``'s (default 1 ms); it must divide the control
+            period; with ``sim``, it must be the model's.
 
     Returns:
         The per-tick record and the outcome.
 
     Raises:
-        ValueError: ``sim`` was built for another robot, or a bad push / velocity.
+        ValueError: ``sim`` was built for another robot or with other periods, a physics step longer than the
+            control period or not dividing it, or a bad push / velocity.
         rtgait.robot.description.RobotError: the robot cannot be loaded or built.
     """
     if not isinstance(robot, RobotModel):
         robot = RobotModel.load(robot)
     if sim is None:
-        sim = build_sim_model(robot, config)
+        sim = build_sim_model(robot, sim_config(config, control_dt, physics_dt))
     elif sim.robot is not robot:
         raise ValueError(f"the simulation model was built for another model of {sim.robot.name!r}")
+    else:
+        _check_periods(sim, control_dt, physics_dt)
     base_options = loop_options(push, stabilizer, options)
     walk = robot_scenario(scenario, robot)
     if walk.guide is not None and velocity is None:
@@ -135,6 +154,30 @@ def simulate(
     planner, changes, stop_after = _planner(walk, velocity)
     walk_options = dataclasses.replace(base_options, changes=changes, stop_after_steps=stop_after)
     return run_closed_loop(sim, planner, walk_options, progress=progress)
+
+
+def sim_config(
+    config: SimConfig | None = None, control_dt: float | None = None, physics_dt: float | None = None
+) -> SimConfig:
+    """``config`` (default :class:`SimConfig`) with these periods, when given (s).
+
+    Raises:
+        ValueError: a period that is not > 0, a physics step longer than the control period, or one that does not
+            divide it (checked here when both are known, else when the model is built).
+    """
+    config = config or SimConfig()
+    changes: dict[str, float] = {}
+    if control_dt is not None:
+        changes["control_dt"] = control_dt
+    if physics_dt is not None:
+        changes["physics_dt"] = physics_dt
+    return dataclasses.replace(config, **changes) if changes else config
+
+
+def _check_periods(sim: SimModel, control_dt: float | None, physics_dt: float | None) -> None:
+    for name, asked, built in (("control_dt", control_dt, sim.control_dt), ("physics_dt", physics_dt, sim.timestep)):
+        if asked is not None and abs(asked - built) > 1e-12:
+            raise ValueError(f"{name} {asked:g} s differs from the given simulation model's {built:g} s")
 
 
 def _planner(
@@ -208,7 +251,13 @@ def mujoco_messages() -> Iterator[list[str]]:
         mujoco.set_mju_user_warning(previous)
 
 
+def sim_csv_columns(result: SimResult) -> tuple[str, ...]:
+    """The columns of ``result``'s ``sim.csv``: :data:`SIM_CSV_COLUMNS`, then ``tau_<joint>`` per actuated joint."""
+    return SIM_CSV_COLUMNS + tuple(TORQUE_COLUMN_PREFIX + name for name in result.joint_names)
+
+
 def _table(result: SimResult) -> np.ndarray:
+    torque = result.torque if result.torque.shape[0] == len(result.times) else np.zeros((len(result.times), 0))
     return np.column_stack(
         [
             result.times,
@@ -218,16 +267,19 @@ def _table(result: SimResult) -> np.ndarray:
             result.base_quaternion,
             result.cog,
             result.contact.astype(float),
+            torque,
         ]
     )
 
 
 def _write_csv(result: SimResult, path: Path) -> None:
     table = _table(result)
+    columns = sim_csv_columns(result)[: table.shape[1]]
     with open(path, "w", encoding="utf-8", newline="") as stream:
-        stream.write(",".join(SIM_CSV_COLUMNS) + "\n")
+        stream.write(",".join(columns) + "\n")
         # Contacts as integers; every other column in 10 significant digits (sub-micrometre positions).
         formats = [_FLOAT_FORMAT] * (len(SIM_CSV_COLUMNS) - 2) + ["%d", "%d"]
+        formats += ["%.6g"] * (len(columns) - len(SIM_CSV_COLUMNS))  # torques: 1 uN m on 100 N m is plenty
         np.savetxt(stream, table, fmt=formats, delimiter=",")
 
 
@@ -357,7 +409,8 @@ def write_sim_outputs(
         The summary, also written as ``summary.json``: ``fell``, ``fall_time`` (s or null), ``fall_cause``,
         ``tipped``, ``tip_time``, ``steps_planned``, ``steps_completed``, ``distance_walked`` (m),
         ``zmp_tracking_error_rms`` and ``_max`` (m, single support), ``simulated_time`` and ``wall_time`` (s),
-        ``real_time_factor``, ``walk_start`` and ``walk_end`` (s), ``rows`` and ``files``.
+        ``real_time_factor``, ``walk_start`` and ``walk_end`` (s), ``legs_touched``, ``control_dt`` and
+        ``physics_dt`` (s), ``rows`` and ``files``.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

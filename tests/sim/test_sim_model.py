@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 
 mujoco = pytest.importorskip("mujoco")
 pin = pytest.importorskip("pinocchio")
 
-from rtgait.robot.model import RobotModel  # noqa: E402
 from rtgait.sim.model import SimConfig, build_sim_model  # noqa: E402
 
 
@@ -28,13 +25,19 @@ def test_structure(talos, talos_sim):
         joint = model.actuator_trnid[i, 0]
         assert mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, joint) == name
         assert model.jnt_qposadr[joint] == talos_sim.qpos_index[i]
-    # Position servos: force = kp * (ctrl - q) - kd * qdot.
+    # PD servos: force = kp * (ctrl - q) - kd * qdot, clipped to the URDF's effort limit; armature on each joint.
     np.testing.assert_allclose(model.actuator_gainprm[:, 0], talos_sim.kp)
     np.testing.assert_allclose(model.actuator_biasprm[:, 1], -talos_sim.kp)
     np.testing.assert_allclose(model.actuator_biasprm[:, 2], -talos_sim.kd)
+    efforts = [talos.model.effortLimit[talos.model.joints[talos.model.getJointId(n)].idx_v] for n in talos.joint_names]
+    assert model.actuator_forcelimited.all()
+    np.testing.assert_allclose(model.actuator_forcerange[:, 1], efforts)
+    np.testing.assert_allclose(model.actuator_forcerange[:, 0], -np.array(efforts))
+    np.testing.assert_allclose(model.dof_armature[talos_sim.dof_index], talos_sim.actuation.armature)
+    assert model.opt.noslip_iterations > 0
 
 
-def test_only_the_soles_touch_the_floor(talos, talos_sim):
+def test_only_the_soles_touch_the_floor_and_the_legs_each_other(talos, talos_sim):
     model = talos_sim.model
     sole = talos.description.sole
     colliding = []
@@ -46,8 +49,19 @@ def test_only_the_soles_touch_the_floor(talos, talos_sim):
             if ok:
                 colliding.append({a, b})
     floor = talos_sim.floor_geom
+    legs = talos_sim.leg_geoms
+    # One box per leg link (6 per leg), on the link's body; the left leg's boxes against the right leg's only.
+    assert len(legs) == 12
+    bodies = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.geom_bodyid[g]) for g in legs]
+    assert bodies == [f"leg_{side}_{i}_link" for side in ("left", "right") for i in range(1, 7)]
+    left, right = legs[:6], legs[6:]
     expected = [sorted({floor, talos_sim.left_sole_geom}), sorted({floor, talos_sim.right_sole_geom})]
+    expected += [sorted({a, b}) for a in left for b in right]
     assert sorted(sorted(pair) for pair in colliding) == sorted(expected)
+    # At half-sitting no pair of leg boxes touches (none had to be excluded), nor the soles anything but the floor.
+    assert talos_sim.excluded_leg_pairs == ()
+    data = talos_sim.new_data()
+    assert data.ncon > 0 and all(talos_sim.floor_geom in data.contact.geom[i] for i in range(data.ncon))
     for geom in (talos_sim.left_sole_geom, talos_sim.right_sole_geom):
         assert model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_BOX
         half = model.geom_size[geom]
@@ -108,20 +122,18 @@ def test_meshes_are_visual_only(talos):
     assert all(model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0 for g in meshes)
 
 
-def test_gains_from_the_description(talos):
-    kp = {name: 1000.0 + i for i, name in enumerate(talos.joint_names)}
-    description = dataclasses.replace(talos.description, kp=kp, kd=7.0)
-    sim = build_sim_model(RobotModel.load(description), SimConfig(meshes=False))
-    np.testing.assert_allclose(sim.kp, [kp[name] for name in talos.joint_names])
-    np.testing.assert_allclose(sim.kd, 7.0)
-    # Without [gains]: the default, proportional to the mass.
-    default = SimConfig()
-    np.testing.assert_allclose(build_sim_model(talos, SimConfig(meshes=False)).kp, default.kp_per_kg * talos.mass)
-
-
 @pytest.mark.parametrize(
     ("field", "value"),
-    [("timestep", 0.0), ("friction", -1.0), ("contact_timeconst", 0.001), ("kp_per_kg", 0.0), ("armature", -0.1)],
+    [
+        ("physics_dt", 0.0),
+        ("friction", -1.0),
+        ("contact_timeconst", 0.001),
+        ("contact_dampratio", 0.0),
+        ("gain_scale", 0.0),
+        ("armature_scale", -0.1),
+        ("noslip_iterations", -1),
+        ("control_dt", 0.0),
+    ],
 )
 def test_bad_config(field, value):
     with pytest.raises(ValueError, match=field):

@@ -17,7 +17,7 @@ from rtgait.core.online import OnlinePlanner
 from rtgait.core.rollout import ScheduledChange, rollout
 from rtgait.robot.motion import robot_scenario
 from rtgait.sim.loop import LoopOptions, Push, run_closed_loop
-from rtgait.sim.run import SIM_CSV_COLUMNS, simulate, write_sim_outputs
+from rtgait.sim.run import SIM_CSV_COLUMNS, sim_csv_columns, simulate, write_sim_outputs
 
 
 def planned(scenario, robot):
@@ -98,12 +98,17 @@ def test_outputs(short_walk, tmp_path):
     folder = tmp_path / "out"
     with open(folder / "sim.csv", encoding="utf-8") as stream:
         rows = list(csv.reader(stream))
-    assert tuple(rows[0]) == SIM_CSV_COLUMNS
+    # The fixed columns, then one torque column per actuated joint.
+    assert tuple(rows[0]) == sim_csv_columns(result)
+    assert tuple(rows[0][: len(SIM_CSV_COLUMNS)]) == SIM_CSV_COLUMNS
+    assert rows[0][len(SIM_CSV_COLUMNS) :] == [f"tau_{name}" for name in result.joint_names]
     assert len(rows) - 1 == len(result.times) == summary["rows"]
     table = np.array(rows[1:], dtype=float)
     np.testing.assert_allclose(table[:, 0], result.times, atol=1e-12)
     np.testing.assert_allclose(table[:, 8:12], result.base_quaternion, atol=1e-9)
-    assert set(np.unique(table[:, -2:])) <= {0.0, 1.0}
+    contacts = table[:, len(SIM_CSV_COLUMNS) - 2 : len(SIM_CSV_COLUMNS)]
+    assert set(np.unique(contacts)) <= {0.0, 1.0}
+    np.testing.assert_allclose(table[:, len(SIM_CSV_COLUMNS) :], result.torque, rtol=1e-5, atol=1e-4)
     saved = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
     assert saved == summary
     for key in (
@@ -113,9 +118,13 @@ def test_outputs(short_walk, tmp_path):
         "distance_walked",
         "zmp_tracking_error_rms",
         "real_time_factor",
+        "legs_touched",
+        "control_dt",
+        "physics_dt",
     ):
         assert key in summary
-    assert summary["fell"] is False and summary["fall_time"] is None
+    assert summary["fell"] is False and summary["fall_time"] is None and summary["legs_touched"] is False
+    assert summary["control_dt"] == 0.001 and summary["physics_dt"] == 0.001
     assert math.isfinite(summary["zmp_tracking_error_rms"])
     assert (folder / "zmp_sim.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in folder.iterdir()) == ["sim.csv", "summary.json", "zmp_sim.png"]

@@ -1,0 +1,251 @@
+"""The paper's cases in physics over an ensemble of physics settings: is an outcome a property of the walk, or of one
+choice of timestep, contact and servo parameters? (Run on demand, not in tests.)
+
+Each of the paper's cases (fig4, fig6, fig7, fig8; the paper: fig4 loses its balance, the others walk) is walked
+in MuJoCo by :func:`rtgait.sim.run.simulate` under every setting of a fixed, seeded sample of physics settings:
+
+* physics step 1 ms or 0.5 ms (half the settings each; the control period stays the robot's),
+* contact time constant 2-10 ms and damping ratio 1-2 (MuJoCo's ``solref``),
+* sole friction 0.6-1.0,
+* every joint's armature, and every joint's kp and kd together, at 50-150 % of the robot's defaults.
+
+The continuous parameters are a Latin hypercube sample (each parameter's range cut into as many equal strata as
+there are settings, one value drawn in each stratum, the strata shuffled independently per parameter), so even a
+small ensemble spans each range evenly. The outcome of a run is one of ``walked`` (every step landed, no fall, no
+foot tipped onto an edge), ``tipped`` (a loaded foot rolled onto an edge of its sole, and the robot did not
+fall), ``fell`` (the run ended in a fall) or ``incomplete`` (no fall, no tip, but a step did not land).
+
+Runs are spread over worker processes (2 by default: this project's CI machine has 2 cores); progress goes to
+stderr. ``--controller`` names the controller level: ``open-loop`` (the plan alone, the paper's assumption) runs
+now; further levels run as soon as :func:`~rtgait.sim.run.simulate` takes a ``controller`` argument, which this
+script passes through.
+
+Usage: ``python benchmarks/physics_ensemble.py [--json] [--robot R] [--controller C] [--quick] [--settings N]
+[--seed S] [--workers W] [--cases fig4,fig6,...]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import functools
+import inspect
+import json
+import math
+import os
+import sys
+import time
+from collections import Counter
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import Any
+
+import numpy as np
+
+CASES = ("fig4", "fig6", "fig7", "fig8")
+EXPECTED = {"fig4": "loses balance", "fig6": "walks", "fig7": "walks", "fig8": "walks"}
+"""The paper's outcome of each case (Harada et al., Section 5): fig4's change is too large for its connection."""
+OUTCOMES = ("walked", "tipped", "fell", "incomplete")
+RANGES = {
+    "contact_timeconst": (0.002, 0.010),  # s
+    "contact_dampratio": (1.0, 2.0),
+    "friction": (0.6, 1.0),
+    "armature_scale": (0.5, 1.5),
+    "gain_scale": (0.5, 1.5),
+}
+"""The continuous physics parameters of the ensemble (:class:`rtgait.sim.model.SimConfig` fields) and their ranges."""
+PHYSICS_DTS = (0.001, 0.0005)
+"""Physics steps of the ensemble (s), each used by half of the settings."""
+
+
+def ensemble(n: int, seed: int) -> list[dict[str, float]]:
+    """``n`` physics settings: a Latin hypercube sample of :data:`RANGES`, physics steps alternating over
+    :data:`PHYSICS_DTS` (see the module docstring). The same ``n`` and ``seed`` give the same settings."""
+    rng = np.random.default_rng(seed)
+    settings: list[dict[str, float]] = [{} for _ in range(n)]
+    for name, (low, high) in RANGES.items():
+        strata = rng.permutation(n)
+        values = low + (high - low) * (strata + rng.random(n)) / n
+        for setting, value in zip(settings, values, strict=True):
+            setting[name] = round(float(value), 6)
+    for i, setting in enumerate(settings):
+        setting["physics_dt"] = PHYSICS_DTS[i % len(PHYSICS_DTS)]
+    return settings
+
+
+def classify(result: Any) -> str:
+    """The outcome of a run: ``fell``, ``tipped``, ``incomplete`` or ``walked`` (see the module docstring)."""
+    if result.fell:
+        return "fell"
+    if result.tipped:
+        return "tipped"
+    if result.steps_completed < result.steps_planned:
+        return "incomplete"
+    return "walked"
+
+
+def controller_available(controller: str) -> bool:
+    """Whether this script can run ``controller``: the plan alone always; other levels once ``simulate`` takes a
+    ``controller`` argument."""
+    from rtgait.sim.run import simulate
+
+    return controller == "open-loop" or "controller" in inspect.signature(simulate).parameters
+
+
+@functools.lru_cache(maxsize=1)
+def _robot(name: str) -> Any:
+    from rtgait.robot.model import RobotModel
+
+    return RobotModel.load(name)
+
+
+@functools.lru_cache(maxsize=4)
+def _sim(robot_name: str, setting: tuple[tuple[str, float], ...]) -> Any:
+    """The MuJoCo model of one setting, kept in the worker for the setting's other cases."""
+    from rtgait.sim.model import SimConfig, build_sim_model
+
+    return build_sim_model(_robot(robot_name), SimConfig(meshes=False, **dict(setting)))
+
+
+def run_one(robot_name: str, controller: str, scenario_name: str, index: int, setting: dict[str, float]) -> dict:
+    """Walk one case under one setting (in a worker process); returns its outcome and a few numbers."""
+    from rtgait.scenario import load_scenario
+    from rtgait.sim.run import mujoco_messages, simulate
+
+    robot = _robot(robot_name)
+    sim = _sim(robot_name, tuple(sorted(setting.items())))
+    scenario = load_scenario(scenario_name)
+    began = time.perf_counter()
+    with mujoco_messages() as warnings:
+        if controller == "open-loop":
+            result = simulate(scenario, robot, sim=sim)
+        else:  # a level the loop knows by name (see controller_available)
+            result = simulate(scenario, robot, sim=sim, controller=controller)  # type: ignore[call-arg]
+    rms = result.zmp_tracking_error_rms
+    return {
+        "scenario": scenario_name,
+        "setting": index,
+        "outcome": classify(result),
+        "steps": f"{result.steps_completed}/{result.steps_planned}",
+        "zmp_error_rms": None if not math.isfinite(rms) else rms,
+        "legs_touched": result.legs_touched,
+        "mujoco_warnings": len(warnings),
+        "wall_time": time.perf_counter() - began,
+        "pid": os.getpid(),
+    }
+
+
+def run_ensemble(
+    robot: str, controller: str, cases: tuple[str, ...], settings: list[dict[str, float]], workers: int, quiet: bool
+) -> list[dict]:
+    """Every case under every setting, in ``workers`` processes; progress on stderr unless ``quiet``."""
+    tasks = [(robot, controller, case, i, setting) for i, setting in enumerate(settings) for case in cases]
+    runs: list[dict] = []
+    began = time.perf_counter()
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futures = [pool.submit(run_one, *task) for task in tasks]
+        for done, future in enumerate(as_completed(futures), start=1):
+            run = future.result()
+            runs.append(run)
+            if not quiet:
+                elapsed = time.perf_counter() - began
+                left = elapsed / done * (len(tasks) - done)
+                print(
+                    f"\r[{done}/{len(tasks)}] {run['scenario']} setting {run['setting']}: {run['outcome']:<10} "
+                    f"{elapsed:5.0f} s elapsed, about {left:4.0f} s left",
+                    end="" if done < len(tasks) else "\n",
+                    file=sys.stderr,
+                    flush=True,
+                )
+    return sorted(runs, key=lambda r: (r["scenario"], r["setting"]))
+
+
+def summarize(robot: str, controller: str, cases: tuple[str, ...], runs: list[dict]) -> list[dict]:
+    """Per case: the share of settings in which it walked, fell, tipped (and was incomplete), and the share that
+    agrees with the paper's outcome (:data:`EXPECTED`)."""
+    table = []
+    for case in cases:
+        outcomes = [r["outcome"] for r in runs if r["scenario"] == case]
+        counts = Counter(outcomes)
+        n = len(outcomes)
+        agree = counts["walked"] if EXPECTED[case] == "walks" else counts["fell"] + counts["tipped"]
+        errors = [r["zmp_error_rms"] for r in runs if r["scenario"] == case and r["zmp_error_rms"] is not None]
+        table.append(
+            {
+                "scenario": case,
+                "robot": robot,
+                "controller": controller,
+                "settings": n,
+                **{outcome: counts[outcome] / n for outcome in OUTCOMES},
+                "paper": EXPECTED[case],
+                "agrees_with_paper": agree / n,
+                "zmp_error_rms_median": float(np.median(errors)) if errors else None,
+            }
+        )
+    return table
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--robot", default="talos")
+    parser.add_argument("--controller", default="open-loop", help="controller level (default open-loop)")
+    parser.add_argument("--quick", action="store_true", help="8 settings instead of the default 48")
+    parser.add_argument("--settings", type=int, default=None, help="number of settings (default 48, 8 with --quick)")
+    parser.add_argument("--seed", type=int, default=2024, help="seed of the sample of settings")
+    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument("--cases", default=",".join(CASES), help="comma-separated cases (default: the paper's four)")
+    args = parser.parse_args()
+    cases = tuple(case for case in args.cases.split(",") if case)
+    unknown = [case for case in cases if case not in EXPECTED]
+    if unknown:
+        parser.error(f"--cases: {', '.join(unknown)} has no paper outcome to compare with (known: {', '.join(CASES)})")
+    if not controller_available(args.controller):
+        parser.error(f"--controller {args.controller}: the physics loop runs only open-loop so far")
+    n = args.settings if args.settings is not None else (8 if args.quick else 48)
+    if n < 1 or args.workers < 1:
+        parser.error("--settings and --workers must be >= 1")
+    settings = ensemble(n, args.seed)
+    began = time.perf_counter()
+    runs = run_ensemble(args.robot, args.controller, cases, settings, args.workers, quiet=False)
+    wall = time.perf_counter() - began
+    table = summarize(args.robot, args.controller, cases, runs)
+    if args.json:
+        report = {"cases": table, "seed": args.seed, "ensemble": settings, "runs": runs, "wall_time": wall}
+        print(json.dumps(report))
+        return
+    print(f"{args.robot}, {args.controller}: {n} physics settings (seed {args.seed}), {len(runs)} runs in {wall:.0f} s")
+    for name, (low, high) in RANGES.items():
+        print(f"  {name}: {low:g} to {high:g}")
+    print(f"  physics_dt: {', '.join(f'{dt:g}' for dt in PHYSICS_DTS)} s")
+    print()
+    print("| case | paper | walked | tipped | fell | incomplete | agrees with the paper | ZMP error RMS (median) |")
+    print("|---|---|---|---|---|---|---|---|")
+    for row in table:
+        error = row["zmp_error_rms_median"]
+        print(
+            f"| {row['scenario']} | {row['paper']} | {row['walked']:.0%} | {row['tipped']:.0%} | {row['fell']:.0%} | "
+            f"{row['incomplete']:.0%} | {row['agrees_with_paper']:.0%} | "
+            f"{'-' if error is None else f'{error * 1000:.0f} mm'} |"
+        )
+    disagreeing = [r for r in runs if (r["outcome"] == "walked") != (EXPECTED[r["scenario"]] == "walks")]
+    if disagreeing:
+        print("\nsettings that disagree with the paper:")
+        for run in disagreeing:
+            setting = dataclasses.asdict(_Setting(**settings[run["setting"]]))
+            print(f"  {run['scenario']} setting {run['setting']}: {run['outcome']} ({run['steps']} steps) {setting}")
+
+
+@dataclasses.dataclass(frozen=True)
+class _Setting:
+    """One setting, for printing in a fixed order."""
+
+    physics_dt: float
+    contact_timeconst: float
+    contact_dampratio: float
+    friction: float
+    armature_scale: float
+    gain_scale: float
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,321 @@
+"""Joint actuation in physics: per-joint PD servos with torque limits and armature, from the robot description.
+
+The model of one joint's drive, the same as the position-controlled humanoids' joint loops run (and as mc_mujoco
+simulates them):
+
+* the controller sends a joint reference ``(q_ref, qd_ref)`` every **control period** (``control_dt``: 1 ms for
+  Talos, whose ros_control loop runs at 1 kHz; 2 ms for G1, whose low-level SDK loop runs at 500 Hz);
+* the drive applies ``tau = kp (q_ref - q) + kd (qd_ref - qd)``, clipped to the joint's torque limit, at every
+  **physics step** (``physics_dt``, which divides the control period): a drive's current loop is much faster
+  than the controller, so the torque follows the measured state between two references;
+* between two references the drive sees them **interpolated linearly** over the physics substeps (substep ``i``
+  of ``n`` gets ``previous + (i + 1) / n * (new - previous)``), so the reference is continuous instead of a
+  staircase; with one substep per period this is the reference itself;
+* the motor's rotor, seen through the gear of ratio ``N``, adds ``J_rotor N^2`` to the joint's inertia (the
+  **armature**).
+
+How it is built in MuJoCo, and why: one *general* actuator per joint with ``gain = kp`` and bias ``-kp q - kd qd``,
+driven with ``ctrl = q_ref + (kd / kp) qd_ref``, and ``forcerange = +-effort limit``. That is the PD above,
+evaluated by MuJoCo itself at the state of each substep. Computing the torque in Python and applying it through
+motor actuators would do the same arithmetic, but the damping would then be explicit: the servos sized for a
+stance leg act on a light swing foot (``kd / inertia`` of 2900 1/s at Talos's ankle, past the ``2 / dt`` that an
+explicit step of 1 ms tolerates) and are stable only with the ``-kd qd`` term integrated implicitly, which
+MuJoCo's ``implicitfast`` integrator does for actuator bias terms (and drops, correctly, while the actuator
+saturates).
+
+Defaults derived from the URDF when the description does not give a value (``[actuation]`` in
+:mod:`rtgait.robot.description`):
+
+* **torque limit** = the URDF's ``<limit effort>`` (none when it is missing, 0 or infinite);
+* **armature** = ``armature_per_torque`` x the torque limit (a motor family's rotor inertia per N m times the gear
+  ratio; see :data:`rtgait.robot.description.DEFAULT_ARMATURE_PER_TORQUE`);
+* **kp** from a target natural frequency ``f`` on the inertia the joint moves: ``kp = (2 pi f)^2 (armature +
+  I_carried)``. ``I_carried`` is the inertia about the joint axis at half-sitting of what the joint carries: for
+  a joint of a leg, the larger of the part beyond it (swing) and the rest of the robot pivoting about it with
+  the foot on the ground (stance, the larger one: 67 kg m^2 for Talos's ankle pitch, against 0.03 for its foot);
+  for any other joint (torso) the part beyond it. So every joint has the target bandwidth where an open-loop
+  walking pattern needs it: carrying the robot.
+* **kd** for a damping ratio ``zeta`` of the joint's own drive and limb: ``kd = 2 zeta sqrt(kp (armature +
+  I_distal))``, ``I_distal`` the inertia beyond the joint. A swinging limb is then critically damped (at
+  ``zeta = 1``) and the loaded stance modes lightly (Talos's ankle: 0.04), as in the gain tables of position-
+  controlled humanoids (mc_mujoco's JVRC1: kd 20-50 N m s/rad on kp 3000-6000 N m/rad). Damping the stance
+  inertia critically instead (kd of 4000 N m s/rad at Talos's ankle) makes the ankle torque, which sets the ZMP,
+  answer every velocity error: on the paper's fig6 case (ankles only, every other joint unchanged) the measured
+  ZMP strayed 116 mm RMS from the plan instead of 31 mm.
+
+The natural frequency is the description's (``actuation.natural_frequency``; 10 Hz for Talos and G1 and by
+default). On Talos, measured with the default contact: at 5 Hz the hips are too soft to carry the upper body
+and fig6 falls, fig8 tips (ZMP 110-130 mm RMS from the plan); at 8 Hz fig6/7/8 walk with 47-55 mm; at 10 Hz
+with 40-50 mm.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+
+from rtgait.robot.model import RobotModel
+
+__all__ = ["Actuation", "ReferenceInterpolator", "add_actuators", "carried_inertia", "resolve_actuation", "substeps"]
+
+_TIME_TOLERANCE = 1e-9  # relative: 0.002 / 0.0005 must count as exactly 4
+
+
+def substeps(control_dt: float, physics_dt: float) -> int:
+    """Physics steps per control period.
+
+    Raises:
+        ValueError: a period that is not a positive finite duration, a physics step longer than the control
+            period, or one that does not divide it.
+    """
+    for name, value in (("control_dt", control_dt), ("physics_dt", physics_dt)):
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{name} must be a duration > 0 s, got {value}")
+    if physics_dt > control_dt * (1.0 + _TIME_TOLERANCE):
+        raise ValueError(
+            f"physics_dt {physics_dt:g} s is longer than the control period control_dt {control_dt:g} s: the physics "
+            "must take at least one step per control period"
+        )
+    ratio = control_dt / physics_dt
+    n = round(ratio)
+    if abs(ratio - n) > _TIME_TOLERANCE * ratio:
+        raise ValueError(
+            f"physics_dt {physics_dt:g} s must divide the control period control_dt {control_dt:g} s "
+            f"(a whole number of physics steps per control period), got {ratio:.6g} steps"
+        )
+    return n
+
+
+def carried_inertia(robot: RobotModel) -> tuple[np.ndarray, np.ndarray]:
+    """The inertia each moving joint moves, about its own axis at half-sitting (kg m^2).
+
+    Returns:
+        ``(distal, carried)`` per joint of ``robot.joint_names``: ``distal`` is the inertia of everything beyond
+        the joint (its subtree, from the root link); ``carried`` is ``distal``, or for a joint whose subtree holds
+        a sole the larger of ``distal`` and the rest of the robot's inertia about the same axis (the foot on the
+        ground). Armature excluded.
+    """
+    model = robot.model
+    data = model.createData()
+    q = robot.q_half_sitting
+    pin.computeJointJacobians(model, data, q)
+    mass_matrix = pin.crba(model, data, q)
+    pin.ccrba(model, data, q, np.zeros(model.nv))
+    whole = data.oYcrb[1].matrix()  # the whole robot's spatial inertia (world frame, at the origin)
+    soles = {model.frames[robot.left_sole_id].parentJoint, model.frames[robot.right_sole_id].parentJoint}
+    distal, carried = [], []
+    for joint in range(2, model.njoints):
+        v = model.joints[joint].idx_v
+        axis = data.J[:, v]  # the joint's unit motion, world frame at the origin
+        own = float(mass_matrix[v, v])  # the subtree's composite inertia about the axis
+        rest = float(axis @ whole @ axis) - own
+        holds_sole = any(joint in model.supports[s] for s in soles)
+        distal.append(own)
+        carried.append(max(own, rest) if holds_sole else own)
+    return np.array(distal), np.array(carried)
+
+
+@dataclass(frozen=True, eq=False)
+class Actuation:
+    """The resolved actuation of every moving joint, in ``joint_names`` order.
+
+    Attributes:
+        joint_names: the moving joints (the IK's order).
+        kp: position gains (N m/rad).
+        kd: damping gains (N m s/rad).
+        armature: reflected rotor inertias (kg m^2).
+        effort_limit: torque limits (N m); ``inf``: none.
+        carried_inertia: the inertia each joint carries at half-sitting, armature excluded (kg m^2), from which the
+            default gains are derived (:func:`carried_inertia`).
+        control_dt: control period (s): a new joint reference every period.
+        physics_dt: physics step (s), a divisor of ``control_dt``.
+    """
+
+    joint_names: tuple[str, ...]
+    kp: np.ndarray
+    kd: np.ndarray
+    armature: np.ndarray
+    effort_limit: np.ndarray
+    carried_inertia: np.ndarray
+    control_dt: float
+    physics_dt: float
+
+    def __post_init__(self) -> None:
+        substeps(self.control_dt, self.physics_dt)
+        for name in ("kp", "kd", "armature", "effort_limit", "carried_inertia"):
+            values = getattr(self, name)
+            if values.shape != (len(self.joint_names),):
+                raise ValueError(f"Actuation.{name} must have one value per joint, got shape {values.shape}")
+        if not (np.isfinite(self.kp).all() and (self.kp > 0.0).all()):
+            bad = self.joint_names[int(np.argmin(np.where(np.isfinite(self.kp), self.kp, -1.0)))]
+            raise ValueError(f"kp of joint {bad} must be finite and > 0 N m/rad (a position servo needs a stiffness)")
+        for name in ("kd", "armature"):
+            values = getattr(self, name)
+            if not (np.isfinite(values).all() and (values >= 0.0).all()):
+                raise ValueError(f"Actuation.{name} must be finite and >= 0 for every joint")
+        if not (self.effort_limit > 0.0).all():
+            raise ValueError("Actuation.effort_limit must be > 0 N m for every joint (inf: no limit)")
+
+    @property
+    def substeps(self) -> int:
+        """Physics steps per control period."""
+        return substeps(self.control_dt, self.physics_dt)
+
+    @property
+    def natural_frequency(self) -> np.ndarray:
+        """Natural frequency of each joint's servo on the inertia it carries plus the armature (Hz)."""
+        return np.sqrt(self.kp / (self.carried_inertia + self.armature)) / (2.0 * math.pi)
+
+    @property
+    def damping_ratio(self) -> np.ndarray:
+        """Damping ratio of each joint's servo on the inertia it carries plus the armature."""
+        inertia = self.carried_inertia + self.armature
+        return self.kd / (2.0 * np.sqrt(self.kp * inertia))
+
+    def scaled(self, gains: float = 1.0, armature: float = 1.0) -> Actuation:
+        """The same actuation with ``kp`` and ``kd`` times ``gains`` and the armature times ``armature`` (for
+        ensembles of physics settings: the servo's gains and the rotor's inertia are uncertain by tens of %)."""
+        for name, value in (("gains", gains), ("armature", armature)):
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"the {name} scale must be finite and > 0, got {value}")
+        return replace(self, kp=self.kp * gains, kd=self.kd * gains, armature=self.armature * armature)
+
+    def rows(self) -> list[dict[str, float | str]]:
+        """One row per joint (for tables and documentation): name, kp, kd, armature, effort limit, carried
+        inertia, natural frequency and damping ratio."""
+        frequency, ratio = self.natural_frequency, self.damping_ratio
+        return [
+            {
+                "joint": name,
+                "kp": float(self.kp[i]),
+                "kd": float(self.kd[i]),
+                "armature": float(self.armature[i]),
+                "effort_limit": float(self.effort_limit[i]),
+                "carried_inertia": float(self.carried_inertia[i]),
+                "natural_frequency": float(frequency[i]),
+                "damping_ratio": float(ratio[i]),
+            }
+            for i, name in enumerate(self.joint_names)
+        ]
+
+
+def _effort_limit(value: float) -> float:
+    """A URDF effort limit as a torque limit: missing (Pinocchio's huge default), 0 or not finite means none."""
+    return value if math.isfinite(value) and 0.0 < value < 1e30 else math.inf
+
+
+def resolve_actuation(robot: RobotModel, control_dt: float | None = None, physics_dt: float = 0.001) -> Actuation:
+    """Every moving joint's actuation: the description's values, else defaults derived from the URDF (see the
+    module docstring).
+
+    Args:
+        robot: the loaded robot.
+        control_dt: control period (s); ``None``: the description's ``actuation.control_dt``.
+        physics_dt: physics step (s); must divide the control period.
+
+    Raises:
+        ValueError: bad periods (:func:`substeps`), or a joint whose resolved kp is not > 0.
+    """
+    description = robot.description
+    if control_dt is None:
+        control_dt = description.actuation.control_dt
+    substeps(control_dt, physics_dt)
+    distal, carried = carried_inertia(robot)
+    model = robot.model
+    kp, kd, armature, limits = [], [], [], []
+    for i, name in enumerate(robot.joint_names):
+        spec = description.joint_actuation(name)
+        joint = model.joints[model.getJointId(name)]
+        limit = spec.effort_limit if spec.effort_limit is not None else _effort_limit(model.effortLimit[joint.idx_v])
+        rotor = spec.armature
+        if rotor is None:
+            rotor = spec.armature_per_torque * limit if math.isfinite(limit) else 0.0
+        omega = 2.0 * math.pi * spec.natural_frequency
+        joint_kp = spec.kp if spec.kp is not None else omega * omega * (rotor + float(carried[i]))
+        kp.append(joint_kp)
+        kd.append(
+            spec.kd
+            if spec.kd is not None
+            else 2.0 * spec.damping_ratio * math.sqrt(joint_kp * (rotor + float(distal[i])))
+        )
+        armature.append(rotor)
+        limits.append(limit)
+    return Actuation(
+        joint_names=robot.joint_names,
+        kp=np.array(kp),
+        kd=np.array(kd),
+        armature=np.array(armature),
+        effort_limit=np.array(limits),
+        carried_inertia=carried,
+        control_dt=float(control_dt),
+        physics_dt=float(physics_dt),
+    )
+
+
+def add_actuators(spec: mujoco.MjSpec, actuation: Actuation) -> None:
+    """Give each moving joint of ``spec`` its armature and a general actuator that is the clipped PD servo (actuator
+    ``i`` drives ``actuation.joint_names[i]``; see the module docstring)."""
+    for i, name in enumerate(actuation.joint_names):
+        joint = spec.joint(name)
+        joint.armature = float(actuation.armature[i])
+        kp, kd, limit = float(actuation.kp[i]), float(actuation.kd[i]), float(actuation.effort_limit[i])
+        # force = kp * ctrl - kp * q - kd * qdot, what <position kp kv> compiles to, spelt out for every MuJoCo
+        # version; implicitfast integrates the -kd * qdot part implicitly.
+        actuator = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+        actuator.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+        actuator.gainprm = [kp] + [0.0] * 9
+        actuator.biasprm = [0.0, -kp, -kd] + [0.0] * 7
+        if math.isfinite(limit):
+            actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            actuator.forcerange = [-limit, limit]
+        else:
+            actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_FALSE
+
+
+class ReferenceInterpolator:
+    """The joint references a drive sees at each physics substep: linear between two control ticks' references.
+
+    MuJoCo's actuator takes one control per joint, ``ctrl = q_ref + (kd / kp) qd_ref`` (see the module docstring),
+    which is linear in the reference, so interpolating the controls is interpolating ``(q_ref, qd_ref)``.
+
+    Args:
+        actuation: the servos (their ``kd / kp`` turns a velocity reference into a position lead).
+        q: the joint positions the servos hold at the start (rad); the velocity reference starts at 0.
+    """
+
+    def __init__(self, actuation: Actuation, q: np.ndarray) -> None:
+        self.n = actuation.substeps
+        self.lead = actuation.kd / actuation.kp  # s
+        self.q = np.array(q, dtype=float)
+        self.qd = np.zeros_like(self.q)
+        self.q_previous, self.qd_previous = self.q, self.qd
+        self._ctrl = self.q.copy()  # the control of the period's last substep: the new reference's
+        self._ctrl_previous = self._ctrl
+        self._ctrl_step = np.zeros_like(self.q)
+
+    def command(self, q_ref: np.ndarray, qd_ref: np.ndarray) -> None:
+        """A new reference from the controller (rad, rad/s): the substeps of this control period move to it.
+        The arrays are kept, not copied: pass new ones each period."""
+        self.q_previous, self.qd_previous = self.q, self.qd
+        self.q, self.qd = q_ref, qd_ref
+        self._ctrl_previous = self._ctrl
+        self._ctrl = q_ref + self.lead * qd_ref
+        if self.n > 1:
+            self._ctrl_step = (self._ctrl - self._ctrl_previous) * (1.0 / self.n)
+
+    def reference(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """The reference ``(q_ref, qd_ref)`` at substep ``i`` (0 to ``n - 1``) of the current control period."""
+        s = (i + 1) / self.n
+        return self.q_previous + s * (self.q - self.q_previous), self.qd_previous + s * (self.qd - self.qd_previous)
+
+    def apply(self, i: int, ctrl: np.ndarray) -> None:
+        """Write the actuators' controls for substep ``i`` (0 to ``n - 1``) into ``ctrl`` (e.g. ``data.ctrl``)."""
+        if i == self.n - 1:
+            ctrl[:] = self._ctrl  # the last substep reaches the new reference exactly
+        else:
+            np.add(self._ctrl_previous, (i + 1) * self._ctrl_step, out=ctrl)

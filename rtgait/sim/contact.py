@@ -1,0 +1,294 @@
+"""The robot's contacts with the world in the closed loop: what is measured of them each control tick, when the
+robot has fallen, tipped over or landed a step, and the external contact forces (pushes) applied to it.
+
+:func:`measure_contacts` reads the vertical forces of the sole-floor contacts and their centre of pressure (the
+measured ZMP) from MuJoCo's constraint forces. :class:`ContactMonitor` keeps the per-tick record of a run: the
+ZMP, the force on each foot, how many corners of each sole box touch, how far each sole is tilted, whether the
+legs touch each other, and it decides when the robot has fallen (:class:`FallLimits`) or tipped over (a loaded
+foot rolled onto an edge of its sole). :class:`Landings` counts the steps whose foot touched down in time.
+:class:`Push` is a force from outside (a hand on the pelvis), applied by :class:`Pushes`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+if TYPE_CHECKING:
+    from rtgait.sim.model import SimModel
+
+__all__ = ["ContactMonitor", "FallLimits", "Landings", "Push", "Pushes", "measure_contacts"]
+
+
+@dataclass(frozen=True)
+class FallLimits:
+    """When the robot has fallen (any of the first three ends the run) or tipped over (recorded only).
+
+    Attributes:
+        base_height_fraction: fallen: the base below this fraction of its height at the start.
+        tilt: fallen: the base tilted from upright beyond this angle (rad).
+        airborne: fallen: no foot on the floor for longer than this (s).
+        tip_angle: tipped over: a foot carrying more than half the load tilted from level beyond this angle (rad).
+            The default, 0.02 rad, lifts the far edge of a 0.13 m wide sole by 2.6 mm; on flat ground the soles of a
+            walk that keeps its ZMP inside tilt a few milliradians at most (the contact's softness).
+    """
+
+    base_height_fraction: float = 0.6
+    tilt: float = math.radians(45.0)
+    airborne: float = 0.2
+    tip_angle: float = 0.02
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.base_height_fraction < 1.0:
+            raise ValueError(f"base_height_fraction must be in (0, 1), got {self.base_height_fraction}")
+        for name in ("tilt", "airborne", "tip_angle"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"fall limit {name} must be finite and > 0, got {value}")
+
+
+def _measure(data: mujoco.MjData, left_geom: int, right_geom: int) -> tuple[float, float, float, float, int, int, int]:
+    """:func:`measure_contacts` plus the number of active contacts that involve neither sole (leg on leg)."""
+    fl = fr = sx = sy = 0.0
+    cl = cr = other = 0
+    if data.ncon:
+        # Both arrays are reallocated by every step: they are fetched at each call. Python floats: a handful of
+        # contacts costs less as scalar arithmetic than as numpy calls.
+        efc_force = data.efc_force.tolist()
+        contacts = data.contact
+        # The contact list holds the ncon active contacts (its arrays have ncon rows).
+        for a, p, g in zip(contacts.efc_address.tolist(), contacts.pos.tolist(), contacts.geom.tolist(), strict=True):
+            if a < 0:  # inside the collision margin but not active: no force
+                continue
+            if left_geom in g:
+                left = True
+            elif right_geom in g:
+                left = False
+            else:  # the legs' boxes touching each other (frictionless, one row): not a support
+                other += 1
+                continue
+            fz = efc_force[a] + efc_force[a + 1] + efc_force[a + 2] + efc_force[a + 3]
+            sx += p[0] * fz
+            sy += p[1] * fz
+            if left:
+                fl += fz
+                cl += 1
+            else:
+                fr += fz
+                cr += 1
+    return sx, sy, fl, fr, cl, cr, other
+
+
+def measure_contacts(
+    data: mujoco.MjData, left_geom: int, right_geom: int
+) -> tuple[float, float, float, float, int, int]:
+    """Vertical contact forces of the soles on the floor, from the last ``mj_step`` (or ``mj_forward``).
+
+    Returns:
+        ``(sx, sy, f_left, f_right, corners_left, corners_right)``: the sums ``sum(p_x f_z)`` and ``sum(p_y f_z)``
+        over the sole contact points (N m), so that the centre of pressure is ``(sx, sy) / (f_left + f_right)``;
+        the vertical force on each sole (N); and how many corners of each sole box touch the floor.
+
+    The floor is flat, so each contact's normal is vertical and its normal force is the vertical force. With
+    MuJoCo's pyramidal friction cones (the default) a contact of dimension 3 has four edge forces in
+    ``efc_force``, each with a unit normal component, and the normal force is their sum; this equals the first
+    component of ``mujoco.mj_contactForce`` without a call per contact. Contacts between the legs are skipped.
+    """
+    return _measure(data, left_geom, right_geom)[:6]
+
+
+class ContactMonitor:
+    """The per-tick contact record of a run, and the fall and tip-over decisions (see the module docstring).
+
+    Args:
+        data: the MuJoCo state the run steps (its fixed-size arrays are read through views kept here).
+        left_geom, right_geom: the sole boxes' geom ids.
+        left_site, right_site: the sole sites' ids.
+        n_ticks: rows to allocate.
+        threshold: a foot touches the floor when its vertical force exceeds this (N).
+        falls: the fall criteria.
+        dt: the tick (s), to count the time without a foot on the floor.
+    """
+
+    def __init__(
+        self,
+        data: mujoco.MjData,
+        left_geom: int,
+        right_geom: int,
+        left_site: int,
+        right_site: int,
+        n_ticks: int,
+        threshold: float,
+        falls: FallLimits,
+        dt: float,
+    ) -> None:
+        self._data = data
+        self._geoms = (left_geom, right_geom)
+        self._sites = (left_site, right_site)
+        self.threshold = threshold
+        # One row per tick, written at once (one assignment costs less than one per quantity): ZMP x, y (NaN while
+        # no foot touches), vertical force left, right, sole corners touching left, right, cosine of the sole tilt
+        # left, right, contacts between the legs.
+        self._table = np.zeros((n_ticks, 9))
+        self.tip_time: float | None = None
+        self._cos_tip = math.cos(falls.tip_angle)
+        self._cos_fall = math.cos(falls.tilt)
+        self._z_low = falls.base_height_fraction * float(data.qpos[2])
+        self._airborne_ticks = max(1, round(falls.airborne / dt))
+        self._airborne = 0
+
+    def measure(self, k: int, t: float) -> tuple[float, float, float, float]:
+        """Record tick ``k`` at time ``t`` (s) from the contacts of the last step, which describe the state at ``t``.
+
+        Returns:
+            ``(zmp_x, zmp_y, f_left, f_right)``: the measured ZMP (m; NaN while no foot touches the floor) and the
+            vertical force on each foot (N).
+        """
+        sx, sy, fl, fr, cl, cr, other = _measure(self._data, *self._geoms)
+        total = fl + fr
+        if total > self.threshold:
+            x, y = sx / total, sy / total
+            self._airborne = 0
+        else:
+            x = y = math.nan
+            self._airborne += 1
+        # The z-z entry of a sole's orientation is the cosine of its tilt from level.
+        site_xmat = self._data.site_xmat
+        cos_left, cos_right = site_xmat[self._sites[0], 8], site_xmat[self._sites[1], 8]
+        self._table[k] = x, y, fl, fr, cl, cr, cos_left, cos_right, other
+        # Tipping over: the loaded foot turned onto an edge of its sole.
+        if self.tip_time is None and (
+            (fl > 0.5 * total and cos_left < self._cos_tip) or (fr > 0.5 * total and cos_right < self._cos_tip)
+        ):
+            self.tip_time = t
+        return x, y, fl, fr
+
+    def fall(self, base: np.ndarray) -> str | None:
+        """Why the robot has fallen, from the base pose ``(x, y, z, qw, qx, qy, qz)`` at the tick last measured,
+        or ``None``."""
+        bx, by = base[4], base[5]
+        upright = 1.0 - 2.0 * (bx * bx + by * by)  # z component of the base's z axis
+        if base[2] < self._z_low:
+            return "base too low"
+        if upright < self._cos_fall:
+            return "base tilted"
+        if self._airborne >= self._airborne_ticks:
+            return "no foot on the floor"
+        return None
+
+    def zmp(self, ticks: int) -> np.ndarray:
+        """The measured ZMP (m) over the first ``ticks`` ticks, shape ``(ticks, 2)``; NaN while no foot touched."""
+        return self._table[:ticks, 0:2].copy()
+
+    def normal_force(self, ticks: int) -> np.ndarray:
+        """The vertical force on each foot (N) over the first ``ticks`` ticks, shape ``(ticks, 2)``."""
+        return self._table[:ticks, 2:4].copy()
+
+    def corners(self, ticks: int) -> np.ndarray:
+        """How many corners of each sole box touched the floor over the first ``ticks`` ticks, shape
+        ``(ticks, 2)``."""
+        return self._table[:ticks, 4:6].astype(np.int8)
+
+    def sole_tilt(self, ticks: int) -> np.ndarray:
+        """Angle between each sole's normal and the vertical over the first ``ticks`` ticks (rad), shape
+        ``(ticks, 2)``."""
+        return np.arccos(np.clip(self._table[:ticks, 6:8], -1.0, 1.0))
+
+    def legs_touch(self, ticks: int) -> np.ndarray:
+        """Whether the legs touched each other over the first ``ticks`` ticks, shape ``(ticks,)``."""
+        return self._table[:ticks, 8] > 0.0
+
+
+class Landings:
+    """Touch-downs completed: when a single support (an odd phase of the planner) ends, its swing foot must be found
+    on the floor within ``window`` seconds.
+
+    Args:
+        window: how long after the planned touch-down the foot may land (s).
+        threshold: the vertical force above which a foot is on the floor (N).
+    """
+
+    def __init__(self, window: float, threshold: float) -> None:
+        self.window, self.threshold = window, threshold
+        self.count = 0
+        self._pending: tuple[int, float] | None = None  # (foot index, end of its window)
+        self._phase, self._code = -1, 0
+
+    def update(self, t: float, phase: int, code: int, f_left: float, f_right: float) -> None:
+        """One tick at time ``t`` (s): the planner's phase and support code, the vertical force on each foot (N)."""
+        if phase != self._phase:
+            if self._phase >= 1 and self._phase & 1:
+                swing = 1 if self._code == 1 else 0  # left support (code 1): the right foot (index 1) was swinging
+                self._pending = (swing, t + self.window)
+            self._phase = phase
+        self._code = code
+        if self._pending is not None:
+            if (f_right if self._pending[0] else f_left) > self.threshold:
+                self.count += 1
+                self._pending = None
+            elif t >= self._pending[1]:
+                self._pending = None
+
+
+@dataclass(frozen=True)
+class Push:
+    """An external force on a body of the robot, constant over a time window (e.g. a push at the pelvis).
+
+    Attributes:
+        start: when it begins (s, simulation time from the start of the run).
+        duration: how long it lasts (s); the impulse is ``force * duration`` (N s).
+        force: world-frame force ``(fx, fy, fz)`` (N), applied at the body's centre of mass.
+        body: MuJoCo body name; ``None`` for the floating base.
+    """
+
+    start: float
+    duration: float
+    force: tuple[float, float, float]
+    body: str | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.start) and self.start >= 0.0):
+            raise ValueError(f"push start must be a time >= 0 s, got {self.start}")
+        if not (math.isfinite(self.duration) and self.duration > 0.0):
+            raise ValueError(f"push duration must be > 0 s, got {self.duration}")
+        if len(self.force) != 3 or not all(math.isfinite(f) for f in self.force):
+            raise ValueError(f"push force must be three finite numbers (fx, fy, fz) in N, got {self.force!r}")
+
+
+class Pushes:
+    """The pushes of a run, applied through ``data.xfrc_applied`` at their times (one at a time)."""
+
+    def __init__(self, sim: SimModel, data: mujoco.MjData, pushes: tuple[Push, ...]) -> None:
+        self._windows = []
+        for push in sorted(pushes, key=lambda p: p.start):
+            body = sim.base_body
+            if push.body is not None:
+                body = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_BODY, push.body)
+            if body < 0:
+                raise ValueError(f"push body {push.body!r}: the MuJoCo model of {sim.robot.name} has no such body")
+            self._windows.append((push.start, push.start + push.duration, push.force, int(body)))
+        self._xfrc = data.xfrc_applied
+        self._active: tuple[float, float, tuple[float, float, float], int] | None = None
+        self._next = 0
+
+    def update(self, t: float) -> None:
+        """Apply the push acting at time ``t`` (s), and end the one that is over."""
+        active = self._active
+        if active is not None and t >= active[1]:
+            self._xfrc[active[3], 0:3] = 0.0
+            self._active = None
+        if self._next < len(self._windows) and t >= self._windows[self._next][0]:
+            self.clear()
+            self._active = self._windows[self._next]
+            self._xfrc[self._active[3], 0:3] = self._active[2]
+            self._next += 1
+
+    def clear(self) -> None:
+        """Remove the push acting now, if any."""
+        if self._active is not None:
+            self._xfrc[self._active[3], 0:3] = 0.0
+            self._active = None

@@ -1,0 +1,275 @@
+"""The MuJoCo controller levels on synthetic measurements: no error, no correction; the signs; landings."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import pytest
+
+pytest.importorskip("mujoco")
+pytest.importorskip("pinocchio")
+
+from rtgait.core.closed_loop import controller_config
+from rtgait.core.footsteps import SoleRect, Timing
+from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
+from rtgait.sim.controllers import (
+    CONTROLLERS,
+    ControllerOptions,
+    RobotInfo,
+    make_controller,
+    step_limits,
+)
+from rtgait.sim.foot_control import split_zmp
+from rtgait.sim.measure import FootState, Landing, Measurement
+
+SOLE = SoleRect(front=0.105, back=0.105, inner=0.065, outer=0.065)
+CONFIG = PlannerConfig(
+    cog_height=0.84, timing=Timing(0.7, 0.1, start=0.6, end=0.6, settle=0.8), step_width=0.2,
+    connection="quasi-real-time",
+)  # fmt: skip
+INFO = RobotInfo(mass=90.0, sole=SOLE, leg_length=0.84)
+WEIGHT = 90.0 * 9.81
+DT = 0.001
+EXACT = ControllerOptions(measurement_filter=0.0)
+
+
+def foot_state(pose, fz, cop, loaded) -> FootState:
+    """A measured foot at ``pose`` (x, y, z, yaw) carrying ``fz`` (N) with its CoP at world ``cop``."""
+    x, y, _, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    local = (c * (cop[0] - x) + s * (cop[1] - y), -s * (cop[0] - x) + c * (cop[1] - y))
+    torque = (fz * local[1], -fz * local[0], 0.0)
+    return FootState((0.0, 0.0, fz), torque, fz, cop, local, tuple(pose), 0.0, 0.0, 0.0, loaded, 4 if loaded else 0)
+
+
+def on_plan(t, values, support, dcm_error=(0.0, 0.0), landings=(), loaded=None) -> Measurement:
+    """The measurement of a robot exactly on the plan: COM state, DCM, ZMP, and each foot's load and CoP as the ZMP
+    split asks; ``loaded`` overrides which feet are loaded (left, right)."""
+    left, right = tuple(values[13:17]), tuple(values[17:21])
+    split = split_zmp((values[9], values[10]), left, right, SOLE, support)
+    fl = split.left_ratio * WEIGHT
+    loaded = loaded or (support != "right", support != "left")
+    dcm = (values[21] + dcm_error[0], values[22] + dcm_error[1])
+    com = (values[0] + dcm_error[0], values[1] + dcm_error[1], values[2])
+    return Measurement(
+        t, com, tuple(values[3:6]), dcm, (values[9], values[10]), WEIGHT,
+        foot_state(left, fl, split.left_cop, loaded[0]), foot_state(right, WEIGHT - fl, split.right_cop, loaded[1]),
+        tuple(landings), 0,
+    )  # fmt: skip
+
+
+def controller(level, steps=3, options=EXACT):
+    ctl = make_controller(level, CONFIG, straight_walk(CONFIG, steps, 0.1), SOLE, INFO, dt=DT, options=options)
+    ctl.start(0.0)
+    return ctl
+
+
+def reference(steps=3):
+    planner = OnlinePlanner(controller_config(CONFIG, "open-loop", SOLE), straight_walk(CONFIG, steps, 0.1))
+    planner.start(0.0)
+    return planner
+
+
+@pytest.mark.parametrize("level", CONTROLLERS)
+def test_on_the_plan_every_level_gives_the_plan(level):
+    ctl, plan = controller(level, steps=2), reference(steps=2)
+    worst = 0.0
+    for k in range(round(plan.end_time / DT)):
+        t = k * DT
+        values, support, _ = plan.sample_values(t)
+        out = ctl.tick(t, on_plan(t, values, support))
+        errors = [
+            *(a - b for a, b in zip(out.com, values[0:3], strict=True)),
+            *(a - b for a, b in zip(out.left_foot, values[13:17], strict=True)),
+            *(a - b for a, b in zip(out.right_foot, values[17:21], strict=True)),
+            out.zmp_command[0] - values[9], out.zmp_command[1] - values[10], *out.offsets, *out.com_offset,
+        ]  # fmt: skip
+        worst = max(worst, max(abs(e) for e in errors))
+        assert out.support == support and not [e for e in out.events if e.kind != "replan"]
+    # Open loop and stabilized: the same plan, no correction; adaptive: its plans from the measured (= planned) state
+    # reproduce the plan to the connection's round-off.
+    assert worst < (1e-6 if level == "adaptive" else 1e-12)
+
+
+def test_the_measurement_filter_lags_by_little():
+    ctl, plan = controller("stabilized", steps=2, options=ControllerOptions()), reference(steps=2)
+    worst = 0.0
+    for k in range(round(plan.end_time / DT)):
+        values, support, _ = plan.sample_values(k * DT)
+        out = ctl.tick(k * DT, on_plan(k * DT, values, support))
+        worst = max(worst, abs(out.com[0] - values[0]), abs(out.com[1] - values[1]), *map(abs, out.offsets))
+    assert 0.0 < worst < 1e-3
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+def test_a_dcm_error_shifts_the_zmp_ahead_and_pulls_the_com_target_back(axis):
+    ctl, plan = controller("stabilized"), reference()
+    error = [0.0, 0.0]
+    error[axis] = 0.02 if axis == 0 else -0.02  # ahead in x, to the right in y
+    for k in range(100):  # the start's double support: the ZMP between the feet, far from the polygon's edges
+        values, support, _ = plan.sample_values(k * DT)
+        out = ctl.tick(k * DT, on_plan(k * DT, values, support, dcm_error=error))
+    sign = math.copysign(1.0, error[axis])
+    # The law: p_cmd = p_ref + (1 + k_p / w) e, so the ZMP goes out along the error; the COM admittance moves the COM
+    # target against it (a COM accelerated backward moves the ZMP forward, p = c - c''/w^2).
+    gains = ctl.options.gains
+    expected = (1.0 + gains.k_p / ctl.planner.w) * error[axis]
+    assert sign * (out.zmp_command[axis] - values[9 + axis]) >= abs(expected)
+    assert sign * out.com_offset[axis] < -1e-4
+    assert out.com[axis] - values[axis] == pytest.approx(out.com_offset[axis])
+    assert out.com_offset[1 - axis] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_open_loop_ignores_errors():
+    ctl, plan = controller("open-loop"), reference()
+    values, support, _ = plan.sample_values(0.05)
+    out = ctl.tick(0.05, on_plan(0.05, values, support, dcm_error=(0.05, 0.05)))
+    assert out.com == tuple(values[0:3]) and out.zmp_command == (values[9], values[10])
+
+
+def test_adaptive_observes_every_tick(monkeypatch):
+    ctl = controller("adaptive")
+    planner = ctl.planner
+    seen = []
+    observe = planner.observe
+    monkeypatch.setattr(planner, "observe", lambda t, c, v: (seen.append(t), observe(t, c, v)))
+    plan = reference()
+    for k in range(50):
+        values, support, _ = plan.sample_values(k * DT)
+        ctl.tick(k * DT, on_plan(k * DT, values, support))
+    assert seen == [k * DT for k in range(50)]
+
+
+def test_adaptive_replans_on_a_large_dcm_error():
+    ctl, plan = controller("adaptive"), reference()
+    events = []
+    for k in range(100):
+        values, support, _ = plan.sample_values(k * DT)
+        events += ctl.tick(k * DT, on_plan(k * DT, values, support, dcm_error=(0.04, 0.0) if k > 50 else (0, 0))).events
+    assert [(e.kind, e.detail) for e in events][:1] == [("replan", "dcm-error")]
+
+
+def walk_to(ctl, t_end, t=0.0, **overrides):
+    """Tick ``ctl`` on its own plan from ``t`` until ``t_end`` (s); returns the last targets and the next tick's
+    time."""
+    out = None
+    while t < t_end - 1e-9:
+        values, support, _ = ctl.planner.sample_values(t)
+        out = ctl.tick(t, on_plan(t, values, support, **overrides))
+        t += DT
+    return out, t
+
+
+def first_swing(ctl):
+    """Phase 1, the first single support: its start, duration, and which foot swings (0 left, 1 right)."""
+    planner = ctl.planner
+    swing = 0 if planner.footprints()[0].side == "left" else 1  # F[0] lifts off first and lands on F[2]
+    return planner.phase_start(1), planner.timeline.duration(1), swing
+
+
+def test_adaptive_early_touchdown_reanchors_and_switches_support():
+    ctl = controller("adaptive")
+    start, duration, swing = first_swing(ctl)
+    side = ("left", "right")[swing]
+    out, t = walk_to(ctl, start + 0.75 * duration)
+    planner = ctl.planner
+    target = planner.footprints()[2]  # where the swing foot was to land
+    landing = Landing(t, side, target.x + 0.012, target.y - 0.006, 0.001, target.yaw + 0.01, 0.0, 0.0, 40.0)
+    values, support, _ = planner.sample_values(t)
+    swing_z = values[15 + 4 * swing]
+    loaded = (True, True)
+    out = ctl.tick(t, on_plan(t, values, support, landings=[landing], loaded=loaded))
+    kinds = [(e.kind, e.detail) for e in out.events]
+    assert ("landing", "early") in kinds and kinds[kinds.index(("landing", "early")) + 1][0] == "touchdown"
+    moved = planner.footprints()[2]
+    assert (moved.x, moved.y, moved.yaw) == pytest.approx((landing.x, landing.y, landing.yaw))
+    assert out.support == "double", "support switches at once"
+    # Where it landed, going on down with the plan, no more than late_descent_limit below where it touched.
+    floor = swing_z - ctl.options.late_descent_limit
+    held = out.left_foot if swing == 0 else out.right_foot
+    assert held == pytest.approx((landing.x, landing.y, max(swing_z, floor), landing.yaw), abs=1e-9)
+    lowest = swing_z
+    while t < start + duration - DT:
+        t += DT
+        values, support, _ = planner.sample_values(t)
+        out = ctl.tick(t, on_plan(t, values, support, loaded=loaded))
+        assert out.support == "double"
+        z = values[15 + 4 * swing]
+        lowest = min(lowest, z)
+        foot = out.left_foot if swing == 0 else out.right_foot
+        assert foot == pytest.approx((landing.x, landing.y, max(z, floor), landing.yaw), abs=1e-9)
+    assert lowest < floor, "the test reaches the floor"
+    # The plan's double support then rests on the landed foot, at the floor's height: continuous.
+    values, support, _ = planner.sample_values(t + DT)
+    out = ctl.tick(t + DT, on_plan(t + DT, values, support))
+    assert support == "double"
+    foot = out.left_foot if swing == 0 else out.right_foot
+    assert foot == pytest.approx((landing.x, landing.y, max(0.0, floor), landing.yaw), abs=1e-9)
+
+
+def test_adaptive_late_touchdown_lowers_the_foot_then_keeps_its_height():
+    ctl = controller("adaptive", options=ControllerOptions(measurement_filter=0.0, foot=None))  # heights: ours only
+    start, duration, swing = first_swing(ctl)
+    side = ("left", "right")[swing]
+    not_down = (True, False) if swing == 1 else (False, True)
+    walk_to(ctl, start + duration)  # the swing ends in the air: the plan's double support begins, the foot is not down
+    t = start + duration
+    planner = ctl.planner
+    heights = []
+    for _ in range(80):  # 0.3 mm per tick: the 2 cm limit is reached after 67 of the double support's 100 ticks
+        values, support, _ = planner.sample_values(t)
+        out = ctl.tick(t, on_plan(t, values, support, loaded=not_down))
+        assert support == "double" and out.support == ("left", "right")[1 - swing], "the other foot carries it"
+        heights.append((out.left_foot if swing == 0 else out.right_foot)[2])
+        t += DT
+    options = ctl.options
+    steps = [a - b for a, b in itertools.pairwise(heights)]
+    assert steps[0] == pytest.approx(options.late_descent_speed * DT, abs=1e-9)
+    assert heights[-1] == pytest.approx(-options.late_descent_limit), "down to the limit, no further"
+    # It lands: re-anchored, and its target stays at the height it landed at.
+    target = planner.footprints()[2]
+    landing = Landing(t, side, target.x - 0.01, target.y, -0.004, target.yaw, 0.0, 0.0, 40.0)
+    values, support, _ = planner.sample_values(t)
+    out = ctl.tick(t, on_plan(t, values, support, landings=[landing], loaded=(True, True)))
+    assert [e.detail for e in out.events if e.kind == "landing"] == ["late"]
+    assert any(e.kind == "touchdown" for e in out.events)
+    assert planner.footprints()[2].x == pytest.approx(landing.x)
+    assert out.support == "double"
+    assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(-options.late_descent_limit)
+    # Through the next single support (phase 3), as the stance foot, it keeps that height; over its own next swing
+    # (phase 5) the height is blended out, so it lands at the plan's height.
+    out, t = walk_to(ctl, planner.phase_start(5), t + DT)
+    assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(-options.late_descent_limit)
+    middle = planner.phase_start(5) + 0.5 * planner.timeline.duration(5)
+    values = planner.sample_values(middle)[0]
+    out, t = walk_to(ctl, middle + DT, t)
+    blended = (out.left_foot if swing == 0 else out.right_foot)[2] - values[15 + 4 * swing]
+    assert blended == pytest.approx(-0.5 * options.late_descent_limit, abs=1e-9)
+    out, t = walk_to(ctl, planner.phase_start(6) + DT, t)
+    assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_stabilized_logs_landings_without_touching_the_plan():
+    ctl = controller("stabilized")
+    start, duration, swing = first_swing(ctl)
+    _, t = walk_to(ctl, start + 0.75 * duration)
+    before = ctl.planner.footprints()
+    target = before[2]
+    landing = Landing(t, ("left", "right")[swing], target.x + 0.02, target.y, 0.0, target.yaw, 0.0, 0.0, 40.0)
+    values, support, _ = ctl.planner.sample_values(t)
+    out = ctl.tick(t, on_plan(t, values, support, landings=[landing]))
+    assert [(e.kind, e.detail) for e in out.events] == [("landing", "early")]
+    assert ctl.planner.footprints() == before and out.support == support
+
+
+def test_step_limits_scale_with_the_robot_and_keep_the_soles_apart():
+    adjust = step_limits(INFO)
+    assert adjust.max_length == pytest.approx(0.35 * 0.84 / 0.8)
+    assert adjust.min_width >= 2 * SOLE.inner + 0.02 and adjust.max_width > adjust.min_width
+    small = step_limits(RobotInfo(30.0, SoleRect(0.08, 0.05, 0.04, 0.04), 0.4))
+    assert small.max_length == pytest.approx(0.175) and small.min_width == pytest.approx(0.1)
+    ctl = controller("adaptive")
+    assert ctl.planner.config.step_adjustment == adjust and ctl.planner.config.feedback == "measured"
+    with pytest.raises(ValueError, match="must be one of"):
+        make_controller("stiff", CONFIG, None, SOLE, INFO)
