@@ -15,10 +15,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rtgait.core.footsteps import Footstep
 from rtgait.core.online import SAMPLE_FIELDS
 from rtgait.core.rollout import Rollout
 from rtgait.outputs import Staging, staged_outputs, write_atomic
 from rtgait.scenario import Scenario
+from rtgait.viz.run_data import figure_file, margin_marker, plan_figure_files, plan_free_segments
 
 if TYPE_CHECKING:  # the robot layer is optional (the [robot] extra)
     from rtgait.robot.pipeline import RobotRun
@@ -26,6 +28,7 @@ if TYPE_CHECKING:  # the robot layer is optional (the [robot] extra)
 __all__ = [
     "CSV_COLUMNS",
     "CSV_HEAD_COLUMNS",
+    "auto_decisions",
     "plan_files",
     "plan_report",
     "simulation_report",
@@ -108,9 +111,53 @@ def _changes(rollout: Rollout, scenario: Scenario) -> list[dict[str, Any]]:
     return out
 
 
+def auto_decisions(scenario: Scenario) -> list[dict[str, Any]]:
+    """The auto connection's decision for each change of ``scenario`` (``connection = "auto"``), JSON-ready: when the
+    change arrived (s), the connection taken (``real-time``, ``quasi-real-time`` or ``deferred``), the strides it
+    sets, when it is applied to the walk (s), every option weighed with its predicted ZMP margin (m) and the reason.
+
+    The decisions are a deterministic function of the scenario (:mod:`rtgait.core.auto`), so they are replayed
+    here with a planner of the scenario's own rather than carried by the rollout."""
+    from rtgait.core.online import OnlinePlanner
+    from rtgait.core.rollout import rollout as roll_out
+
+    planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
+    replayed = roll_out(planner, scenario.dt, scenario.sole, scenario.changes)
+    # The planner logs the latest time it sampled; the rollout, the tick at which it handed the change over.
+    handed = {step: when for when, step in replayed.changes}
+    out = []
+    for record in planner.change_log:
+        arrived = float(handed.get(record.step, record.time))
+        committed = arrived if record.commit_time == record.time else float(record.commit_time)
+        out.append({
+            "step": record.step,
+            "arrived_at": arrived,
+            "connection": record.connection,
+            "committed_step": record.committed_step,
+            "through": record.through,
+            "committed_at": committed,
+            "predicted": [
+                {"connection": kind, "step": step, "zmp_margin": margin} for kind, step, margin in record.predicted
+            ],
+            "reason": record.reason,
+        })  # fmt: skip
+    return out
+
+
+def _footprints(footprints: list[Footstep]) -> list[dict[str, Any]]:
+    return [{"x": f.x, "y": f.y, "yaw": f.yaw, "side": f.side} for f in footprints]
+
+
 def summarize(rollout: Rollout, scenario: Scenario) -> dict[str, Any]:
-    """Key numbers of a rollout, JSON-serialisable (SI units; planning times in microseconds)."""
-    worst = rollout.worst_index
+    """Key numbers of a rollout, JSON-serialisable (SI units; planning times in microseconds).
+
+    ``zmp_margin_min`` is the smallest margin; ``zmp_margin_min_time``, ``_position`` and ``_support`` describe the
+    tick the figures mark, one of the ticks at that minimum chosen by :func:`rtgait.viz.run_data.margin_marker`
+    (when the minimum is tied, the first tied tick at or after the first change's decision, else the first tied
+    tick). ``nominal_footprints`` and ``free_segments`` are there so that the figures can be drawn again from the
+    files alone (``rtgait plot``).
+    """
+    worst = margin_marker(rollout.times, rollout.margin, [t for t, _ in rollout.changes]).index
     zmp = np.stack([rollout.column("zmp_x"), rollout.column("zmp_y")], axis=1)
     deviation = zmp - np.stack([rollout.column("zmp_ref_x"), rollout.column("zmp_ref_y")], axis=1)
     free = rollout.free_segment_mask()
@@ -160,20 +207,23 @@ def summarize(rollout: Rollout, scenario: Scenario) -> dict[str, Any]:
         "zmp_outside_duration": float(np.count_nonzero(rollout.margin < 0.0) * scenario.dt),
         "zmp_deviation_max": [float(max_deviation[0]), float(max_deviation[1])],
         "changes": _changes(rollout, scenario),
-        "footprints": [{"x": f.x, "y": f.y, "yaw": f.yaw, "side": f.side} for f in rollout.footprints],
-    }
+        "footprints": _footprints(rollout.footprints),
+        "nominal_footprints": _footprints(scenario.nominal_footprints()),
+        "free_segments": [list(segment) for segment in plan_free_segments(rollout)],
+        **({"auto_margin": scenario.auto_margin, "auto_decisions": auto_decisions(scenario)}
+           if scenario.connection == "auto" else {}),
+    }  # fmt: skip
 
 
 # ----- the whole set of a plan's outputs ------------------------------------------------------------------------
 
 
-def plan_files(figures: bool, robot: bool, html: bool) -> list[str]:
-    """The files :func:`write_plan_outputs` writes with these options, in the order the summary lists them."""
+def plan_files(figures: bool, robot: bool, html: bool, fmt: str = "png") -> list[str]:
+    """The files :func:`write_plan_outputs` writes with these options (figures in the format ``fmt``: png, pdf or
+    svg), in the order the summary lists them."""
     names = ["trajectory.csv", "summary.json"] + (["joints.csv"] if robot else [])
     if figures:
-        from rtgait.viz.figures import FIGURE_FILES
-
-        names += [*FIGURE_FILES, *(["multibody_zmp.png"] if robot else [])]
+        names += [*plan_figure_files(fmt), *([figure_file("multibody_zmp", fmt)] if robot else [])]
     return names + (["replay.html"] if robot and html else [])
 
 
@@ -185,6 +235,7 @@ def write_plan_outputs(
     figures: bool = True,
     robot_run: RobotRun | None = None,
     html: bool = False,
+    fmt: str = "png",
 ) -> dict[str, Any]:
     """Write what ``rtgait plan`` writes into the folder ``out``, replacing the previous outputs of the same names
     together or not at all (:func:`rtgait.outputs.staged_outputs`); returns the summary.
@@ -196,6 +247,7 @@ def write_plan_outputs(
         figures: the four figures and, with a robot, the multibody ZMP figure (needs matplotlib).
         robot_run: the walk on a robot: adds ``joints.csv`` and the robot's numbers to the summary.
         html: with a robot, also the 3D replay ``replay.html`` (needs meshcat).
+        fmt: the figures' file format, ``"png"``, ``"pdf"`` or ``"svg"``.
 
     Raises:
         rtgait.outputs.OutputError: the outputs could not be written; ``out`` is unchanged.
@@ -208,7 +260,7 @@ def write_plan_outputs(
             write_joints_csv(*robot_run.motion.table(), staging.add("joints.csv"))
             summary.update(robot_run.summary())
         if figures:
-            _write_figures(result, scenario, robot_run, staging)
+            _write_figures(result, scenario, robot_run, staging, fmt)
         if html and robot_run is not None:
             _write_replay(result, scenario, robot_run, staging.add("replay.html"))
         summary["rows"] = rows
@@ -217,7 +269,9 @@ def write_plan_outputs(
     return summary
 
 
-def _write_figures(result: Rollout, scenario: Scenario, robot_run: RobotRun | None, staging: Staging) -> None:
+def _write_figures(
+    result: Rollout, scenario: Scenario, robot_run: RobotRun | None, staging: Staging, fmt: str
+) -> None:
     from rtgait.viz.figures import FigureInfo, plot_multibody_zmp, render_all
 
     info = FigureInfo(
@@ -225,14 +279,14 @@ def _write_figures(result: Rollout, scenario: Scenario, robot_run: RobotRun | No
         sole=scenario.sole,
         nominal_footprints=scenario.nominal_footprints(),
     )
-    for path in render_all(result, info, staging.folder):
+    for path in render_all(result, info, staging.folder, fmt):
         staging.add(path.name)
     if robot_run is not None:
         before = robot_run.uncompensated[1] if robot_run.uncompensated else robot_run.check
         after = robot_run.check if robot_run.uncompensated else None
         plot_multibody_zmp(
-            result, info, staging.add("multibody_zmp.png"), before.zmp, None if after is None else after.zmp,
-            robot=robot_run.robot.name,
+            result, info, staging.add(figure_file("multibody_zmp", fmt)), before.zmp,
+            None if after is None else after.zmp, robot=robot_run.robot.name,
         )  # fmt: skip
 
 
@@ -269,6 +323,18 @@ def _describe_change(change: dict[str, Any]) -> str:
         parts.append(f"yaw {change['yaw']:g} rad")
     span = "that step only" if change["through"] == change["step"] else f"steps {change['step']}..{change['through']}"
     return f"step {change['step']} decided at {change['decided_at']:.3f} s: {', '.join(parts)} ({span})"
+
+
+def _describe_decision(decision: dict[str, Any]) -> str:
+    def option(p: dict[str, Any]) -> str:
+        where = f" {p['step']}" if p["connection"] == "deferred" else ""
+        return f"{p['connection']}{where} {p['zmp_margin'] * 1e3:+.1f} mm"
+
+    others = ", ".join(option(p) for p in decision["predicted"])
+    return (
+        f"step {decision['step']} at {decision['arrived_at']:.3f} s -> {decision['reason']}; applied at "
+        f"{decision['committed_at']:.3f} s (weighed: {others})"
+    )
 
 
 def _robot_lines(summary: dict[str, Any]) -> list[str]:
@@ -309,6 +375,7 @@ def plan_report(summary: dict[str, Any], out: Path, wall_time: float) -> str:
         f"{summary['duration']:.2f} s walked",
     ]
     lines += [f"change      {_describe_change(change)}" for change in summary["changes"]] or ["change      none"]
+    lines += [f"auto        {_describe_decision(decision)}" for decision in summary.get("auto_decisions", [])]
     lines += [
         f"ZMP margin  min {summary['zmp_margin_min']:+.4f} m at t = {summary['zmp_margin_min_time']:.3f} s, "
         f"ZMP at ({x:.3f}, {y:.3f}) m, {summary['zmp_margin_min_support']} support",

@@ -5,7 +5,8 @@ data in ``rtgait/scenarios/`` and are loaded by name; any other file is loaded b
 
     name = "my-walk"
     description = "one line shown by `rtgait scenarios`"
-    connection = "real-time"            # or "quasi-real-time"
+    connection = "real-time"            # or "quasi-real-time", or "auto" (chosen per change)
+    # auto_margin = 0.01                # m, optional with "auto": the ZMP margin a connection must keep
 
     [robot]
     cog_height = 0.80                   # m, constant COG height above the ground
@@ -62,6 +63,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rtgait.core.config import ALL_CONNECTION_MODES, MAX_AUTO_MARGIN
 from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride, Timing, place_footsteps, standing_feet
 from rtgait.core.limits import (
     MAX_COG_HEIGHT,
@@ -78,7 +80,7 @@ from rtgait.core.limits import (
     MIN_PHASE_DURATION,
     check_range,
 )
-from rtgait.core.online import CONNECTION_MODES, ConnectionMode, PlannerConfig
+from rtgait.core.online import ConnectionMode, PlannerConfig
 from rtgait.core.rollout import ScheduledChange
 from rtgait.tomlfile import NumberRule, TomlFiles, is_finite_number
 
@@ -183,7 +185,7 @@ class Scenario:
     Attributes:
         name: short identifier, also the default output folder name.
         description: one line for listings.
-        connection: ``"real-time"`` or ``"quasi-real-time"``.
+        connection: ``"real-time"``, ``"quasi-real-time"`` or ``"auto"`` (:mod:`rtgait.core.auto`).
         cog_height: constant COG height above the ground (m).
         gravity: (m/s^2).
         sole: sole rectangle around the foot frame (m).
@@ -201,6 +203,7 @@ class Scenario:
         guide: a hand-guided walk's path (``[guide]``), or ``None``.
         mass: the robot's mass (kg, ``[robot] mass``) for pendulum-level simulations, where pushes act on it;
             ``None``: not given (``rtgait simulate --model lipm`` then takes an HRP-2-like 57 kg).
+        auto_margin: with ``connection = "auto"``, the ZMP margin (m) a connection must be predicted to keep.
     """
 
     name: str
@@ -222,6 +225,7 @@ class Scenario:
     source: str = field(default="", compare=False)
     guide: GuidePath | None = None
     mass: float | None = None
+    auto_margin: float = 0.01
 
     def __post_init__(self) -> None:
         # The TOML loader already checks every field with its file path; these checks cover scenarios built in
@@ -230,8 +234,11 @@ class Scenario:
         # memory or time or leave the range where the closed form is well conditioned.
         if not _NAME_PATTERN.fullmatch(self.name):
             raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {self.name!r}")
-        if self.connection not in CONNECTION_MODES:
-            raise ScenarioError(f"connection must be one of {', '.join(CONNECTION_MODES)}, got {self.connection!r}")
+        if self.connection not in ALL_CONNECTION_MODES:
+            raise ScenarioError(
+                f"connection must be one of {', '.join(ALL_CONNECTION_MODES)}, got {self.connection!r}"
+            )
+        _within("auto_margin", self.auto_margin, (-MAX_AUTO_MARGIN, MAX_AUTO_MARGIN), "m")
         _within("cog_height", self.cog_height, _COG_HEIGHT_BOUNDS, "m")
         _within("gravity", self.gravity, _GRAVITY_BOUNDS, "m/s^2")
         if self.mass is not None:
@@ -270,6 +277,9 @@ class Scenario:
             connection=self.connection,
             gravity=self.gravity,
             first_side=self.first_foot,
+            # The auto connection predicts margins against the sole; the other modes do not need it.
+            auto_margin=self.auto_margin,
+            sole=self.sole if self.connection == "auto" else None,
         )
 
     def strides(self) -> list[Stride]:
@@ -408,14 +418,21 @@ def _parse_guide(raw: Any) -> GuidePath:
 
 def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
-    _FILES.check_keys(data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide"))
+    _FILES.check_keys(
+        data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide", "auto_margin")
+    )
     name = _FILES.string(data, "name")
     if not _NAME_PATTERN.fullmatch(name):
         raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
     description = _FILES.string(data, "description") if "description" in data else ""
     if "\n" in description:
         raise ScenarioError("description must be a single line")
-    connection = _choice(data, "connection", "", CONNECTION_MODES)
+    connection = _choice(data, "connection", "", ALL_CONNECTION_MODES)
+    auto_margin = 0.01
+    if "auto_margin" in data:
+        if connection != "auto":
+            raise ScenarioError(f'auto_margin is for connection = "auto", got connection = "{connection}"')
+        auto_margin = _number(data, "auto_margin", "", unit="m", bounds=(-MAX_AUTO_MARGIN, MAX_AUTO_MARGIN))
 
     robot = _FILES.table(data["robot"], "robot")
     _FILES.check_keys(robot, "robot", ("cog_height", "sole"), ("gravity", "mass"))
@@ -482,6 +499,7 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
             source=source,
             guide=guide,
             mass=mass,
+            auto_margin=auto_margin,
         )
     except ScenarioError as error:
         # Cross-field checks in Scenario use bare names; point at the TOML table they live in.

@@ -223,9 +223,60 @@ def test_progress_is_shown_only_on_a_terminal(
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     assert main(["plan", "fig6", "--out", str(tmp_path / "b"), "--no-figures"]) == 0
     err = capsys.readouterr().err
-    assert "rtgait: planning fig6" in err and "%" in err
+    assert "rtgait: planning fig6" in err and "%" in err and "ticks/s" in err  # tqdm's bar, with its rate
     assert main(["plan", "fig6", "--out", str(tmp_path / "c"), "--no-figures", "--quiet"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_format_option_writes_valid_svg_and_pdf_figures(tmp_path: Path) -> None:
+    import xml.etree.ElementTree as ElementTree
+
+    out = tmp_path / "svg"
+    assert main(["plan", "fig6", "--out", str(out), "--format", "svg", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["files"] == plan_files(figures=True, robot=False, html=False, fmt="svg")
+    assert sorted(p.name for p in out.iterdir()) == sorted(summary["files"])
+    for name in FIGURES:
+        svg = out / name.replace(".png", ".svg")
+        assert ElementTree.parse(svg).getroot().tag == "{http://www.w3.org/2000/svg}svg", name
+    out = tmp_path / "pdf"
+    argv = ["simulate", "fig8", "--model", "lipm", "--out", str(out), "--format", "pdf", "--quiet"]
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["files"] == ["sim.csv", "summary.json", "pendulum.pdf"]
+    data = (out / "pendulum.pdf").read_bytes()
+    assert data.startswith(b"%PDF-") and data.rstrip().endswith(b"%%EOF")
+
+
+def test_format_is_refused_where_it_would_be_ignored(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # The MuJoCo run draws zmp_sim.png itself, in PNG: a silent PNG for --format pdf would be a surprise.
+    assert main(["simulate", "fig8", "--format", "pdf", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "--format pdf is for --model lipm" in err
+    assert main(["plan", "fig6", "--format", "jpg"]) == 2
+    assert "invalid choice: 'jpg'" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_progress_printer_is_a_tqdm_bar_fed_with_the_fraction_done() -> None:
+    import io
+
+    from rtgait.commands.common import progress_printer
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    stream = Terminal()
+    progress = progress_printer(stream, "rtgait: simulating probe")
+    for fraction in (0.0, 0.5, 1.0):
+        progress(fraction)
+    text = stream.getvalue()
+    assert "rtgait: simulating probe" in text and "%" in text and "<" in text  # the share done and the time left
+    assert text.endswith("\r")  # closed at 1.0: the bar erased itself, the next line starts clean
+    log = io.StringIO()  # not a terminal: a log file or a pipe gets nothing
+    progress_printer(log, "rtgait: planning probe", total=10)(1.0)
+    assert log.getvalue() == ""
 
 
 # ----- listing and entry points ---------------------------------------------------------------------------------

@@ -1,5 +1,5 @@
 """What the ``rtgait`` subcommands share: the program's name, the error that is not the input's fault, one-line
-messages, progress lines, loading a robot, checks made before a long run."""
+messages, progress bars, loading a robot, checks made before a long run."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, TextIO
 
 from rtgait.core.limits import MAX_ROLLOUT_TICKS
 from rtgait.scenario import Scenario, ScenarioError
+from rtgait.viz.run_data import FIGURE_FORMATS
 
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
@@ -28,6 +29,16 @@ def out_folder(text: str) -> Path:
     if not text:
         raise argparse.ArgumentTypeError("must name a folder, got an empty string")
     return Path(text)
+
+
+def add_format_option(
+    parser: argparse.ArgumentParser,
+    default: str | None = "png",
+    description: str = "file format of the figures: png (default), pdf or svg (vector, for papers)",
+) -> None:
+    """``--format png|pdf|svg``, the figures' file format, as ``args.figure_format`` (every command that draws
+    figures; ``default=None`` lets a command tell whether it was given)."""
+    parser.add_argument("--format", choices=FIGURE_FORMATS, default=default, dest="figure_format", help=description)
 
 
 def require_extras(figures: bool, html: bool) -> None:
@@ -62,12 +73,49 @@ def robot_walk(scenario: Scenario, robot: RobotModel) -> Scenario:
         raise ScenarioError(f"with robot {robot.name}: {error}") from None
 
 
-def progress_printer(stream: TextIO, label: str) -> Callable[[float], None]:
-    def report(fraction: float) -> None:
-        stream.write(f"\r{label} {fraction * 100:3.0f}%")
-        stream.flush()
+class _Progress:
+    """A tqdm bar driven by the fraction of the work done (the callback the long runs take)."""
 
-    return report
+    def __init__(self, stream: TextIO, label: str, total: int | None, unit: str) -> None:
+        from tqdm import tqdm
+
+        # With a count the bar shows its rate (ticks per second); with a fraction only, the share done and the
+        # time left. leave=False: the bar is erased when done, so the summary printed after it starts clean.
+        self._total = total
+        self._bar = tqdm(
+            total=total if total is not None else 100,
+            desc=label,
+            file=stream,
+            leave=False,
+            disable=None,  # None: nothing on a stream that is not a terminal (a log file, a pipe)
+            unit=f" {unit}" if total is not None else "%",  # "2.5k ticks/s"
+            unit_scale=total is not None,
+            dynamic_ncols=True,
+            bar_format=None if total is not None else "{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]",
+        )
+
+    def __call__(self, fraction: float) -> None:
+        done = round(min(max(fraction, 0.0), 1.0) * self._bar.total)
+        if done > self._bar.n:
+            self._bar.update(done - self._bar.n)  # tqdm throttles the redraws itself
+        if fraction >= 1.0:
+            self.close()
+
+    def close(self) -> None:
+        """Erase the bar (again harmless)."""
+        self._bar.close()
+
+
+def progress_printer(
+    stream: TextIO, label: str, total: int | None = None, unit: str = "ticks"
+) -> Callable[[float], None]:
+    """A progress bar on ``stream`` (tqdm), as a callback taking the fraction of the work done, 0 to 1.
+
+    ``total``: how many ``unit`` the whole work is, for a rate in ``unit`` per second; without it the bar shows the
+    share done and the time left. The bar closes (and erases itself) when the fraction reaches 1; callers decide
+    whether to show one at all (a terminal, no ``--quiet``), and tqdm shows nothing on a stream that is no terminal.
+    """
+    return _Progress(stream, label, total, unit)
 
 
 def numbers(text: str, count: int, option: str) -> tuple[float, ...]:

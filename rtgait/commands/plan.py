@@ -12,6 +12,7 @@ from typing import Any
 
 from rtgait.commands.common import (
     PROG,
+    add_format_option,
     load_robot,
     out_folder,
     progress_printer,
@@ -33,12 +34,13 @@ def add_parser(commands: Any) -> None:
         "plan",
         help="plan a scenario and write trajectory.csv, summary.json and figures",
         description="Roll out a scenario at its control period, handing each footstep change to the planner at "
-        "its connection mode's deadline, and write trajectory.csv, summary.json and four PNG figures.",
+        "its connection mode's deadline, and write trajectory.csv, summary.json and four figures (PNG by default).",
     )
     plan.add_argument("scenario", metavar="SCENARIO", help="built-in scenario name or path to a scenario .toml file")
     plan.add_argument("--out", metavar="DIR", type=out_folder, help="output folder (default: out/<scenario name>)")
     plan.add_argument("--dt", metavar="S", type=float, help="control period in seconds (default: the scenario's)")
-    plan.add_argument("--no-figures", action="store_true", help="skip the PNG figures (no matplotlib needed)")
+    plan.add_argument("--no-figures", action="store_true", help="skip the figures (no matplotlib needed)")
+    add_format_option(plan)
     plan.add_argument(
         "--robot",
         metavar="NAME_OR_FILE",
@@ -94,14 +96,12 @@ def _run(scenario: Scenario, quiet: bool) -> tuple[Rollout, float]:
     """Roll the scenario out; returns the rollout and its wall time (s)."""
     ticks = scenario.duration / scenario.dt
     show = not quiet and ticks >= PROGRESS_MIN_TICKS and sys.stderr.isatty()
-    progress = progress_printer(sys.stderr, f"{PROG}: planning {scenario.name}") if show else None
+    label = f"{PROG}: planning {scenario.name}"
+    progress = progress_printer(sys.stderr, label, total=math.floor(ticks + 1e-9) + 1, unit="ticks") if show else None
     planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
     began = time.perf_counter()
     result = rollout(planner, scenario.dt, scenario.sole, scenario.changes, progress=progress)
     elapsed = time.perf_counter() - began
-    if show:
-        sys.stderr.write("\r\033[K")  # erase the progress line so the summary starts clean
-        sys.stderr.flush()
     return result, elapsed
 
 
@@ -112,7 +112,8 @@ def run(args: argparse.Namespace) -> int:
     figures = not args.no_figures
     robot_name = args.robot or ("talos" if args.html or args.compensate is not None else None)
     require_extras(figures, args.html)
-    check_destination(out, plan_files(figures, robot_name is not None, args.html))
+    fmt = args.figure_format
+    check_destination(out, plan_files(figures, robot_name is not None, args.html, fmt))
     robot = None
     if robot_name is not None:
         robot = load_robot(robot_name)
@@ -124,7 +125,9 @@ def run(args: argparse.Namespace) -> int:
 
         # The robot's check: an IK error beyond its limit anywhere (UnreachableError) refuses the walk.
         robot_run = run_on_robot(robot, result, scenario.cog_height, scenario.gravity, args.compensate)
-    summary = write_plan_outputs(result, scenario, out, figures=figures, robot_run=robot_run, html=args.html)
+    summary = write_plan_outputs(
+        result, scenario, out, figures=figures, robot_run=robot_run, html=args.html, fmt=fmt
+    )
     if not args.quiet:
         sys.stdout.write(plan_report(summary, out, wall_time))
     return 0

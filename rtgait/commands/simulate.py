@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 from rtgait.commands.common import (
     PROG,
     RunError,
+    add_format_option,
     check_run_length,
     load_robot,
     numbers,
@@ -91,6 +92,11 @@ def add_parser(commands: Any) -> None:
     )
     simulate.add_argument("--stabilizer", action="store_true", help="turn the ZMP/COG feedback stabiliser on")
     simulate.add_argument("--no-figures", action="store_true", help="skip zmp_sim.png")
+    add_format_option(
+        simulate,
+        default=None,  # None: not given, which the MuJoCo run must tell from an explicit png
+        description="--model lipm: file format of pendulum.png, png (default), pdf or svg (the MuJoCo run writes PNG)",
+    )
     simulate.add_argument(
         "--html", action="store_true", help="write replay.html, a 3D replay of the simulated motion (needs meshcat)"
     )
@@ -139,6 +145,8 @@ def run(args: argparse.Namespace) -> int:
     for option in ("mass", "control_dt"):
         if getattr(args, option) is not None:
             raise ScenarioError(f"--{option.replace('_', '-')} is for --model lipm")
+    if args.figure_format not in (None, "png"):  # zmp_sim.png is drawn by rtgait.sim.run, in PNG only for now
+        raise ScenarioError(f"--format {args.figure_format} is for --model lipm: the MuJoCo run writes zmp_sim.png")
     if args.controller not in (None, "open-loop"):
         raise ScenarioError(
             f"--controller {args.controller} is not wired into the MuJoCo loop yet: use --model lipm, or open-loop "
@@ -174,6 +182,7 @@ def run(args: argparse.Namespace) -> int:
 def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) -> int:
     """``simulate --model lipm``: the walk on the point-mass pendulum at the controller level asked for."""
     from rtgait.pendulum_sim import PENDULUM_FILES, simulate_pendulum, write_pendulum_outputs
+    from rtgait.viz.run_data import PENDULUM_FIGURE, figure_file
 
     for option, why in (("velocity", "walks by command"), ("html", "the 3D replay"), ("stabilizer", "its stabiliser")):
         if getattr(args, option):
@@ -195,7 +204,8 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) 
     pushes = _push_values(args.push, run_time)
     figures = not args.no_figures
     require_extras(figures, html=False)
-    check_destination(out, [*PENDULUM_FILES, *(["pendulum.png"] if figures else [])])
+    figure_name = figure_file(PENDULUM_FIGURE, args.figure_format or "png")
+    check_destination(out, [*PENDULUM_FILES, *([figure_name] if figures else [])])
     controller = args.controller or "adaptive"
     show = not args.quiet and sys.stderr.isatty()
     progress = progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
@@ -213,9 +223,8 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) 
         if figures:
             from rtgait.viz.pendulum import plot_pendulum
 
-            plot_pendulum(result, staging.folder / "pendulum.png", title=f"{scenario.name} ({scenario.connection})")
-            staging.add("pendulum.png")
-            summary["files"].append("pendulum.png")
+            plot_pendulum(result, staging.add(figure_name), title=f"{scenario.name} ({scenario.connection})")
+            summary["files"].append(figure_name)
             text = json.dumps(summary, indent=2, allow_nan=False) + "\n"  # again, now listing the figure
             (staging.folder / "summary.json").write_text(text, encoding="utf-8")
     if not args.quiet:

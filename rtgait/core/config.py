@@ -7,13 +7,18 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from rtgait.core.connect import MIN_REST_W_T
-from rtgait.core.footsteps import Side, Timing
+from rtgait.core.footsteps import Side, SoleRect, Timing
 from rtgait.core.limits import MAX_HORIZON_STEPS, MAX_PHASE_W_T, MAX_STRIDE, check_range
 from rtgait.core.lipm import GRAVITY, omega
 from rtgait.core.stepping import StepAdjustment
 
-ConnectionMode = Literal["real-time", "quasi-real-time"]
+ConnectionMode = Literal["real-time", "quasi-real-time", "auto"]
 CONNECTION_MODES: tuple[ConnectionMode, ConnectionMode] = ("real-time", "quasi-real-time")
+"""The paper's two connection modes (Section 4.1)."""
+ALL_CONNECTION_MODES: tuple[ConnectionMode, ...] = (*CONNECTION_MODES, "auto")
+"""Every accepted ``connection``: the paper's two and ``"auto"``, which chooses per change (:mod:`rtgait.core.auto`)."""
+MAX_AUTO_MARGIN = 0.5
+"""Largest ``auto_margin`` accepted (m): no sole is a metre wide."""
 FeedbackMode = Literal["planned", "measured"]
 FEEDBACK_MODES: tuple[FeedbackMode, FeedbackMode] = ("planned", "measured")
 
@@ -29,7 +34,8 @@ class PlannerConfig:
         step_width: lateral distance between the feet when standing and in straight walking (m).
         step_height: peak swing-foot height (m).
         horizon_steps: steps covered by each plan after its first double support, 1..20.
-        connection: ``"real-time"`` or ``"quasi-real-time"``.
+        connection: ``"real-time"``, ``"quasi-real-time"`` or ``"auto"`` (per change, the latest connection
+            predicted to keep the ZMP margin at least ``auto_margin``, else a later step: :mod:`rtgait.core.auto`).
         gravity: (m/s^2), within [0.1, 100].
         first_degree: degree of the free ZMP polynomial of the first segment, 4 (default: ZMP position and
             velocity continuous across a replan) or 2 (the paper's minimal variant: ZMP position only).
@@ -44,6 +50,10 @@ class PlannerConfig:
             replan_now`) when the observed DCM is farther than this from the plan's (m); ``None``: only at
             double-support starts.
         step_adjustment: push recovery by stepping (:mod:`rtgait.core.stepping`); ``None`` (default): off.
+        auto_margin: with ``connection="auto"``, the ZMP margin (m, signed) a connection's prediction must reach to
+            be taken, within [-0.5, 0.5].
+        sole: the sole rectangle (m) of the support polygons the auto connection predicts against; required with
+            ``connection="auto"``, unused otherwise.
     """
 
     cog_height: float = 0.8
@@ -62,6 +72,8 @@ class PlannerConfig:
     feedback: FeedbackMode = "planned"
     replan_dcm_error: float | None = None
     step_adjustment: StepAdjustment | None = None
+    auto_margin: float = 0.01
+    sole: SoleRect | None = None
 
     def __post_init__(self) -> None:
         w = omega(self.cog_height, self.gravity)  # validates both ranges
@@ -80,8 +92,13 @@ class PlannerConfig:
                 f"{MIN_REST_W_T:g}: shorter, the ZMP would have to leave the feet to bring the COG to rest), "
                 f"got {self.timing.settle}"
             )
-        if self.connection not in CONNECTION_MODES:
-            raise ValueError(f"connection must be one of {CONNECTION_MODES}, got {self.connection!r}")
+        if self.connection not in ALL_CONNECTION_MODES:
+            raise ValueError(f"connection must be one of {ALL_CONNECTION_MODES}, got {self.connection!r}")
+        check_range("auto_margin", self.auto_margin, -MAX_AUTO_MARGIN, MAX_AUTO_MARGIN, "m")
+        if self.sole is not None and not isinstance(self.sole, SoleRect):
+            raise ValueError(f"sole must be a SoleRect or None, got {type(self.sole).__name__}")
+        if self.connection == "auto" and self.sole is None:
+            raise ValueError("connection 'auto' needs sole (a SoleRect): it predicts the ZMP margin of each change")
         if self.feedback not in FEEDBACK_MODES:
             raise ValueError(f"feedback must be one of {FEEDBACK_MODES}, got {self.feedback!r}")
         if (

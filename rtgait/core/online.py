@@ -13,6 +13,10 @@ Connection modes (method.md section 5), for a change of step ``k``:
   takes the change into account at the double support that follows step ``k``'s touch-down.
 * ``"quasi-real-time"``: accepted until the double support before step ``k``'s lift-off begins; the new plan is
   connected there, so the COG has the whole single support of step ``k`` to adapt.
+* ``"auto"``: accepted until step ``k`` lifts off; each change is decided when it arrives, by predicting its ZMP
+  margin with the plan operators: the real-time connection if it keeps the margin, else the quasi-real-time one
+  while its deadline has not passed, else the change moves to a later step (:mod:`rtgait.core.auto`). Every
+  decision, with the predictions and the reason, is in :attr:`OnlinePlanner.change_log`.
 
 The walk's footprints, strides, velocity command and deadlines live in :class:`~rtgait.core.walk.Walk`.
 """
@@ -27,8 +31,16 @@ from collections.abc import Sequence
 import numpy as np
 
 from rtgait.core.active_plan import ActivePlan, PlanLayout
+from rtgait.core.auto import AutoConnection, ChangeRecord
 from rtgait.core.batch import halfplane_margin, polygon_halfplanes
-from rtgait.core.config import CONNECTION_MODES, FEEDBACK_MODES, ConnectionMode, FeedbackMode, PlannerConfig
+from rtgait.core.config import (
+    ALL_CONNECTION_MODES,
+    CONNECTION_MODES,
+    FEEDBACK_MODES,
+    ConnectionMode,
+    FeedbackMode,
+    PlannerConfig,
+)
 from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride, Timeline, midpoint
 from rtgait.core.limits import MAX_REPLANS_PER_SAMPLE, MAX_STEPS
 from rtgait.core.lipm import CogTrajectory, omega
@@ -121,8 +133,12 @@ class OnlinePlanner:
         history = config.history_steps
         self.plans: deque[PlanRecord] = deque(maxlen=history)
         """Every replanning, oldest first (the last ``history_steps`` of them)."""
-        self.change_log: deque[tuple[float, int]] = deque(maxlen=history)
-        """``(time, step)`` of every accepted change (the last ``history_steps`` of them)."""
+        self.change_log: deque[ChangeRecord] = deque(maxlen=history)
+        """Every accepted change, oldest first (the last ``history_steps`` of them): when it arrived, the step it
+        asked for, how it is connected and, in auto mode, the predictions and the reason
+        (:class:`~rtgait.core.auto.ChangeRecord`; its first two fields are ``(time, step)``)."""
+        self._auto = AutoConnection(self)  # the auto connection's decisions and held changes
+        self._commit_time = math.inf  # earliest commit of a held (auto, real-time) change
         self.replan_count = 0
         """Replannings since :meth:`start` (not bounded by the history)."""
         self.step_adjustments: deque[StepDecision] = deque(maxlen=history)
@@ -180,7 +196,8 @@ class OnlinePlanner:
         return self._t0 + self.timeline.start_time(q)
 
     def change_deadline(self, step: int) -> float:
-        """Last absolute time (exclusive) at which a change of ``step`` (1-based) is accepted (s)."""
+        """Last absolute time (exclusive) at which a change of ``step`` (1-based) is accepted (s); in auto mode, at
+        which both connections are still open (the change itself is accepted until the step lifts off)."""
         return self.phase_start(self._walk.deadline_phase(step))
 
     def first_open_step(self) -> int:
@@ -192,14 +209,21 @@ class OnlinePlanner:
         return self._walk.contact_feet(q)
 
     # ----- changes ----------------------------------------------------------------------------------------
-    def _changed(self, step: int | None) -> None:
+    def _changed(self, step: int | None, record: ChangeRecord | None = None) -> None:
         """After any change of the walk: refresh what depends on it and log it."""
         self._phase = None  # the swing target of the phase being sampled may have moved
         if step is None:
             return
         if self.started and self._next_replan_phase is not None:
             self._prepare_layouts(self._next_replan_phase)  # no-op unless the walk's length changed
-        self.change_log.append((self._latest, step))
+        if record is None:
+            record = ChangeRecord(self._latest, step, self.config.connection, step, step, self._latest, (), "")
+        self.change_log.append(record)
+
+    def _replaced(self) -> None:
+        """The walk is replaced (set_strides, set_footsteps, set_velocity, stop): pending changes are dropped."""
+        self._auto.clear()
+        self._commit_time = math.inf
 
     def change_step(
         self,
@@ -214,18 +238,24 @@ class OnlinePlanner:
 
         Values not given are kept; of two changes of one step the later wins. Later footprints move with it (each
         lands relative to its predecessor). Raises :class:`StepChangeTooLateError` past the connection mode's
-        deadline; a refused change changes nothing.
+        deadline; a refused change changes nothing. In auto mode the change is decided here
+        (:mod:`rtgait.core.auto`): applied now, deferred to a later step, or held until step ``step`` lifts off.
         """
+        if self.config.connection == "auto":
+            self._auto.change(step, {"length": length, "width": width, "turn": turn}, through)
+            return
         self._changed(self._walk.change_step(step, length=length, width=width, turn=turn, through=through))
 
     def set_strides(self, strides: Sequence[Stride], from_step: int | None = None) -> None:
         """Replace the walk from ``from_step`` (default: the first open step) on; the walk ends after them."""
+        self._replaced()
         self._changed(self._walk.set_strides(strides, from_step))
 
     def set_footsteps(self, footsteps: Sequence[Footstep]) -> None:
         """Replace the walk by absolute landing footprints for steps 1..N (the first ones may already be walked:
         those must match what was walked, within 1 mm). Raises :class:`StepChangeTooLateError` when every one
         of them is committed."""
+        self._replaced()
         self._changed(self._walk.set_footsteps(footsteps))
 
     def set_velocity(self, vx: float = 0.0, vy: float = 0.0, wz: float = 0.0) -> None:
@@ -233,6 +263,7 @@ class OnlinePlanner:
 
         Commands beyond ``max_step_*`` per step are clamped with a :class:`CommandClampedWarning`; a command after
         :meth:`stop` cancels the stop with a :class:`StopCancelledWarning`."""
+        self._replaced()
         self._changed(self._walk.set_velocity(VelocityCommand(vx, vy, wz)))
 
     def stop(self) -> None:
@@ -240,6 +271,7 @@ class OnlinePlanner:
 
         Calling it again once the closing step is committed changes nothing, so a control loop may keep
         sending "stop"."""
+        self._replaced()
         self._changed(self._walk.stop())
 
     # ----- the measured robot -----------------------------------------------------------------------------
@@ -356,6 +388,7 @@ class OnlinePlanner:
         self._observed = None
         self.plans.clear()
         self.replan_count = 0
+        self._replaced()
         self._next_replan_phase = 0  # the first plan is made by the first sample, like every later one
         self._next_replan_time = self._t0
         self._prepare_layouts(0)
@@ -366,6 +399,13 @@ class OnlinePlanner:
         n = self.n_steps
         last = (q - (q & 1)) + 2 * self.config.horizon_steps
         return 2 * n + 1 if n is not None and last >= 2 * n else last
+
+    def layout_for_replan(self, q: int) -> PlanLayout:
+        """The layout of the plan made when double support ``q`` begins (its operator and anchor phases), as
+        :meth:`sample` uses it; for evaluating many walks of this shape at once (:mod:`rtgait.core.batch`)."""
+        if not self.started:
+            raise RuntimeError("call start() before layout_for_replan()")
+        return self._layout(q, self._plan_span(q))
 
     def _prepare_layouts(self, first_phase: int) -> None:
         """Build the operators of every plan shape still to come, so that no replan pays for one (they cost
@@ -639,6 +679,8 @@ class OnlinePlanner:
 
     def sample_values(self, t: float) -> tuple[list[float], str, int]:
         """As :meth:`sample` but returns plain floats in :data:`SAMPLE_FIELDS` order (for tight loops)."""
+        if t >= self._commit_time:
+            self._commit_time = self._auto.commit(t)
         if t >= self._next_replan_time:
             if t == math.inf:
                 raise ValueError("t must be finite, got inf")
@@ -723,6 +765,7 @@ def straight_walk(config: PlannerConfig, steps: int, step_length: float) -> list
 
 
 __all__ = [
+    "ALL_CONNECTION_MODES",
     "CONNECTION_MODES",
     "FEEDBACK_MODES",
     "SAMPLE_FIELDS",

@@ -7,7 +7,10 @@ a change of one step moves every later footprint with it.
 
 What may change is decided by the latest phase the planner has reached (:meth:`Walk.reach`), never by an earlier
 time sampled later: a committed step stays committed. Step ``k``'s deadline is the start of phase ``2k - 1`` (its
-lift-off) in real-time mode and ``2k - 2`` (the double support before it) in quasi-real-time mode.
+lift-off) in real-time mode and ``2k - 2`` (the double support before it) in quasi-real-time mode. In auto mode
+(:mod:`rtgait.core.auto`) a change of step ``k`` is accepted until its lift-off, as in real-time mode, and
+:meth:`Walk.deadline_phase` is its *decision* deadline, ``2k - 2``: the last moment at which both connections are
+still open, when scheduled changes are handed over.
 
 Memory stays flat on an endless walk: footprints and strides more than ``history_steps`` steps behind the
 latest phase are dropped (:attr:`Walk.base` is the index of the oldest footprint kept).
@@ -19,7 +22,7 @@ import contextlib
 import itertools
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from rtgait.core.footsteps import (
@@ -35,7 +38,7 @@ from rtgait.core.footsteps import (
 )
 from rtgait.core.limits import MAX_STEPS
 
-ConnectionMode = str  # "real-time" | "quasi-real-time" (see rtgait.core.online.CONNECTION_MODES)
+ConnectionMode = str  # "real-time" | "quasi-real-time" | "auto" (see rtgait.core.config.ALL_CONNECTION_MODES)
 
 
 class StepChangeTooLateError(ValueError):
@@ -78,7 +81,7 @@ class Walk:
 
     Args:
         timing: phase durations (s).
-        connection: ``"real-time"`` or ``"quasi-real-time"``: which deadline applies to a change.
+        connection: ``"real-time"``, ``"quasi-real-time"`` or ``"auto"``: which deadline applies to a change.
         step_width: lateral distance between the feet when standing and in straight walking (m).
         limits: bounds on strides made from velocity commands.
         strides: one stride per step, or ``None`` to walk by velocity command until :meth:`stop`.
@@ -232,11 +235,24 @@ class Walk:
         if q is None:
             return 1  # nothing sampled yet: even step 1's first plan is still to be made
         # The current phase q has started, so the open steps are those whose deadline phase lies after it.
-        return (q + 1) // 2 + 1 if self.connection == "real-time" else q // 2 + 2
+        return (q + 1) // 2 + 1 if self.connection in ("real-time", "auto") else q // 2 + 2
 
     def deadline_phase(self, step: int) -> int:
-        """The phase whose start is the deadline of a change of ``step`` (exclusive)."""
+        """The phase whose start is the deadline of a change of ``step`` (exclusive); in auto mode the decision
+        deadline (module docstring), the change itself being accepted until ``2 step - 1``."""
         return 2 * step - 1 if self.connection == "real-time" else 2 * step - 2
+
+    @contextlib.contextmanager
+    def trial(self) -> Iterator[Walk]:
+        """Changes made inside the block are undone when it ends: for predicting what a change would do."""
+        saved = (list(self._strides), list(self._prints), self.base, self.finite, self.command, self.stopping)
+        timeline, standing = self._timeline, self.standing
+        try:
+            yield self
+        finally:
+            strides, prints, self.base, self.finite, self.command, self.stopping = saved
+            self._strides[:], self._prints[:] = strides, prints
+            self._timeline, self.standing = timeline, standing
 
     def reach(self, q: int) -> None:
         """The planner has reached phase ``q``: what it committed stays committed. Old history is dropped."""

@@ -1,29 +1,54 @@
-"""Figures of a rollout in the spirit of the paper's Figs. 4-9 (matplotlib, rendered off-screen with Agg).
+"""Figures of a planned walk in the spirit of the paper's Figs. 4-9 (matplotlib, drawn off-screen with Agg).
 
-Each ``plot_*`` function draws one PNG from a :class:`~rtgait.core.rollout.Rollout` and a :class:`FigureInfo`
-(title, sole, the footprints as planned before any change) and returns the path written. The figures are built
-with matplotlib's object API and the Agg canvas directly, so nothing touches pyplot's global state or needs a
-display.
+Each ``draw_*`` function makes one figure from a :class:`~rtgait.viz.run_data.PlanRun` (a rollout in memory, or a
+finished run read back from its files) and a :class:`FigureInfo` (title, sole, the footprints as planned before any
+change); each ``plot_*`` function writes one to a path whose suffix picks the format (png, pdf, svg) and also takes
+a :class:`~rtgait.core.rollout.Rollout` directly. :func:`render_all` writes the four figures of ``rtgait plan``.
+
+Conventions (:mod:`rtgait.viz.style`): positions in m, deviations and margins in mm, time in s from the walk's
+start, units in square brackets.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
 from rtgait.core.footsteps import Footstep, SoleRect
 from rtgait.core.rollout import Rollout
+from rtgait.viz.run_data import PLAN_FIGURES, FigureInfo, PlanRun, figure_file, plan_figure_files
+from rtgait.viz.style import (
+    BAND_COLOR,
+    CHANGE_COLOR,
+    COG_COLOR,
+    DOUBLE_COLOR,
+    MINUS,
+    REF_COLOR,
+    SIDE_COLORS,
+    TIME_LABEL,
+    ZMP_COLOR,
+    clean_ticks,
+    new_figure,
+    runs,
+    save,
+    signed_mm,
+    span_limits,
+)
 
 __all__ = [
+    "DRAW",
     "FIGURE_FILES",
+    "MIN_DEVIATION_SPAN",
     "FigureInfo",
+    "draw_top_view",
+    "draw_zmp_cog",
+    "draw_zmp_deviation",
+    "draw_zmp_margin",
     "plot_multibody_zmp",
     "plot_top_view",
     "plot_zmp_cog",
@@ -33,61 +58,39 @@ __all__ = [
     "support_extents",
 ]
 
-DPI = 100
-FIGURE_FILES = ("zmp_cog.png", "zmp_deviation.png", "top_view.png", "zmp_margin.png")
-"""File names written by :func:`render_all`, in order."""
+FIGURE_FILES = tuple(plan_figure_files("png"))
+"""File names written by :func:`render_all` in the default format, in order."""
 
-# One colour per quantity across all figures, so a reader who learnt one figure can read the others.
-ZMP_COLOR = "tab:blue"
-REF_COLOR = "black"
-COG_COLOR = "tab:red"
-BAND_COLOR = "tab:green"
-DOUBLE_COLOR = "0.85"
-CHANGE_COLOR = "tab:purple"
-SIDE_COLORS = {"left": "tab:blue", "right": "tab:orange"}
+MIN_DEVIATION_SPAN = 4.0
+"""Smallest y span (mm) of a deviation panel: a replan that keeps the ZMP within a fraction of a mm of its reference
+shows as the flat line it is, not as noise blown up to the panel's height."""
+
 MOVED_TOLERANCE = 1e-3  # a footprint moved by more than this (m, or rad of yaw) counts as changed
+MARKER_GID = "margin-marker"
+"""``gid`` of the artist marking the minimum ZMP margin (top view, margin figure), for tools and tests."""
+
+RunLike = Rollout | PlanRun
 
 
-@dataclass(frozen=True)
-class FigureInfo:
-    """What the figures need besides the rollout.
-
-    Attributes:
-        title: prefix of every figure title, e.g. ``"fig4 (real-time)"``.
-        sole: sole rectangle around the foot frame (m), for support polygons and footprint outlines.
-        nominal_footprints: footprints ``F[0..]`` as planned before any change; footprints that differ from
-            them are highlighted in the top view. ``None``: nothing highlighted.
-    """
-
-    title: str
-    sole: SoleRect
-    nominal_footprints: Sequence[Footstep] | None = None
+def _as_run(run: RunLike) -> PlanRun:
+    return run if isinstance(run, PlanRun) else PlanRun.from_rollout(run)
 
 
 # ----- data helpers ---------------------------------------------------------------------------------------------
 
 
-def support_extents(rollout: Rollout, sole: SoleRect) -> tuple[np.ndarray, np.ndarray]:
-    """Per tick, the support polygon's lower and upper bounds along x and y, each shape ``(k, 2)`` (m)."""
-    lower = np.empty((len(rollout.times), 2))
-    upper = np.empty_like(lower)
-    for q, polygon in rollout.polygons.items():
-        mask = rollout.phase == q
+def support_extents(run: RunLike, sole: SoleRect | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Per tick, the support polygon's lower and upper bounds along x and y, each shape ``(k, 2)`` (m).
+
+    ``sole`` is not needed (the run's polygons are built with it); kept for the callers that pass it."""
+    run = _as_run(run)
+    lower = np.full((len(run.times), 2), np.nan)
+    upper = np.full_like(lower, np.nan)
+    for q, polygon in run.polygons.items():
+        mask = run.phase == q
         lower[mask] = polygon.min(axis=0)
         upper[mask] = polygon.max(axis=0)
     return lower, upper
-
-
-def _runs(mask: np.ndarray, times: np.ndarray) -> list[tuple[float, float]]:
-    """``(start, end)`` times (s) of each run of consecutive true ticks; a run ends where the next tick starts."""
-    if not mask.any():
-        return []
-    edges = np.diff(np.concatenate(([0], mask.astype(np.int8), [0])))
-    starts = np.flatnonzero(edges == 1)
-    ends = np.flatnonzero(edges == -1)  # index one past the run
-    dt = float(times[1] - times[0]) if len(times) > 1 else 0.0
-    last = float(times[-1]) + dt
-    return [(float(times[s]), float(times[e]) if e < len(times) else last) for s, e in zip(starts, ends, strict=True)]
 
 
 def _moved(footprints: Sequence[Footstep], nominal: Sequence[Footstep] | None) -> list[bool]:
@@ -102,88 +105,26 @@ def _moved(footprints: Sequence[Footstep], nominal: Sequence[Footstep] | None) -
 # ----- drawing helpers ------------------------------------------------------------------------------------------
 
 
-def _new_figure(width: float, height: float) -> Figure:
-    figure = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
-    FigureCanvasAgg(figure)
-    return figure
-
-
-def _save(figure: Figure, path: Path) -> Path:
-    path = Path(path)
-    figure.savefig(path, dpi=DPI)
-    return path
-
-
-def _shade_double_support(ax: Axes, rollout: Rollout, label: bool) -> None:
-    for k, (t0, t1) in enumerate(_runs(rollout.support == "double", rollout.times)):
-        text = "double support" if label and k == 0 else None
+def _shade_double_support(ax: Axes, run: PlanRun, label: bool) -> None:
+    for k, (t0, t1) in enumerate(runs(run.support == "double", run.times)):
+        text = "double support (both feet on the ground)" if label and k == 0 else None
         ax.axvspan(t0, t1, color=DOUBLE_COLOR, alpha=0.6, lw=0, zorder=0, label=text)
 
 
-def _mark_changes(ax: Axes, rollout: Rollout, label: bool) -> None:
-    for k, (t, step) in enumerate(rollout.changes):
-        text = "change decided" if label and k == 0 else None
+def _mark_changes(ax: Axes, run: PlanRun, label: bool) -> None:
+    for k, (t, step) in enumerate(run.changes):
+        text = "footstep change decided" if label and k == 0 else None
         ax.axvline(t, color=CHANGE_COLOR, ls=":", lw=1.8, zorder=3, label=text)
         # The step number on the marker links the time plot to the footprint numbers of the top view.
-        ax.annotate(
-            f"step {step}",
-            (t, 1.0),
-            xycoords=("data", "axes fraction"),
-            xytext=(3, -3),
-            textcoords="offset points",
-            va="top",
-            fontsize=8,
-            color=CHANGE_COLOR,
-        )
+        ax.annotate(f"step {step}", (t, 1.0), xycoords=("data", "axes fraction"), xytext=(3, -3),
+                    textcoords="offset points", va="top", fontsize=8, color=CHANGE_COLOR)  # fmt: skip
 
 
-def _mark_outside(ax: Axes, rollout: Rollout, values: np.ndarray, label: bool) -> None:
-    outside = rollout.margin < 0.0
+def _mark_outside(ax: Axes, run: PlanRun, values: np.ndarray, label: bool) -> None:
+    outside = run.margin < 0.0
     if outside.any():
-        ax.plot(
-            rollout.times[outside],
-            values[outside],
-            ls="none",
-            marker=".",
-            ms=3,
-            color="red",
-            zorder=4,
-            label="ZMP outside support polygon" if label else None,
-        )
-
-
-# ----- the figures ----------------------------------------------------------------------------------------------
-
-
-def plot_zmp_cog(rollout: Rollout, info: FigureInfo, path: Path) -> Path:
-    """ZMP (planned and reference) and COG along x and y against time, with the support polygon's extent.
-
-    The band is the support polygon's extent along each axis (m): a ZMP outside the band is outside the
-    polygon; red dots mark every tick where the ZMP is outside the polygon in the plane.
-    """
-    lower, upper = support_extents(rollout, info.sole)
-    figure = _new_figure(11, 7.5)
-    axes = figure.subplots(2, 1, sharex=True)
-    t = rollout.times
-    for index, (ax, axis) in enumerate(zip(axes, "xy", strict=True)):
-        first = index == 0
-        _shade_double_support(ax, rollout, first)
-        ax.fill_between(
-            t, lower[:, index], upper[:, index], color=BAND_COLOR, alpha=0.18, lw=0, zorder=1,
-            label="support polygon extent" if first else None,
-        )  # fmt: skip
-        zmp = rollout.column(f"zmp_{axis}")
-        ax.plot(t, rollout.column(f"cog_{axis}"), color=COG_COLOR, lw=1.6, zorder=3, label="COG" if first else None)
-        ax.plot(t, zmp, color=ZMP_COLOR, lw=1.6, zorder=3, label="ZMP (planned)" if first else None)
-        ax.plot(
-            t, rollout.column(f"zmp_ref_{axis}"), color=REF_COLOR, ls="--", lw=1.0, zorder=3,
-            label="ZMP reference (footsteps only)" if first else None,
-        )  # fmt: skip
-        _mark_outside(ax, rollout, zmp, first)
-        _mark_changes(ax, rollout, first)
-        ax.set_ylabel(f"{axis} [m]")
-    _finish_time_panels(figure, axes, t, f"{info.title}: ZMP and COG", legend_columns=4)
-    return _save(figure, path)
+        ax.plot(run.times[outside], values[outside], ls="none", marker=".", ms=3, color="red", zorder=4,
+                label="ZMP outside the support polygon" if label else None)  # fmt: skip
 
 
 def _finish_time_panels(
@@ -193,7 +134,7 @@ def _finish_time_panels(
     for ax in axes:
         ax.grid(True, alpha=0.3)
         ax.set_xlim(t[0], t[-1])
-    axes[-1].set_xlabel("time [s]")
+    axes[-1].set_xlabel(TIME_LABEL)
     axes[0].set_title("sagittal (x)", fontsize=10, loc="left")
     axes[1].set_title("lateral (y)", fontsize=10, loc="left")
     figure.suptitle(title)
@@ -201,166 +142,237 @@ def _finish_time_panels(
         figure.legend(loc="outside lower center", ncol=legend_columns, fontsize=9)
 
 
-def plot_zmp_deviation(rollout: Rollout, info: FigureInfo, path: Path) -> Path:
-    """``zmp - zmp_ref`` (m) along x and y during the free first segment of each plan, where it can differ.
+def _margin_caption(run: PlanRun) -> str:
+    """What the minimum-margin marker shows: the value, inside or out, when, and whether the minimum is tied."""
+    marker = run.marker
+    margin = run.zmp_margin_min
+    verdict = "OUTSIDE" if margin < 0.0 else "inside"
+    text = f"min ZMP margin {signed_mm(margin)} ({verdict}) at {run.times[marker.index]:.2f} s"
+    if marker.tied > 1:
+        text += f"\n(reached for {marker.tied_duration:.2f} s in all; marked: the {marker.reason})"
+    return text
 
-    Outside those windows the planned ZMP is the footsteps' reference by construction, so only the windows
-    are drawn (shaded); the deviation is what absorbs a changed step.
+
+# ----- the figures ----------------------------------------------------------------------------------------------
+
+
+def draw_zmp_cog(run: PlanRun, info: FigureInfo) -> Figure:
+    """ZMP (planned and reference) and COG along x and y against time, with the support polygon's extent.
+
+    The band is the support polygon's extent along each axis (m): a ZMP outside the band is outside the
+    polygon; red dots mark every tick where the ZMP is outside the polygon in the plane.
     """
-    free = rollout.free_segment_mask(rollout.plans)
-    # The initial plan starts from rest and always swings the ZMP away from its reference first (the
-    # anticipatory shift that starts the COG moving); the maximum worth reporting is that of the connections.
-    connecting = rollout.free_segment_mask()
-    windows = _runs(free, rollout.times)
-    figure = _new_figure(11, 6.5)
+    lower, upper = support_extents(run)
+    figure = new_figure(11, 7.5)
     axes = figure.subplots(2, 1, sharex=True)
-    t = rollout.times
+    t = run.times
     for index, (ax, axis) in enumerate(zip(axes, "xy", strict=True)):
         first = index == 0
-        deviation = rollout.column(f"zmp_{axis}") - rollout.column(f"zmp_ref_{axis}")
-        for k, (t0, t1) in enumerate(windows):
-            ax.axvspan(t0, t1, color=DOUBLE_COLOR, alpha=0.6, lw=0, zorder=0,
-                       label="free first segment of a plan" if first and k == 0 else None)  # fmt: skip
-        # NaN outside the windows breaks the line there instead of drawing zeros that were never free.
-        initial = free & ~connecting
-        ax.plot(t, np.where(connecting, deviation, np.nan), color=ZMP_COLOR, lw=1.6, zorder=3,
-                label="ZMP - ZMP reference, replans" if first else None)  # fmt: skip
-        ax.plot(t, np.where(initial, deviation, np.nan), color=ZMP_COLOR, lw=1.2, ls="--", alpha=0.7, zorder=3,
-                label="ZMP - ZMP reference, initial plan (start from rest)" if first else None)  # fmt: skip
-        ax.axhline(0.0, color="black", lw=0.8, zorder=2)
-        if connecting.any():
-            worst = int(np.argmax(np.where(connecting, np.abs(deviation), -1.0)))
-            ax.plot(t[worst], deviation[worst], "o", color="red", ms=5, zorder=4,
-                    label="largest deviation of a replan" if first else None)  # fmt: skip
-            ax.annotate(
-                f"{deviation[worst] * 1000:+.1f} mm at {t[worst]:.2f} s",
-                (t[worst], deviation[worst]),
-                xytext=(8, 0),
-                textcoords="offset points",
-                fontsize=8,
-                color="red",
-                va="center",
-            )
-        _mark_changes(ax, rollout, first)
-        ax.set_ylabel(f"{axis} deviation [m]")
-    _finish_time_panels(figure, axes, t, f"{info.title}: ZMP deviation in the connecting segments", legend_columns=3)
-    return _save(figure, path)
+        _shade_double_support(ax, run, first)
+        ax.fill_between(t, lower[:, index], upper[:, index], color=BAND_COLOR, alpha=0.18, lw=0, zorder=1,
+                        label="support polygon's extent along the axis" if first else None)  # fmt: skip
+        zmp = run.zmp[:, index]
+        ax.plot(t, run.cog[:, index], color=COG_COLOR, lw=1.6, zorder=3, label="COG" if first else None)
+        ax.plot(t, zmp, color=ZMP_COLOR, lw=1.6, zorder=3, label="ZMP (planned)" if first else None)
+        ax.plot(t, run.zmp_ref[:, index], color=REF_COLOR, ls="--", lw=1.0, zorder=3,
+                label="ZMP reference (footsteps only)" if first else None)  # fmt: skip
+        _mark_outside(ax, run, zmp, first)
+        _mark_changes(ax, run, first)
+        ax.set_ylabel(f"{axis} [m]")
+        clean_ticks(ax)
+    _finish_time_panels(figure, axes, t, f"{info.title}: ZMP and COG", legend_columns=3)
+    return figure
 
 
-def plot_top_view(rollout: Rollout, info: FigureInfo, path: Path) -> Path:
-    """Top view (m, equal aspect): soles of all footprints, ZMP and COG paths, and the worst ZMP margin."""
-    prints = rollout.footprints
+def _deviation_panel(ax: Axes, run: PlanRun, index: int, first: bool) -> None:
+    """One axis of :func:`draw_zmp_deviation`, in mm, scaled on the replans."""
+    t = run.times
+    deviation = (run.zmp[:, index] - run.zmp_ref[:, index]) * 1000.0
+    connecting = run.free_mask(initial=False)
+    initial = run.free_mask(initial=True) & ~connecting
+    for k, (t0, t1) in enumerate(runs(initial | connecting, t)):
+        ax.axvspan(t0, t1, color=DOUBLE_COLOR, alpha=0.6, lw=0, zorder=0,
+                   label="free first segment of a plan (the ZMP may leave its reference)" if first and k == 0 else None)
+    # NaN outside the windows breaks the line there instead of drawing zeros that were never free.
+    ax.plot(t, np.where(connecting, deviation, np.nan), color=ZMP_COLOR, lw=1.6, zorder=3, gid="deviation-replans",
+            label=f"ZMP {MINUS} ZMP reference, replans" if first else None)  # fmt: skip
+    ax.plot(t, np.where(initial, deviation, np.nan), color=ZMP_COLOR, lw=1.2, ls="--", alpha=0.7, zorder=3,
+            gid="deviation-initial",
+            label=f"ZMP {MINUS} ZMP reference, initial plan (start from rest)" if first else None)  # fmt: skip
+    ax.axhline(0.0, color="black", lw=0.8, zorder=2)
+    # The initial plan always swings the ZMP far from its reference (the anticipatory shift that starts the COG
+    # moving from rest); scaled on it, the replans' deviations, which the figure is about, would be flat lines.
+    scale_on = connecting if connecting.any() else initial
+    low, high = span_limits(deviation[scale_on], MIN_DEVIATION_SPAN, include=0.0)
+    ax.set_ylim(low, high)
+    if connecting.any():
+        worst = int(np.argmax(np.where(connecting, np.abs(deviation), -1.0)))
+        ax.plot(t[worst], deviation[worst], "o", color="red", ms=5, zorder=4,
+                label="largest deviation of a replan" if first else None)  # fmt: skip
+        ax.annotate(f"{signed_mm(deviation[worst] / 1000.0)} at {t[worst]:.2f} s", (t[worst], deviation[worst]),
+                    xytext=(8, 0), textcoords="offset points", fontsize=8, color="red", va="center")  # fmt: skip
+    start = np.where(initial, deviation, np.nan)
+    if np.any(initial) and (np.nanmin(start) < low or np.nanmax(start) > high):
+        _mark_off_scale(ax, t, start, low, high)
+    _mark_changes(ax, run, first)
+    ax.set_ylabel(f"{'xy'[index]} deviation [mm]")
+    clean_ticks(ax)
+
+
+def _mark_off_scale(ax: Axes, t: np.ndarray, values: np.ndarray, low: float, high: float) -> None:
+    """Mark the initial plan's extreme, clipped off the scale, by a triangle on the axes' edge, and write its value
+    above the panel (inside it, the words would cover the replans' curves)."""
+    extreme = int(np.nanargmax(np.abs(values)))
+    below = values[extreme] < low
+    ax.plot(t[extreme], low if below else high, marker="v" if below else "^", ms=8, color=ZMP_COLOR, mec="black",
+            mew=0.6, clip_on=False, zorder=6, gid="deviation-off-scale")  # fmt: skip
+    arrow = "\N{BLACK DOWN-POINTING TRIANGLE}" if below else "\N{BLACK UP-POINTING TRIANGLE}"
+    ax.set_title(f"initial plan off scale ({arrow}): {signed_mm(values[extreme] / 1000.0)} at {t[extreme]:.2f} s",
+                 loc="right", fontsize=9, color=ZMP_COLOR)  # fmt: skip
+
+
+def draw_zmp_deviation(run: PlanRun, info: FigureInfo) -> Figure:
+    """``zmp - zmp_ref`` (mm) along x and y during the free first segment of each plan, where it can differ.
+
+    Outside those windows the planned ZMP is the footsteps' reference by construction, so only the windows are
+    drawn (shaded); the deviation is what absorbs a changed step. Each panel is scaled on the replans' deviation
+    (at least :data:`MIN_DEVIATION_SPAN` mm); the initial plan's start from rest is drawn dashed, clipped where it
+    leaves that scale, and its extreme written at the edge.
+    """
+    figure = new_figure(11, 6.5)
+    axes = figure.subplots(2, 1, sharex=True)
+    for index, ax in enumerate(axes):
+        _deviation_panel(ax, run, index, index == 0)
+    _finish_time_panels(figure, axes, run.times, f"{info.title}: ZMP deviation in the free first segments",
+                        legend_columns=3)  # fmt: skip
+    return figure
+
+
+def draw_top_view(run: PlanRun, info: FigureInfo) -> Figure:
+    """Top view (m, equal aspect): soles of all footprints, ZMP and COG paths, and the minimum ZMP margin."""
+    prints = run.footprints
     corners = np.concatenate([info.sole.corners(foot) for foot in prints])
     span = np.ptp(corners, axis=0) + 0.1
     # Size the figure to the walk's shape: a fixed box would leave a straight walk as a thin strip in a sea
     # of empty axes. About 9.5 in of plot width, the height following the aspect, within readable bounds.
     plot_height = float(np.clip(9.5 * span[1] / span[0], 2.5, 8.0))
-    figure = _new_figure(11, plot_height + 2.3)
+    figure = new_figure(11, plot_height + 2.5)
     ax = figure.add_subplot()
     moved = _moved(prints, info.nominal_footprints)
     seen: set[str] = set()
     for index, (foot, was_moved) in enumerate(zip(prints, moved, strict=True)):
         key = f"{foot.side} foot" + (" (moved by a change)" if was_moved else "")
-        ax.add_patch(
-            Polygon(
-                info.sole.corners(foot),
-                closed=True,
-                facecolor=SIDE_COLORS[foot.side],
-                alpha=0.35 if was_moved else 0.18,
-                edgecolor="black" if was_moved else SIDE_COLORS[foot.side],
-                lw=1.6 if was_moved else 1.0,
-                hatch="///" if was_moved else None,
-                label=None if key in seen else key,
-            )
-        )
+        colour = SIDE_COLORS[foot.side]
+        ax.add_patch(Polygon(info.sole.corners(foot), closed=True, facecolor=colour, alpha=0.35 if was_moved else 0.18,
+                             edgecolor="black" if was_moved else colour, lw=1.6 if was_moved else 1.0,
+                             hatch="///" if was_moved else None, label=None if key in seen else key))  # fmt: skip
         seen.add(key)
         # F[i + 1] is where step i lands; F[0], F[1] are the standing feet (step 0).
         ax.annotate(str(max(index - 1, 0)), (foot.x, foot.y), ha="center", va="center", fontsize=8, color="0.15")
     if info.nominal_footprints is not None:
         # Drawn after the soles so the outlines stay visible where the moved footprints overlap them.
         for index in (i for i, was_moved in enumerate(moved) if was_moved):
-            ax.add_patch(
-                Polygon(
-                    info.sole.corners(info.nominal_footprints[index]),
-                    closed=True,
-                    fill=False,
-                    ls="--",
-                    edgecolor="0.4",
-                    lw=0.9,
-                    label=None if "planned" in seen else "where it was planned before the change",
-                )
-            )
+            ax.add_patch(Polygon(info.sole.corners(info.nominal_footprints[index]), closed=True, fill=False, ls="--",
+                                 edgecolor="0.4", lw=0.9,
+                                 label=None if "planned" in seen else "where it was planned before the change"))
             seen.add("planned")
-    ax.plot(rollout.column("cog_x"), rollout.column("cog_y"), color=COG_COLOR, lw=1.5, label="COG")
-    ax.plot(rollout.column("zmp_x"), rollout.column("zmp_y"), color=ZMP_COLOR, lw=1.3, label="ZMP (planned)")
-    worst = rollout.worst_index
-    margin = rollout.zmp_margin_min
+    ax.plot(run.cog[:, 0], run.cog[:, 1], color=COG_COLOR, lw=1.5, label="COG")
+    ax.plot(run.zmp[:, 0], run.zmp[:, 1], color=ZMP_COLOR, lw=1.3, label="ZMP (planned)")
+    worst = run.marker.index
+    margin = run.zmp_margin_min
     colour = "red" if margin < 0.0 else "tab:green"
-    point = (rollout.column("zmp_x")[worst], rollout.column("zmp_y")[worst])
-    polygon = rollout.polygons[int(rollout.phase[worst])]
+    polygon = run.polygons[int(run.phase[worst])]
     ax.add_patch(Polygon(polygon, closed=True, fill=False, edgecolor=colour, lw=1.4, ls="-.",
-                         label="support polygon at the worst instant"))  # fmt: skip
-    verdict = "OUTSIDE" if margin < 0.0 else "inside"
-    ax.plot(*point, marker="X" if margin < 0.0 else "o", ms=11, color=colour, mec="black", zorder=5,
-            label=f"min ZMP margin {margin * 1000:+.1f} mm ({verdict}) at {rollout.times[worst]:.2f} s")  # fmt: skip
+                         label="support polygon at the marked instant"))  # fmt: skip
+    ax.plot(run.zmp[worst, 0], run.zmp[worst, 1], marker="X" if margin < 0.0 else "o", ms=11, color=colour,
+            mec="black", zorder=5, gid=MARKER_GID, label=_margin_caption(run))  # fmt: skip
     ax.set_aspect("equal", adjustable="datalim")
     ax.autoscale_view()
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
+    clean_ticks(ax)
     ax.grid(True, alpha=0.3)
     ax.set_title(f"{info.title}: footprints, ZMP and COG (top view; numbers = step landing there)")
-    figure.legend(loc="outside lower center", ncol=3, fontsize=8)
-    return _save(figure, path)
+    figure.legend(loc="outside lower center", ncol=2, fontsize=8)
+    return figure
 
 
-def plot_zmp_margin(rollout: Rollout, info: FigureInfo, path: Path) -> Path:
-    """Signed ZMP margin to the support polygon (m, positive inside) against time."""
-    figure = _new_figure(11, 4.5)
+def draw_zmp_margin(run: PlanRun, info: FigureInfo) -> Figure:
+    """Signed ZMP margin to the support polygon (mm, positive inside) against time, the minimum marked."""
+    figure = new_figure(11, 4.8)
     ax = figure.add_subplot()
-    t = rollout.times
-    _shade_double_support(ax, rollout, True)
-    ax.plot(t, rollout.margin, color=ZMP_COLOR, lw=1.5, label="ZMP margin")
-    ax.fill_between(t, rollout.margin, 0.0, where=rollout.margin < 0.0, color="red", alpha=0.35, lw=0,
-                    label="outside the support polygon")  # fmt: skip
+    t = run.times
+    margin = run.margin * 1000.0
+    _shade_double_support(ax, run, True)
+    ax.plot(t, margin, color=ZMP_COLOR, lw=1.5, label="ZMP margin")
+    outside = margin < 0.0
+    if outside.any():  # an empty fill would still put its label in the legend
+        ax.fill_between(t, margin, 0.0, where=outside, color="red", alpha=0.35, lw=0,
+                        label="ZMP outside the support polygon")  # fmt: skip
     ax.axhline(0.0, color="black", lw=1.0)
-    worst = rollout.worst_index
-    margin = rollout.zmp_margin_min
-    colour = "red" if margin < 0.0 else "tab:green"
-    ax.plot(t[worst], margin, "o", color=colour, mec="black", ms=7, zorder=5)
-    ax.annotate(
-        f"min {margin * 1000:+.1f} mm at {t[worst]:.2f} s",
-        (t[worst], margin),
-        xytext=(10, -4),
-        textcoords="offset points",
-        fontsize=9,
-        color=colour,
-        va="top",
-    )
-    _mark_changes(ax, rollout, True)
+    worst = run.marker.index
+    colour = "red" if run.zmp_margin_min < 0.0 else "tab:green"
+    ax.plot(t[worst], margin[worst], "o", color=colour, mec="black", ms=7, zorder=5, gid=MARKER_GID,
+            label=_margin_caption(run))  # fmt: skip
+    _mark_changes(ax, run, True)
+    # Room below the lowest point for the marker, and zero always in view: the margin's sign is the verdict.
+    low, high = span_limits(margin, 20.0, include=0.0, pad=0.12)
+    ax.set_ylim(low, high)
     ax.set_xlim(t[0], t[-1])
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("margin [m] (> 0 inside)")
+    ax.set_xlabel(TIME_LABEL)
+    ax.set_ylabel("ZMP margin [mm] (> 0: inside)")
+    clean_ticks(ax)
     ax.grid(True, alpha=0.3)
     ax.set_title(f"{info.title}: signed ZMP margin to the support polygon")
-    ax.legend(loc="lower right", fontsize=8)
-    return _save(figure, path)
+    figure.legend(loc="outside lower center", ncol=3, fontsize=8)
+    return figure
+
+
+DRAW: dict[str, Callable[[PlanRun, FigureInfo], Figure]] = {
+    "zmp_cog": draw_zmp_cog,
+    "zmp_deviation": draw_zmp_deviation,
+    "top_view": draw_top_view,
+    "zmp_margin": draw_zmp_margin,
+}
+"""The four figures of ``rtgait plan`` by file stem (:data:`~rtgait.viz.run_data.PLAN_FIGURES` order)."""
+
+
+def plot_zmp_cog(rollout: RunLike, info: FigureInfo, path: Path) -> Path:
+    """Write :func:`draw_zmp_cog` to ``path`` (format from the suffix); returns ``path``."""
+    return save(draw_zmp_cog(_as_run(rollout), info), path)
+
+
+def plot_zmp_deviation(rollout: RunLike, info: FigureInfo, path: Path) -> Path:
+    """Write :func:`draw_zmp_deviation` to ``path`` (format from the suffix); returns ``path``."""
+    return save(draw_zmp_deviation(_as_run(rollout), info), path)
+
+
+def plot_top_view(rollout: RunLike, info: FigureInfo, path: Path) -> Path:
+    """Write :func:`draw_top_view` to ``path`` (format from the suffix); returns ``path``."""
+    return save(draw_top_view(_as_run(rollout), info), path)
+
+
+def plot_zmp_margin(rollout: RunLike, info: FigureInfo, path: Path) -> Path:
+    """Write :func:`draw_zmp_margin` to ``path`` (format from the suffix); returns ``path``."""
+    return save(draw_zmp_margin(_as_run(rollout), info), path)
 
 
 def plot_multibody_zmp(
-    rollout: Rollout,
+    rollout: RunLike,
     info: FigureInfo,
     path: Path,
     multibody_zmp: np.ndarray,
     compensated_zmp: np.ndarray | None = None,
     robot: str = "robot",
 ) -> Path:
-    """Multibody ZMP of the robot's whole-body motion minus the planned ZMP (m), along x and y against time,
+    """Multibody ZMP of the robot's whole-body motion minus the planned ZMP (mm), along x and y against time,
     before and, when given, after the angular-momentum compensation (the paper's Fig. 11)."""
-    figure = _new_figure(11, 6.5)
+    run = _as_run(rollout)
+    figure = new_figure(11, 6.5)
     axes = figure.subplots(2, 1, sharex=True)
-    t = rollout.times
+    t = run.times
     for index, (ax, axis) in enumerate(zip(axes, "xy", strict=True)):
-        planned = rollout.column(f"zmp_{axis}")
+        planned = run.zmp[:, index]
         before = multibody_zmp[:, index] - planned
         ax.plot(t, before * 1000, color=COG_COLOR, lw=1.3, zorder=2,
                 label=f"{axis}: without compensation (max {np.abs(before).max() * 1000:.1f} mm)")  # fmt: skip
@@ -369,18 +381,20 @@ def plot_multibody_zmp(
             label = f"{axis}: with angular-momentum compensation (max {np.abs(after).max() * 1000:.1f} mm)"
             ax.plot(t, after * 1000, color=ZMP_COLOR, lw=1.3, zorder=3, label=label)
         ax.axhline(0.0, color="black", lw=0.8, zorder=1)
-        _shade_double_support(ax, rollout, label=False)
-        _mark_changes(ax, rollout, index == 0)
+        _shade_double_support(ax, run, label=index == 0)
+        _mark_changes(ax, run, index == 0)
         ax.set_ylabel(f"{axis} error [mm]")
+        clean_ticks(ax)
         ax.legend(loc="upper right", fontsize=8)
     _finish_time_panels(
         figure, axes, t, f"{info.title}: multibody ZMP minus planned ZMP ({robot})", legend_columns=3, legend=False
     )
-    return _save(figure, path)
+    return save(figure, path)
 
 
-def render_all(rollout: Rollout, info: FigureInfo, folder: Path) -> list[Path]:
-    """Write the four figures (:data:`FIGURE_FILES`) into ``folder``; returns their paths."""
+def render_all(rollout: RunLike, info: FigureInfo, folder: Path, fmt: str = "png") -> list[Path]:
+    """Write the four figures (:data:`~rtgait.viz.run_data.PLAN_FIGURES`) into ``folder`` in the format ``fmt``
+    (png, pdf or svg); returns their paths."""
+    run = _as_run(rollout)
     folder = Path(folder)
-    plots = (plot_zmp_cog, plot_zmp_deviation, plot_top_view, plot_zmp_margin)
-    return [plot(rollout, info, folder / name) for plot, name in zip(plots, FIGURE_FILES, strict=True)]
+    return [save(DRAW[stem](run, info), folder / figure_file(stem, fmt)) for stem in PLAN_FIGURES]

@@ -1,0 +1,126 @@
+"""The pendulum level of a sweep: every case planned (or preview-controlled) and its ZMP margin measured, batched.
+
+Cases that differ only in the numbers a walk is affine in (``change.length``, ``change.width``,
+``walk.step_length``) form one group: one :class:`~rtgait.core.walk_family.WalkFamily` (or one preview loop), one
+vectorised pass (:mod:`rtgait.core.batch`, :func:`rtgait.core.preview.evaluate_preview`). The numbers are those
+``rtgait plan`` reports for the same scenario. A base scenario the batch cannot take (a turning walk) is rolled out
+case by case instead, with the same results, slowly.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from rtgait.core.batch import StraightWalk, evaluate_parameters
+from rtgait.core.preview import PREVIEW_PERIOD, PreviewPlanner, evaluate_preview
+from rtgait.scenario import Scenario
+from rtgait.sweep.spec import SweepSpec, case_scenario
+
+PARAMETER_AXES = ("walk.step_length", "change.length", "change.width")
+"""Axes a group's cases may differ in: the walk is affine in them."""
+
+
+def groups(spec: SweepSpec, cases: list[tuple[str, dict[str, Any]]]) -> Iterator[list[tuple[str, dict[str, Any]]]]:
+    """``cases`` (id, values) split into groups of one family each, in order of first appearance."""
+    by_key: dict[tuple, list[tuple[str, dict[str, Any]]]] = {}
+    for key, values in cases:
+        group = tuple((k, v) for k, v in values.items() if k not in PARAMETER_AXES)
+        by_key.setdefault(group, []).append((key, values))
+    yield from by_key.values()
+
+
+def evaluate_group(spec: SweepSpec, group: list[tuple[str, dict[str, Any]]]) -> dict[str, dict[str, Any]]:
+    """Results (case id -> fields of :data:`~rtgait.sweep.store.PENDULUM_COLUMNS`) of one group of cases."""
+    first = case_scenario(spec.base, group[0][1])
+    method = group[0][1].get("connection", first.connection)
+    try:
+        walk = _walk(first, method)
+        theta = np.stack([_parameters(walk, spec.base, values) for _, values in group])
+        if method == "preview":
+            margin, time, deviation = evaluate_preview(walk, theta)
+            decisions = [""] * len(group)
+        else:
+            result = evaluate_parameters(walk, theta)
+            margin, time, deviation = result.zmp_margin_min, result.zmp_margin_min_time, result.zmp_deviation_max
+            decisions = list(result.decisions)
+    except ValueError as error:
+        if "straight walks" not in str(error):
+            raise
+        return {key: rolled_out(case_scenario(spec.base, values), method) for key, values in group}
+    return {
+        key: _fields(float(margin[i]), float(time[i]), deviation[i], decisions[i])
+        for i, (key, _) in enumerate(group)
+    }
+
+
+def evaluate_cases(
+    spec: SweepSpec, cases: list[tuple[str, dict[str, Any]]], done: Callable[[dict[str, dict[str, Any]]], None]
+) -> None:
+    """Evaluate ``cases`` group by group, handing each group's results to ``done`` as soon as they are known."""
+    for group in groups(spec, cases):
+        done(evaluate_group(spec, group))
+
+
+def rolled_out(scenario: Scenario, method: str) -> dict[str, Any]:
+    """One case by a rollout (what ``rtgait plan`` does), for what the batch does not take."""
+    from rtgait.core.online import OnlinePlanner
+    from rtgait.core.rollout import rollout
+    from rtgait.viz.run_data import margin_marker
+
+    config = scenario.planner_config()
+    if method == "preview":
+        run = rollout(PreviewPlanner(config, scenario.strides()), PREVIEW_PERIOD, scenario.sole, scenario.changes)
+        mask = np.ones(len(run.times), dtype=bool)
+    else:
+        run = rollout(OnlinePlanner(config, scenario.strides()), scenario.dt, scenario.sole, scenario.changes)
+        mask = run.free_segment_mask()
+    zmp = np.stack([run.column("zmp_x"), run.column("zmp_y")], axis=1)
+    ref = np.stack([run.column("zmp_ref_x"), run.column("zmp_ref_y")], axis=1)
+    deviation = np.abs(zmp - ref)[mask].max(axis=0) if mask.any() else np.zeros(2)
+    worst = margin_marker(run.times, run.margin, [t for t, _ in run.changes]).index
+    return _fields(run.zmp_margin_min, float(run.times[worst]), deviation, "")
+
+
+def _walk(scenario: Scenario, method: str) -> StraightWalk:
+    config = scenario.planner_config()
+    if method == "preview":
+        config = replace(config, connection="real-time")  # its changes are decided at the real-time deadline
+    if scenario.yaw != 0.0:
+        raise ValueError("batched evaluation needs straight walks")
+    return StraightWalk(config, scenario.sole, scenario.dt, scenario.steps, scenario.step_length, scenario.changes)
+
+
+def _parameters(walk: StraightWalk, base: Scenario, values: dict[str, Any]) -> np.ndarray:
+    """The family parameters of one case: the group's own, with its swept lengths and widths."""
+    theta = walk.parameters()
+    if "walk.step_length" in values:
+        theta[1] = float(values["walk.step_length"])
+    if walk.changes:
+        first = walk.changes[0]
+        column = 3
+        if "change.length" in values and first.length is not None:
+            theta[column] = float(values["change.length"])
+        column += first.length is not None
+        if "change.width" in values and first.width is not None:
+            theta[column] = float(values["change.width"])
+    return theta
+
+
+def _fields(margin: float, time: float, deviation: np.ndarray, decision: str) -> dict[str, Any]:
+    dx, dy = float(deviation[0]), float(deviation[1])
+    return {
+        "zmp_margin_min": margin,
+        "zmp_margin_min_time": time,
+        "zmp_outside": bool(margin < 0.0),
+        "zmp_deviation_max": max(dx, dy),
+        "zmp_deviation_max_x": dx,
+        "zmp_deviation_max_y": dy,
+        "decision": decision,
+    }
+
+
+__all__ = ["PARAMETER_AXES", "evaluate_cases", "evaluate_group", "groups", "rolled_out"]
