@@ -32,7 +32,6 @@ import numpy as np
 
 from rtgait.core.active_plan import ActivePlan, PlanLayout
 from rtgait.core.auto import AutoConnection, ChangeRecord
-from rtgait.core.batch import halfplane_margin, polygon_halfplanes
 from rtgait.core.config import (
     ALL_CONNECTION_MODES,
     CONNECTION_MODES,
@@ -41,14 +40,17 @@ from rtgait.core.config import (
     FeedbackMode,
     PlannerConfig,
 )
-from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride, Timeline, midpoint
+from rtgait.core.footsteps import Footstep, SoleRect, Stride, Timeline, midpoint
 from rtgait.core.limits import MAX_REPLANS_PER_SAMPLE, MAX_STEPS
 from rtgait.core.lipm import CogTrajectory, omega
+from rtgait.core.measured import (
+    MeasuredPlanning,
+)
 from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey, PlanOperator
 from rtgait.core.phases import PhaseInfo, SwingRetarget, phase_info
 from rtgait.core.sample import SAMPLE_FIELDS, GaitSample, PlanRecord
 from rtgait.core.spline import PiecewisePolynomial
-from rtgait.core.stepping import StepDecision, propose_landing
+from rtgait.core.stepping import StepDecision
 from rtgait.core.support import signed_margin, support_polygon
 from rtgait.core.walk import (
     CommandClampedWarning,
@@ -59,27 +61,8 @@ from rtgait.core.walk import (
     Walk,
 )
 
-MIN_REMAINDER = 0.05
-"""Shortest remainder of a phase (s) that :meth:`OnlinePlanner.replan_now` plans over: closer to the phase's end
-the free ZMP polynomial would need implausible speeds (its coefficients grow as ``1/T^4``; from 50 ms down the
-connection conditions hold only to ~1e-7 m), and the next phase's replan is imminent anyway."""
 
-OBSERVATION_MAX_AGE = 0.5
-"""Oldest observation (s before the connection instant) a measured-state replan still uses."""
-
-AUTO_MIN_REMAINDER = 0.1
-"""Shortest remainder of a phase (s) over which a DCM error triggers a replan by itself; closer to the phase's end
-the replan waits for the next phase (the error persists until a plan starts from the measured state)."""
-
-AUTO_REPLAN_INTERVAL = 0.05
-"""Least time (s) between two replans triggered by a DCM error (``PlannerConfig.replan_dcm_error``): a replan
-from the measured state zeroes the error, so a new one means a new disturbance."""
-
-_OPERATOR_CACHE_SIZE = 256
-"""Operators kept for plans that start mid-phase (their first duration varies continuously)."""
-
-
-class OnlinePlanner:
+class OnlinePlanner(MeasuredPlanning):
     """Walking pattern generator that replans at every double-support start and can change steps on the fly.
 
     Args:
@@ -274,74 +257,8 @@ class OnlinePlanner:
         self._replaced()
         self._changed(self._walk.stop())
 
-    # ----- the measured robot -----------------------------------------------------------------------------
-    def observe(self, t: float, cog: Sequence[float], cog_vel: Sequence[float]) -> None:
-        """The latest estimate of the horizontal COG position (m) and velocity (m/s) at absolute time ``t`` (s).
 
-        With ``feedback="measured"`` each new plan connects from it, propagated to the connection instant by the
-        pendulum (the planned ZMP drives both, so the deviation from the plan evolves as the free pendulum).
-        """
-        values = (float(t), float(cog[0]), float(cog[1]), float(cog_vel[0]), float(cog_vel[1]))
-        if not all(math.isfinite(v) for v in values):
-            raise ValueError(f"observe needs a finite time, COG and COG velocity, got {values}")
-        self._observed = values
-        threshold = self.config.replan_dcm_error
-        plan = self._plan
-        if threshold is None or plan is None or self.config.feedback != "measured" or t < self._latest:
-            return
-        planned = plan.state(*plan.locate(t), self.w)
-        w = self.w
-        ex = values[1] + values[3] / w - planned[4] - planned[6] / w
-        ey = values[2] + values[4] / w - planned[5] - planned[7] / w
-        if ex * ex + ey * ey > threshold * threshold and t - self._last_auto_replan >= AUTO_REPLAN_INTERVAL:
-            phase, rel = self._phase, t - self._t0
-            if phase is not None and phase.start <= rel < phase.end and phase.end - rel < AUTO_MIN_REMAINDER:
-                return  # a free segment this short would need wild ZMP swings: the next phase's first tick replans
-            self._last_auto_replan = t
-            self.replan_now(t, "dcm-error")
 
-    def touchdown(self, t: float, side: Side, x: float, y: float, yaw: float) -> int:
-        """A foot is on the ground at ``(x, y)`` (m) with heading ``yaw`` (rad): where a swing foot really landed,
-        or where a stance foot slipped to. Its footprint is replaced and every later footprint follows it (strides
-        stay relative), so errors never accumulate. Returns the footprint index replaced.
-
-        The plan under way is remade at once from its own state at ``t`` (:meth:`replan_now`, reason
-        ``"touchdown"``), so the ZMP rests on the new footprint from the end of the phase under way on (unless the
-        phase ends within :data:`MIN_REMAINDER`: then the replan at the next double-support start does it).
-        """
-        if not self.started:
-            raise RuntimeError("call start() before touchdown()")
-        footprint = Footstep(float(x), float(y), float(yaw), side)
-        if self._plan is not None and t >= self._latest:
-            self.sample_values(t)  # the landing may begin a double support: make its plan, then re-anchor it
-        q = self._walk.latest_phase or 0
-        kind = self.timeline.kind(q)
-        if kind == "single":
-            i = (q + 1) // 2  # stance F[i], the swing foot lands on F[i + 1]
-            index = i if self._walk.footprint(i).side == side else i + 1
-        else:
-            n = self.n_steps
-            i = q // 2 if n is None else min(q // 2, n)
-            index = i if self._walk.footprint(i).side == side else i + 1
-        if kind == "single" and index == (q + 1) // 2 + 1:
-            self._freeze_swing(t)
-        self._walk.retarget(index, footprint)
-        self._phase = None
-        if self._plan is not None and t >= self._latest and self._next_replan_time > t:
-            self.replan_now(t, "touchdown")  # re-anchor now, unless the replan due at t will
-        return index
-
-    def _freeze_swing(self, t: float) -> tuple[float, float, float]:
-        """The landing of the foot swinging now is about to move: remember its pose and velocity at ``t`` so the
-        swing continues smoothly from there (:func:`~rtgait.core.swing.retargeted_swing`). Returns the pose."""
-        self.sample_values(t)
-        phase = self._phase
-        if phase is None or phase.swing_from is None:
-            raise RuntimeError(f"no foot is swinging at t={t} s")
-        rel = t - self._t0
-        pose, vel = phase.swing_state(rel, self.config.step_height)
-        self._swing_retarget = (phase.index, (rel, pose, vel))
-        return pose
 
     # ----- planning ---------------------------------------------------------------------------------------
     def start(
@@ -433,20 +350,6 @@ class OnlinePlanner:
             layout = self._layouts[shape] = PlanLayout(PlanOperator(key), kinds)
         return layout
 
-    def _midphase_layout(self, q: int, remainder: float) -> PlanLayout:
-        """Layout of a plan that starts ``remainder`` (s) before the end of phase ``q`` (cached, bounded)."""
-        timeline = self.timeline
-        last = self._plan_span(q)
-        kinds = tuple(timeline.kind(k) for k in range(q, last + 1))
-        durations = (round(remainder, 9), *(timeline.duration(k) for k in range(q + 1, last + 1)))
-        key = PatternKey(kinds=kinds, durations=durations, w=self.w, first_degree=self.config.first_degree)
-        cache = self._midphase_layouts
-        layout = cache.get(key)
-        if layout is None:
-            if len(cache) >= _OPERATOR_CACHE_SIZE:
-                del cache[next(iter(cache))]  # the oldest: dicts keep insertion order
-            layout = cache[key] = PlanLayout(PlanOperator(key), kinds)
-        return layout
 
     def _state_at_phase_start(self, q: int) -> list[float]:
         """``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]`` at the start of phase ``q`` (m, m/s).
@@ -458,25 +361,6 @@ class OnlinePlanner:
         plan = self._plan
         return plan.end_state(q - 1 - plan.phase0, self.w)
 
-    def _measured_cog(self, t: float, state: list[float]) -> None:
-        """Replace the COG part of ``state`` (the planned state at ``t``) by the observed one carried to ``t``.
-
-        Between the observation and ``t`` both the plan and the robot are driven by the planned ZMP, so their
-        difference ``e`` obeys the free pendulum ``e'' = w^2 e``: ``e(t) = e cosh(w d) + e'/w sinh(w d)``."""
-        observed, plan = self._observed, self._plan
-        if observed is None or plan is None:
-            return
-        t_obs, cx, cy, vx, vy = observed
-        d = t - t_obs
-        if abs(d) > OBSERVATION_MAX_AGE:
-            return
-        w = self.w
-        planned = plan.state(*plan.locate(t_obs), w)
-        ch, sh = math.cosh(w * d), math.sinh(w * d)
-        for axis, (c, v) in enumerate(((cx, vx), (cy, vy))):
-            e, de = c - planned[4 + axis], v - planned[6 + axis]
-            state[4 + axis] += e * ch + de / w * sh
-            state[6 + axis] += e * w * sh + de * ch
 
     def _connect(self, t_start: float, q: int, layout: PlanLayout, state: list[float], elapsed: float) -> None:
         """Make the plan of ``layout`` from ``state`` at ``t_start`` (``elapsed`` s into phase ``q``)."""
@@ -529,118 +413,9 @@ class OnlinePlanner:
         self.plans.append(PlanRecord(t_start, q, end, len(layout.durations), elapsed, reason))
         self.replan_count += 1
 
-    def replan_now(self, t: float, reason: str = "request") -> PlanRecord | None:
-        """Replan at absolute time ``t`` (s), inside any phase: the free first segment is the remainder of the
-        phase under way (``docs/closed_loop.md`` gives the equations). The plan starts from the measured state
-        with ``feedback="measured"`` (else from the plan itself, which reproduces it).
 
-        Returns the new plan's record, or ``None`` when the phase ends within :data:`MIN_REMAINDER` (the regular
-        replan at the next double-support start is imminent) or the walk is settling.
-        """
-        began = time.perf_counter()
-        if not math.isfinite(t):
-            raise ValueError(f"t must be finite, got {t}")
-        if self._plan is None:
-            raise RuntimeError("replan_now needs a plan under way: call start() and sample() first")
-        if t < self._latest:
-            raise ValueError(f"replan_now at t={t} s is before the latest sample ({self._latest} s)")
-        self.sample_values(t)  # replans up to t if due, and fixes the phase
-        phase = self._phase
-        assert phase is not None
-        q = phase.index
-        rel = t - self._t0
-        remainder = phase.end - rel
-        if remainder < MIN_REMAINDER or self.timeline.kind(q) == "settle":
-            return None
-        state = self._plan.state(*self._plan.locate(t), self.w)
-        planned = None
-        if self.config.feedback == "measured":
-            planned = list(state)
-            self._measured_cog(t, state)
-        layout = self._midphase_layout(q, remainder)
-        self._connect(t, q, layout, state, rel - phase.start)
-        self._record(t, q, layout, began, reason)
-        record = self.plans[-1]
-        if self.config.step_adjustment is not None:
-            self._adjust_step(t, planned)
-        return record
 
-    # ----- step adjustment -------------------------------------------------------------------------------
-    def _free_segment_margin(self, halfplanes) -> tuple[np.ndarray, np.ndarray, float]:
-        """The plan's free segment: its layout's ZMP rows ``M``, its ZMP at the sample times and its margin."""
-        plan = self._plan
-        rows = plan.layout.zmp_rows(self.config.step_adjustment.samples)
-        zmp = rows @ plan.y
-        return rows, zmp, float(halfplane_margin(zmp, *halfplanes).min())
 
-    def _adjust_step(self, t: float, planned: list[float] | None) -> StepDecision | None:
-        """After a replan: if its free segment asks for a ZMP outside the support polygon, move the landing of the
-        next step that can still change to the candidate that keeps it inside with the least departure
-        (:mod:`rtgait.core.stepping`).
-
-        With none, the landing with the largest margin is taken all the same (a capture step), and
-        ``StepAdjustment.on_failure`` decides what follows: ``"continue"`` walks on, ``"stop"`` stops after that
-        step. A plan made from the measured state is then replaced by the one from the planned state
-        ``planned``, with the new landing: a plan no foot can realise would ask the feedback law to follow it, while
-        from the planned state it asks only for what the ankle can do and the law, saturated at the sole's edge,
-        recovers the rest (at the pendulum level this recovers 5-25 % more impulse than the measured plan).
-        """
-        adjust = self.config.step_adjustment
-        plan = self._plan
-        q = plan.phase0
-        walk = self._walk
-        if self.timeline.kind(q) in ("end", "settle"):
-            return None
-        halfplanes = polygon_halfplanes(support_polygon(walk.contact_feet(q), adjust.sole))
-        rows, zmp, before = self._free_segment_margin(halfplanes)
-        if before >= adjust.required_margin:
-            return None
-        proposal = propose_landing(
-            adjust, walk, q, t, self.phase_start, rows, zmp, halfplanes, plan.layout.anchor_phases,
-            lambda: self._freeze_swing(t)[:2],
-        )  # fmt: skip
-        if proposal is None:
-            if planned is not None:
-                self._connect(plan.t_start, q, plan.layout, planned, plan.elapsed)
-            return None
-        k, nominal, landing = proposal.step, proposal.nominal, proposal.landing
-        walk.move_landing(k, *landing)
-        moved = math.hypot(landing[0] - nominal.x, landing[1] - nominal.y)
-        reason = f"ZMP margin {before * 1e3:+.1f} mm: step {k} lands {moved:.3f} m away"
-        n = walk.n_steps
-        if not proposal.enough:
-            reason += f"; no landing keeps the ZMP inside (best {proposal.margin * 1e3:+.1f} mm)"
-            if adjust.on_failure == "stop" or planned is None:
-                if n is None or k < n:
-                    walk.set_strides([Stride(0.0, self.config.step_width, 0.0)], from_step=k + 1)
-                reason += ": emergency stop after it"
-            else:
-                reason += ": walking on from the planned state, the feedback law recovers"
-        self._phase = None
-        self._reconnect(planned if planned is not None and not proposal.enough else None)
-        after = self._free_segment_margin(halfplanes)[2]
-        decision = StepDecision(
-            t, k, (nominal.x, nominal.y), landing, before, after, proposal.candidates, not proposal.enough, reason
-        )
-        last = self.step_adjustments[-1] if self.step_adjustments else None
-        repeated = last is not None and last.step == k and math.dist(last.landing, landing) < 1e-3 and last.emergency
-        if not repeated:  # a disturbance that persists re-decides the same capture step: log it once
-            self.step_adjustments.append(decision)
-            self.step_adjustment_count += 1
-        return decision
-
-    def _reconnect(self, state: list[float] | None = None) -> None:
-        """Remake the plan under way at its own start, after its footprints (or the walk's length) changed at that
-        instant: from its own initial state, or from ``state`` (``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]``)."""
-        plan = self._plan
-        q, elapsed = plan.phase0, plan.elapsed
-        if self._next_replan_phase is not None:
-            self._prepare_layouts(self._next_replan_phase)
-        if elapsed == 0.0 and self.timeline.kind(q) in MOVING_KINDS:
-            layout = self._layout(q, self._plan_span(q))
-        else:
-            layout = self._midphase_layout(q, plan.durations[0])
-        self._connect(plan.t_start, q, layout, plan.y[:4].ravel().tolist() if state is None else state, elapsed)
 
     def _advance(self, t: float) -> None:
         """Replan at every double-support start up to ``t``, each from the state of the plan before it."""
