@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 from typing import Literal
 
 from rtgait.core.connect import MIN_REST_W_T
@@ -74,8 +74,15 @@ class PlannerConfig:
     step_adjustment: StepAdjustment | None = None
     auto_margin: float = 0.01
     sole: SoleRect | None = None
+    com_height: InitVar[float | None] = None
+    """``cog_height`` under the name most libraries use (placo, Pinocchio, mc_rtc): ``PlannerConfig(com_height=0.8)``
+    sets ``cog_height``; giving both with different values is an error."""
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, com_height: float | None) -> None:
+        if com_height is not None:
+            if self.cog_height != 0.8 and self.cog_height != com_height:
+                raise ValueError(f"com_height ({com_height}) and cog_height ({self.cog_height}) disagree: give one")
+            object.__setattr__(self, "cog_height", com_height)
         w = omega(self.cog_height, self.gravity)  # validates both ranges
         if not isinstance(self.timing, Timing):
             raise ValueError(f"timing must be a Timing, got {type(self.timing).__name__}")

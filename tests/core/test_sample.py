@@ -34,3 +34,17 @@ def test_foot_transforms_map_the_foot_frame_to_the_world():
     assert abs(s.left_foot[3]) > 0.1
     point = foot_transform(np.array([1.0, 2.0, 0.0, math.pi / 2])) @ [1.0, 0.0, 0.0, 1.0]
     assert np.allclose(point, [1.0, 3.0, 0.0, 1.0])
+
+
+def test_configs_take_the_com_height_under_either_name():
+    from dataclasses import replace
+
+    import pytest
+
+    assert PlannerConfig(com_height=0.9).cog_height == 0.9
+    assert PlannerConfig(com_height=0.9) == PlannerConfig(cog_height=0.9)
+    assert replace(PlannerConfig(com_height=0.9), horizon_steps=2).cog_height == 0.9
+    with pytest.raises(ValueError, match="disagree"):
+        PlannerConfig(cog_height=0.7, com_height=0.9)
+    with pytest.raises(ValueError, match="cog_height must be within"):
+        PlannerConfig(com_height=1e-6)
