@@ -12,33 +12,14 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from scenario_files import scenario_text
 
 from rtgait import cli, outputs
 from rtgait.cli import main
 from rtgait.commands import plan as plan_command
 from rtgait.core import limits
 
-BASE = """\
-name = "probe"
-connection = "real-time"
-[robot]
-cog_height = 0.8
-[robot.sole]
-front = 0.13
-back = 0.10
-inner = 0.07
-outer = 0.07
-[timing]
-single_support = 0.8
-double_support = 0.2
-dt = 0.01
-horizon_steps = 3
-[walk]
-steps = 3
-step_length = 0.1
-step_width = 0.19
-step_height = 0.05
-"""
+BASE = scenario_text()
 
 
 def edited(*edits: tuple[str, str]) -> str:
