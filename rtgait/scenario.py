@@ -49,6 +49,10 @@ data in ``rtgait/scenarios/`` and are loaded by name; any other file is loaded b
 With ``[guide]``, ``rtgait simulate`` ignores the walk's footsteps: a person pulls the robot's hand along that path
 and the hand force sets the steps (:mod:`rtgait.sim.guided`); ``walk.steps`` is then the most steps it may take.
 
+A file with ``[[footstep]]`` entries instead of ``walk.steps`` is a footstep plan, absolute footholds each with its
+own timing if wanted: :func:`load_scenario` hands it to :mod:`rtgait.footholds`, which returns a :class:`Scenario`
+too (``footholds`` set, per-step timings in ``timing.per_step``).
+
 Every problem with a file raises :class:`ScenarioError` with one line naming the offending field. Sizes and
 physical quantities are bounded by :mod:`rtgait.core.limits` (steps, phase durations and ``w T``, the control
 period and the number of samples it makes, the horizon, COG height, gravity, stride lengths), checked here so that
@@ -57,6 +61,7 @@ the message names the TOML field; two ``[[walk.change]]`` entries for the same s
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from dataclasses import dataclass, field
@@ -64,7 +69,18 @@ from pathlib import Path
 from typing import Any
 
 from rtgait.core.config import ALL_CONNECTION_MODES, MAX_AUTO_MARGIN
-from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride, Timing, place_footsteps, standing_feet
+from rtgait.core.footsteps import (
+    Footstep,
+    Side,
+    SoleRect,
+    Stride,
+    Timeline,
+    Timing,
+    check_step_timings,
+    place_footsteps,
+    standing_feet,
+    stride_between,
+)
 from rtgait.core.limits import (
     MAX_COG_HEIGHT,
     MAX_GRAVITY,
@@ -204,6 +220,11 @@ class Scenario:
         mass: the robot's mass (kg, ``[robot] mass``) for pendulum-level simulations, where pushes act on it;
             ``None``: not given (``rtgait simulate --model lipm`` then takes an HRP-2-like 57 kg).
         auto_margin: with ``connection = "auto"``, the ZMP margin (m) a connection must be predicted to keep.
+        footholds: a footstep plan's landings ``F[2..steps + 2]`` in the world frame (m, rad), one per step, the
+            last one being the closing step (:mod:`rtgait.footholds`); ``None`` for a walk given by
+            ``step_length`` and ``yaw``. Its strides start from the standing feet (``step_width`` apart at the
+            origin), so a different ``step_width`` (a robot's) moves the first stride, never a foothold. Per-step
+            timings, if any, are in ``timing.per_step``.
     """
 
     name: str
@@ -226,6 +247,7 @@ class Scenario:
     guide: GuidePath | None = None
     mass: float | None = None
     auto_margin: float = 0.01
+    footholds: tuple[Footstep, ...] | None = None
 
     def __post_init__(self) -> None:
         # The TOML loader already checks every field with its file path; these checks cover scenarios built in
@@ -239,6 +261,8 @@ class Scenario:
                 f"connection must be one of {', '.join(ALL_CONNECTION_MODES)}, got {self.connection!r}"
             )
         _within("auto_margin", self.auto_margin, (-MAX_AUTO_MARGIN, MAX_AUTO_MARGIN), "m")
+        if self.connection == "auto" and not self.timing.uniform:
+            raise ScenarioError('connection = "auto" needs one timing for every step: per-step timings are unsupported')
         _within("cog_height", self.cog_height, _COG_HEIGHT_BOUNDS, "m")
         _within("gravity", self.gravity, _GRAVITY_BOUNDS, "m/s^2")
         if self.mass is not None:
@@ -254,6 +278,15 @@ class Scenario:
                     f"walk.change[{index}].step must be a step of the walk (1..{self.steps}), got {change.step}"
                 )
         _check_distinct_steps([change.step for change in self.changes], "walk.change")
+        if self.footholds is not None:
+            if len(self.footholds) != self.steps + 1:
+                raise ScenarioError(
+                    f"footholds must hold steps + 1 = {self.steps + 1} landings, got {len(self.footholds)}"
+                )
+            if self.changes:
+                raise ScenarioError("a footstep plan has no walk.change entries: edit the footholds instead")
+            if self.footholds[0].side != self.first_foot:
+                raise ScenarioError(f"the first footstep must be the first foot ({self.first_foot})")
 
     def _check_period(self) -> None:
         """``dt`` is a number within [MIN_DT, the shortest phase]."""
@@ -261,7 +294,7 @@ class Scenario:
             raise ScenarioError(f"dt must be a number > 0 s, got {self.dt}")
         if self.dt < MIN_DT:
             raise ScenarioError(f"dt must be at least {MIN_DT:g} s, got {self.dt}")
-        shortest = min(self.timing.single_support, self.timing.double_support, self.timing.start, self.timing.end)
+        shortest = self.timing.shortest_phase
         if self.dt > shortest:
             # A period longer than a phase would skip whole phases (and their replans) between two samples.
             raise ScenarioError(f"dt must not exceed the shortest phase ({shortest} s), got {self.dt}")
@@ -283,13 +316,19 @@ class Scenario:
         )
 
     def strides(self) -> list[Stride]:
-        """Strides of the walk as planned before any change: ``steps`` forward ones, then a closing one."""
+        """Strides of the walk as planned before any change: ``steps`` forward ones, then a closing one (of a
+        footstep plan: from each foothold to the next, the standing feet first)."""
+        if self.footholds is not None:
+            chain = [*standing_feet(self.step_width, self.first_foot), *self.footholds]
+            return [stride_between(a, b) for a, b in itertools.pairwise(chain[1:])]
         forward = Stride(self.step_length, self.step_width, self.yaw)
         # The closing step lands beside the last footprint so the walk ends standing with parallel feet.
         return [forward] * self.steps + [Stride(0.0, self.step_width, 0.0)]
 
     def nominal_footprints(self) -> list[Footstep]:
         """Footprints ``F[0..steps+1]`` the walk would have without any change (m, rad)."""
+        if self.footholds is not None:
+            return [*standing_feet(self.step_width, self.first_foot), *self.footholds]
         return place_footsteps(standing_feet(self.step_width, self.first_foot), self.strides())
 
     @property
@@ -298,6 +337,8 @@ class Scenario:
         t = self.timing
         # steps + 1 steps in all (the closing one), each but the last followed by a double support.
         n = self.steps + 1
+        if t.per_step:
+            return Timeline(t, n, t.per_step).end_time
         return t.start + n * t.single_support + (n - 1) * t.double_support + t.end + t.settle
 
 
@@ -326,6 +367,10 @@ def _check_phase_lengths(timing: Timing, cog_height: float, gravity: float) -> N
                 f" must be at most {MAX_PHASE_W_T:g} (w = sqrt(gravity / cog_height) = {w:.3g} 1/s), i.e. phases of "
                 f"at most {MAX_PHASE_W_T / w:.3g} s"
             )
+    try:
+        check_step_timings(timing, w)
+    except ValueError as error:
+        raise ScenarioError(str(error)) from None
 
 
 def _check_ticks(duration: float, dt: float) -> None:
@@ -416,11 +461,9 @@ def _parse_guide(raw: Any) -> GuidePath:
     return GuidePath(**values)
 
 
-def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
-    """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
-    _FILES.check_keys(
-        data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide", "auto_margin")
-    )
+def parse_common(data: dict[str, Any]) -> dict[str, Any]:
+    """The parts a scenario and a footstep plan (:mod:`rtgait.footholds`) share: ``name``, ``description``,
+    ``connection``, ``auto_margin``, ``[robot]`` and ``[timing]``, checked, as :class:`Scenario` keywords."""
     name = _FILES.string(data, "name")
     if not _NAME_PATTERN.fullmatch(name):
         raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
@@ -463,6 +506,36 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     horizon_steps = _FILES.count(
         timing_table["horizon_steps"], "timing.horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY
     )
+    return {
+        "name": name, "description": description, "connection": connection, "auto_margin": auto_margin,
+        "cog_height": cog_height, "gravity": gravity, "mass": mass, "sole": sole, "timing": timing, "dt": dt,
+        "horizon_steps": horizon_steps,
+    }  # fmt: skip
+
+
+number = _number
+"""A finite number of a scenario-like file, checked and worded as the scenario's own fields (for
+:mod:`rtgait.footholds`)."""
+
+
+def build_scenario(**fields: Any) -> Scenario:
+    """:class:`Scenario` from parsed fields, its cross-field messages pointed at the TOML table they live in."""
+    try:
+        return Scenario(**fields)
+    except ScenarioError as error:
+        message = str(error)
+        if message.startswith("dt "):
+            message = "timing." + message
+        raise ScenarioError(message) from None
+
+
+def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
+    """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
+    _FILES.check_keys(
+        data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide", "auto_margin")
+    )
+    common = parse_common(data)
+    connection = common["connection"]
 
     walk = _FILES.table(data["walk"], "walk")
     walk_required = ("steps", "step_length", "step_width", "step_height")
@@ -478,35 +551,18 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     if guide is not None and connection != "quasi-real-time":
         raise ScenarioError("a [guide] walk uses the quasi-real-time connection (the paper's Section 6)")
 
-    try:
-        return Scenario(
-            name=name,
-            description=description,
-            connection=connection,  # type: ignore[arg-type]  # checked by _choice
-            cog_height=cog_height,
-            gravity=gravity,
-            sole=sole,
-            timing=timing,
-            dt=dt,
-            horizon_steps=horizon_steps,
-            steps=steps,
-            step_length=step_length,
-            step_width=step_width,
-            step_height=step_height,
-            changes=changes,
-            yaw=yaw,
-            first_foot=first_foot,  # type: ignore[arg-type]  # checked by _choice
-            source=source,
-            guide=guide,
-            mass=mass,
-            auto_margin=auto_margin,
-        )
-    except ScenarioError as error:
-        # Cross-field checks in Scenario use bare names; point at the TOML table they live in.
-        message = str(error)
-        if message.startswith("dt "):
-            message = "timing." + message
-        raise ScenarioError(message) from None
+    return build_scenario(
+        **common,
+        steps=steps,
+        step_length=step_length,
+        step_width=step_width,
+        step_height=step_height,
+        changes=changes,
+        yaw=yaw,
+        first_foot=first_foot,
+        source=source,
+        guide=guide,
+    )
 
 
 # ----- finding scenarios ----------------------------------------------------------------------------------------
@@ -518,10 +574,15 @@ def builtin_scenarios() -> dict[str, str]:
 
 
 def load_scenario(name_or_path: str | Path) -> Scenario:
-    """Load a built-in scenario by name, or any scenario TOML file by path.
+    """Load a built-in scenario by name, or any scenario TOML file by path; a file with ``[[footstep]]``
+    entries is a footstep plan (:mod:`rtgait.footholds`).
 
     A string that is a built-in name wins over a file of the same name in the current folder; anything that
     looks like a path (a ``.toml`` suffix, a folder separator, or an existing file) is read as a file.
     """
     document = _FILES.load(name_or_path)
+    if "footstep" in document.data:
+        from rtgait.footholds import parse_footstep_plan  # it builds on this module
+
+        return parse_footstep_plan(document.data, document.source)
     return parse_scenario(document.data, document.source)

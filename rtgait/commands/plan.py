@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 from dataclasses import replace
@@ -21,9 +22,10 @@ from rtgait.commands.common import (
 )
 from rtgait.core.online import OnlinePlanner
 from rtgait.core.rollout import Rollout, rollout
-from rtgait.outputs import check_destination
+from rtgait.footholds import footstep_plan_text
+from rtgait.outputs import OutputError, check_destination, write_text_atomic
 from rtgait.report import plan_files, plan_report, write_plan_outputs
-from rtgait.scenario import PHASES, Scenario, ScenarioError, load_scenario
+from rtgait.scenario import Scenario, ScenarioError, load_scenario
 
 PROGRESS_MIN_TICKS = 50_000
 """Below this many ticks a rollout takes well under a second: a progress bar would only flicker."""
@@ -61,6 +63,14 @@ def add_parser(commands: Any) -> None:
     plan.add_argument(
         "--html", action="store_true", help="write replay.html, a 3D replay of the robot (implies --robot talos)"
     )
+    plan.add_argument(
+        "--export-footsteps",
+        metavar="FILE",
+        type=Path,
+        dest="export_footsteps",
+        help="also write the walk's footholds, as walked (after its changes), as a footstep plan .toml that "
+        "'rtgait plan FILE' walks again",
+    )
     plan.add_argument("--quiet", action="store_true", help="print nothing on success")
 
 
@@ -83,7 +93,7 @@ def _check_order(order: int | None, scenario: Scenario) -> None:
     option = "--compensate-angular-momentum ORDER"
     if order < 0:
         raise ScenarioError(f"{option} must be an integer >= 0, got {order}")
-    shortest = min(getattr(scenario.timing, name) for name in PHASES)
+    shortest = min(scenario.timing.shortest_phase, scenario.timing.settle)
     samples = math.floor(shortest / scenario.dt + 1e-9) + 1
     if 2 * order + 1 > samples:
         raise ScenarioError(
@@ -114,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
     require_extras(figures, args.html)
     fmt = args.figure_format
     check_destination(out, plan_files(figures, robot_name is not None, args.html, fmt))
+    _check_export(args.export_footsteps)
     robot = None
     if robot_name is not None:
         robot = load_robot(robot_name)
@@ -128,7 +139,27 @@ def run(args: argparse.Namespace) -> int:
     summary = write_plan_outputs(
         result, scenario, out, figures=figures, robot_run=robot_run, html=args.html, fmt=fmt
     )
+    if args.export_footsteps is not None:
+        write_text_atomic(args.export_footsteps, footstep_plan_text(scenario, result.footprints))
     if not args.quiet:
         sys.stdout.write(plan_report(summary, out, wall_time))
+        if args.export_footsteps is not None:
+            sys.stdout.write(f"footsteps   {args.export_footsteps}\n")
     return 0
+
+
+def _check_export(path: Path | None) -> None:
+    """``--export-footsteps FILE`` can be written: not a folder, not read-only, in an existing folder."""
+    if path is None:
+        return
+    option = "--export-footsteps"
+    if str(path) in ("", "."):
+        raise ScenarioError(f"{option} needs a file name")
+    if path.is_dir():
+        raise ScenarioError(f"{option} {path} is a folder")
+    folder = path.parent
+    if not folder.is_dir():
+        raise OutputError(f"{option}: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise OutputError(f"{option}: {path} is not writable")
 

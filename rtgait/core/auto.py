@@ -141,6 +141,9 @@ class AutoConnection:
     with the planner's own operators, and holds the changes that wait for their step's lift-off."""
 
     def __init__(self, planner: OnlinePlanner) -> None:
+        if planner.config.connection == "auto" and not planner.config.timing.uniform:
+            # Its predictions assume one timing for every step (the windows of later plans): refuse, not guess.
+            raise ValueError("connection 'auto' needs one timing for every step: per-step timings are not supported")
         self.planner = planner
         self.held: dict[int, tuple[float, AutoOption, dict[str, float | None]]] = {}
 

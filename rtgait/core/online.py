@@ -40,7 +40,7 @@ from rtgait.core.config import (
     FeedbackMode,
     PlannerConfig,
 )
-from rtgait.core.footsteps import Footstep, SoleRect, Stride, Timeline, midpoint
+from rtgait.core.footsteps import Footstep, SoleRect, Stride, Timeline, check_step_timings, midpoint
 from rtgait.core.limits import MAX_REPLANS_PER_SAMPLE, MAX_STEPS
 from rtgait.core.lipm import CogTrajectory, omega
 from rtgait.core.measured import (
@@ -94,6 +94,7 @@ class OnlinePlanner(MeasuredPlanning):
             raise ValueError(f"config must be a PlannerConfig, got {type(config).__name__}")
         self.config = config
         self.w = omega(config.cog_height, config.gravity)
+        check_step_timings(config.timing, self.w)
         self._walk = Walk(
             config.timing,
             config.connection,
@@ -103,7 +104,7 @@ class OnlinePlanner(MeasuredPlanning):
             first_side=config.first_side,
             history_steps=config.history_steps,
         )
-        self._layouts: dict[tuple[bool, int, bool], PlanLayout] = {}
+        self._layouts: dict[tuple, PlanLayout] = {}
         self._midphase_layouts: dict[PatternKey, PlanLayout] = {}
         self._plan: ActivePlan | None = None
         self._next_replan_time = math.inf
@@ -325,25 +326,29 @@ class OnlinePlanner(MeasuredPlanning):
         return self._layout(q, self._plan_span(q))
 
     def _prepare_layouts(self, first_phase: int) -> None:
-        """Build the operators of every plan shape still to come, so that no replan pays for one (they cost
-        a dense solve, a fraction of a millisecond, once per shape)."""
+        """Build the operators of every plan shape still to come (with per-step timings: of every shape and
+        durations), so that no replan pays for one (a fraction of a millisecond each, once per shape)."""
         n = self.n_steps
         last_replan = first_phase + 2 if n is None else 2 * n
         for q in range(first_phase, last_replan + 1, 2):
             self._layout(q, self._plan_span(q))
 
     def _layout(self, first: int, last: int) -> PlanLayout:
-        """Operator and anchor bookkeeping for the plan over phases ``first..last`` (cached by plan shape)."""
+        """Operator and anchor bookkeeping for the plan over phases ``first..last`` (cached by plan shape and, when
+        steps have their own timing, by the phases' durations too)."""
         n = self.n_steps
-        # The phase kinds of a plan depend only on these three facts, so they key the cache cheaply.
-        shape = (first == 0, last - first, n is not None and last == 2 * n + 1)
+        timeline = self.timeline
+        # The phase kinds of a plan depend only on these three facts, so they key the cache cheaply; with one
+        # timing for every step they also fix the durations.
+        shape: tuple = (first == 0, last - first, n is not None and last == 2 * n + 1)
+        if not timeline.uniform:
+            shape = (*shape, timeline.durations(first, last))
         layout = self._layouts.get(shape)
         if layout is None:
-            timeline = self.timeline
             kinds = tuple(timeline.kind(q) for q in range(first, last + 1))
             key = PatternKey(
                 kinds=kinds,
-                durations=tuple(timeline.duration(q) for q in range(first, last + 1)),
+                durations=timeline.durations(first, last),
                 w=self.w,
                 first_degree=self.config.first_degree,
             )

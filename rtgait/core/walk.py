@@ -89,6 +89,10 @@ class Walk:
             side at the origin, heading +x, ``first_side`` swinging first.
         first_side: which foot swings first when ``feet`` is not given.
         history_steps: footprints kept behind the latest phase (``None``: all).
+
+    Steps keep their own timing (``timing.per_step``) through every change of their strides; a walk by velocity
+    command is uniform: it ignores ``per_step``, and :meth:`set_velocity` drops the per-step timing of the steps
+    it replaces.
     """
 
     def __init__(
@@ -124,7 +128,8 @@ class Walk:
         self._prints: list[Footstep] = [*self.standing]
         self.latest_phase: int | None = None
         self.stopping = False
-        self._timeline = Timeline(timing, self.n_steps)
+        self._step_timings: tuple[tuple[float, float], ...] = timing.per_step if self.finite else ()
+        self._timeline = Timeline(timing, self.n_steps, self._step_timings)
 
     # ----- what the walk is -------------------------------------------------------------------------------
     @property
@@ -246,13 +251,13 @@ class Walk:
     def trial(self) -> Iterator[Walk]:
         """Changes made inside the block are undone when it ends: for predicting what a change would do."""
         saved = (list(self._strides), list(self._prints), self.base, self.finite, self.command, self.stopping)
-        timeline, standing = self._timeline, self.standing
+        timeline, standing, step_timings = self._timeline, self.standing, self._step_timings
         try:
             yield self
         finally:
             strides, prints, self.base, self.finite, self.command, self.stopping = saved
             self._strides[:], self._prints[:] = strides, prints
-            self._timeline, self.standing = timeline, standing
+            self._timeline, self.standing, self._step_timings = timeline, standing, step_timings
 
     def reach(self, q: int) -> None:
         """The planner has reached phase ``q``: what it committed stays committed. Old history is dropped."""
@@ -393,6 +398,7 @@ class Walk:
         del self._strides[start - 1 - self.base :]
         self.finite = False
         self.stopping = False
+        self._step_timings = self._step_timings[: start - 1]  # steps by command are uniform
         self._walk_changed()
         self._rebuild(start)
         return start
@@ -455,8 +461,9 @@ class Walk:
     # ----- internals ---------------------------------------------------------------------------------------
     def _walk_changed(self) -> None:
         n = self.n_steps
-        if self._timeline.n_steps != n:
-            self._timeline = Timeline(self.timing, n)
+        timeline = self._timeline
+        if timeline.n_steps != n or timeline.step_timings is not self._step_timings:
+            self._timeline = Timeline(self.timing, n, self._step_timings)
 
     def _rebuild(self, from_step: int) -> None:
         """Recompute the footprints after a change of ``from_step`` (``F[from_step + 1]`` on)."""

@@ -128,6 +128,8 @@ class WalkFamily:
     """
 
     def __init__(self, key: FamilyKey) -> None:
+        if not key.timing.uniform:
+            raise ValueError("the batched evaluation needs one timing for every step: per-step timings are unsupported")
         from rtgait.core.online import OnlinePlanner  # online imports this module's package; import when used
 
         self.key = key
