@@ -50,10 +50,9 @@ class ActivePlan:
         self.offsets = layout.offsets  # segment starts relative to t_start (s)
         self.first_reference = first_reference  # [axis] -> cubic coefficients of segment 1's reference ZMP
         self.reference_offset = reference_offset  # time into that cubic at which segment 1 starts (s)
-        x_rows, y_rows = (layout.G_eager @ y).T.tolist()
-        self.segments: list = [None] * len(layout.durations)
-        for j in range(min(EAGER_SEGMENTS, len(self.segments))):
-            self.segments[j] = (x_rows[12 * j : 12 * j + 12], y_rows[12 * j : 12 * j + 12])
+        segments: list = [None] * len(layout.durations)
+        segments[0] = tuple((layout.G_eager @ y).T.tolist())  # EAGER_SEGMENTS = 1: the rows of segment 0
+        self.segments = segments
 
     def segment(self, j: int) -> tuple[list[float], list[float]]:
         seg = self.segments[j]
@@ -71,9 +70,9 @@ class ActivePlan:
         tau = min(max(rel - offsets[j], 0.0), self.durations[j])
         return j, tau
 
-    def end_state(self, j: int, w: float) -> list[float]:
+    def end_state(self, j: int, w: float) -> np.ndarray:
         """:meth:`state` at the end of segment ``j``: one precomputed product, as every replan needs it."""
-        return (self.layout.end_state_rows(j, w) @ self.y).ravel().tolist()
+        return (self.layout.end_state_rows(j, w) @ self.y).ravel()
 
     def state(self, j: int, tau: float, w: float) -> list[float]:
         """``[px, py, dpx, dpy, cx, cy, dcx, dcy]`` on segment ``j`` at local time ``tau`` (m, m/s)."""

@@ -205,7 +205,7 @@ class AutoConnection:
         walk, sole, q0 = planner.walk, planner.config.sole, planner._next_replan_phase
         assert sole is not None and q0 is not None
         first, last = option.window
-        state = planner._state_at_phase_start(q0)
+        state = list(planner._state_at_phase_start(q0))
         margin = math.inf
         with walk.trial():
             applied = False

@@ -105,6 +105,7 @@ class OnlinePlanner(MeasuredPlanning):
             history_steps=config.history_steps,
         )
         self._layouts: dict[tuple, PlanLayout] = {}
+        self._layout_at: dict[int, PlanLayout] = {}  # the layout of each regular replan still to come, by phase
         self._midphase_layouts: dict[PatternKey, PlanLayout] = {}
         self._plan: ActivePlan | None = None
         self._next_replan_time = math.inf
@@ -330,8 +331,7 @@ class OnlinePlanner(MeasuredPlanning):
         durations), so that no replan pays for one (a fraction of a millisecond each, once per shape)."""
         n = self.n_steps
         last_replan = first_phase + 2 if n is None else 2 * n
-        for q in range(first_phase, last_replan + 1, 2):
-            self._layout(q, self._plan_span(q))
+        self._layout_at = {q: self._layout(q, self._plan_span(q)) for q in range(first_phase, last_replan + 1, 2)}
 
     def _layout(self, first: int, last: int) -> PlanLayout:
         """Operator and anchor bookkeeping for the plan over phases ``first..last`` (cached by plan shape and, when
@@ -356,7 +356,7 @@ class OnlinePlanner(MeasuredPlanning):
         return layout
 
 
-    def _state_at_phase_start(self, q: int) -> list[float]:
+    def _state_at_phase_start(self, q: int) -> np.ndarray | list[float]:
         """``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]`` at the start of phase ``q`` (m, m/s).
 
         The state comes from the plan being executed; the ZMP is its left limit (the end of the segment before).
@@ -372,10 +372,14 @@ class OnlinePlanner(MeasuredPlanning):
         sources = layout.anchor_sources
         if sources is None:
             sources = layout.anchor_sources = self._walk.relative_anchor_sources(q, layout.anchor_phases)
-        y = state + self._walk.anchors_from(q >> 1, sources)
+        anchors = self._walk.anchors_from(q >> 1, sources)
+        y = np.empty((4 + len(sources), 2))
+        flat = y.ravel()  # a view: y is C-contiguous
+        flat[:8] = state
+        flat[8:] = anchors
         # Reference of the free segment: the cubic transfer the footsteps alone would ask for over the whole
         # phase (for a plan made mid-phase: the one of the plan made when the phase began).
-        px, py, ax, ay = y[0], y[1], y[8], y[9]
+        px, py, ax, ay = flat[0], flat[1], anchors[0], anchors[1]
         offset = 0.0
         previous = self._plan
         if elapsed == 0.0 and layout.first_kind in MOVING_KINDS:
@@ -386,7 +390,7 @@ class OnlinePlanner(MeasuredPlanning):
             reference, offset = previous.first_reference, elapsed
         else:
             reference = ((ax, 0.0, 0.0, 0.0), (ay, 0.0, 0.0, 0.0))
-        self._plan = ActivePlan(t_start, q, layout, np.array(y).reshape(-1, 2), reference, offset, elapsed)
+        self._plan = ActivePlan(t_start, q, layout, y, reference, offset, elapsed)
 
     def _replan(self, t: float) -> None:
         """Make and connect the plan of the double support that begins now (phase ``_next_replan_phase``), for
@@ -395,7 +399,8 @@ class OnlinePlanner(MeasuredPlanning):
         q = self._next_replan_phase
         assert q is not None
         n = self.n_steps
-        layout = self._layout(q, self._plan_span(q))
+        # Prepared in start() (and again whenever the walk's length or timing changes): a lookup, not a build.
+        layout = self._layout_at.pop(q, None) or self._layout(q, self._plan_span(q))
         state = self._state_at_phase_start(q)
         t_start = self._next_replan_time
         planned = None
