@@ -25,12 +25,13 @@ from rtgait.commands.common import (
     robot_walk,
 )
 from rtgait.outputs import check_destination, staged_outputs
-from rtgait.report import pendulum_report, simulation_report
+from rtgait.report import pendulum_report
 from rtgait.scenario import Scenario, ScenarioError, load_scenario
 
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
     from rtgait.sim.loop import Push, SimResult
+    from rtgait.sim.model import SimConfig
 
 MODELS = ("mujoco", "lipm")
 """What ``--model`` can simulate: the robot in MuJoCo, or the linear inverted pendulum's point mass."""
@@ -60,21 +61,31 @@ def add_parser(commands: Any) -> None:
     simulate.add_argument(
         "--controller",
         choices=CONTROLLERS,
-        help="open-loop (the plan alone, the paper's assumption), stabilized (+ DCM feedback) or adaptive (+ "
-        "replanning from the measured state, step adjustment, re-anchoring on landings); default: adaptive with "
-        "--model lipm; MuJoCo runs open-loop for now (--stabilizer adds its COG-shift stabiliser)",
+        help="adaptive (default): + replanning from the measured state, re-anchoring on landings, step adjustment "
+        "and landing detection; stabilized: the plan + DCM feedback on the measured COM state and foot force control "
+        "from the measured wrench of each foot; open-loop: the plan alone (the paper's assumption)",
     )
     simulate.add_argument(
         "--robot",
         metavar="NAME_OR_FILE",
-        help="robot (default talos with --model mujoco); with --model lipm, its COG height, sole, step width and "
-        "mass replace the scenario's",
+        help="robot (default talos with --model mujoco); its COG height, sole and step width replace the scenario's "
+        "(and with --model lipm its mass)",
     )
     simulate.add_argument(
         "--mass", metavar="KG", type=float, help="--model lipm: the point mass (default the scenario's, else 57 kg)"
     )
     simulate.add_argument(
-        "--control-dt", metavar="S", type=float, help="--model lipm: control period (default 0.001 s)"
+        "--control-dt",
+        metavar="S",
+        type=float,
+        help="control period (s): a new joint reference every period (default: the robot description's, 1 ms for "
+        "Talos, 2 ms for G1; 1 ms with --model lipm)",
+    )
+    simulate.add_argument(
+        "--physics-dt",
+        metavar="S",
+        type=float,
+        help="--model mujoco: physics step (s, default 0.001); at most the control period and dividing it",
     )
     simulate.add_argument("--out", metavar="DIR", type=out_folder, help="output folder (default: out/<scenario>-sim)")
     simulate.add_argument(
@@ -87,15 +98,16 @@ def add_parser(commands: Any) -> None:
         metavar="T,DURATION,FX,FY",
         action="append",
         default=[],
-        help="push the base with a horizontal force (N) from time T (s, from the start of the run) for DURATION "
-        "(s); may be repeated, for pushes that do not overlap",
+        help="push the base with a horizontal force (N) from time T (s, on the walk's clock: 0 when the walk starts, "
+        "after MuJoCo's 1.5 s start transition from half-sitting) for DURATION (s); may be repeated, for pushes "
+        "that do not overlap",
     )
-    simulate.add_argument("--stabilizer", action="store_true", help="turn the ZMP/COG feedback stabiliser on")
-    simulate.add_argument("--no-figures", action="store_true", help="skip zmp_sim.png")
+    simulate.add_argument("--stabilizer", action="store_true", help=argparse.SUPPRESS)  # removed: a clear error
+    simulate.add_argument("--no-figures", action="store_true", help="skip the figure (zmp_sim or pendulum)")
     add_format_option(
         simulate,
-        default=None,  # None: not given, which the MuJoCo run must tell from an explicit png
-        description="--model lipm: file format of pendulum.png, png (default), pdf or svg (the MuJoCo run writes PNG)",
+        default="png",
+        description="file format of the figure (zmp_sim, or pendulum with --model lipm): png (default), pdf or svg",
     )
     simulate.add_argument(
         "--html", action="store_true", help="write replay.html, a 3D replay of the simulated motion (needs meshcat)"
@@ -115,7 +127,9 @@ def _push_values(texts: Sequence[str], run_time: float) -> list[tuple[float, flo
         if not duration > 0.0:
             raise ScenarioError(f"--push duration must be > 0 s, got {duration:g} in {text!r}")
         if start >= run_time:
-            raise ScenarioError(f"--push {text} starts after the run has ended (at {run_time:.2f} s)")
+            raise ScenarioError(
+                f"--push {text} starts after the run has ended (at {run_time:.2f} s on the walk's clock)"
+            )
         pushes.append((start, duration, fx, fy))
     ordered = sorted(zip(pushes, texts, strict=True), key=lambda pair: pair[0][0])
     for (first, first_text), (second, second_text) in itertools.pairwise(ordered):
@@ -137,22 +151,24 @@ def _pushes(texts: Sequence[str], run_time: float) -> list[Push]:
     return pushes
 
 
+STABILIZER_REMOVED = (
+    "--stabilizer was removed: its COG-shift stabiliser is replaced by the controller levels, use --controller "
+    "stabilized (DCM feedback and foot force control) or adaptive (the default)"
+)
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.stabilizer:
+        raise ScenarioError(STABILIZER_REMOVED)
     scenario = load_scenario(args.scenario)
     out: Path = args.out if args.out is not None else Path("out") / f"{scenario.name}-sim"
     if args.model == "lipm":
         return _simulate_pendulum(args, scenario, out)
-    for option in ("mass", "control_dt"):
-        if getattr(args, option) is not None:
-            raise ScenarioError(f"--{option.replace('_', '-')} is for --model lipm")
-    if args.figure_format not in (None, "png"):  # zmp_sim.png is drawn by rtgait.sim.run, in PNG only for now
-        raise ScenarioError(f"--format {args.figure_format} is for --model lipm: the MuJoCo run writes zmp_sim.png")
-    if args.controller not in (None, "open-loop"):
-        raise ScenarioError(
-            f"--controller {args.controller} is not wired into the MuJoCo loop yet: use --model lipm, or open-loop "
-            "(with --stabilizer for the loop's COG-shift stabiliser)"
-        )
+    if args.mass is not None:
+        raise ScenarioError("--mass is for --model lipm (the robot's mass is its model's)")
+    _check_periods(args.control_dt, args.physics_dt)
     args.robot = args.robot or "talos"
+    controller = args.controller or "adaptive"
     velocity = None if args.velocity is None else numbers(args.velocity, 3, "--velocity")
     try:
         from rtgait.robot.motion import whole_body_motion
@@ -162,21 +178,67 @@ def run(args: argparse.Namespace) -> int:
     pushes = _check_simulation(args, scenario, velocity, out)
     robot = load_robot(args.robot)
     walk = robot_walk(scenario, robot)
+    config = _physics_config(robot, args.control_dt, args.physics_dt)
+    for push in pushes:
+        try:
+            push.check(robot.mass, walk.cog_height, walk.gravity)
+        except ValueError as error:
+            raise ScenarioError(f"--push at {push.start:g} s: {error}") from None
     # The check of `plan --robot`, on the walk the simulation will ask for: a robot that cannot reach it is refused.
     whole_body_motion(robot, planned_walk(scenario, robot, velocity))
     show = not args.quiet and sys.stderr.isatty()
     progress = progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
-    extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection}
-    extra["stabilizer"] = args.stabilizer
+    extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection, "walk": _walk_facts(walk)}
     with mujoco_messages() as messages:  # else MuJoCo appends them to MUJOCO_LOG.TXT in the working folder
-        result = _physics(scenario, walk, robot, velocity, pushes, args.stabilizer, progress, extra)
+        result = _physics(scenario, walk, robot, config, controller, velocity, pushes, progress, extra)
     extra["mujoco_warnings"] = messages
     if show:
         sys.stderr.write("\r\033[K")
-    summary = _write_simulation(result, scenario, walk, robot, out, not args.no_figures, args.html, extra)
+    summary = _write_simulation(result, scenario, walk, robot, out, args, extra)
     if not args.quiet:
-        sys.stdout.write(simulation_report(summary, out))
+        from rtgait.sim.outputs import sim_report
+
+        sys.stdout.write(sim_report(summary, out))
     return 0
+
+
+def _check_periods(control_dt: float | None, physics_dt: float | None) -> None:
+    """The periods asked for, when both are known before the robot is (s); each must be a duration > 0."""
+    for name, value in (("--control-dt", control_dt), ("--physics-dt", physics_dt)):
+        if value is not None and not (math.isfinite(value) and 1e-5 <= value <= 0.1):
+            raise ScenarioError(f"{name} must be within [1e-05, 0.1] s, got {value}")
+    if control_dt is not None and physics_dt is not None:
+        from rtgait.sim.actuation import substeps
+
+        try:
+            substeps(control_dt, physics_dt)
+        except ValueError as error:
+            raise ScenarioError(f"--physics-dt: {error}") from None
+
+
+def _physics_config(robot: RobotModel, control_dt: float | None, physics_dt: float | None) -> SimConfig:
+    """The physics parameters with the periods asked for, checked against the robot's own control period."""
+    from rtgait.sim.actuation import substeps
+    from rtgait.sim.run import sim_config
+
+    config = sim_config(None, control_dt, physics_dt)
+    control = robot.description.actuation.control_dt if control_dt is None else control_dt
+    try:
+        substeps(control, config.physics_dt)
+    except ValueError as error:
+        raise ScenarioError(f"--physics-dt: {error} (the control period of {robot.name})") from None
+    return config
+
+
+def _walk_facts(walk: Scenario) -> dict[str, Any]:
+    """The walk's COG height, step width and sole as the robot gives them, for the summary."""
+    sole = walk.sole
+    return {
+        "cog_height": walk.cog_height,
+        "step_width": walk.step_width,
+        "sole": {"front": sole.front, "back": sole.back, "inner": sole.inner, "outer": sole.outer},
+        "source": "from the robot description (the scenario's own are not used)",
+    }
 
 
 def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) -> int:
@@ -184,9 +246,9 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) 
     from rtgait.pendulum_sim import PENDULUM_FILES, simulate_pendulum, write_pendulum_outputs
     from rtgait.viz.run_data import PENDULUM_FIGURE, figure_file
 
-    for option, why in (("velocity", "walks by command"), ("html", "the 3D replay"), ("stabilizer", "its stabiliser")):
+    for option, why in (("velocity", "walks by command"), ("html", "the 3D replay"), ("physics_dt", "its step")):
         if getattr(args, option):
-            raise ScenarioError(f"--{option} ({why}) is for --model mujoco")
+            raise ScenarioError(f"--{option.replace('_', '-')} ({why}) is for --model mujoco")
     if scenario.guide is not None:
         raise ScenarioError(f"{scenario.name} is led by the hand ([guide]): that needs --model mujoco")
     mass = args.mass
@@ -236,16 +298,17 @@ def _check_simulation(
     args: argparse.Namespace, scenario: Scenario, velocity: tuple[float, ...] | None, out: Path
 ) -> list[Push]:
     """Everything about a simulation that can be checked before loading the robot; returns the pushes."""
-    from rtgait.sim.model import SimConfig
-    from rtgait.sim.run import SIM_FILES, simulated_time
+    from rtgait.sim.outputs import sim_figure_file
+    from rtgait.sim.run import simulated_time
 
     run_time = simulated_time(scenario, velocity=velocity)
-    check_run_length(run_time, SimConfig().timestep)
-    pushes = _pushes(args.push, run_time)
+    check_run_length(run_time, args.physics_dt or 0.001)
+    lead = 1.5  # the start transition (LoopOptions' start_ramp + start_hold): the walk's clock starts after it
+    pushes = _pushes(args.push, run_time - lead)
     figures = not args.no_figures
     require_extras(figures, args.html)
-    names = [name for name in SIM_FILES if figures or name != "zmp_sim.png"] + (["replay.html"] if args.html else [])
-    check_destination(out, names)
+    names = ["sim.csv", "summary.json"] + ([sim_figure_file(args.figure_format)] if figures else [])
+    check_destination(out, names + (["replay.html"] if args.html else []))
     return pushes
 
 
@@ -253,24 +316,26 @@ def _physics(
     scenario: Scenario,
     walk: Scenario,
     robot: RobotModel,
+    config: SimConfig,
+    controller: str,
     velocity: tuple[float, ...] | None,
     pushes: list[Push],
-    stabilizer: bool,
     progress: Callable[[float], None] | None,
     extra: dict[str, Any],
 ) -> SimResult:
     """Walk ``scenario`` (as ``robot`` walks it: ``walk``) in MuJoCo; a guided walk's outcome goes into ``extra``."""
+    from rtgait.sim.model import build_sim_model
     from rtgait.sim.run import loop_options, simulate
 
+    sim = build_sim_model(robot, config)
     if scenario.guide is None or velocity is not None:
-        return simulate(scenario, robot, velocity=velocity, push=pushes or None, stabilizer=stabilizer,
-                        progress=progress)  # fmt: skip
+        return simulate(scenario, robot, controller=controller, velocity=velocity, push=pushes or None, sim=sim,
+                        progress=progress)  # type: ignore[arg-type]  # fmt: skip
     # Led by the hand: the outcome (where the person led the robot) goes into the summary too.
     from rtgait.sim.guided import simulate_guided
-    from rtgait.sim.model import build_sim_model
 
-    options = loop_options(pushes or None, stabilizer)
-    result, led = simulate_guided(build_sim_model(robot), walk, options, progress=progress)
+    options = loop_options(pushes or None)
+    result, led = simulate_guided(sim, walk, options, controller=controller, progress=progress)  # type: ignore[arg-type]
     extra["guide"] = {**asdict(led), "base_error": led.base_error}
     return result
 
@@ -281,8 +346,7 @@ def _write_simulation(
     walk: Scenario,
     robot: RobotModel,
     out: Path,
-    figures: bool,
-    html: bool,
+    args: argparse.Namespace,
     extra: dict[str, Any],
 ) -> dict[str, Any]:
     """Write the simulation's outputs into a staging folder, then replace the previous ones in ``out`` together."""
@@ -290,10 +354,10 @@ def _write_simulation(
 
     with staged_outputs(out) as staging:
         summary = write_sim_outputs(
-            result, staging.folder, figure=figures, title=f"{scenario.name} ({scenario.connection})", extra=extra,
-            replay=robot if html else None, sole=walk.sole,  # the sole the walk was planned with
+            result, staging.folder, figure=not args.no_figures, figure_format=args.figure_format,
+            title=f"{scenario.name} ({scenario.connection})", extra=extra, replay=robot if args.html else None,
+            sole=walk.sole,  # the sole the walk was planned with
         )  # fmt: skip
         for name in summary["files"]:
             staging.add(name)
     return summary
-

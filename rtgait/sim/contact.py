@@ -21,7 +21,9 @@ import numpy as np
 if TYPE_CHECKING:
     from rtgait.sim.model import SimModel
 
-__all__ = ["ContactMonitor", "FallLimits", "Landings", "Push", "Pushes", "measure_contacts"]
+_TIME_TOLERANCE = 1e-9  # s
+
+__all__ = ["PUSH_SPEED_LIMIT", "ContactMonitor", "FallLimits", "Landings", "Push", "Pushes", "measure_contacts"]
 
 
 @dataclass(frozen=True)
@@ -132,8 +134,8 @@ class ContactMonitor:
         self.threshold = threshold
         # One row per tick, written at once (one assignment costs less than one per quantity): ZMP x, y (NaN while
         # no foot touches), vertical force left, right, sole corners touching left, right, cosine of the sole tilt
-        # left, right, contacts between the legs.
-        self._table = np.zeros((n_ticks, 9))
+        # left, right, contacts between the legs, then each sole's x, y and yaw (left, then right).
+        self._table = np.zeros((n_ticks, 15))
         self.tip_time: float | None = None
         self._cos_tip = math.cos(falls.tip_angle)
         self._cos_fall = math.cos(falls.tilt)
@@ -157,9 +159,15 @@ class ContactMonitor:
             x = y = math.nan
             self._airborne += 1
         # The z-z entry of a sole's orientation is the cosine of its tilt from level.
-        site_xmat = self._data.site_xmat
-        cos_left, cos_right = site_xmat[self._sites[0], 8], site_xmat[self._sites[1], 8]
-        self._table[k] = x, y, fl, fr, cl, cr, cos_left, cos_right, other
+        site_xmat, site_xpos = self._data.site_xmat, self._data.site_xpos
+        left, right = self._sites
+        ml, mr = site_xmat[left].tolist(), site_xmat[right].tolist()
+        pl, pr = site_xpos[left].tolist(), site_xpos[right].tolist()
+        cos_left, cos_right = ml[8], mr[8]
+        self._table[k] = (
+            x, y, fl, fr, cl, cr, cos_left, cos_right, other,
+            pl[0], pl[1], math.atan2(ml[3], ml[0]), pr[0], pr[1], math.atan2(mr[3], mr[0]),
+        )  # fmt: skip
         # Tipping over: the loaded foot turned onto an edge of its sole.
         if self.tip_time is None and (
             (fl > 0.5 * total and cos_left < self._cos_tip) or (fr > 0.5 * total and cos_right < self._cos_tip)
@@ -202,6 +210,11 @@ class ContactMonitor:
         """Whether the legs touched each other over the first ``ticks`` ticks, shape ``(ticks,)``."""
         return self._table[:ticks, 8] > 0.0
 
+    def sole_poses(self, ticks: int) -> np.ndarray:
+        """Each sole's ground pose ``(x, y, yaw)`` (m, rad; yaw of its x axis) over the first ``ticks`` ticks, shape
+        ``(ticks, 2, 3)``, left then right."""
+        return self._table[:ticks, 9:15].reshape(ticks, 2, 3).copy()
+
 
 class Landings:
     """Touch-downs completed: when a single support (an odd phase of the planner) ends, its swing foot must be found
@@ -215,6 +228,8 @@ class Landings:
     def __init__(self, window: float, threshold: float) -> None:
         self.window, self.threshold = window, threshold
         self.count = 0
+        self.missed = 0
+        """Single supports whose swing foot was not on the floor by the end of its window."""
         self._pending: tuple[int, float] | None = None  # (foot index, end of its window)
         self._phase, self._code = -1, 0
 
@@ -232,6 +247,14 @@ class Landings:
                 self._pending = None
             elif t >= self._pending[1]:
                 self._pending = None
+                self.missed += 1
+
+
+PUSH_SPEED_LIMIT = 10.0
+"""Largest push accepted, as the change of COM speed ``|J| / m`` it would give the free robot, in units of
+``sqrt(g z_c)`` (the pendulum plant's limit, :data:`rtgait.core.plant.PUSH_SPEED_LIMIT`): some twenty times what any
+number of steps could recover, so it refuses only physical nonsense (a unit error, a collision), never a push worth
+simulating. 2.6 kN s for Talos (90 kg, COM 0.84 m high), 0.84 kN s for G1."""
 
 
 @dataclass(frozen=True)
@@ -239,7 +262,8 @@ class Push:
     """An external force on a body of the robot, constant over a time window (e.g. a push at the pelvis).
 
     Attributes:
-        start: when it begins (s, simulation time from the start of the run).
+        start: when it begins (s, on the walk's clock: 0 when the walk starts, negative during the start
+            transition).
         duration: how long it lasts (s); the impulse is ``force * duration`` (N s).
         force: world-frame force ``(fx, fy, fz)`` (N), applied at the body's centre of mass.
         body: MuJoCo body name; ``None`` for the floating base.
@@ -251,12 +275,48 @@ class Push:
     body: str | None = None
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.start) and self.start >= 0.0):
-            raise ValueError(f"push start must be a time >= 0 s, got {self.start}")
+        if not math.isfinite(self.start):
+            raise ValueError(f"push start must be a finite time in s, got {self.start}")
         if not (math.isfinite(self.duration) and self.duration > 0.0):
             raise ValueError(f"push duration must be > 0 s, got {self.duration}")
         if len(self.force) != 3 or not all(math.isfinite(f) for f in self.force):
             raise ValueError(f"push force must be three finite numbers (fx, fy, fz) in N, got {self.force!r}")
+
+    @property
+    def impulse(self) -> tuple[float, float, float]:
+        """``force * duration`` (N s)."""
+        return (self.force[0] * self.duration, self.force[1] * self.duration, self.force[2] * self.duration)
+
+    @property
+    def impulse_norm(self) -> float:
+        """Size of the impulse (N s)."""
+        return math.hypot(*self.impulse)
+
+    def check(self, mass: float, cog_height: float, gravity: float = 9.81) -> None:
+        """Refuse a push beyond physical sense for a robot of ``mass`` (kg) walking with its COM ``cog_height`` (m)
+        high (:data:`PUSH_SPEED_LIMIT`).
+
+        Raises:
+            ValueError: naming the impulse and the limit.
+        """
+        limit = PUSH_SPEED_LIMIT * mass * math.sqrt(gravity * cog_height)
+        if self.impulse_norm > limit:
+            raise ValueError(
+                f"push impulse {self.impulse_norm:.4g} N s exceeds {limit:.4g} N s, a change of COM speed of "
+                f"{PUSH_SPEED_LIMIT:g} sqrt(g z_c) for this {mass:.1f} kg robot: check the units (N, s)"
+            )
+
+    def summary(self) -> dict[str, object]:
+        """JSON-ready: ``start``, ``duration`` (s), ``force`` (N), ``impulse`` (N s), ``impulse_norm`` (N s),
+        ``body``."""
+        return {
+            "start": self.start,
+            "duration": self.duration,
+            "force": list(self.force),
+            "impulse": list(self.impulse),
+            "impulse_norm": self.impulse_norm,
+            "body": self.body,
+        }
 
 
 class Pushes:
@@ -276,7 +336,10 @@ class Pushes:
         self._next = 0
 
     def update(self, t: float) -> None:
-        """Apply the push acting at time ``t`` (s), and end the one that is over."""
+        """Apply the push acting at time ``t`` (s), and end the one that is over. A window edge within a nanosecond
+        of a tick counts as on it, so that a push of 0.1 s lasts exactly 100 ticks of 1 ms whatever the round-off of
+        the tick times."""
+        t += _TIME_TOLERANCE
         active = self._active
         if active is not None and t >= active[1]:
             self._xfrc[active[3], 0:3] = 0.0

@@ -26,6 +26,7 @@ All on Python floats; the support polygon (numpy) is rebuilt only when the feet 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, NamedTuple
@@ -51,6 +52,7 @@ if TYPE_CHECKING:
 __all__ = [
     "CONTROLLERS",
     "SIM_COM_ADMITTANCE",
+    "SIM_COP_ADMITTANCE",
     "ControlEvent",
     "ControlTargets",
     "ControllerOptions",
@@ -67,6 +69,23 @@ Talos in MuJoCo, stiff position servos, 6 steps of 0.1 m at 0.7/0.1 s with a 0.1
 support: with ``A = 0`` the measured ZMP strayed 52 mm RMS from the plan and a 25 N s outward push felled it; with
 0.5, 22 mm, and it stood that push and a 40 N s inward one; with 2, 10 mm, but the inward push saturated the COM
 offset (5 cm) and felled it."""
+
+SIM_COP_ADMITTANCE = 0.002
+"""Ankle damping gain ``K`` of the MuJoCo levels (rad/(N m s)), a fifth of lipm_walking_controller's 0.01 for HRP-4
+(:class:`~rtgait.sim.foot_control.FootControlGains`). The CoP loop's rate is ``K`` times the stiffness that turns an
+ankle tilt into a sole moment: on HRP-2 and HRP-4 the rubber bushes of the foot set it, some 10^3 N m/rad; here it is
+the stiff ankle servo (Talos 2.7e5 N m/rad, G1 6e4) in series with MuJoCo's sole contact, some 10^4 N m/rad, so
+0.01 made the loop faster than the 5 ms filter and the tick: the tilts chattered at their rate limit and fig8 fell,
+on Talos and on G1. Measured (``stabilized``, fig6/7/8): 0.001-0.003 walk on both robots, the measured ZMP 2-5 mm
+closer to the plan than without ankle damping."""
+
+ERROR_REPLAN_INTERVAL = 0.05
+"""Least time (s) between two replans of ``"adaptive"`` triggered by a DCM error: a replan from the measured state
+zeroes the error, so a new one means a new disturbance (the core's own interval for ``feedback="measured"``)."""
+
+ERROR_REPLAN_MIN_REMAINDER = 0.1
+"""Shortest remainder of a phase (s) over which a DCM error triggers a replan; closer to the phase's end the free ZMP
+polynomial would need wild swings, and the error is taken in at the next phase's first tick (as the core does)."""
 
 _NO_EVENTS: tuple[ControlEvent, ...] = ()
 _SIDES: tuple[Side, Side] = ("left", "right")
@@ -110,7 +129,8 @@ class ControllerOptions:
     Attributes:
         gains: DCM law and COM admittance; default the core law's gains with ``com_admittance`` =
             :data:`SIM_COM_ADMITTANCE`.
-        foot: foot force control gains; ``None`` turns foot force control off.
+        foot: foot force control gains, default its defaults with ``cop_admittance`` = :data:`SIM_COP_ADMITTANCE`;
+            ``None`` turns foot force control off.
         measurement_filter: time constant of the first-order low-pass on the measured ZMP and feet loads and CoPs
             before they are fed back (s); 0: none. MuJoCo's contact forces answer the stiff servos within a tick:
             fed back raw, they made Talos's ankle tilts chatter to their clamp (ZMP 101 mm RMS from the plan, against
@@ -122,22 +142,49 @@ class ControllerOptions:
         late_descent_speed: how fast a late foot's target goes down (m/s).
         late_descent_limit: how far below the plan it goes at most (m); also how far below where it touched an
             early-landed foot's target goes on down.
+        on_time_window: a touch-down this little before the plan's (s) is on time, not early: the foot goes on down
+            with the plan and support switches with it. The swing's height profile ends flat (2 mm at 70 ms before
+            the touch-down, :mod:`rtgait.core.swing`), so a robot whose stance side gives 2 mm touches that early at
+            every step (G1 does: its body rolls 5-8 mrad toward the swing foot); switching support at each of those
+            touches made G1 fall on fig6 and fig8, while with this window it walks them.
+        relanding_tolerance: a foot that lands again (after a bounce, or a standing foot unloaded and loaded
+            again) is re-anchored only when it moved this far (m; its heading twice this in rad) from where it was
+            anchored: a bounce in place would only replan for nothing.
+        late_grace: a foot not on the ground when its swing ends counts as late only this long (s) after: the
+            landing's detection lags the touch (MuJoCo's soft contact reaches the landing force a few milliseconds
+            after the sole touches; Talos's landings were detected 2-9 ms after the planned touch-down), and a foot
+            lowered for that lag stood its whole stance 1-2 mm below the floor, pressing against the other.
+        measured_replanning: ``"adaptive"``: when a plan starts from the measured COM state. ``"on-error"``
+            (default): only when the measured DCM is more than ``replan_dcm_error`` off the plan's (a disturbance);
+            every other plan (the regular double-support replans, the re-anchoring at landings, the start) continues
+            the plan under way. ``"always"``: every plan, the core's ``feedback="measured"`` (module docstring).
     """
 
     gains: DcmFeedbackGains = field(default_factory=lambda: DcmFeedbackGains(com_admittance=SIM_COM_ADMITTANCE))
-    foot: FootControlGains | None = field(default_factory=FootControlGains)
+    foot: FootControlGains | None = field(default_factory=lambda: FootControlGains(cop_admittance=SIM_COP_ADMITTANCE))
     measurement_filter: float = 0.005
     replan_dcm_error: float = DEFAULT_REPLAN_DCM_ERROR
     step_adjustment: StepAdjustment | None = None
     early_touchdown_fraction: float = 0.5
     late_descent_speed: float = 0.3
     late_descent_limit: float = 0.02
+    measured_replanning: str = "on-error"
+    late_grace: float = 0.01
+    on_time_window: float = 0.08
+    relanding_tolerance: float = 0.01
+    com_reference: str = "measured"
 
     def __post_init__(self) -> None:
-        for name in ("measurement_filter", "late_descent_speed", "late_descent_limit"):
+        names = ("measurement_filter", "late_descent_speed", "late_descent_limit", "late_grace", "on_time_window",
+                 "relanding_tolerance")  # fmt: skip
+        for name in names:
             value = getattr(self, name)
             if not (math.isfinite(value) and 0.0 <= value <= 10.0):
                 raise ValueError(f"ControllerOptions.{name} must be within [0, 10], got {value}")
+        if self.com_reference not in ("measured", "planned"):
+            raise ValueError(f"com_reference must be 'measured' or 'planned', got {self.com_reference!r}")
+        if self.measured_replanning not in ("on-error", "always"):
+            raise ValueError(f"measured_replanning must be 'on-error' or 'always', got {self.measured_replanning!r}")
         if not 0.0 <= self.early_touchdown_fraction <= 1.0:
             raise ValueError(f"early_touchdown_fraction must be within [0, 1], got {self.early_touchdown_fraction}")
 
@@ -171,6 +218,8 @@ class ControlTargets(NamedTuple):
             early or late touch-down the feet really on the ground.
         phase: the planner's phase index.
         events: what happened at this tick (:class:`ControlEvent`).
+        planned_support: the plan's support at this tick (``"double"``, ``"left"``, ``"right"``).
+        dcm_planned: the plan's DCM (m).
     """
 
     t: float
@@ -184,6 +233,8 @@ class ControlTargets(NamedTuple):
     support: str
     phase: int
     events: tuple[ControlEvent, ...]
+    planned_support: str = "double"
+    dcm_planned: tuple[float, float] = (math.nan, math.nan)
 
     @property
     def ik(self) -> IKTargets:
@@ -206,6 +257,8 @@ class WalkingController:
         closed = level != "open-loop"
         self.feedback = DcmFeedback(planner.w, options.gains, dt) if closed else None
         self.foot = FootForceControl(options.foot, dt) if closed and options.foot is not None else None
+        self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
+        self._last_error_replan = -math.inf
         tau = options.measurement_filter
         self._smoothing = 1.0 if tau == 0.0 else -math.expm1(-dt / tau)
         self._polygon_key: tuple[float, ...] | None = None
@@ -223,8 +276,10 @@ class WalkingController:
         self._replans = self._adjustments = 0
         # Early touch-down: (x, y, yaw) where it landed, and the least height of its target (m).
         self._hold: list[tuple[float, float, float, float] | None] = [None, None]
-        self._late = [False, False]
+        self._late = [False, False]  # the swing ended in the air ...
+        self._late_from = [math.inf, math.inf]  # ... and from when (s) it counts as late
         self._landed = [True, True]  # whether the foot's last swing ended on the ground
+        self._anchor: list[tuple[float, float, float] | None] = [None, None]  # the last re-anchored pose per foot
         self._swing_phase = [-2, -2]  # phase of each foot's last swing
         self._z = [0.0, 0.0]  # height of each foot's target above the plan (m): landing heights, late descent
         self._blend: list[tuple[float, float, float] | None] = [None, None]  # (height, swing start, duration)
@@ -237,9 +292,13 @@ class WalkingController:
         if self.level == "adaptive" and measurement is not None:
             m = measurement
             feet = (m.left.footstep("left"), m.right.footstep("right"))
-            planner.start(t0, feet=feet, cog=m.com[:2], cog_vel=m.com_vel[:2])
+            if self._on_error:  # standing: the COM where the plan has it, between the measured feet, at rest
+                planner.start(t0, feet=feet)
+            else:
+                planner.start(t0, feet=feet, cog=m.com[:2], cog_vel=m.com_vel[:2])
         else:
             planner.start(t0)
+        self._last_error_replan = -math.inf
         self._replans, self._adjustments = planner.replan_count, planner.step_adjustment_count
 
     # ----- the tick ------------------------------------------------------------------------------------------------
@@ -249,8 +308,10 @@ class WalkingController:
         adaptive = self.level == "adaptive"
         events: list[ControlEvent] = []
         if adaptive:
-            planner.observe(t, m.com[:2], m.com_vel[:2])  # may replan at once (DCM error)
+            planner.observe(t, m.com[:2], m.com_vel[:2])  # with "always", may replan at once (DCM error)
         values, support, q = planner.sample_values(t)
+        if self._on_error and self._dcm_error_replan(t, m, values, q):
+            values, support, q = planner.sample_values(t)
         if q != self._phase:
             self._enter_phase(q, support, m)
         self._update_heights(t)
@@ -261,7 +322,8 @@ class WalkingController:
 
         left = self._foot_target(0, values[13:17])
         right = self._foot_target(1, values[17:21])
-        support = self._support(support)
+        planned_support = support
+        support = self._support(t, support)
         planned_zmp = (values[9], values[10])
         com = (values[0], values[1], values[2])
         offsets = FootOffsets()
@@ -281,8 +343,42 @@ class WalkingController:
                 left = (left[0], left[1], left[2] + offsets.left_height, left[3])
                 right = (right[0], right[1], right[2] + offsets.right_height, right[3])
         return ControlTargets(
-            t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS
-        )
+            t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
+            planned_support, (values[21], values[22]),
+        )  # fmt: skip
+
+    def _dcm_error_replan(self, t: float, m: Measurement, values: list[float], q: int) -> bool:
+        """``"on-error"``: replan from the measured state when the measured DCM is more than ``replan_dcm_error`` off
+        the plan's, as the core's ``observe`` does with ``feedback="measured"`` (at most every
+        :data:`ERROR_REPLAN_INTERVAL`, not within :data:`ERROR_REPLAN_MIN_REMAINDER` of a phase's end); returns
+        whether it replanned."""
+        threshold = self.options.replan_dcm_error
+        w = self.planner.w
+        ex = m.com[0] + m.com_vel[0] / w - values[21]
+        ey = m.com[1] + m.com_vel[1] / w - values[22]
+        if ex * ex + ey * ey <= threshold * threshold or t - self._last_error_replan < ERROR_REPLAN_INTERVAL:
+            return False
+        planner = self.planner
+        remainder = planner.phase_start(q) + planner.timeline.duration(q) - t
+        if remainder < ERROR_REPLAN_MIN_REMAINDER:
+            return False
+        self._last_error_replan = t
+        # The core takes the measured state into a plan, and adjusts steps, when its configuration says so: for this
+        # one replan.
+        config = planner.config
+        planner.config = dataclasses.replace(config, feedback="measured", step_adjustment=self.options.step_adjustment)
+        try:
+            replanned = planner.replan_now(t, "dcm-error") is not None
+            if replanned and self.options.com_reference == "planned":
+                # The footsteps are the measured state's; the COM goes on from where the plan had it, so that the
+                # servos keep pulling the robot back: the plan under way remade from the state sampled before.
+                planner.observe(t, (values[0], values[1]), (values[3], values[4]))
+                planner.config = dataclasses.replace(config, feedback="measured")
+                planner.replan_now(t, "dcm-error-plan")
+                planner.observe(t, m.com[:2], m.com_vel[:2])
+            return replanned
+        finally:
+            planner.config = config
 
     # ----- landings and the feet's targets ---------------------------------------------------------------------------
     def _enter_phase(self, q: int, support: str, m: Measurement) -> None:
@@ -301,6 +397,7 @@ class WalkingController:
             if not self._landed[i]:
                 loaded = (m.left, m.right)[i].loaded
                 self._late[i] = self.level == "adaptive" and not loaded
+                self._late_from[i] = self.planner.phase_start(q) + self.options.late_grace
                 self._landed[i] = loaded
         if support in _SIDES:  # a single support: the other foot lifts off
             i = 1 if support == "left" else 0
@@ -315,16 +412,28 @@ class WalkingController:
         """Classify a landing and, in ``"adaptive"``, act on it; returns whether the planner replanned."""
         i = 0 if landing.side == "left" else 1
         planner = self.planner
-        if support in _SIDES and _SIDES[i] != support:  # the plan has this foot swinging
+        swinging = support in _SIDES and _SIDES[i] != support  # the plan has this foot swinging
+        if self._landed[i] or not (swinging or q == self._swing_phase[i] + 1):
+            kind = "re-landing"  # it bounced, or a standing foot was unloaded and loaded again
+        elif swinging:
             start, duration = planner.phase_start(q), planner.timeline.duration(q)
-            kind = "early" if t - start >= self.options.early_touchdown_fraction * duration else "ignored"
-        elif self._late[i]:
-            kind = "late"
+            if start + duration - t <= self.options.on_time_window:
+                kind = "on time"  # the foot follows the plan down: nothing to switch
+            elif t - start >= self.options.early_touchdown_fraction * duration:
+                kind = "early"
+            else:
+                kind = "ignored"
         else:
-            kind = "on time" if q == self._swing_phase[i] + 1 else "re-landing"
+            kind = "late" if self._late[i] and t >= self._late_from[i] else "on time"
         events.append(ControlEvent(t, "landing", landing.side, kind, landing.x, landing.y))
         if kind == "ignored" or self.level != "adaptive":
             return False
+        anchor = self._anchor[i]
+        if kind == "re-landing" and anchor is not None:
+            tolerance = self.options.relanding_tolerance
+            moved = math.hypot(landing.x - anchor[0], landing.y - anchor[1])
+            if moved < tolerance and abs(math.remainder(landing.yaw - anchor[2], math.tau)) < 2.0 * tolerance:
+                return False  # where it was anchored: nothing to re-anchor
         self._landed[i] = True
         self._late[i] = False
         if kind == "early":
@@ -338,6 +447,7 @@ class WalkingController:
         except (ValueError, RuntimeError) as error:
             events.append(ControlEvent(t, "touchdown-refused", landing.side, str(error), landing.x, landing.y))
             return False
+        self._anchor[i] = (landing.x, landing.y, landing.yaw)
         events.append(ControlEvent(t, "touchdown", landing.side, f"footprint {index}", landing.x, landing.y))
         return True
 
@@ -354,7 +464,7 @@ class WalkingController:
                     self._z[i] = 0.0
                 else:
                     self._z[i] = height * (1.0 - max(s, 0.0))
-            elif self._late[i]:
+            elif self._late[i] and t >= self._late_from[i]:
                 limit = self.options.late_descent_limit
                 self._z[i] = max(self._z[i] - self.options.late_descent_speed * self.dt, -limit)
 
@@ -365,12 +475,13 @@ class WalkingController:
             return (hold[0], hold[1], max(planned[2] + self._z[i], hold[3]), hold[2])
         return (planned[0], planned[1], planned[2] + self._z[i], planned[3])
 
-    def _support(self, planned: str) -> str:
+    def _support(self, t: float, planned: str) -> str:
         """The feet the controller acts on: the plan's, both after an early touch-down, the other while late."""
         if planned in _SIDES:
             swing = 1 if planned == "left" else 0
             return "double" if self._hold[swing] is not None else planned
-        late_left, late_right = self._late
+        late_left = self._late[0] and t >= self._late_from[0]
+        late_right = self._late[1] and t >= self._late_from[1]
         if late_left != late_right:
             return "right" if late_left else "left"
         return planned
@@ -447,4 +558,8 @@ def make_controller(
     config = controller_config(
         planner_config, level, sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
     )
+    if level == "adaptive" and options.measured_replanning == "on-error":
+        # The controller takes the measured state in, and steps elsewhere, only on a DCM error (_dcm_error_replan).
+        options = dataclasses.replace(options, step_adjustment=adjust)
+        config = dataclasses.replace(config, feedback="planned", step_adjustment=None)
     return WalkingController(level, OnlinePlanner(config, strides), info, dt, options)

@@ -25,11 +25,14 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
+from rtgait.core.closed_loop import Controller
 from rtgait.core.guidance import HandGuide
 from rtgait.core.online import OnlinePlanner, VelocityCommand
 from rtgait.scenario import GuidePath, Scenario
-from rtgait.sim.loop import LoopOptions, SimResult, run_closed_loop
+from rtgait.sim.controllers import ControllerOptions, make_controller
+from rtgait.sim.loop import LoopOptions, run_closed_loop
 from rtgait.sim.model import SimModel
+from rtgait.sim.result import SimResult
 
 __all__ = ["HAND_FRAMES", "GuideOutcome", "HandPull", "Leash", "guided_options", "simulate_guided"]
 
@@ -222,9 +225,9 @@ class HandPull:
 
 
 def guided_options(pull: HandPull, options: LoopOptions, margin: float = 8.0) -> LoopOptions:
-    """``options`` with ``pull`` as its hook and a duration that covers the start transition, the person's walk
-    and ``margin`` seconds (s) for the robot to catch up and stop."""
-    duration = options.start_ramp + options.start_hold + pull.path.duration + margin
+    """``options`` with ``pull`` as its hook and a duration that covers the person's walk and ``margin`` seconds
+    (s) for the robot to catch up and stop."""
+    duration = pull.path.duration + margin
     return dataclasses.replace(options, on_tick=pull, duration=duration, stop_after_steps=None)
 
 
@@ -233,6 +236,8 @@ def simulate_guided(
     walk: Scenario,
     options: LoopOptions | None = None,
     *,
+    controller: Controller = "adaptive",
+    controller_options: ControllerOptions | None = None,
     path: GuidePath | None = None,
     leash: Leash | None = None,
     progress: Callable[[float], None] | None = None,
@@ -244,6 +249,8 @@ def simulate_guided(
         walk: the scenario as walked by this robot (:func:`rtgait.robot.motion.robot_scenario`); its timing and
             connection (quasi-real-time) build the planner, ``walk.steps`` is the most steps allowed.
         options: further loop settings; its hook, duration and ``stop_after_steps`` are replaced.
+        controller: the controller level (:mod:`rtgait.sim.controllers`).
+        controller_options: its gains and landing handling.
         path: the person's path (default: ``walk.guide``).
         leash: the person's arm (default :class:`Leash`).
         progress: called now and then with the fraction simulated.
@@ -257,7 +264,9 @@ def simulate_guided(
     path = path or walk.guide
     if path is None:
         raise ValueError(f"scenario {walk.name!r} has no [guide] path")
-    planner = OnlinePlanner(walk.planner_config(), None)
-    pull = HandPull(sim, planner, path, leash, max_steps=walk.steps)
-    result = run_closed_loop(sim, planner, guided_options(pull, options or LoopOptions()), progress=progress)
+    level = make_controller(
+        controller, walk.planner_config(), None, walk.sole, sim.robot, dt=sim.control_dt, options=controller_options
+    )
+    pull = HandPull(sim, level.planner, path, leash, max_steps=walk.steps)
+    result = run_closed_loop(sim, level, guided_options(pull, options or LoopOptions()), progress=progress)
     return result, pull.outcome(result.base_position[-1])

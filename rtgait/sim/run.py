@@ -16,22 +16,28 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import inspect
-import json
 from collections.abc import Callable, Iterator, Sequence
-from pathlib import Path
-from typing import Any
 
 import mujoco
-import numpy as np
 
+from rtgait.core.closed_loop import CONTROLLERS, Controller
 from rtgait.core.online import OnlinePlanner, VelocityCommand
 from rtgait.core.rollout import Rollout, ScheduledChange, rollout
-from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario import Scenario
-from rtgait.sim.loop import LoopOptions, Push, SimResult, Stabilizer, run_closed_loop
+from rtgait.sim.controllers import ControllerOptions, WalkingController, make_controller
+from rtgait.sim.loop import LoopOptions, Push, SimResult, run_closed_loop
 from rtgait.sim.model import SimConfig, SimModel, build_sim_model
+from rtgait.sim.outputs import (
+    SIM_CSV_COLUMNS,
+    SIM_FILES,
+    TORQUE_COLUMN_PREFIX,
+    replay_paths,
+    sim_csv_columns,
+    write_sim_outputs,
+    write_sim_replay,
+)
 
 __all__ = [
     "SIM_CSV_COLUMNS",
@@ -49,48 +55,26 @@ __all__ = [
     "write_sim_replay",
 ]
 
-SIM_CSV_COLUMNS = (
-    "t", "zmp_x", "zmp_y", "zmp_planned_x", "zmp_planned_y",
-    "base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw",
-    "cog_x", "cog_y", "cog_z", "left_contact", "right_contact",
-)  # fmt: skip
-"""The first columns of ``sim.csv``: time (s), measured and planned ZMP (m; measured is ``nan`` while no foot
-touches the floor), base position (m) and orientation (unit quaternion x, y, z, w), measured COG (m), feet on the
-floor (0/1). Then one column ``tau_<joint>`` per actuated joint (:data:`TORQUE_COLUMN_PREFIX`): the joint torque
-the servo applied (N m), its mean over the tick's physics substeps. One row per control tick."""
 
-TORQUE_COLUMN_PREFIX = "tau_"
-"""Prefix of the joint torque columns of ``sim.csv``, followed by the URDF joint name."""
-
-SIM_FILES = ("sim.csv", "summary.json", "zmp_sim.png")
-"""Files written by :func:`write_sim_outputs` (the figure only when asked for)."""
-
-_FLOAT_FORMAT = "%.10g"
-
-
-def loop_options(
-    push: Push | Sequence[Push] | None = None,
-    stabilizer: bool | Stabilizer = False,
-    options: LoopOptions | None = None,
-) -> LoopOptions:
-    """``options`` (default :class:`LoopOptions`) with these pushes and stabiliser (see :func:`simulate`)."""
+def loop_options(push: Push | Sequence[Push] | None = None, options: LoopOptions | None = None) -> LoopOptions:
+    """``options`` (default :class:`LoopOptions`) with these pushes (see :func:`simulate`)."""
     if push is None:
         pushes: tuple[Push, ...] = ()
     elif isinstance(push, Push):
         pushes = (push,)
     else:
         pushes = tuple(push)
-    feedback = stabilizer if isinstance(stabilizer, Stabilizer) else (Stabilizer() if stabilizer else None)
-    return dataclasses.replace(options or LoopOptions(), stabilizer=feedback, pushes=pushes)
+    return dataclasses.replace(options or LoopOptions(), pushes=pushes)
 
 
 def simulate(
     scenario: Scenario,
     robot: RobotModel | str,
     *,
+    controller: Controller = "adaptive",
+    controller_options: ControllerOptions | None = None,
     velocity: VelocityCommand | tuple[float, float, float] | None = None,
     push: Push | Sequence[Push] | None = None,
-    stabilizer: bool | Stabilizer = False,
     progress: Callable[[float], None] | None = None,
     sim: SimModel | None = None,
     config: SimConfig | None = None,
@@ -98,8 +82,8 @@ def simulate(
     control_dt: float | None = None,
     physics_dt: float | None = None,
 ) -> SimResult:
-    """Walk ``scenario`` with ``robot`` in MuJoCo, planner + whole-body IK + physics in closed loop, one tick per
-    control period (the robot's: 1 kHz for Talos, 500 Hz for G1).
+    """Walk ``scenario`` with ``robot`` in MuJoCo, in closed loop at a controller level: measurement, controller,
+    whole-body IK and physics once per control period (the robot's: 1 kHz for Talos, 500 Hz for G1).
 
     The scenario is walked with the robot's nominal COG height, its step width at half-sitting and its sole
     (:func:`rtgait.robot.motion.robot_scenario`); its footstep changes are handed to the planner at their
@@ -110,19 +94,20 @@ def simulate(
     Args:
         scenario: the walk (a built-in scenario or one loaded from a file).
         robot: a loaded robot, or a built-in robot name / description file path.
+        controller: ``"adaptive"`` (default: feedback, foot force control, measured-state replanning,
+            re-anchoring, step adjustment, landing detection), ``"stabilized"`` (feedback and foot force control)
+            or ``"open-loop"`` (the plan alone, the paper's assumption); :mod:`rtgait.sim.controllers`.
+        controller_options: the levels' gains and landing handling (default :class:`ControllerOptions`).
         velocity: walk by velocity command ``(vx, vy, wz)`` (m/s, m/s, rad/s) instead of the scenario's footsteps:
             ``scenario.steps`` steps, then a closing step; the scenario's changes do not apply. Without it, a
             scenario with a ``[guide]`` path is walked led by the hand (:func:`rtgait.sim.guided.simulate_guided`).
         push: external force(s) on the robot, e.g. ``Push(start=5.0, duration=0.1, force=(0, 100, 0))``; times
-            are from the start of the run, whose walk begins after the start transition
-            (:attr:`SimResult.walk_start`).
-        stabilizer: ``True`` for the default ZMP feedback (:class:`~rtgait.sim.loop.Stabilizer`), or one with your
-            gains; ``False`` (default): the planner alone, as in the paper.
+            are on the walk's clock (0 when the walk starts, after the start transition).
         progress: called now and then with the fraction simulated, for long runs.
         sim: a MuJoCo model built for this robot, to reuse (building one takes about 0.5 s with meshes).
         config: physics parameters for a new model (ignored when ``sim`` is given).
-        options: further loop settings (start transition, fall limits); ``changes``, ``pushes``, ``stabilizer``
-            and ``stop_after_steps`` in it are replaced by the ones derived from the arguments above.
+        options: further loop settings (start transition, fall limits); ``changes``, ``pushes`` and
+            ``stop_after_steps`` in it are replaced by the ones derived from the arguments above.
         control_dt: the control period (s), overriding ``config`` and the robot description's
             ``actuation.control_dt``; with ``sim``, it must be the model's.
         physics_dt: the physics step (s), overriding ``config``'s (default 1 ms); it must divide the control
@@ -133,27 +118,35 @@ def simulate(
 
     Raises:
         ValueError: ``sim`` was built for another robot or with other periods, a physics step longer than the
-            control period or not dividing it, or a bad push / velocity.
+            control period or not dividing it, an unknown controller, or a bad push (beyond physical sense:
+            :meth:`Push.check`) or velocity.
         rtgait.robot.description.RobotError: the robot cannot be loaded or built.
     """
+    if controller not in CONTROLLERS:
+        raise ValueError(f"controller must be one of {', '.join(CONTROLLERS)}, got {controller!r}")
     if not isinstance(robot, RobotModel):
         robot = RobotModel.load(robot)
+    walk = robot_scenario(scenario, robot)
+    base_options = loop_options(push, options)
+    for each in base_options.pushes:
+        each.check(robot.mass, walk.cog_height, walk.gravity)
     if sim is None:
         sim = build_sim_model(robot, sim_config(config, control_dt, physics_dt))
     elif sim.robot is not robot:
         raise ValueError(f"the simulation model was built for another model of {sim.robot.name!r}")
     else:
         _check_periods(sim, control_dt, physics_dt)
-    base_options = loop_options(push, stabilizer, options)
-    walk = robot_scenario(scenario, robot)
     if walk.guide is not None and velocity is None:
         # Led by the hand: the pull sets the steps (rtgait.sim.guided); the scenario's footsteps do not apply.
         from rtgait.sim.guided import simulate_guided
 
-        return simulate_guided(sim, walk, dataclasses.replace(base_options, changes=()), progress=progress)[0]
-    planner, changes, stop_after = _planner(walk, velocity)
+        return simulate_guided(
+            sim, walk, dataclasses.replace(base_options, changes=()), controller=controller,
+            controller_options=controller_options, progress=progress,
+        )[0]  # fmt: skip
+    level, changes, stop_after = _controller(walk, velocity, controller, sim, controller_options)
     walk_options = dataclasses.replace(base_options, changes=changes, stop_after_steps=stop_after)
-    return run_closed_loop(sim, planner, walk_options, progress=progress)
+    return run_closed_loop(sim, level, walk_options, progress=progress)
 
 
 def sim_config(
@@ -183,8 +176,8 @@ def _check_periods(sim: SimModel, control_dt: float | None, physics_dt: float | 
 def _planner(
     walk: Scenario, velocity: VelocityCommand | tuple[float, float, float] | None
 ) -> tuple[OnlinePlanner, tuple[ScheduledChange, ...], int | None]:
-    """The planner of ``walk`` (by its footsteps, or by the ``velocity`` command), the changes to hand it and,
-    for a walk by command, the steps after which it stops."""
+    """The open-loop planner of ``walk`` (by its footsteps, or by the ``velocity`` command), the changes to hand it
+    and, for a walk by command, the steps after which it stops."""
     config = walk.planner_config()
     if velocity is None:
         return OnlinePlanner(config, walk.strides()), walk.changes, None
@@ -192,6 +185,26 @@ def _planner(
     planner = OnlinePlanner(config, None)
     planner.set_velocity(command.vx, command.vy, command.wz)
     return planner, (), walk.steps
+
+
+def _controller(
+    walk: Scenario,
+    velocity: VelocityCommand | tuple[float, float, float] | None,
+    level: Controller,
+    sim: SimModel,
+    options: ControllerOptions | None,
+) -> tuple[WalkingController, tuple[ScheduledChange, ...], int | None]:
+    """The controller of ``level`` for ``walk`` (by its footsteps, or by the ``velocity`` command), the changes to
+    hand its planner and, for a walk by command, the steps after which it stops."""
+    strides = walk.strides() if velocity is None else None
+    controller = make_controller(
+        level, walk.planner_config(), strides, walk.sole, sim.robot, dt=sim.control_dt, options=options
+    )
+    if velocity is None:
+        return controller, walk.changes, None
+    command = velocity if isinstance(velocity, VelocityCommand) else VelocityCommand(*velocity)
+    controller.planner.set_velocity(command.vx, command.vy, command.wz)
+    return controller, (), walk.steps
 
 
 def planned_walk(
@@ -249,180 +262,3 @@ def mujoco_messages() -> Iterator[list[str]]:
         yield messages
     finally:
         mujoco.set_mju_user_warning(previous)
-
-
-def sim_csv_columns(result: SimResult) -> tuple[str, ...]:
-    """The columns of ``result``'s ``sim.csv``: :data:`SIM_CSV_COLUMNS`, then ``tau_<joint>`` per actuated joint."""
-    return SIM_CSV_COLUMNS + tuple(TORQUE_COLUMN_PREFIX + name for name in result.joint_names)
-
-
-def _table(result: SimResult) -> np.ndarray:
-    torque = result.torque if result.torque.shape[0] == len(result.times) else np.zeros((len(result.times), 0))
-    return np.column_stack(
-        [
-            result.times,
-            result.zmp,
-            result.zmp_planned,
-            result.base_position,
-            result.base_quaternion,
-            result.cog,
-            result.contact.astype(float),
-            torque,
-        ]
-    )
-
-
-def _write_csv(result: SimResult, path: Path) -> None:
-    table = _table(result)
-    columns = sim_csv_columns(result)[: table.shape[1]]
-    with open(path, "w", encoding="utf-8", newline="") as stream:
-        stream.write(",".join(columns) + "\n")
-        # Contacts as integers; every other column in 10 significant digits (sub-micrometre positions).
-        formats = [_FLOAT_FORMAT] * (len(SIM_CSV_COLUMNS) - 2) + ["%d", "%d"]
-        formats += ["%.6g"] * (len(columns) - len(SIM_CSV_COLUMNS))  # torques: 1 uN m on 100 N m is plenty
-        np.savetxt(stream, table, fmt=formats, delimiter=",")
-
-
-def plot_zmp_sim(result: SimResult, path: Path, title: str = "") -> None:
-    """Planned and measured ZMP, x and y against time, with the walk's start, the double supports, and the
-    tip-over and fall marked; written to ``path`` (PNG)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    figure = Figure(figsize=(10.0, 6.0), dpi=100, layout="constrained")
-    FigureCanvasAgg(figure)
-    axes = figure.subplots(2, 1, sharex=True)
-    t = result.times
-    double = result.support == 0
-    for axis, ax in enumerate(axes):
-        # Shade the planned double supports: the measured ZMP moves between the feet there.
-        edges = np.flatnonzero(np.diff(np.r_[0, double.astype(int), 0]))
-        for start, stop in zip(edges[::2], edges[1::2], strict=True):
-            ax.axvspan(t[start], t[min(stop, len(t) - 1)], color="0.9", lw=0, zorder=0)
-        ax.plot(t, result.zmp_planned[:, axis], color="tab:blue", lw=1.4, label="planned ZMP")
-        ax.plot(t, result.zmp[:, axis], color="tab:orange", lw=0.8, label="measured ZMP (contact CoP)")
-        ax.plot(t, result.cog[:, axis], color="tab:red", lw=0.8, ls="--", label="measured COG")
-        ax.axvline(result.walk_start, color="0.4", lw=0.8, ls=":", label="walk starts")
-        if result.tip_time is not None:
-            ax.axvline(result.tip_time, color="tab:purple", lw=1.2, ls="--", label=f"tipped ({result.tip_time:.2f} s)")
-        if result.fell and result.fall_time is not None:
-            ax.axvline(result.fall_time, color="tab:red", lw=1.6, label=f"fell ({result.fall_time:.2f} s)")
-        ax.set_ylabel(f"{'xy'[axis]} (m)")
-        ax.grid(True, lw=0.3)
-    axes[0].legend(loc="upper left", fontsize=8, ncols=2)
-    axes[1].set_xlabel("time (s)")
-    outcome = (
-        f"fell at {result.fall_time:.2f} s ({result.fall_cause})"
-        if result.fell
-        else f"walked {result.steps_completed}/{result.steps_planned} steps"
-    )
-    if result.tip_time is not None:
-        outcome += f", a foot tipped over at {result.tip_time:.2f} s"
-    axes[0].set_title(f"{title + ': ' if title else ''}{result.robot} in MuJoCo, {outcome}", fontsize=10)
-    figure.savefig(path, format="png")
-
-
-def replay_paths(result: SimResult) -> tuple[np.ndarray, np.ndarray]:
-    """The measured COG (m, shape ``(m, 3)``) and ZMP (m, shape ``(m, 2)``) at the replay's ticks.
-
-    The measured ZMP is NaN while no foot touches the floor (and the replay cannot draw NaN): such rows hold the
-    last measured value, or the planned ZMP before the first measurement.
-    """
-    index = result.replay_index
-    cog = result.cog[index]
-    zmp = result.zmp[index].copy()
-    last = result.zmp_planned[index[0]] if len(index) else np.zeros(2)
-    for row in zmp:  # a few hundred rows: a plain loop is clearer than a vectorised forward fill
-        if np.isfinite(row).all():
-            last = row.copy()
-        else:
-            row[:] = last
-    return cog, zmp
-
-
-def write_sim_replay(
-    result: SimResult, robot: RobotModel, path: str | Path, *, sole: Any = None, title: str = ""
-) -> Path:
-    """Write ``path`` (HTML): the 3D replay of the SIMULATED motion, with the planner's footprints, the measured
-    COG and the measured ZMP (needs meshcat; see :func:`rtgait.viz.replay.write_replay_html`).
-
-    Args:
-        result: a simulated walk, with its configurations recorded (:attr:`SimResult.replay_q`).
-        robot: the robot it was simulated with (its full model and visual meshes are drawn).
-        path: the HTML file; its folder must exist.
-        sole: the footprints' sole rectangle (m), e.g. the walked scenario's ``sole``; the replay's default if
-            ``None``.
-        title: the page title.
-
-    Returns:
-        The path written.
-
-    Raises:
-        ValueError: fewer than two configurations were recorded, or they are for another robot.
-    """
-    from rtgait.robot.pipeline import visual_model
-    from rtgait.viz.replay import write_replay_html
-
-    if len(result.replay_index) < 2:
-        raise ValueError("the replay needs at least two recorded configurations (the run was too short)")
-    if result.replay_q.shape[1] != robot.full_model.nq:
-        raise ValueError(f"the recorded configurations are not those of {robot.name}'s full model")
-    cog, zmp = replay_paths(result)
-    return write_replay_html(
-        path,
-        robot.full_model,
-        visual_model(robot),
-        result.replay_times,
-        result.replay_q,
-        footprints=result.footprints,
-        sole=sole,
-        cog=cog,
-        zmp=zmp,
-        title=title or f"rtgait: {result.robot} in MuJoCo",
-    )
-
-
-def write_sim_outputs(
-    result: SimResult,
-    out_dir: str | Path,
-    *,
-    figure: bool = True,
-    title: str = "",
-    extra: dict[str, Any] | None = None,
-    replay: RobotModel | None = None,
-    sole: Any = None,
-) -> dict[str, Any]:
-    """Write ``sim.csv``, ``summary.json``, with ``figure`` ``zmp_sim.png`` and with ``replay`` ``replay.html``
-    into ``out_dir``.
-
-    Args:
-        result: the simulated walk.
-        out_dir: folder, created if missing; files of the same names are replaced, others are left alone.
-        figure: also draw ``zmp_sim.png`` (needs matplotlib).
-        title: prefix of the figure's and the replay's title (e.g. the scenario's name).
-        extra: more entries for the summary (e.g. the scenario's name).
-        replay: the robot simulated, to write the 3D replay of the simulated motion (:func:`write_sim_replay`,
-            needs meshcat).
-        sole: the replay's footprint rectangle (m): the sole the walk was planned with.
-
-    Returns:
-        The summary, also written as ``summary.json``: ``fell``, ``fall_time`` (s or null), ``fall_cause``,
-        ``tipped``, ``tip_time``, ``steps_planned``, ``steps_completed``, ``distance_walked`` (m),
-        ``zmp_tracking_error_rms`` and ``_max`` (m, single support), ``simulated_time`` and ``wall_time`` (s),
-        ``real_time_factor``, ``walk_start`` and ``walk_end`` (s), ``legs_touched``, ``control_dt`` and
-        ``physics_dt`` (s), ``rows`` and ``files``.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    files = ["sim.csv", "summary.json"]
-    write_atomic(out / "sim.csv", lambda path: _write_csv(result, path))
-    if figure:
-        write_atomic(out / "zmp_sim.png", lambda path: plot_zmp_sim(result, path, title))
-        files.append("zmp_sim.png")
-    if replay is not None:
-        label = f"{title} on {replay.name}" if title else replay.name
-        write_sim_replay(result, replay, out / "replay.html", sole=sole, title=f"rtgait: {label} in MuJoCo")
-        files.append("replay.html")
-    summary: dict[str, Any] = {**(extra or {}), **result.summary(), "rows": len(result.times), "files": files}
-    write_text_atomic(out / "summary.json", json.dumps(summary, indent=2, allow_nan=False) + "\n")
-    return summary

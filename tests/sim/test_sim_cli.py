@@ -117,7 +117,7 @@ def test_a_step_the_robot_cannot_reach_is_refused_before_simulating(
     ("extra", "words"),
     [
         (["--push", "1,0.2,50,0", "--push", "1.1,0.1,-50,0"], "--push 1,0.2,50,0 and --push 1.1,0.1,-50,0 overlap"),
-        (["--push", "20,0.1,50,0"], "--push 20,0.1,50,0 starts after the run has ended (at 14.70 s)"),
+        (["--push", "20,0.1,50,0"], "--push 20,0.1,50,0 starts after the run has ended (at 13.20 s on the walk's"),
     ],
 )
 def test_pushes_that_would_silently_not_act_are_refused(
@@ -196,6 +196,11 @@ def test_simulate_writes_nothing_outside_out_and_reports_mujocos_warnings(
     work.mkdir()
     monkeypatch.chdir(work)
     # A 10^12 N shove makes the physics blow up at once: MuJoCo warns (and the robot falls), in a tenth of a second.
+    # Such a push is refused as beyond physical sense (test_bad_input_is_one_line_and_no_output): not here, where
+    # it is the way to make MuJoCo warn.
+    import rtgait.sim.contact
+
+    monkeypatch.setattr(rtgait.sim.contact, "PUSH_SPEED_LIMIT", float("inf"))
     args = ["simulate", str(scenario), "--out", "out", "--push", "0.1,0.01,1e12,0", "--no-figures"]
     assert main(args) == 0
     assert "warnings    MuJoCo: Nan, Inf or huge value in QACC" in capsys.readouterr().out
@@ -219,3 +224,31 @@ def test_a_negative_velocity_command_walks_backward(
     assert float(rows[-1]["base_x"]) - float(rows[0]["base_x"]) == pytest.approx(-0.16, abs=0.04)
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     assert summary["mujoco_warnings"] == []
+
+
+# ----- the controller levels and the periods ----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("extra", "words"),
+    [
+        (["--controller", "stiff"], "invalid choice: 'stiff'"),
+        (["--stabilizer"], "--stabilizer was removed"),
+        (["--physics-dt", "0.002", "--control-dt", "0.001"], "longer than the control period"),
+        (["--physics-dt", "0.002"], "longer than the control period"),  # Talos's own period is 1 ms
+        (["--physics-dt", "0.0007", "--control-dt", "0.002"], "must divide the control period"),
+        (["--control-dt", "nan"], "--control-dt must be within"),
+        (["--push", "1,0.1,nan,0"], "--push needs 4 finite"),
+        (["--push", "1,0.1,1e9,0"], "exceeds"),  # 10^8 N s: a unit error, not a push
+        (["--mass", "50"], "--mass is for --model lipm"),
+    ],
+)
+@pytest.mark.usefixtures("no_physics")
+def test_bad_controller_periods_and_pushes_are_one_line_and_no_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str], words: str
+) -> None:
+    out = tmp_path / "never"
+    assert main(["simulate", "fig8", "--out", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rtgait: error:") and len(err.strip().splitlines()) == 1 and words in err, err
+    assert not out.exists()

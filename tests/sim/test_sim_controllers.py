@@ -209,7 +209,8 @@ def test_adaptive_early_touchdown_reanchors_and_switches_support():
 
 
 def test_adaptive_late_touchdown_lowers_the_foot_then_keeps_its_height():
-    ctl = controller("adaptive", options=ControllerOptions(measurement_filter=0.0, foot=None))  # heights: ours only
+    # Heights: ours only (no foot force control); late at once (no grace for the landing's detection).
+    ctl = controller("adaptive", options=ControllerOptions(measurement_filter=0.0, foot=None, late_grace=0.0))
     start, duration, swing = first_swing(ctl)
     side = ("left", "right")[swing]
     not_down = (True, False) if swing == 1 else (False, True)
@@ -269,7 +270,12 @@ def test_step_limits_scale_with_the_robot_and_keep_the_soles_apart():
     assert adjust.min_width >= 2 * SOLE.inner + 0.02 and adjust.max_width > adjust.min_width
     small = step_limits(RobotInfo(30.0, SoleRect(0.08, 0.05, 0.04, 0.04), 0.4))
     assert small.max_length == pytest.approx(0.175) and small.min_width == pytest.approx(0.1)
-    ctl = controller("adaptive")
+    # The core's closed loop ("always"): every plan from the measured state, step adjustment after each.
+    ctl = controller("adaptive", options=ControllerOptions(measured_replanning="always"))
     assert ctl.planner.config.step_adjustment == adjust and ctl.planner.config.feedback == "measured"
+    # The default ("on-error"): the plan continues itself; the measured state and step adjustment on a DCM error only.
+    ctl = controller("adaptive")
+    assert ctl.planner.config.step_adjustment is None and ctl.planner.config.feedback == "planned"
+    assert ctl.options.step_adjustment == adjust
     with pytest.raises(ValueError, match="must be one of"):
         make_controller("stiff", CONFIG, None, SOLE, INFO)

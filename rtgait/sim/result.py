@@ -1,0 +1,394 @@
+"""A walk in physics, tick by tick, and the measures of its outcome (:class:`SimResult`).
+
+Times are on the walk's clock: ``t = 0`` when the planner starts, negative during the start transition from
+half-sitting (:attr:`SimResult.run_start` is the first tick), the same clock as ``rtgait simulate --model lipm``.
+
+The error measures are honest about what is compared with what (all in m, over the planned single supports from
+the walk's start to its planned end, where the measured ZMP must be on the stance sole):
+
+* ``vs_plan``: the measured ZMP (centre of pressure of the sole contacts) against the planner's ZMP, the one the
+  linear inverted pendulum of the plan needs. This is what the paper's method promises.
+* ``vs_command``: against the ZMP the controller asked the feet for (the DCM law's ``p_cmd``; the plan's ZMP in
+  ``open-loop``).
+* ``vs_commanded_motion``: against the multibody ZMP of the commanded motion, i.e. of the joint references the
+  servos were given (the IK's configuration with the ankle offsets of foot force control), from Pinocchio's
+  centroidal dynamics with finite differences (:func:`rtgait.robot.dynamics.multibody_check`). The pendulum plan
+  ignores the legs' angular momentum, so even a perfect servo would miss ``vs_plan`` by that much (20-30 mm on
+  Talos, ``docs/robots.md``); what is left of ``vs_commanded_motion`` is the servos' and the contacts' doing.
+
+**Slip** of a stance foot: a *stance* is a stretch of ticks over which the foot carries at least
+:data:`STANCE_FRACTION` of the weight; its slip is the largest horizontal distance of the sole point from where it
+was at the stance's first tick (and likewise the largest change of heading). :attr:`SimResult.foot_slip_max` is the
+largest over all stances: a robot that walks keeps it at a millimetre or two; one that is dragged does not.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from rtgait.core.footsteps import Footstep
+from rtgait.sim.contact import Push
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+    from rtgait.core.stepping import StepDecision
+    from rtgait.sim.controllers import ControlEvent
+
+__all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SUPPORT_CODES", "SimResult", "Stance", "stances"]
+
+SUPPORT_CODES = {"double": 0, "left": 1, "right": 2}
+"""Planned support per tick in :attr:`SimResult.support`: 0 double, 1 left foot only, 2 right foot only."""
+
+STANCE_FRACTION = 0.1
+"""A foot is a stance foot, for the slip measure, while it carries at least this fraction of the weight: a foot
+that only touches (the end of a swing, the start of a lift-off) may scuff without the robot slipping."""
+
+FALL_MARGIN = 0.5
+"""The ZMP errors leave out the last this many seconds before a fall (s): the robot is falling, not walking, and
+the commanded motion of an IK chasing a falling robot has no meaningful ZMP."""
+
+REST_SPEED = 0.02
+"""Largest COM speed (m/s, averaged over the run's last 0.1 s) of a walk that ended at rest."""
+
+
+@dataclass(frozen=True)
+class Stance:
+    """One foot's stretch of ticks on the ground under load, and how far it slipped.
+
+    Attributes:
+        side: ``"left"`` or ``"right"``.
+        start, end: its first and last tick times (s, walk clock).
+        slip: largest horizontal distance of the sole point from its place at ``start`` (m).
+        yaw_slip: largest change of the sole's heading from ``start`` (rad).
+    """
+
+    side: str
+    start: float
+    end: float
+    slip: float
+    yaw_slip: float
+
+
+def stances(times: np.ndarray, normal_force: np.ndarray, sole_pose: np.ndarray, threshold: float) -> list[Stance]:
+    """The stances of both feet (module docstring): ``normal_force`` ``(k, 2)`` (N) above ``threshold`` (N), sole
+    poses ``(k, 2, 3)`` as ``(x, y, yaw)`` (m, rad)."""
+    found = []
+    for i, side in enumerate(("left", "right")):
+        loaded = np.r_[False, normal_force[:, i] >= threshold, False].astype(np.int8)
+        edges = np.flatnonzero(np.diff(loaded))
+        for begin, stop in zip(edges[::2], edges[1::2], strict=True):
+            pose = sole_pose[begin:stop, i]
+            moved = pose[:, 0:2] - pose[0, 0:2]
+            turned = np.abs(np.remainder(pose[:, 2] - pose[0, 2] + math.pi, 2.0 * math.pi) - math.pi)
+            found.append(
+                Stance(side, float(times[begin]), float(times[stop - 1]), float(np.hypot(*moved.T).max()),
+                       float(turned.max()))
+            )  # fmt: skip
+    return sorted(found, key=lambda s: s.start)
+
+
+def _number(value: float | None) -> float | None:
+    """A JSON-ready number: NaN and infinities become ``None`` (JSON has neither)."""
+    return None if value is None or not math.isfinite(value) else float(value)
+
+
+def _decision(decision: StepDecision) -> dict[str, Any]:
+    """One step adjustment, JSON-ready (s, m)."""
+    return {
+        "t": float(decision.t),
+        "step": int(decision.step),
+        "landing": [float(v) for v in decision.landing],
+        "emergency": bool(decision.emergency),
+        "reason": decision.reason,
+    }
+
+
+def _error_stats(measured: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> dict[str, float | None]:
+    """RMS and largest distance (m), and the RMS per axis, of ``measured - reference`` over ``mask``."""
+    mask = mask & np.isfinite(measured[:, 0]) & np.isfinite(reference[:, 0])
+    if not mask.any():
+        return {"rms": None, "max": None, "rms_x": None, "rms_y": None}
+    error = measured[mask] - reference[mask]
+    return {
+        "rms": float(np.sqrt(np.mean(np.sum(error * error, axis=1)))),
+        "max": float(np.max(np.hypot(*error.T))),
+        "rms_x": float(np.sqrt(np.mean(error[:, 0] ** 2))),
+        "rms_y": float(np.sqrt(np.mean(error[:, 1] ** 2))),
+    }
+
+
+@dataclass(frozen=True, eq=False)
+class SimResult:
+    """A walk in physics, control tick by control tick, and its outcome. ``k`` ticks were simulated (fewer than
+    planned after a fall); every array has ``k`` rows and describes the state at the tick's time.
+
+    Attributes:
+        times: tick times (s, walk clock; module docstring), shape ``(k,)``.
+        zmp: measured ZMP, the centre of pressure of the sole-floor contact forces (m), shape ``(k, 2)``; NaN
+            while no foot touches the floor.
+        zmp_planned: the planner's ZMP (m), shape ``(k, 2)``; during the start transition, the COG target's
+            ground projection.
+        zmp_command: the ZMP the controller asked the feet for (m), shape ``(k, 2)``: the DCM law's, or the plan's
+            in ``open-loop`` and during the start transition.
+        dcm: the measured DCM ``c + c'/w`` the controller acted on (m), shape ``(k, 2)``: of the state one physics step
+            before the tick (:mod:`rtgait.sim.loop`); NaN during the start transition.
+        dcm_planned: the plan's DCM at the tick (m), shape ``(k, 2)``; NaN during the start transition.
+        cog: the measured COG (m), shape ``(k, 3)``.
+        cog_planned: the COG target given to the IK (m), shape ``(k, 3)`` (the plan's with the controller's COM
+            offset).
+        base_position: floating-base position (m), shape ``(k, 3)``.
+        base_quaternion: floating-base orientation, unit quaternion ``(qx, qy, qz, qw)``, shape ``(k, 4)``.
+        contact: whether each foot (left, right) touches the floor, shape ``(k, 2)``.
+        normal_force: vertical contact force on each foot (N), shape ``(k, 2)``.
+        corners: corners of each sole box touching the floor (0 to 4), shape ``(k, 2)``.
+        sole_tilt: angle between each sole's normal and the vertical (rad), shape ``(k, 2)``.
+        sole_pose: each sole's ground pose ``(x, y, yaw)`` (m, rad), shape ``(k, 2, 3)``.
+        support: planned support per tick, codes :data:`SUPPORT_CODES` (the start transition is double).
+        torque: the joint torques the servos applied (N m), mean over the tick's physics substeps, shape ``(k, n)``,
+            columns in :attr:`joint_names` order; within each joint's torque limit.
+        joint_names: the actuated joints, the columns of :attr:`torque`.
+        legs_touch: whether the legs' collision boxes touched each other at the tick, shape ``(k,)``.
+        commanded_q: the commanded configuration of the robot's reduced Pinocchio model at each tick (the IK's
+            floating base, the servos' joint references), shape ``(k, nq)`` (m, unit quaternion, rad).
+        control_dt: the control period, the interval between two ticks (s).
+        physics_dt: the physics step (s).
+        run_start: time of the first tick (s, walk clock): minus the start transition's length.
+        walk_end: when the planned walk (as it ended up: step adjustment may shorten it) has come to rest (s).
+        steps_planned: steps of the walk (the closing step included).
+        steps_completed: touch-downs completed: after the step's planned landing, and before the next lift-off,
+            the landing foot was on the floor and the robot had not fallen.
+        missed_landings: single supports whose swing foot was not on the floor by the end of its window.
+        fell: whether the robot fell.
+        fall_time: when (s), or ``None``.
+        fall_cause: ``"base too low"``, ``"base tilted"`` or ``"no foot on the floor"``, or ``None``.
+        tipped: whether a foot carrying most of the load tilted beyond the fall limits' ``tip_angle``.
+        tip_time: when that first happened (s), or ``None``.
+        wall_time: wall-clock time of the loop (s), the planner, controller, IK and physics.
+        robot: the robot's name.
+        mass: its mass (kg).
+        controller: the controller level (:data:`rtgait.sim.controllers.CONTROLLERS`).
+        pushes: the external pushes of the run.
+        events: what the controller logged (landings, re-anchoring, step adjustments, replans).
+        step_adjustments: the planner's step adjustments, in order.
+        replans: replannings of the planner since the walk's start.
+        replay_index: the ticks at which the configuration was recorded for the replay; their times are
+            :attr:`replay_times`.
+        replay_q: the robot's configuration at those ticks in its FULL Pinocchio model, shape ``(m, full nq)``.
+        replay_soles: MuJoCo's left and right sole site positions at those ticks (m), shape ``(m, 2, 3)``.
+        footprints: the planner's footprints ``F[0..]`` as planned at the end of the run.
+        model: the reduced Pinocchio model of :attr:`commanded_q` (for the multibody ZMP), or ``None``.
+        at_rest_speed: mean horizontal COM speed over the run's last 0.1 s (m/s).
+    """
+
+    times: np.ndarray
+    zmp: np.ndarray
+    zmp_planned: np.ndarray
+    zmp_command: np.ndarray
+    dcm: np.ndarray
+    dcm_planned: np.ndarray
+    cog: np.ndarray
+    cog_planned: np.ndarray
+    base_position: np.ndarray
+    base_quaternion: np.ndarray
+    contact: np.ndarray
+    normal_force: np.ndarray
+    corners: np.ndarray
+    sole_tilt: np.ndarray
+    sole_pose: np.ndarray
+    support: np.ndarray
+    torque: np.ndarray
+    joint_names: tuple[str, ...]
+    legs_touch: np.ndarray
+    commanded_q: np.ndarray
+    control_dt: float
+    physics_dt: float
+    run_start: float
+    walk_end: float
+    steps_planned: int
+    steps_completed: int
+    missed_landings: int
+    fell: bool
+    fall_time: float | None
+    fall_cause: str | None
+    tipped: bool
+    tip_time: float | None
+    wall_time: float
+    robot: str
+    mass: float
+    controller: str
+    replay_index: np.ndarray
+    replay_q: np.ndarray
+    replay_soles: np.ndarray
+    footprints: tuple[Footstep, ...]
+    pushes: tuple[Push, ...] = ()
+    events: tuple[ControlEvent, ...] = ()
+    step_adjustments: tuple[StepDecision, ...] = ()
+    replans: int = 0
+    model: pin.Model | None = field(default=None, repr=False)
+    gravity: float = 9.81
+
+    # ----- time ------------------------------------------------------------------------------------------------------
+    @property
+    def walk_start(self) -> float:
+        """When the walk starts on the result's clock (s): 0, the walk's clock."""
+        return 0.0
+
+    @property
+    def replay_times(self) -> np.ndarray:
+        """Times (s) of the replay's configurations, shape ``(m,)``."""
+        return self.times[self.replay_index]
+
+    @property
+    def duration(self) -> float:
+        """Simulated time (s), the start transition included."""
+        return float(self.times[-1] - self.run_start + self.control_dt) if len(self.times) else 0.0
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall-clock second of the loop."""
+        return self.duration / self.wall_time if self.wall_time > 0.0 else math.inf
+
+    # ----- outcome ---------------------------------------------------------------------------------------------------
+    @property
+    def legs_touched(self) -> bool:
+        """Whether the legs touched each other at any tick (a step that crossed the feet, a swing foot that hit the
+        stance leg)."""
+        return bool(self.legs_touch.any())
+
+    @property
+    def distance_walked(self) -> float:
+        """Horizontal displacement of the base from the start to the last tick (m)."""
+        return float(np.hypot(*(self.base_position[-1, :2] - self.base_position[0, :2])))
+
+    @property
+    def all_steps_completed(self) -> bool:
+        """Whether every step of the walk touched down and the robot did not fall."""
+        return not self.fell and self.steps_completed == self.steps_planned
+
+    @property
+    def at_rest_speed(self) -> float:
+        """Mean horizontal COM speed over the run's last 0.1 s (m/s); inf for a run shorter than that."""
+        n = max(1, round(0.1 / self.control_dt))
+        if len(self.times) <= n:
+            return math.inf
+        return float(np.hypot(*(self.cog[-1, :2] - self.cog[-1 - n, :2])) / (n * self.control_dt))
+
+    @property
+    def ended_at_rest(self) -> bool:
+        """Not fallen, the run went past the walk's planned end, and at its end the COM is still (below
+        :data:`REST_SPEED`) with both feet on the floor, flat (no foot tipped onto an edge)."""
+        if self.fell or not len(self.times) or self.times[-1] < self.walk_end:
+            return False
+        flat = bool((self.sole_tilt[-1] < 0.02).all())
+        return self.at_rest_speed < REST_SPEED and bool(self.contact[-1].all()) and flat
+
+    @property
+    def step_adjustment_count(self) -> int:
+        """Step adjustments of the run."""
+        return len(self.step_adjustments)
+
+    # ----- slip ------------------------------------------------------------------------------------------------------
+    @functools.cached_property
+    def stances(self) -> list[Stance]:
+        """Every stance of both feet and its slip (module docstring)."""
+        threshold = STANCE_FRACTION * self.mass * self.gravity
+        return stances(self.times, self.normal_force, self.sole_pose, threshold)
+
+    @property
+    def foot_slip_max(self) -> float:
+        """Largest horizontal slip of a stance foot during one stance (m); 0 without any stance."""
+        return max((s.slip for s in self.stances), default=0.0)
+
+    @property
+    def foot_yaw_slip_max(self) -> float:
+        """Largest change of heading of a stance foot during one stance (rad)."""
+        return max((s.yaw_slip for s in self.stances), default=0.0)
+
+    # ----- ZMP errors ------------------------------------------------------------------------------------------------
+    @property
+    def single_support_mask(self) -> np.ndarray:
+        """Ticks of the walk (from its start to its planned end, and up to :data:`FALL_MARGIN` before a fall) in
+        planned single support at which the ZMP was measured."""
+        end = self.walk_end if self.fall_time is None else min(self.walk_end, self.fall_time - FALL_MARGIN)
+        return (self.support != 0) & np.isfinite(self.zmp[:, 0]) & (self.times >= 0.0) & (self.times <= end)
+
+    @property
+    def zmp_tracking_error_rms(self) -> float:
+        """RMS distance between the measured and the planned ZMP in single support (m); NaN without any."""
+        value = _error_stats(self.zmp, self.zmp_planned, self.single_support_mask)["rms"]
+        return math.nan if value is None else value
+
+    @property
+    def zmp_tracking_error_max(self) -> float:
+        """Largest distance between the measured and the planned ZMP in single support (m); NaN without any."""
+        value = _error_stats(self.zmp, self.zmp_planned, self.single_support_mask)["max"]
+        return math.nan if value is None else value
+
+    @functools.cached_property
+    def zmp_commanded_motion(self) -> np.ndarray:
+        """The multibody ZMP of the commanded motion (m), shape ``(k, 2)`` (module docstring); NaN without a model
+        or with fewer than 3 ticks."""
+        if self.model is None or len(self.times) < 3:
+            return np.full((len(self.times), 2), math.nan)
+        from rtgait.robot.dynamics import multibody_check
+
+        times = self.run_start + np.arange(len(self.times)) * self.control_dt  # exactly uniform
+        check = multibody_check(self.model, times, self.commanded_q)
+        zmp = np.array(check.zmp)
+        # A ZMP needs the feet pressed on the ground: NaN where the motion's vertical force is not near the weight.
+        weight = self.mass * self.gravity
+        zmp[~(np.abs(check.vertical_force - weight) < 0.9 * weight)] = math.nan
+        return zmp
+
+    def zmp_errors(self) -> dict[str, dict[str, float | None]]:
+        """The three ZMP error measures of the module docstring: ``vs_plan``, ``vs_command`` and
+        ``vs_commanded_motion``, each ``rms``, ``max``, ``rms_x``, ``rms_y`` (m) over the planned single supports."""
+        mask = self.single_support_mask
+        return {
+            "vs_plan": _error_stats(self.zmp, self.zmp_planned, mask),
+            "vs_command": _error_stats(self.zmp, self.zmp_command, mask),
+            "vs_commanded_motion": _error_stats(self.zmp, self.zmp_commanded_motion, mask),
+        }
+
+    def summary(self) -> dict[str, Any]:
+        """The outcome as JSON-ready values (SI units; times on the walk's clock)."""
+        worst = max(self.stances, key=lambda s: s.slip, default=None)
+        return {
+            "model": "mujoco",
+            "robot": self.robot,
+            "controller": self.controller,
+            "fell": self.fell,
+            "fall_time": _number(self.fall_time),
+            "fall_cause": self.fall_cause,
+            "tipped": self.tipped,
+            "tip_time": _number(self.tip_time),
+            "steps_planned": self.steps_planned,
+            "steps_completed": self.steps_completed,
+            "missed_landings": self.missed_landings,
+            "step_adjustments": self.step_adjustment_count,
+            "step_adjustment_log": [_decision(d) for d in self.step_adjustments],
+            "replans": self.replans,
+            "ended_at_rest": self.ended_at_rest,
+            "distance_walked": self.distance_walked,
+            "foot_slip_max": self.foot_slip_max,
+            "foot_slip_max_time": None if worst is None else worst.start,
+            "foot_yaw_slip_max": self.foot_yaw_slip_max,
+            "zmp_error": self.zmp_errors(),
+            "zmp_tracking_error_rms": _number(self.zmp_tracking_error_rms),
+            "zmp_tracking_error_max": _number(self.zmp_tracking_error_max),
+            "pushes": [push.summary() for push in self.pushes],
+            "simulated_time": self.duration,
+            "wall_time": self.wall_time,
+            "real_time_factor": self.real_time_factor,
+            "run_start": self.run_start,
+            "walk_end": self.walk_end,
+            "legs_touched": self.legs_touched,
+            "control_dt": self.control_dt,
+            "physics_dt": self.physics_dt,
+        }
