@@ -20,10 +20,16 @@ demo: $(STAMP)
 	$(BIN)/rtgait plan fig8 --out out/fig8
 	$(BIN)/rtgait plan fig11 --robot talos --compensate-angular-momentum --html --out out/fig11-talos
 	$(BIN)/rtgait plan fig8 --robot talos --compensate-angular-momentum --html --out out/fig8-talos
-	$(BIN)/rtgait simulate fig8 --robot talos --html --out out/fig8-sim
+	$(BIN)/rtgait simulate fig8 --robot talos --controller adaptive --html --out out/fig8-sim
+	$(BIN)/rtgait simulate fig8 --robot talos --controller adaptive --velocity 0.2,0,0 --velocity 0,0,0.2@5 \
+		--push 2.85,0.1,300,0 --html --out out/velocity-push-sim
+	$(BIN)/python benchmarks/pushes.py --robot talos --controller adaptive --phase single --directions 4 \
+		--tolerance 4 --out out/pushes
 	@echo "Figures, trajectory.csv and summary.json for each scenario are in out/<scenario>/;"
 	@echo "on Talos also joints.csv, multibody_zmp.png and replay.html (open it in a browser);"
-	@echo "the walk in MuJoCo physics is in out/fig8-sim/ (sim.csv, summary.json, zmp_sim.png, replay.html)."
+	@echo "the walks in MuJoCo physics (adaptive controller) are in out/fig8-sim/ and out/velocity-push-sim/"
+	@echo "(a velocity walk that turns, pushed 30 N s forward at 2.85 s); out/pushes/pushes.png is the largest"
+	@echo "push Talos survives in 4 directions at mid single support (a short run of benchmarks/pushes.py)."
 
 test: $(STAMP)
 	$(BIN)/ruff check .

@@ -16,9 +16,8 @@ foot tipped onto an edge), ``tipped`` (a loaded foot rolled onto an edge of its 
 fall), ``fell`` (the run ended in a fall) or ``incomplete`` (no fall, no tip, but a step did not land).
 
 Runs are spread over worker processes (2 by default: this project's CI machine has 2 cores); progress goes to
-stderr. ``--controller`` names the controller level: ``open-loop`` (the plan alone, the paper's assumption) runs
-now; further levels run as soon as :func:`~rtgait.sim.run.simulate` takes a ``controller`` argument, which this
-script passes through.
+stderr. ``--controller`` names the controller level (:mod:`rtgait.sim.controllers`): ``open-loop`` (the default
+here: the plan alone, the paper's assumption, whose outcomes the paper reports), ``stabilized`` or ``adaptive``.
 
 Usage: ``python benchmarks/physics_ensemble.py [--json] [--robot R] [--controller C] [--quick] [--settings N]
 [--seed S] [--workers W] [--cases fig4,fig6,...]``
@@ -29,7 +28,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import functools
-import inspect
 import json
 import math
 import os
@@ -83,14 +81,6 @@ def classify(result: Any) -> str:
     return "walked"
 
 
-def controller_available(controller: str) -> bool:
-    """Whether this script can run ``controller``: the plan alone always; other levels once ``simulate`` takes a
-    ``controller`` argument."""
-    from rtgait.sim.run import simulate
-
-    return controller == "open-loop" or "controller" in inspect.signature(simulate).parameters
-
-
 @functools.lru_cache(maxsize=1)
 def _robot(name: str) -> Any:
     from rtgait.robot.model import RobotModel
@@ -116,10 +106,7 @@ def run_one(robot_name: str, controller: str, scenario_name: str, index: int, se
     scenario = load_scenario(scenario_name)
     began = time.perf_counter()
     with mujoco_messages() as warnings:
-        if controller == "open-loop":
-            result = simulate(scenario, robot, sim=sim)
-        else:  # a level the loop knows by name (see controller_available)
-            result = simulate(scenario, robot, sim=sim, controller=controller)  # type: ignore[call-arg]
+        result = simulate(scenario, robot, sim=sim, controller=controller)  # type: ignore[arg-type]
     rms = result.zmp_tracking_error_rms
     return {
         "scenario": scenario_name,
@@ -188,7 +175,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--robot", default="talos")
-    parser.add_argument("--controller", default="open-loop", help="controller level (default open-loop)")
+    parser.add_argument(
+        "--controller", default="open-loop", choices=("open-loop", "stabilized", "adaptive"),
+        help="controller level (default open-loop, the paper's assumption)",
+    )  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="8 settings instead of the default 48")
     parser.add_argument("--settings", type=int, default=None, help="number of settings (default 48, 8 with --quick)")
     parser.add_argument("--seed", type=int, default=2024, help="seed of the sample of settings")
@@ -199,8 +189,6 @@ def main() -> None:
     unknown = [case for case in cases if case not in EXPECTED]
     if unknown:
         parser.error(f"--cases: {', '.join(unknown)} has no paper outcome to compare with (known: {', '.join(CASES)})")
-    if not controller_available(args.controller):
-        parser.error(f"--controller {args.controller}: the physics loop runs only open-loop so far")
     n = args.settings if args.settings is not None else (8 if args.quick else 48)
     if n < 1 or args.workers < 1:
         parser.error("--settings and --workers must be >= 1")

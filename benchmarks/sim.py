@@ -9,8 +9,16 @@ show what each costs.
 
 Wall times on a shared virtual machine vary from run to run: run it a few times.
 
+With ``--walks`` it reports outcomes instead: the paper's cases fig6, fig7 and fig8 at each controller level asked
+for (``--controller``, default all three) and, with ``--velocity-walks``, walks by velocity command of
+``--walk-time`` seconds (default 60): 0.3 m/s forward, 0.1 m/s backward, 0.1 m/s sideways, 0.3 rad/s turning, and
+one that changes between them every fifth of its time; per walk whether it walked (no fall, every step landed,
+ended at rest), the ZMP errors (measured vs planned, vs the multibody ZMP of the commanded motion, single support,
+RMS), the largest stance-foot slip and the real-time factor, over worker processes (``--workers``, default 2).
+
 Usage: ``python benchmarks/sim.py [--json] [--robot NAME] [--scenario NAME] [--repeat N] [--control-dt S]
-[--physics-dt S]``
+[--physics-dt S] [--controller C]`` or ``python benchmarks/sim.py --walks [--velocity-walks] [--robot NAME ...]
+[--controller C ...] [--walk-time S] [--workers N] [--json]``
 """
 
 from __future__ import annotations
@@ -19,8 +27,11 @@ import argparse
 import dataclasses
 import gc
 import json
+import math
 import statistics
 import time
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -35,13 +46,16 @@ from rtgait.sim.model import SimConfig, build_sim_model
 from rtgait.sim.run import simulate
 
 
-def _step_times(robot: RobotModel, config: SimConfig, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Wall time of each ``mj_step`` and of each contact measurement (s) with ``targets`` replayed, one row per
-    control tick, ``substeps`` physics steps each."""
+def _step_times(robot: RobotModel, config: SimConfig, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Wall time of each ``mj_step``, of each contact record and of each controller measurement (s) with
+    ``targets`` replayed, one row per control tick, ``substeps`` physics steps each."""
+    from rtgait.sim.measure import SimMeasurer
+
     sim = build_sim_model(robot, config)
     data = sim.new_data()
+    measurer = SimMeasurer.for_sim(sim)
     clock = time.perf_counter
-    steps, contacts = [], np.empty(len(targets))
+    steps, contacts, measures = [], np.empty(len(targets)), np.empty(len(targets))
     for k, row in enumerate(targets):
         data.ctrl[:] = row
         for _ in range(sim.substeps):
@@ -51,7 +65,10 @@ def _step_times(robot: RobotModel, config: SimConfig, targets: np.ndarray) -> tu
         began = clock()
         measure_contacts(data, sim.left_sole_geom, sim.right_sole_geom)
         contacts[k] = clock() - began
-    return np.array(steps), contacts
+        began = clock()
+        measurer.measure(data, k * sim.control_dt)
+        measures[k] = clock() - began
+    return np.array(steps), contacts, measures
 
 
 def parts(robot: RobotModel, scenario_name: str, config: SimConfig) -> dict[str, float]:
@@ -77,9 +94,9 @@ def parts(robot: RobotModel, scenario_name: str, config: SimConfig) -> dict[str,
         q, _ = ik.solve(IKTargets(row[0:3], row[13:17], row[17:21]), q, max_iterations=1, tolerance=0.0)
         solves[k] = clock() - began
         targets[k] = q[7:]
-    steps, contacts = _step_times(robot, config, targets)
-    plain, _ = _step_times(robot, dataclasses.replace(config, noslip_iterations=0), targets)
-    no_legs, _ = _step_times(robot, dataclasses.replace(config, leg_collisions=False), targets)
+    steps, contacts, measures = _step_times(robot, config, targets)
+    plain, _, _ = _step_times(robot, dataclasses.replace(config, noslip_iterations=0), targets)
+    no_legs, _, _ = _step_times(robot, dataclasses.replace(config, leg_collisions=False), targets)
     return {
         "control_dt_s": dt,
         "physics_dt_s": sim.timestep,
@@ -90,30 +107,140 @@ def parts(robot: RobotModel, scenario_name: str, config: SimConfig) -> dict[str,
         "mj_step_without_noslip_us": float(np.median(plain) * 1e6),
         "mj_step_without_leg_collisions_us": float(np.median(no_legs) * 1e6),
         "measure_contacts_us": float(np.median(contacts) * 1e6),
+        "controller_measurement_us": float(np.median(measures) * 1e6),
     }
+
+
+VELOCITY_WALKS = {
+    "forward 0.3 m/s": (0.3, 0.0, 0.0),
+    "backward 0.1 m/s": (-0.1, 0.0, 0.0),
+    "sideways 0.1 m/s": (0.0, 0.1, 0.0),
+    "turning 0.3 rad/s": (0.0, 0.0, 0.3),
+}
+"""The walks by velocity command of ``--velocity-walks`` (m/s, m/s, rad/s), and one that changes between them."""
+
+
+def velocity_schedule(name: str, seconds: float) -> list[tuple[float, float, float, float]]:
+    """The ``(t, vx, vy, wz)`` commands of walk ``name``: one command, or ``"changes"``: forward, sideways, turning,
+    backward, forward again, each a fifth of ``seconds``."""
+    if name != "changes":
+        return [(0.0, *VELOCITY_WALKS[name])]
+    order = [(0.3, 0.0, 0.0), (0.0, 0.1, 0.0), (0.1, 0.0, 0.3), (-0.1, 0.0, 0.0), (0.3, 0.0, 0.0)]
+    return [(i * seconds / len(order), *command) for i, command in enumerate(order)]
+
+
+def walk_case(job: dict[str, Any]) -> dict[str, Any]:
+    """One walk of ``--walks`` (a worker's task): its outcome and measures."""
+    from rtgait.sim.run import mujoco_messages
+
+    robot = RobotModel.load(job["robot"])
+    sim = build_sim_model(robot, SimConfig(meshes=False))
+    scenario = load_scenario(job["scenario"])
+    velocity = None
+    if job["velocity"] is not None:
+        period = scenario.timing.single_support + scenario.timing.double_support
+        steps = math.ceil((job["seconds"] - scenario.timing.start) / period)
+        scenario = dataclasses.replace(scenario, steps=steps)
+        velocity = velocity_schedule(job["velocity"], job["seconds"])
+    with mujoco_messages():
+        result = simulate(scenario, robot, sim=sim, controller=job["controller"], velocity=velocity)
+    errors = result.zmp_errors()
+    return {
+        "robot": robot.name,
+        "walk": job["velocity"] or job["scenario"],
+        "controller": job["controller"],
+        "walked": bool(result.all_steps_completed and result.ended_at_rest),
+        "fell": result.fell,
+        "fall_time": result.fall_time,
+        "tipped": result.tipped,
+        "steps_completed": result.steps_completed,
+        "steps_planned": result.steps_planned,
+        "distance_walked": result.distance_walked,
+        "zmp_vs_plan_rms": errors["vs_plan"]["rms"],
+        "zmp_vs_commanded_motion_rms": errors["vs_commanded_motion"]["rms"],
+        "foot_slip_max": result.foot_slip_max,
+        "step_adjustments": result.step_adjustment_count,
+        "simulated_time": result.duration,
+        "real_time_factor": result.real_time_factor,
+    }
+
+
+def walks(args: argparse.Namespace) -> list[dict[str, Any]]:
+    """The outcome table of ``--walks`` (module docstring)."""
+    controllers = args.controller or ["open-loop", "stabilized", "adaptive"]
+    jobs = [
+        {"robot": robot, "scenario": case, "controller": c, "velocity": None, "seconds": 0.0}
+        for robot in args.robots or ["talos"]
+        for case in ("fig6", "fig7", "fig8")
+        for c in controllers
+    ]
+    if args.velocity_walks:
+        jobs += [
+            {"robot": robot, "scenario": "fig8", "controller": c, "velocity": name, "seconds": args.walk_time}
+            for robot in args.robots or ["talos"]
+            for name in [*VELOCITY_WALKS, "changes"]
+            for c in controllers
+        ]
+    with ProcessPoolExecutor(args.workers) as pool:
+        return list(pool.map(walk_case, jobs))
+
+
+def print_walks(rows: list[dict[str, Any]]) -> None:
+    def mm(value: float | None) -> str:
+        return "-" if value is None else f"{value * 1e3:.1f}"
+
+    print(f"{'robot':<7} {'walk':<18} {'controller':<11} {'outcome':<26} {'ZMP-plan':>8} {'ZMP-mb':>7} "
+          f"{'slip':>5} {'adj':>4} {'RTF':>5}")  # fmt: skip
+    print(f"{'':<7} {'':<18} {'':<11} {'':<26} {'mm RMS':>8} {'mm RMS':>7} {'mm':>5} {'':>4} {'':>5}")
+    for r in rows:
+        if r["fell"]:
+            outcome = f"FELL at {r['fall_time']:.1f} s ({r['steps_completed']}/{r['steps_planned']})"
+        else:
+            outcome = f"{'walked' if r['walked'] else 'stood'} {r['steps_completed']}/{r['steps_planned']}"
+            outcome += ", tipped" if r["tipped"] else ""
+        print(f"{r['robot']:<7} {r['walk']:<18} {r['controller']:<11} {outcome:<26} {mm(r['zmp_vs_plan_rms']):>8} "
+              f"{mm(r['zmp_vs_commanded_motion_rms']):>7} {r['foot_slip_max'] * 1e3:>5.1f} "
+              f"{r['step_adjustments']:>4} {r['real_time_factor']:>5.1f}")  # fmt: skip
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument("--robot", default="talos")
+    parser.add_argument("--robot", action="append", dest="robots", help="robot(s) (default talos)")
     parser.add_argument("--scenario", default="fig8")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--control-dt", type=float, default=None, help="control period (s); default the robot's")
     parser.add_argument("--physics-dt", type=float, default=0.001, help="physics step (s); default 0.001")
+    parser.add_argument("--controller", action="append", choices=("open-loop", "stabilized", "adaptive"),
+                        help="controller level(s); the speed report takes the first (default adaptive)")  # fmt: skip
+    parser.add_argument("--walks", action="store_true", help="report the outcomes of fig6/7/8 instead of speed")
+    parser.add_argument("--velocity-walks", action="store_true", help="with --walks: the walks by command too")
+    parser.add_argument("--walk-time", type=float, default=60.0, help="length of a walk by command (s)")
+    parser.add_argument("--workers", type=int, default=2, help="worker processes of --walks (default 2)")
     args = parser.parse_args()
-    robot = RobotModel.load(args.robot)
+    if args.walks:
+        began = time.perf_counter()
+        rows = walks(args)
+        if args.json:
+            print(json.dumps({"walks": rows, "seconds": time.perf_counter() - began}))
+        else:
+            print_walks(rows)
+            print(f"({time.perf_counter() - began:.0f} s on {args.workers} workers)")
+        return
+    robot = RobotModel.load((args.robots or ["talos"])[0])
+    controller = (args.controller or ["adaptive"])[0]
     config = SimConfig(control_dt=args.control_dt, physics_dt=args.physics_dt)
     sim = build_sim_model(robot, config)
     scenario = load_scenario(args.scenario)
     factors, per_tick = [], []
     for _ in range(args.repeat):
         gc.collect()
-        result = simulate(scenario, robot, sim=sim)
+        result = simulate(scenario, robot, sim=sim, controller=controller)
         factors.append(result.real_time_factor)
         per_tick.append(result.wall_time / len(result.times) * 1e6)
     report = {
         "robot": robot.name,
+        "controller": controller,
         "scenario": args.scenario,
         "simulated_time_s": result.duration,
         "real_time_factor": factors,
@@ -124,7 +251,7 @@ def main() -> None:
     if args.json:
         print(json.dumps(report))
         return
-    print(f"{robot.name}, {args.scenario}: {report['simulated_time_s']:.1f} s simulated per run")
+    print(f"{robot.name}, {args.scenario}, {controller}: {report['simulated_time_s']:.1f} s simulated per run")
     print("real-time factor per run: " + ", ".join(f"{f:.1f}" for f in factors))
     control, physics = report["control_dt_s"] * 1000, report["physics_dt_s"] * 1000
     tick = f"{control:g} ms tick, {report['substeps']} physics step(s) of {physics:g} ms"
@@ -136,6 +263,7 @@ def main() -> None:
         "mj_step_without_noslip_us",
         "mj_step_without_leg_collisions_us",
         "measure_contacts_us",
+        "controller_measurement_us",
     ):
         print(f"  {key[:-3].replace('_', ' ')}: {report[key]:.1f} us (median)")
 

@@ -317,13 +317,14 @@ def test_there_is_one_atomic_write_helper() -> None:
 @pytest.mark.parametrize(
     ("argv", "attribute", "value"),
     [
-        (["simulate", "fig8", "--velocity", "-0.1,0,0"], "velocity", "-0.1,0,0"),
-        (["simulate", "fig8", "--velocity=-0.1,0,0"], "velocity", "-0.1,0,0"),
-        (["simulate", "fig8", "--vel", "-0.1,0,0"], "velocity", "-0.1,0,0"),  # argparse's unique prefixes
+        # --velocity may be repeated (a command from a time on, VX,VY,WZ@T): a list of its values
+        (["simulate", "fig8", "--velocity", "-0.1,0,0"], "velocity", ["-0.1,0,0"]),
+        (["simulate", "fig8", "--velocity=-0.1,0,0"], "velocity", ["-0.1,0,0"]),
+        (["simulate", "fig8", "--vel", "-0.1,0,0"], "velocity", ["-0.1,0,0"]),  # argparse's unique prefixes
         (["simulate", "fig8", "--push", "-1,0.1,50,0", "--push", "2,0.1,-50,0"], "push",
          ["-1,0.1,50,0", "2,0.1,-50,0"]),
         (["plan", "fig8", "--dt", "-1e-3"], "dt", -1e-3),
-        (["simulate", "fig8", "--velocity", ".1,-.1,0"], "velocity", ".1,-.1,0"),
+        (["simulate", "fig8", "--velocity", ".1,-.1,0"], "velocity", [".1,-.1,0"]),
     ],
 )  # fmt: skip
 def test_option_values_may_start_with_a_minus_sign(argv: list[str], attribute: str, value: object) -> None:

@@ -90,8 +90,11 @@ def add_parser(commands: Any) -> None:
     simulate.add_argument("--out", metavar="DIR", type=out_folder, help="output folder (default: out/<scenario>-sim)")
     simulate.add_argument(
         "--velocity",
-        metavar="VX,VY,WZ",
-        help="walk the scenario's number of steps by a velocity command instead of its footsteps (m/s, m/s, rad/s)",
+        metavar="VX,VY,WZ[@T]",
+        action="append",
+        help="walk the scenario's number of steps by a velocity command instead of its footsteps (m/s, m/s, rad/s); "
+        "repeat it with @T for a new command from time T on (s, walk clock), e.g. --velocity 0.2,0,0 --velocity "
+        "0,0,0.3@5 (MuJoCo)",
     )
     simulate.add_argument(
         "--push",
@@ -169,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
     _check_periods(args.control_dt, args.physics_dt)
     args.robot = args.robot or "talos"
     controller = args.controller or "adaptive"
-    velocity = None if args.velocity is None else numbers(args.velocity, 3, "--velocity")
+    velocity, schedule = _velocities(args.velocity)
     try:
         from rtgait.robot.motion import whole_body_motion
         from rtgait.sim.run import mujoco_messages, planned_walk
@@ -185,12 +188,13 @@ def run(args: argparse.Namespace) -> int:
         except ValueError as error:
             raise ScenarioError(f"--push at {push.start:g} s: {error}") from None
     # The check of `plan --robot`, on the walk the simulation will ask for: a robot that cannot reach it is refused.
-    whole_body_motion(robot, planned_walk(scenario, robot, velocity))
+    for command in [velocity] if not schedule else [v for _, *v in schedule]:  # each command's walk must be reachable
+        whole_body_motion(robot, planned_walk(scenario, robot, command))
     show = not args.quiet and sys.stderr.isatty()
     progress = progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
     extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection, "walk": _walk_facts(walk)}
     with mujoco_messages() as messages:  # else MuJoCo appends them to MUJOCO_LOG.TXT in the working folder
-        result = _physics(scenario, walk, robot, config, controller, velocity, pushes, progress, extra)
+        result = _physics(scenario, walk, robot, config, controller, schedule or velocity, pushes, progress, extra)
     extra["mujoco_warnings"] = messages
     if show:
         sys.stderr.write("\r\033[K")
@@ -200,6 +204,27 @@ def run(args: argparse.Namespace) -> int:
 
         sys.stdout.write(sim_report(summary, out))
     return 0
+
+
+def _velocities(texts: Sequence[str] | None) -> tuple[tuple[float, ...] | None, list[tuple[float, ...]]]:
+    """``--velocity`` options: the one command ``(vx, vy, wz)`` (m/s, m/s, rad/s), or the schedule ``(t, vx, vy,
+    wz)`` of several (the first from the walk's start unless it says ``@T``), in time order."""
+    if not texts:
+        return None, []
+    schedule = []
+    for i, text in enumerate(texts):
+        command, _, at = text.partition("@")
+        values = numbers(command, 3, "--velocity")
+        t = 0.0 if not at and i == 0 else numbers(at, 1, f"--velocity ...@T (in {text!r})")[0]
+        if not at and i > 0:
+            raise ScenarioError(f"--velocity {text}: a command after the first needs its time, VX,VY,WZ@T")
+        schedule.append((t, *values))
+    times = [item[0] for item in schedule]
+    if times != sorted(times) or len(set(times)) != len(times) or times[0] < 0.0:
+        raise ScenarioError(f"--velocity times must be >= 0 s and increasing, got {times}")
+    if len(schedule) == 1 and schedule[0][0] == 0.0:
+        return schedule[0][1:], []
+    return schedule[0][1:], schedule
 
 
 def _check_periods(control_dt: float | None, physics_dt: float | None) -> None:
@@ -296,7 +321,7 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) 
 
 def _check_simulation(
     args: argparse.Namespace, scenario: Scenario, velocity: tuple[float, ...] | None, out: Path
-) -> list[Push]:
+) -> list[Push]:  # velocity: the first command, enough to tell a walk by command
     """Everything about a simulation that can be checked before loading the robot; returns the pushes."""
     from rtgait.sim.outputs import sim_figure_file
     from rtgait.sim.run import simulated_time
@@ -318,7 +343,7 @@ def _physics(
     robot: RobotModel,
     config: SimConfig,
     controller: str,
-    velocity: tuple[float, ...] | None,
+    velocity: tuple[float, ...] | list[tuple[float, ...]] | None,
     pushes: list[Push],
     progress: Callable[[float], None] | None,
     extra: dict[str, Any],

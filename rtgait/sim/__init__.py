@@ -1,13 +1,20 @@
-"""Walking in physics: the planner, the whole-body IK and a MuJoCo model of the robot in closed loop at 1 kHz.
+"""Walking in physics: the planner, a controller level, the whole-body IK and a MuJoCo model of the robot in closed
+loop, one tick per control period.
 
 Modules (import them directly; this package imports nothing, so importing it needs neither MuJoCo nor Pinocchio):
 
 * :mod:`rtgait.sim.model`: ``build_sim_model(robot)``, the MuJoCo model built at run time from the robot
-  description's URDF (free-floating base, sole contact boxes, floor, position actuators, half-sitting start).
-* :mod:`rtgait.sim.loop`: ``run_closed_loop(...)``, planner + IK + physics per tick, the measured ZMP (centre of
-  pressure of the sole contacts), fall detection, pushes, an optional stabiliser; ``SimResult``.
-* :mod:`rtgait.sim.run`: ``simulate(scenario, robot)``, ``write_sim_outputs(result, out_dir)`` and
-  ``write_sim_replay(result, robot, path)`` (the 3D replay of the simulated motion) for the CLI.
+  description's URDF (free-floating base, sole contact boxes, floor, PD servos, half-sitting start);
+  :mod:`rtgait.sim.actuation` and :mod:`rtgait.sim.contact_model` its servos and contacts.
+* :mod:`rtgait.sim.measure`: what a controller measures each tick (per-foot wrench, CoP, foot poses, COM, DCM,
+  landings); :mod:`rtgait.sim.foot_control`: ankle damping and foot force-difference control.
+* :mod:`rtgait.sim.controllers` (settings in :mod:`rtgait.sim.control_settings`): the levels ``open-loop``,
+  ``stabilized`` and ``adaptive``.
+* :mod:`rtgait.sim.loop`: ``run_closed_loop(sim, controller)``, measure -> controller -> IK -> servos -> physics;
+  :mod:`rtgait.sim.contact`: the per-tick contact record, falls, landings, pushes; :mod:`rtgait.sim.result`:
+  ``SimResult`` and its measures (ZMP errors, slip, rest).
+* :mod:`rtgait.sim.run`: ``simulate(scenario, robot, controller=...)`` for the CLI; :mod:`rtgait.sim.outputs`
+  (``sim.csv``, ``summary.json``, the replay, the printed summary) and :mod:`rtgait.sim.figure` (``zmp_sim``).
 * :mod:`rtgait.sim.guided`: ``simulate_guided(sim, walk)``, a walk led by the hand (the paper's Section 6): a
-  person pulls the hand along the scenario's ``[guide]`` path, the wrist reading sets the steps.
+  person pulls and twists the hand along the scenario's ``[guide]`` path, the wrist reading sets the steps.
 """

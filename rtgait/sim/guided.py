@@ -9,9 +9,14 @@ the planner's velocity command, one decision per step (quasi-real-time), and onc
 command is zero the planner is told to stop.
 
 The torque about the vertical, which the paper's operator gives by twisting the hand, is the person's: a twist
-proportional to how far the robot's heading lags the path's (:attr:`Leash.twist_gain`). The pull alone would
-not turn the robot: the hand is beside the body, and the moment of a forward pull about the base is a constant
-bias, not a turn.
+proportional to how far the robot's heading lags the path's (:attr:`Leash.twist_gain`), applied to the hand's body
+as a torque (``data.xfrc_applied``) and read by the wrist sensor. The pull alone would not turn the robot: the hand
+is beside the body, and the moment of a forward pull about the base is a constant bias, not a turn.
+
+The leash is scaled to the robot (:meth:`Leash.for_robot`): its force limit is a fraction of the robot's weight
+(:data:`FORCE_FRACTION`, 4.5 %: 40 N on Talos, 15 N on G1), its stiffness and damping and the twist's gain and limit
+in proportion, so that the person leads any robot as they lead Talos, and a person does not drag a robot: the robot
+must walk after the hand, its stance feet still (:attr:`rtgait.sim.result.SimResult.foot_slip_max`).
 """
 
 from __future__ import annotations
@@ -34,7 +39,21 @@ from rtgait.sim.loop import LoopOptions, run_closed_loop
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SimResult
 
-__all__ = ["HAND_FRAMES", "GuideOutcome", "HandPull", "Leash", "guided_options", "simulate_guided"]
+__all__ = [
+    "FORCE_FRACTION",
+    "HAND_FRAMES",
+    "GuideOutcome",
+    "HandPull",
+    "Leash",
+    "guided_options",
+    "simulate_guided",
+]
+
+FORCE_FRACTION = 0.045
+"""Largest pull of the leash as a fraction of the robot's weight: 40 N on Talos (90 kg), the value the guided walk
+was first tuned with, about a tenth of what the soles' friction (coefficient 1) could hold in single support."""
+
+_TALOS_WEIGHT = 40.0 / FORCE_FRACTION  # N: the weight the default leash is sized for
 
 HAND_FRAMES = ("gripper_right_base_link", "right_rubber_hand", "right_wrist_yaw_link")
 """Right-hand frames of the built-in robots (Talos, G1), tried in this order when no hand frame is given."""
@@ -67,6 +86,23 @@ class Leash:
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"leash {name} must be finite and >= 0, got {value}")
 
+    @classmethod
+    def for_robot(cls, mass: float, gravity: float = 9.81, hand_frame: str | None = None) -> Leash:
+        """The default leash scaled to a robot of ``mass`` (kg): force limit :data:`FORCE_FRACTION` of its weight,
+        stiffness, damping, twist gain and twist limit in the same proportion to the defaults (sized for Talos)."""
+        if not (math.isfinite(mass) and mass > 0.0):
+            raise ValueError(f"mass must be > 0 kg, got {mass}")
+        scale = mass * gravity / _TALOS_WEIGHT
+        base = cls()
+        return cls(
+            stiffness=base.stiffness * scale,
+            damping=base.damping * scale,
+            max_force=FORCE_FRACTION * mass * gravity,
+            twist_gain=base.twist_gain * scale,
+            max_twist=base.max_twist * scale,
+            hand_frame=hand_frame,
+        )
+
 
 @dataclass(frozen=True)
 class GuideOutcome:
@@ -79,6 +115,8 @@ class GuideOutcome:
         base_end: where the base ended (m, world x, y).
         max_force: the largest pull on the hand (N).
         stop_time: when the planner was told to stop (s), or ``None``.
+        force_limit: the leash's force limit (N).
+        max_twist: the largest twist applied to the hand (N m).
     """
 
     person_end: tuple[float, float]
@@ -86,6 +124,8 @@ class GuideOutcome:
     base_end: tuple[float, float]
     max_force: float
     stop_time: float | None
+    force_limit: float = math.nan
+    max_twist: float = 0.0
 
     @property
     def base_error(self) -> float:
@@ -116,7 +156,7 @@ class HandPull:
         self.sim = sim
         self.planner = planner
         self.path = path
-        self.leash = leash or Leash()
+        self.leash = leash or Leash.for_robot(sim.robot.mass, float(-sim.model.opt.gravity[2]))
         self.guide = HandGuide(planner)
         self.max_steps = max_steps
         robot = sim.robot
@@ -145,6 +185,7 @@ class HandPull:
         self._hand_previous = np.zeros(2)
         self.stop_time: float | None = None
         self.max_force = 0.0
+        self.max_twist = 0.0
 
     def _begin(self, t: float, data: mujoco.MjData) -> None:
         """At the walk's start: where the hand is on its body, and the path's placement in the world."""
@@ -196,11 +237,14 @@ class HandPull:
         xfrc[0:3] = force3
         # MuJoCo applies xfrc_applied at the body's centre of mass: add the moment of moving it from the hand.
         xfrc[3:6] = np.cross(hand - data.xipos[body], force3)
-        if self.stop_time is not None:
-            return
         heading = _yaw(data.qpos)
         lag = math.remainder(path_heading - heading, math.tau)
-        twist = min(max(leash.twist_gain * lag, -leash.max_twist), leash.max_twist)
+        twist = 0.0 if self.stop_time is not None else leash.twist_gain * lag
+        twist = min(max(twist, -leash.max_twist), leash.max_twist)
+        xfrc[5] += twist  # the person's twist of the hand, a torque about the vertical on the hand's body
+        self.max_twist = max(self.max_twist, abs(twist))
+        if self.stop_time is not None:
+            return
         # The wrist sensor reads the force applied to the hand (world frame) and the person's twist.
         self.guide.update(t, float(xfrc[0]), float(xfrc[1]), twist, heading)
         person_stopped = t - self._t0 >= self.path.duration
@@ -221,6 +265,8 @@ class HandPull:
             base_end=(float(base_end[0]), float(base_end[1])),
             max_force=self.max_force,
             stop_time=self.stop_time,
+            force_limit=self.leash.max_force,
+            max_twist=self.max_twist,
         )
 
 
@@ -252,7 +298,7 @@ def simulate_guided(
         controller: the controller level (:mod:`rtgait.sim.controllers`).
         controller_options: its gains and landing handling.
         path: the person's path (default: ``walk.guide``).
-        leash: the person's arm (default :class:`Leash`).
+        leash: the person's arm (default :meth:`Leash.for_robot` of the simulated robot).
         progress: called now and then with the fraction simulated.
 
     Returns:

@@ -88,6 +88,9 @@ class LoopOptions:
         changes: footstep changes, each handed to the planner at its connection mode's deadline.
         stop_after_steps: for a walk by velocity command: ``planner.stop()`` once this many steps are committed,
             so that the walk has ``stop_after_steps + 1`` steps (the last one closes the feet).
+        velocity_changes: for a walk by velocity command: ``(t, vx, vy, wz)`` (s on the walk's clock, m/s, m/s,
+            rad/s), each handed to the planner (``set_velocity``) at its time, in time order; the command before the
+            first is the planner's own.
         on_tick: called every tick from the walk's start on, as ``on_tick(t, data)`` with the walk's time ``t``
             (s) and the MuJoCo state, before the footstep changes and the controller: a hook for simulated sensors
             and operators (e.g. a hand pull through ``data.xfrc_applied`` that sets the planner's velocity command,
@@ -107,6 +110,7 @@ class LoopOptions:
     contact_threshold: float = 0.01
     changes: tuple[ScheduledChange, ...] = ()
     stop_after_steps: int | None = None
+    velocity_changes: tuple[tuple[float, float, float, float], ...] = ()
     replay_period: float = 0.04
     on_tick: Callable[[float, mujoco.MjData], None] | None = None
     duration: float | None = None
@@ -126,6 +130,12 @@ class LoopOptions:
             )
         if self.stop_after_steps is not None and self.stop_after_steps < 1:
             raise ValueError(f"stop_after_steps must be >= 1, got {self.stop_after_steps}")
+        for change in self.velocity_changes:
+            if len(change) != 4 or not all(math.isfinite(v) for v in change):
+                raise ValueError(f"a velocity change is four finite numbers (t, vx, vy, wz), got {change!r}")
+        times = [change[0] for change in self.velocity_changes]
+        if times != sorted(times):
+            raise ValueError(f"velocity changes must be in time order, got times {times}")
 
     @property
     def lead(self) -> float:
@@ -284,6 +294,7 @@ def run_closed_loop(
     landings = Landings(max(min(planner.config.timing.double_support, LANDING_WINDOW), dt), threshold)
     fell, fall_time, fall_cause = False, None, None
     stopped = stop_after is None
+    commands = list(options.velocity_changes)
     report_every = max(n_ticks // 50, 1)
     ticks = n_ticks
     step = mujoco.mj_step
@@ -314,6 +325,9 @@ def run_closed_loop(
                 planner.change_step(
                     change.step, length=change.length, width=change.width, turn=change.turn, through=change.through
                 )
+            while commands and t >= commands[0][0] - 1e-9 and not stopped:
+                _, vx, vy, wz = commands.pop(0)
+                planner.set_velocity(vx, vy, wz)
             if not stopped and planner.first_open_step() > stop_after:  # type: ignore[operator]
                 planner.stop()
                 stopped = True

@@ -12,6 +12,9 @@ What the importer gets from the URDF and what is changed, and why:
   described sole rectangle), the only thing that touches the floor, and boxes around the leg links, which collide
   with the other leg's.
 * The root link gets a free joint (the URDF has a fixed base).
+* Visual meshes in a format MuJoCo cannot decode (:data:`MESH_FORMATS`; Romeo's COLLADA ``.dae``) are left out, with
+  one :class:`MeshSkippedWarning`; ``<mimic>`` joint couplings are dropped (every joint is locked or has its own
+  servo).
 * Every joint outside ``walking.moving_joints`` is locked at its half-sitting angle (its body is turned by the
   angle and the joint removed): the whole-body IK treats them the same way, and the model gets fewer degrees of
   freedom, which makes every physics step cheaper.
@@ -27,6 +30,7 @@ qy, qz)``; joints are matched by URDF name, never by order.
 from __future__ import annotations
 
 import math
+import warnings
 import xml.etree.ElementTree as ElementTree
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,7 +43,15 @@ from rtgait.robot.model import RobotModel
 from rtgait.sim.actuation import Actuation, add_actuators, resolve_actuation, substeps
 from rtgait.sim.contact_model import add_floor, add_leg_shapes, add_sole, exclude_pairs, touching_pairs
 
-__all__ = ["SETTLE_TIME", "SimConfig", "SimModel", "build_sim_model"]
+__all__ = ["MESH_FORMATS", "SETTLE_TIME", "MeshSkippedWarning", "SimConfig", "SimModel", "build_sim_model"]
+
+MESH_FORMATS = (".stl", ".obj", ".msh")
+"""Mesh file formats MuJoCo decodes; other visual meshes (Romeo's COLLADA ``.dae``) are left out of the model."""
+
+
+class MeshSkippedWarning(UserWarning):
+    """Visual meshes of the robot were left out of its MuJoCo model (a format MuJoCo cannot decode)."""
+
 
 SETTLE_TIME = 0.2
 """Physics time (s) a fresh state stands still before its clock starts (see :meth:`SimModel.reset`)."""
@@ -303,6 +315,12 @@ def _urdf_for_mujoco(description: RobotDescription, meshes: bool) -> str:
         raise RobotError(f"model.urdf {description.urdf} is not a readable URDF: {error}") from None
     for old in root.findall("mujoco"):
         root.remove(old)
+    for joint in root.findall("joint"):
+        # A <mimic> becomes an equality constraint in MuJoCo, which fails once the joints it names are locked
+        # (Romeo's fingers); every joint is either locked or driven by its own servo here.
+        for mimic in joint.findall("mimic"):
+            joint.remove(mimic)
+    undecodable: dict[str, int] = {}
     for link in root.findall("link"):
         for collision in link.findall("collision"):
             link.remove(collision)
@@ -311,11 +329,23 @@ def _urdf_for_mujoco(description: RobotDescription, meshes: bool) -> str:
             if mesh is None:
                 continue
             path = _resolve_mesh(mesh.get("filename", ""), description) if meshes else None
+            suffix = Path(path).suffix.lower() if path is not None else ""
+            if path is not None and suffix not in MESH_FORMATS:
+                undecodable[suffix] = undecodable.get(suffix, 0) + 1
+                path = None
             if path is None:
-                # A missing mesh file is only a missing picture; the physics does not depend on it.
+                # A missing or undecodable mesh file is only a missing picture; the physics does not depend on it.
                 link.remove(visual)
             else:
                 mesh.set("filename", path)
+    if undecodable:
+        kinds = ", ".join(f"{count} {suffix}" for suffix, count in sorted(undecodable.items()))
+        warnings.warn(
+            f"{description.name}: visual meshes MuJoCo cannot decode ({kinds}) are left out of its MuJoCo model "
+            "(they are only its picture; the 3D replay draws them)",
+            MeshSkippedWarning,
+            stacklevel=3,
+        )
     extension = ElementTree.Element("mujoco")
     ElementTree.SubElement(
         extension,

@@ -245,7 +245,8 @@ def sim_report(summary: dict[str, Any], out: Path) -> str:
         f"{summary['step_adjustments']} step adjustment(s), stance-foot slip at most "
         f"{summary['foot_slip_max'] * 1e3:.1f} mm",
         f"ZMP         measured vs planned in single support: RMS {_mm(errors['vs_plan']['rms'])}; vs the multibody "
-        f"ZMP of the commanded motion: RMS {_mm(errors['vs_commanded_motion']['rms'])}",
+        f"ZMP of the commanded motion: RMS {_mm(errors['vs_commanded_motion']['rms'])}, median "
+        f"{_mm(errors['vs_commanded_motion']['median'])}",
     ]
     if pushes:
         lines.append("pushes      " + ", ".join(f"{p['impulse_norm']:.1f} N s at {p['start']:.2f} s" for p in pushes))

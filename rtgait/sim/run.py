@@ -73,7 +73,7 @@ def simulate(
     *,
     controller: Controller = "adaptive",
     controller_options: ControllerOptions | None = None,
-    velocity: VelocityCommand | tuple[float, float, float] | None = None,
+    velocity: VelocityCommand | tuple[float, float, float] | Sequence[tuple[float, float, float, float]] | None = None,
     push: Push | Sequence[Push] | None = None,
     progress: Callable[[float], None] | None = None,
     sim: SimModel | None = None,
@@ -99,8 +99,10 @@ def simulate(
             or ``"open-loop"`` (the plan alone, the paper's assumption); :mod:`rtgait.sim.controllers`.
         controller_options: the levels' gains and landing handling (default :class:`ControllerOptions`).
         velocity: walk by velocity command ``(vx, vy, wz)`` (m/s, m/s, rad/s) instead of the scenario's footsteps:
-            ``scenario.steps`` steps, then a closing step; the scenario's changes do not apply. Without it, a
-            scenario with a ``[guide]`` path is walked led by the hand (:func:`rtgait.sim.guided.simulate_guided`).
+            ``scenario.steps`` steps, then a closing step; the scenario's changes do not apply. A sequence of
+            ``(t, vx, vy, wz)`` changes the command at each time ``t`` (s, walk clock; the first at ``t <= 0`` is the
+            start's). Without it, a scenario with a ``[guide]`` path is walked led by the hand
+            (:func:`rtgait.sim.guided.simulate_guided`).
         push: external force(s) on the robot, e.g. ``Push(start=5.0, duration=0.1, force=(0, 100, 0))``; times
             are on the walk's clock (0 when the walk starts, after the start transition).
         progress: called now and then with the fraction simulated, for long runs.
@@ -144,9 +146,30 @@ def simulate(
             sim, walk, dataclasses.replace(base_options, changes=()), controller=controller,
             controller_options=controller_options, progress=progress,
         )[0]  # fmt: skip
-    level, changes, stop_after = _controller(walk, velocity, controller, sim, controller_options)
-    walk_options = dataclasses.replace(base_options, changes=changes, stop_after_steps=stop_after)
+    command, schedule = _velocity_schedule(velocity)
+    level, changes, stop_after = _controller(walk, command, controller, sim, controller_options)
+    walk_options = dataclasses.replace(
+        base_options, changes=changes, stop_after_steps=stop_after, velocity_changes=schedule
+    )
     return run_closed_loop(sim, level, walk_options, progress=progress)
+
+
+def _velocity_schedule(
+    velocity: VelocityCommand | tuple[float, float, float] | Sequence[tuple[float, float, float, float]] | None,
+) -> tuple[VelocityCommand | tuple[float, float, float] | None, tuple[tuple[float, float, float, float], ...]]:
+    """The command the walk starts with and the later changes ``(t, vx, vy, wz)`` of a ``velocity`` argument."""
+    if velocity is None or isinstance(velocity, VelocityCommand):
+        return velocity, ()
+    items = list(velocity)
+    if items and all(isinstance(v, int | float) for v in items):
+        return tuple(items), ()  # type: ignore[return-value]  # one command (vx, vy, wz)
+    schedule = tuple(tuple(float(v) for v in item) for item in items)
+    if not schedule or any(len(item) != 4 for item in schedule):
+        raise ValueError(f"velocity must be (vx, vy, wz) or a sequence of (t, vx, vy, wz), got {velocity!r}")
+    first = schedule[0]
+    if first[0] > 0.0:
+        return (0.0, 0.0, 0.0), schedule  # type: ignore[return-value]
+    return first[1:], schedule[1:]  # type: ignore[return-value]
 
 
 def sim_config(

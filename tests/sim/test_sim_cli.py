@@ -252,3 +252,29 @@ def test_bad_controller_periods_and_pushes_are_one_line_and_no_output(
     err = capsys.readouterr().err
     assert err.startswith("rtgait: error:") and len(err.strip().splitlines()) == 1 and words in err, err
     assert not out.exists()
+
+
+def test_zmp_sim_in_any_format_on_the_walks_clock_with_its_error_measures(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], write_scenario
+) -> None:
+    from xml.etree import ElementTree
+
+    scenario = write_scenario(name="short", connection="quasi-real-time", single_support=0.7, double_support=0.1,
+                              dt=0.005, steps=1, step_length=0.08, short_ends=True)  # fmt: skip
+    out = tmp_path / "svg"
+    argv = ["simulate", str(scenario), "--out", str(out), "--format", "svg", "--controller", "stabilized"]
+    assert main([*argv, "--push", "1.0,0.1,50,0"]) == 0
+    printed = capsys.readouterr().out
+    assert "stabilized" in printed and "from the robot description" in printed and "5.0 N s at 1.00 s" in printed
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["files"] == ["sim.csv", "summary.json", "zmp_sim.svg"]
+    assert ElementTree.parse(out / "zmp_sim.svg").getroot().tag == "{http://www.w3.org/2000/svg}svg"
+    # The walk's clock: the start transition at negative times, the push where --push said, on that clock.
+    assert summary["run_start"] == pytest.approx(-1.5) and summary["pushes"][0]["start"] == 1.0
+    assert summary["pushes"][0]["impulse"] == pytest.approx([5.0, 0.0, 0.0])
+    assert summary["controller"] == "stabilized" and summary["walk"]["step_width"] == pytest.approx(0.17, abs=1e-3)
+    for key in ("missed_landings", "step_adjustments", "foot_slip_max", "fall_cause", "steps_planned"):
+        assert key in summary
+    with open(out / "sim.csv", encoding="utf-8") as stream:
+        rows = list(csv.DictReader(stream))
+    assert float(rows[0]["t"]) == pytest.approx(-1.5) and min(abs(float(r["t"])) for r in rows) < 1e-9

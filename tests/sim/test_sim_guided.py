@@ -26,11 +26,25 @@ def test_the_robot_follows_the_hand_along_a_short_path(talos, talos_sim):
     assert led.stop_time is not None and led.stop_time >= result.walk_start + path.duration
     assert result.steps_completed == result.steps_planned >= 6
     assert led.base_error < 0.3
-    assert 0.0 < led.max_force <= Leash().max_force
+    assert 0.0 < led.max_force <= led.force_limit == pytest.approx(0.045 * talos.mass * 9.81)
+    assert led.max_twist > 0.0, "the person twisted the hand"
+    # It walked after the hand, not dragged: the stance feet stood still, the ZMP followed the plan.
+    assert result.foot_slip_max < 0.02
+    assert result.zmp_errors()["vs_plan"]["rms"] < 0.04
     # It turned with the path (to the left), and came to rest.
     qx, qy, qz, qw = result.base_quaternion[-1]
     yaw = math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
     assert yaw == pytest.approx(0.6, abs=0.25)
+
+
+def test_the_leash_is_scaled_to_the_robot():
+    talos, g1 = Leash.for_robot(90.0), Leash.for_robot(33.0)
+    assert talos.max_force == pytest.approx(0.045 * 90.0 * 9.81) and g1.max_force == pytest.approx(0.045 * 33.0 * 9.81)
+    ratio = 33.0 / 90.0
+    for name in ("stiffness", "damping", "max_force", "twist_gain", "max_twist"):
+        assert getattr(g1, name) == pytest.approx(ratio * getattr(talos, name)), name
+    with pytest.raises(ValueError, match="mass"):
+        Leash.for_robot(0.0)
 
 
 def test_guide_path_geometry():

@@ -138,3 +138,44 @@ def test_meshes_are_visual_only(talos):
 def test_bad_config(field, value):
     with pytest.raises(ValueError, match=field):
         SimConfig(**{field: value})
+
+
+ROMEO = """name = "romeo"
+[model]
+urdf = "example-robot-data:romeo_description/urdf/romeo.urdf"
+[feet]
+left_sole_frame = "l_sole"
+right_sole_frame = "r_sole"
+[feet.sole]
+front = 0.11
+back = 0.07
+inner = 0.045
+outer = 0.045
+[walking]
+cog_height = 0.60
+moving_joints = ["LHipYaw", "LHipRoll", "LHipPitch", "LKneePitch", "LAnklePitch", "LAnkleRoll",
+                 "RHipYaw", "RHipRoll", "RHipPitch", "RKneePitch", "RAnklePitch", "RAnkleRoll", "TrunkYaw"]
+torso_frame = "torso"
+[posture]
+LHipPitch = -0.3490658
+LKneePitch = 0.6981317
+LAnklePitch = -0.3490658
+RHipPitch = -0.3490658
+RKneePitch = 0.6981317
+RAnklePitch = -0.3490658
+"""
+
+
+def test_a_robot_with_meshes_mujoco_cannot_decode_still_builds_with_one_note(tmp_path):
+    """Romeo's visual meshes are COLLADA (.dae), which MuJoCo does not read, and its fingers are coupled by <mimic>
+    joints: the model builds without them (one warning), with the same mass as Pinocchio's."""
+    from rtgait.robot.model import RobotModel
+    from rtgait.sim.model import MeshSkippedWarning
+
+    path = tmp_path / "romeo.toml"
+    path.write_text(ROMEO, encoding="utf-8")
+    robot = RobotModel.load(str(path))
+    with pytest.warns(MeshSkippedWarning, match=r"romeo: visual meshes MuJoCo cannot decode \(\d+ \.dae\)") as caught:
+        sim = build_sim_model(robot)
+    assert len(caught) == 1 and "\n" not in str(caught[0].message)
+    assert sim.model.body_subtreemass[sim.base_body] == pytest.approx(robot.mass)

@@ -1,0 +1,108 @@
+"""A walking controller's CI: short scripted walks in physics with the default (adaptive) controller, for Talos and
+G1, each judged on what a robot must do (not fall, stay upright, end where it was sent), and bad input refused."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco")
+pytest.importorskip("pinocchio")
+
+from rtgait.core.closed_loop import CONTROLLERS
+from rtgait.scenario import load_scenario
+from rtgait.sim.contact import Push
+from rtgait.sim.loop import LoopOptions
+from rtgait.sim.run import simulate
+
+ROBOTS = ("talos", "g1")
+TILT_LIMIT = 0.1
+"""Largest tilt of the base from upright (rad) a scripted walk may show: 6 degrees."""
+POSITION_TOLERANCE = 0.1
+"""Largest distance of the base's end from its target (m)."""
+QUICK = LoopOptions(start_ramp=0.5, start_hold=0.3, after=0.3)
+"""A shorter start transition than the default's 1.5 s: the robots settle within it."""
+
+
+@pytest.fixture(scope="module")
+def robots(talos: Any, talos_sim: Any) -> dict[str, tuple[Any, Any]]:
+    from rtgait.robot.model import RobotModel
+    from rtgait.sim.model import SimConfig, build_sim_model
+
+    g1 = RobotModel.load("g1")
+    return {"talos": (talos, talos_sim), "g1": (g1, build_sim_model(g1, SimConfig(meshes=False)))}
+
+
+def short(steps: int, length: float) -> Any:
+    """fig8's timing (quasi-real-time, T_s 0.7 s, T_dbl 0.1 s) for ``steps`` steps of ``length`` (m), short ends."""
+    scenario = load_scenario("fig8")
+    timing = dataclasses.replace(scenario.timing, start=0.6, end=0.6, settle=1.0)
+    return dataclasses.replace(scenario, steps=steps, step_length=length, changes=(), timing=timing)
+
+
+def tilt(result: Any) -> np.ndarray:
+    """Angle of the base's z axis from the vertical at each tick (rad)."""
+    qx, qy = result.base_quaternion[:, 0], result.base_quaternion[:, 1]
+    return np.arccos(np.clip(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0))
+
+
+def check_walk(result: Any, displacement: tuple[float, float], name: str) -> None:
+    """No fall, every step landed, upright, at rest, and the base moved by ``displacement`` (m) within tolerance."""
+    assert not result.fell, f"{name}: fell at {result.fall_time} s ({result.fall_cause})"
+    assert result.steps_completed == result.steps_planned, name
+    assert tilt(result).max() < TILT_LIMIT, f"{name}: base tilted {tilt(result).max():.3f} rad"
+    assert result.ended_at_rest, name
+    moved = result.base_position[-1, :2] - result.base_position[0, :2]
+    assert math.dist(moved, displacement) < POSITION_TOLERANCE, f"{name}: moved {moved}, sent {displacement}"
+    assert result.foot_slip_max < 0.01, f"{name}: a stance foot slipped {result.foot_slip_max * 1e3:.1f} mm"
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_a_few_steps(robots, robot):
+    model, sim = robots[robot]
+    # Three 0.1 m steps and the closing one: 0.3 m forward.
+    result = simulate(short(3, 0.1), model, sim=sim, options=QUICK)
+    assert result.controller == "adaptive"
+    check_walk(result, (0.3, 0.0), f"{robot}, three steps")
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_a_velocity_walk_that_turns(robots, robot):
+    model, sim = robots[robot]
+    # 0.1 m/s forward, then a turn to the left on the spot: 0.08 m strides, then a quarter turn's worth of steps.
+    schedule = [(0.0, 0.1, 0.0, 0.0), (2.0, 0.0, 0.0, 0.3)]
+    result = simulate(short(5, 0.1), model, sim=sim, options=QUICK, velocity=schedule)
+    qx, qy, qz, qw = result.base_quaternion[-1]
+    yaw = math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    assert 0.2 < yaw < 1.0, f"{robot} turned {yaw:.2f} rad"
+    # Two strides of 0.08 m before the turn, then stepping round on the spot.
+    check_walk(result, (0.16, 0.0), f"{robot}, velocity walk")
+
+
+@pytest.mark.parametrize(("robot", "impulse"), [("talos", 25.0), ("g1", 6.0)])
+def test_a_moderate_push_forward_in_single_support(robots, robot, impulse):
+    model, sim = robots[robot]
+    scenario = short(4, 0.1)
+    single = scenario.timing.start + scenario.timing.single_support + scenario.timing.double_support  # step 2
+    push = Push(single + 0.3, 0.1, (impulse / 0.1, 0.0, 0.0))  # mid single support of step 2
+    result = simulate(scenario, model, sim=sim, options=QUICK, push=push)
+    assert result.pushes == (push,) and result.summary()["pushes"][0]["impulse_norm"] == pytest.approx(impulse)
+    check_walk(result, (0.4, 0.0), f"{robot}, pushed {impulse} N s")
+
+
+def test_bad_input_is_refused_before_any_physics(robots):
+    model, sim = robots["talos"]
+    scenario = short(1, 0.1)
+    with pytest.raises(ValueError, match="controller must be one of"):
+        simulate(scenario, model, sim=sim, controller="stiff")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="finite"):
+        Push(1.0, 0.1, (math.nan, 0.0, 0.0))
+    with pytest.raises(ValueError, match="exceeds"):
+        simulate(scenario, model, sim=sim, push=Push(1.0, 0.1, (1e6, 0.0, 0.0)))  # 10^5 N s on 90 kg
+    with pytest.raises(ValueError, match="longer than the control period"):
+        simulate(scenario, model, control_dt=0.001, physics_dt=0.002)
+    assert set(CONTROLLERS) == {"open-loop", "stabilized", "adaptive"}
