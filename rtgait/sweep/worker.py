@@ -9,7 +9,6 @@ A case that cannot be walked (the robot cannot reach it, a bad value) prints ``{
 
 from __future__ import annotations
 
-import inspect
 import json
 import sys
 from typing import Any
@@ -21,17 +20,8 @@ CONTROLLERS = ("open-loop", "stabilized", "adaptive")
 
 
 def simulate_options(controller: str | None) -> dict[str, Any]:
-    """Keyword arguments of :func:`rtgait.sim.run.simulate` for ``controller``: its ``controller=`` where it has one,
-    else the basic ``stabilizer`` switch (``open-loop``: off, ``stabilized``: on)."""
-    if controller is None:
-        return {}
-    from rtgait.sim.run import simulate
-
-    if "controller" in inspect.signature(simulate).parameters:
-        return {"controller": controller}
-    if controller in ("open-loop", "stabilized"):
-        return {"stabilizer": controller == "stabilized"}
-    raise ValueError(f"--controller {controller} needs rtgait.sim.run.simulate(controller=...), which is not there")
+    """Keyword arguments of :func:`rtgait.sim.run.simulate` for ``controller`` (``None``: its default level)."""
+    return {} if controller is None else {"controller": controller}
 
 
 def run_job(job: dict[str, Any]) -> dict[str, Any]:
