@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, NamedTuple
 from rtgait.core.closed_loop import DEFAULT_REPLAN_DCM_ERROR
 from rtgait.core.feedback import DcmFeedbackGains
 from rtgait.core.footsteps import SoleRect
+from rtgait.core.measured import AUTO_MIN_REMAINDER, AUTO_REPLAN_INTERVAL
 from rtgait.core.stepping import StepAdjustment
 from rtgait.robot.ik import IKTargets
 from rtgait.sim.foot_control import FootControlGains, FootOffsets
@@ -46,13 +47,10 @@ the stiff ankle servo (Talos 2.7e5 N m/rad, G1 6e4) in series with MuJoCo's sole
 on Talos and on G1. Measured (``stabilized``, fig6/7/8): 0.001-0.003 walk on both robots, the measured ZMP 2-5 mm
 closer to the plan than without ankle damping."""
 
-ERROR_REPLAN_INTERVAL = 0.05
-"""Least time (s) between two replans of ``"adaptive"`` triggered by a DCM error: a replan from the measured state
-zeroes the error, so a new one means a new disturbance (the core's own interval for ``feedback="measured"``)."""
-
-ERROR_REPLAN_MIN_REMAINDER = 0.1
-"""Shortest remainder of a phase (s) over which a DCM error triggers a replan; closer to the phase's end the free ZMP
-polynomial would need wild swings, and the error is taken in at the next phase's first tick (as the core does)."""
+# The core's own thresholds for replans triggered by a DCM error (rtgait.core.measured), under the names the MuJoCo
+# controller uses: the least time between two, and the shortest phase remainder one is made over (s).
+ERROR_REPLAN_INTERVAL = AUTO_REPLAN_INTERVAL
+ERROR_REPLAN_MIN_REMAINDER = AUTO_MIN_REMAINDER
 
 
 @dataclass(frozen=True)
