@@ -23,8 +23,6 @@ from rtgait.outputs import OutputError
 from rtgait.scenario import builtin_scenarios
 from rtgait.sweep import cli as sweep_cli
 
-_RunError = RunError  # the name this module used to raise, for code that catches it
-
 # A value that starts like a negative number ("-0.1,0,0", "-1e-3", "-inf"); argparse would take it for an option.
 _NEGATIVE_VALUE = re.compile(r"-(\d|\.\d|inf|nan)", re.IGNORECASE)
 

@@ -31,7 +31,6 @@ __all__ = [
     "auto_decisions",
     "plan_files",
     "plan_report",
-    "simulation_report",
     "summarize",
     "write_joints_csv",
     "write_plan_outputs",
@@ -392,33 +391,6 @@ def plan_report(summary: dict[str, Any], out: Path, wall_time: float) -> str:
         lines.append(f"replans     none (first plan {times['first_plan']:.0f} µs)")
     if "robot" in summary:
         lines += _robot_lines(summary)
-    lines.append(f"outputs     {out}{os.sep}: {', '.join(summary['files'])} ({summary['rows']} rows)")
-    return "\n".join(lines) + "\n"
-
-
-def simulation_report(summary: dict[str, Any], out: Path) -> str:
-    """The lines ``rtgait simulate`` prints for the summary of a run written to ``out``: outcome, distance, ZMP
-    tracking, speed, MuJoCo's warnings if any, outputs."""
-    if summary["fell"]:
-        outcome = f"FELL at {summary['fall_time']:.2f} s ({summary['fall_cause']})"
-    else:
-        outcome = f"walked {summary['steps_completed']} of {summary['steps_planned']} steps without falling"
-    if summary["tipped"]:
-        outcome += f"; a loaded foot tipped over at {summary['tip_time']:.2f} s"
-    if "guide" in summary:
-        outcome += f"; led by the hand, the base ended {summary['guide']['base_error']:.3f} m from its goal"
-    rms = summary["zmp_tracking_error_rms"]
-    lines = [
-        f"scenario    {summary['scenario']} ({summary['connection']}) on {summary['robot']} in MuJoCo, 1 kHz",
-        f"outcome     {outcome}",
-        f"walked      {summary['distance_walked']:.3f} m; measured vs planned ZMP in single support: "
-        f"RMS {'n/a' if rms is None else f'{rms * 1e3:.1f} mm'}",
-        f"speed       real-time factor {summary['real_time_factor']:.1f} "
-        f"({summary['simulated_time']:.1f} s simulated in {summary['wall_time']:.1f} s)",
-    ]
-    warnings = summary.get("mujoco_warnings") or []
-    if warnings:
-        lines.append(f"warnings    MuJoCo: {warnings[0]} ({len(warnings)} in all, listed in summary.json)")
     lines.append(f"outputs     {out}{os.sep}: {', '.join(summary['files'])} ({summary['rows']} rows)")
     return "\n".join(lines) + "\n"
 

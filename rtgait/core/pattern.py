@@ -54,8 +54,6 @@ from rtgait.core.lipm import particular_matrix
 
 DEGREE = 4
 """Storage degree of every segment polynomial (the free quartic and the rest bump are the highest)."""
-REFERENCE_DEGREE = 3
-"""Degree of the reference ZMP segments (cubic transfers in double support)."""
 SEGMENT_WIDTH = 2 * (DEGREE + 1) + 2
 """Per segment and axis: ``a_0..a_4, A_0..A_4, V, W``."""
 
@@ -68,12 +66,6 @@ REST_KIND = "settle"
 
 _STATE_COLUMNS = 4
 """Leading columns of ``y``: ``p0, dp0, c0, dc0``; the anchors follow."""
-
-
-def transfer_cubic(start: np.ndarray, end: np.ndarray, duration: float) -> np.ndarray:
-    """Coefficients ``(4, d)`` of the cubic from ``start`` to ``end`` (m) with zero end velocities."""
-    delta = np.asarray(end, dtype=float) - np.asarray(start, dtype=float)
-    return np.array([start, np.zeros_like(delta), 3.0 * delta / duration**2, -2.0 * delta / duration**3])
 
 
 @dataclass(frozen=True)
