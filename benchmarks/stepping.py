@@ -91,9 +91,9 @@ def adjust_cost(grid: int) -> dict:
         decision.append(time.perf_counter() - began)
         return result
 
-    import rtgait.core.online as online  # the planner calls it through its own module's name
+    import rtgait.core.measured as measured  # the planner calls it through this module's name
 
-    online.propose_landing = timed
+    measured.propose_landing = timed
     try:
         for angle in np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False):
             for speed in (0.12, 0.2):
@@ -107,7 +107,7 @@ def adjust_cost(grid: int) -> dict:
                     if attempt == 1 and planner.step_adjustment_count:
                         total.append((elapsed, decision[-1]))
     finally:
-        online.propose_landing = original
+        measured.propose_landing = original
     whole = np.array([a for a, _ in total]) * 1e6
     alone = np.array([b for _, b in total]) * 1e6
     return {
