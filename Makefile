@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test lint bench clean images
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -43,3 +43,20 @@ bench: $(STAMP)
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .hypothesis
+
+# docs/images/ from the current code: the README's and docs' figures, remade in a scratch folder and copied.
+IMAGES := out/images
+images: $(STAMP)
+	$(BIN)/rtgait plan fig4 --out $(IMAGES)/fig4
+	$(BIN)/rtgait plan fig8 --out $(IMAGES)/fig8
+	$(BIN)/rtgait plan fig11 --robot talos --compensate-angular-momentum --out $(IMAGES)/fig11-talos
+	$(BIN)/rtgait simulate fig8 --robot talos --controller adaptive --out $(IMAGES)/fig8-sim
+	$(BIN)/rtgait sweep sweeps/map.toml --quiet --out $(IMAGES)/map
+	$(BIN)/python benchmarks/pushes.py --robot talos --controller adaptive --phase single --directions 8 \
+		--out $(IMAGES)/pushes
+	cp $(IMAGES)/fig4/zmp_cog.png docs/images/fig4_zmp_cog.png
+	cp $(IMAGES)/fig8/top_view.png docs/images/fig8_top_view.png
+	cp $(IMAGES)/fig11-talos/multibody_zmp.png docs/images/fig11_multibody_zmp.png
+	cp $(IMAGES)/fig8-sim/zmp_sim.png docs/images/fig8_zmp_sim.png
+	cp $(IMAGES)/map/map.png docs/images/sweep_map.png
+	cp $(IMAGES)/pushes/pushes.png docs/images/pushes_talos.png
