@@ -1,7 +1,8 @@
 """The complete per-tick record of a walk in physics, beyond what :class:`~rtgait.sim.result.SimResult` keeps.
 
 :class:`TickLog` preallocates every array once and fills one row per control tick with :meth:`TickLog.record`
-(no allocation per tick: row assignments into the arrays and one MuJoCo call, ``mj_subtreeVel``);
+(no allocation per tick beyond a few Python floats: five row copies, one ``struct`` packing into a preallocated
+table, one MuJoCo call, ``mj_subtreeVel``);
 :meth:`TickLog.finish` trims them to the ticks simulated and derives the rest with numpy, into a :class:`TickRecord`.
 
 **Which instant.** :meth:`TickLog.record` is called right after the first physics step of tick ``k``: MuJoCo's
@@ -11,9 +12,9 @@ for the state it starts from before integrating it), the same instant as the ZMP
 
 * joint positions and velocities: ``actuator_length / gear`` and ``actuator_velocity / gear`` (each actuator drives
   one joint through a joint transmission, so these are the joint's ``qpos`` and ``qvel``);
-* the base's angular velocity ``w`` and the linear velocity of its origin ``p`` (world frame): MuJoCo's ``cvel`` of
-  the base body is the spatial velocity ``(w, v_c)`` at the robot's subtree COM ``c``, so ``v_p = v_c + w x (p - c)``
-  (``mj_objectVelocity`` would give the velocity at the base link's own centre of mass instead);
+* the base's spatial velocity, MuJoCo's ``cvel`` of the base body: its angular velocity ``w`` and the velocity ``v_c``
+  of its point at the robot's COM ``c`` (world frame); the base origin ``p`` moves at ``v_p = v_c + w x (p - c)``
+  (:meth:`TickRecord.base_velocity`; ``mj_objectVelocity`` would give the base link's centre of mass instead);
 * the COM velocity, ``subtree_linvel`` of the base (``mj_subtreeVel``, the robot being the base's subtree);
 * each sole frame's position and orientation (``site_xpos``, ``site_xmat``), turned into ``(x, y, z, yaw, pitch,
   roll)`` with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` as :mod:`rtgait.sim.measure` does.
@@ -33,6 +34,7 @@ plan's DCM ``xi_plan`` and COM ``c_plan``, the IK's COM target minus the correct
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -53,9 +55,16 @@ __all__ = ["LEVEL_CODES", "TickLog", "TickRecord"]
 LEVEL_CODES = {level: code for code, level in enumerate(CONTROLLERS)}
 """Controller level per tick in :attr:`TickRecord.level`: its index in :data:`rtgait.core.closed_loop.CONTROLLERS`."""
 
-# Columns of the per-tick scalar table, written with one assignment per tick.
-_FOOT = 9  # force x, y, z (N), torque x, y, z (N m), CoP x, y (m), loaded (0/1): per foot, left then right
-_PLAN = 2 * _FOOT  # COM correction x, y (m), planned COM velocity x, y (m/s), support code, level code
+# The per-tick scalars, packed into one row of a float64 table with one ``struct`` call (a numpy assignment from a
+# tuple of Python floats costs several times more): COM velocity (3), base spatial velocity (6), IK sole targets
+# (2 x 4), per foot force (3), torque (3), CoP (2) and load (1), then COM correction (2), planned COM velocity (2),
+# support code, level code.
+_COG_VELOCITY = 0
+_BASE_VELOCITY = 3
+_TARGETS = 9
+_FEET = 17
+_FOOT = 9
+_PLAN = _FEET + 2 * _FOOT
 _SCALARS = _PLAN + 6
 _NAN_FEET = (math.nan,) * (2 * _FOOT)
 _NAN_PLAN = (math.nan,) * 4
@@ -70,8 +79,9 @@ class TickRecord:
             ``joint_names`` order (the torques' order).
         joint_velocity: measured joint velocities (rad/s), shape ``(k, n)``.
         joint_velocity_command: the joint velocity references the servos were given (rad/s), shape ``(k, n)``.
-        base_linear_velocity: the floating base's velocity at its origin (m/s), shape ``(k, 3)``.
-        base_angular_velocity: its angular velocity (rad/s), world frame, shape ``(k, 3)``.
+        base_spatial_velocity: MuJoCo's ``cvel`` of the base, ``(w, v_c)``: its angular velocity (rad/s) and the
+            velocity of the point fixed to it at the robot's COM (m/s), world frame, shape ``(k, 6)``;
+            :meth:`base_velocity` moves it to the base's origin.
         cog_velocity: measured COM velocity (m/s), shape ``(k, 3)``.
         sole_pose: each sole frame's ``(x, y, z, yaw, pitch, roll)`` (m, rad), shape ``(k, 2, 6)``, left then right.
         foot_target: the IK's sole targets ``(x, y, z, yaw)`` (m, rad), shape ``(k, 2, 4)``.
@@ -92,8 +102,7 @@ class TickRecord:
     joint_position: np.ndarray
     joint_velocity: np.ndarray
     joint_velocity_command: np.ndarray
-    base_linear_velocity: np.ndarray
-    base_angular_velocity: np.ndarray
+    base_spatial_velocity: np.ndarray
     cog_velocity: np.ndarray
     sole_pose: np.ndarray
     foot_target: np.ndarray
@@ -107,6 +116,14 @@ class TickRecord:
     level: np.ndarray
     omega: float
     contact_lag: float
+
+    def base_velocity(self, base_position: np.ndarray, cog: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The base's linear velocity at its origin ``v_p = v_c + w x (p - c)`` (m/s) and its angular velocity ``w``
+        (rad/s), world frame, each ``(k, 3)``, from the base origin ``p`` and the COM ``c`` at the ticks (m,
+        ``(k, 3)``: :attr:`SimResult.base_position` and :attr:`SimResult.cog`)."""
+        angular = self.base_spatial_velocity[:, 0:3]
+        linear = self.base_spatial_velocity[:, 3:6] + np.cross(angular, base_position - cog)
+        return linear, angular.copy()
 
 
 def _euler(rotation: np.ndarray) -> np.ndarray:
@@ -140,18 +157,17 @@ class TickLog:
         self.omega = float(omega)
         self.physics_dt = float(sim.timestep)
         self._joints = np.full((n_ticks, 3, nu), math.nan)  # position, velocity, velocity reference
-        self._velocity = np.full((n_ticks, 6), math.nan)  # cvel of the base: angular, then linear at the COM
-        self._points = np.full((n_ticks, 2, 3), math.nan)  # the base's origin and the robot's COM
-        self._cog_velocity = np.full((n_ticks, 3), math.nan)
-        self._sole_position = np.full((n_ticks, 2, 3), math.nan)
-        self._sole_rotation = np.full((n_ticks, 2, 9), math.nan)
-        self._targets = np.full((n_ticks, 2, 4), math.nan)
+        # Every site (the model has the two sole sites only, so one assignment copies both).
+        self._sites_position = np.full((n_ticks, model.nsite, 3), math.nan)
+        self._sites_rotation = np.full((n_ticks, model.nsite, 9), math.nan)
         self._scalars = np.full((n_ticks, _SCALARS), math.nan)
+        self._buffer = memoryview(self._scalars).cast("B")
+        self._row_bytes = _SCALARS * self._scalars.itemsize
+        self._pack = struct.Struct(f"={_SCALARS}d").pack_into
         # Views of MuJoCo's fixed-size arrays stay valid for the life of ``data``.
         self._length, self._actuator_velocity = data.actuator_length, data.actuator_velocity
         self._site_xpos, self._site_xmat, self._subtree_linvel = data.site_xpos, data.site_xmat, data.subtree_linvel
-        self._cvel, self._xpos, self._subtree_com = data.cvel, data.xpos, data.subtree_com
-        self._root = int(model.body_rootid[self._base])
+        self._cvel = data.cvel
 
     def record(
         self,
@@ -164,66 +180,57 @@ class TickLog:
     ) -> None:
         """Record tick ``k``, right after its first physics step: the IK's sole targets ``(x, y, z, yaw)`` (m, rad),
         the controller's output and measurement (``None`` during the start transition) and its level."""
-        model, data = self._model, self._data
         rows = self._joints[k]
         rows[0] = self._length
         rows[1] = self._actuator_velocity
         rows[2] = self._servo.qd
+        self._sites_position[k] = self._site_xpos
+        self._sites_rotation[k] = self._site_xmat
         base = self._base
-        self._velocity[k] = self._cvel[base]
-        points = self._points[k]
-        points[0], points[1] = self._xpos[base], self._subtree_com[self._root]
-        mujoco.mj_subtreeVel(model, data)
-        self._cog_velocity[k] = self._subtree_linvel[base]
-        left, right = self._sites
-        position, rotation = self._sole_position[k], self._sole_rotation[k]
-        position[0], position[1] = self._site_xpos[left], self._site_xpos[right]
-        rotation[0], rotation[1] = self._site_xmat[left], self._site_xmat[right]
-        target = self._targets[k]
-        target[0], target[1] = left_foot, right_foot
+        mujoco.mj_subtreeVel(self._model, self._data)
         if measurement is None:
             feet = _NAN_FEET
         else:
             lf, rf = measurement.left, measurement.right
             feet = (*lf.force, *lf.torque, *lf.cop, lf.loaded, *rf.force, *rf.torque, *rf.cop, rf.loaded)
         if targets is None:
-            plan, support = _NAN_PLAN, 0
+            plan: tuple[float, ...] = _NAN_PLAN
+            support = 0
         else:
             (cx, cy, _), (dx, dy) = targets.com, targets.com_offset
             xi_x, xi_y = targets.dcm_planned
             w = self.omega
             plan, support = (dx, dy, w * (xi_x - (cx - dx)), w * (xi_y - (cy - dy))), SUPPORT_CODES[targets.support]
-        self._scalars[k] = (*feet, *plan, support, LEVEL_CODES[level])
+        self._pack(
+            self._buffer, k * self._row_bytes, *self._subtree_linvel[base].tolist(), *self._cvel[base].tolist(),
+            *left_foot, *right_foot, *feet, *plan, support, LEVEL_CODES[level],
+        )  # fmt: skip
 
     def finish(self, ticks: int) -> TickRecord:
         """The record of the first ``ticks`` ticks, with the derived quantities (module docstring)."""
         joints = self._joints[:ticks]
         gear = self._gear
         scalars = self._scalars[:ticks]
-        feet = scalars[:, :_PLAN].reshape(ticks, 2, _FOOT)
-        rotation = self._sole_rotation[:ticks]
-        sole_pose = np.concatenate([self._sole_position[:ticks], _euler(rotation)], axis=-1)
-        velocity = self._velocity[:ticks]
-        points = self._points[:ticks]
-        angular = velocity[:, 0:3]
-        linear = velocity[:, 3:6] + np.cross(angular, points[:, 0] - points[:, 1])
+        feet = scalars[:, _FEET:_PLAN].reshape(ticks, 2, _FOOT)
+        sites = list(self._sites)
+        position, rotation = self._sites_position[:ticks, sites], self._sites_rotation[:ticks, sites]
+        plan = scalars[:, _PLAN:]
         return TickRecord(
             joint_position=joints[:, 0] / gear,
             joint_velocity=joints[:, 1] / gear,
             joint_velocity_command=joints[:, 2].copy(),
-            base_linear_velocity=linear,
-            base_angular_velocity=angular.copy(),
-            cog_velocity=self._cog_velocity[:ticks].copy(),
-            sole_pose=sole_pose,
-            foot_target=self._targets[:ticks].copy(),
+            base_spatial_velocity=scalars[:, _BASE_VELOCITY:_TARGETS].copy(),
+            cog_velocity=scalars[:, _COG_VELOCITY:_BASE_VELOCITY].copy(),
+            sole_pose=np.concatenate([position, _euler(rotation)], axis=-1),
+            foot_target=scalars[:, _TARGETS:_FEET].reshape(ticks, 2, 4).copy(),
             force=feet[:, :, 0:3].copy(),
             torque=feet[:, :, 3:6].copy(),
             cop=feet[:, :, 6:8].copy(),
             loaded=feet[:, :, 8] == 1.0,
-            com_offset=scalars[:, _PLAN : _PLAN + 2].copy(),
-            cog_velocity_planned=scalars[:, _PLAN + 2 : _PLAN + 4].copy(),
-            support_control=scalars[:, _PLAN + 4].astype(np.int8),
-            level=scalars[:, _PLAN + 5].astype(np.int8),
+            com_offset=plan[:, 0:2].copy(),
+            cog_velocity_planned=plan[:, 2:4].copy(),
+            support_control=plan[:, 4].astype(np.int8),
+            level=plan[:, 5].astype(np.int8),
             omega=self.omega,
             contact_lag=self.physics_dt,
         )
