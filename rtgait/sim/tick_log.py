@@ -42,6 +42,7 @@ import mujoco
 import numpy as np
 
 from rtgait.core.closed_loop import CONTROLLERS
+from rtgait.core.footsteps import SoleRect
 from rtgait.sim.result import SUPPORT_CODES
 
 if TYPE_CHECKING:
@@ -58,14 +59,14 @@ LEVEL_CODES = {level: code for code, level in enumerate(CONTROLLERS)}
 # The per-tick scalars, packed into one row of a float64 table with one ``struct`` call (a numpy assignment from a
 # tuple of Python floats costs several times more): COM velocity (3), base spatial velocity (6), IK sole targets
 # (2 x 4), per foot force (3), torque (3), CoP (2) and load (1), then COM correction (2), planned COM velocity (2),
-# support code, level code.
+# the planner's phase, support code, level code.
 _COG_VELOCITY = 0
 _BASE_VELOCITY = 3
 _TARGETS = 9
 _FEET = 17
 _FOOT = 9
 _PLAN = _FEET + 2 * _FOOT
-_SCALARS = _PLAN + 6
+_SCALARS = _PLAN + 7
 _NAN_FEET = (math.nan,) * (2 * _FOOT)
 _NAN_PLAN = (math.nan,) * 4
 
@@ -92,9 +93,12 @@ class TickRecord:
         loaded: each foot's load state after the measurer's hysteresis, shape ``(k, 2)``.
         com_offset: the controller's COM correction (m), shape ``(k, 2)``; NaN during the start transition.
         cog_velocity_planned: the plan's COM velocity (m/s), shape ``(k, 2)``; NaN during the start transition.
+        phase: the planner's phase index (0: the standing start, odd: single supports), -1 during the start
+            transition, shape ``(k,)``.
         support_control: the support the controller acts on, codes :data:`~rtgait.sim.result.SUPPORT_CODES`,
             shape ``(k,)``; double during the start transition.
         level: the controller level, codes :data:`LEVEL_CODES`, shape ``(k,)``.
+        sole: the robot's sole rectangle around the sole frame (m).
         omega: the planner's ``w = sqrt(g / z_c)`` (1/s), for the measured DCM ``c + c'/w``.
         contact_lag: how long before the tick the contact wrench was measured (s): one physics step.
     """
@@ -112,8 +116,10 @@ class TickRecord:
     loaded: np.ndarray
     com_offset: np.ndarray
     cog_velocity_planned: np.ndarray
+    phase: np.ndarray
     support_control: np.ndarray
     level: np.ndarray
+    sole: SoleRect
     omega: float
     contact_lag: float
 
@@ -155,6 +161,7 @@ class TickLog:
         self._sites = (sim.left_sole_site, sim.right_sole_site)
         self._gear = model.actuator_gear[:, 0].copy()
         self.omega = float(omega)
+        self.sole = sim.robot.description.sole
         self.physics_dt = float(sim.timestep)
         self._joints = np.full((n_ticks, 3, nu), math.nan)  # position, velocity, velocity reference
         # Every site (the model has the two sole sites only, so one assignment copies both).
@@ -195,15 +202,16 @@ class TickLog:
             feet = (*lf.force, *lf.torque, *lf.cop, lf.loaded, *rf.force, *rf.torque, *rf.cop, rf.loaded)
         if targets is None:
             plan: tuple[float, ...] = _NAN_PLAN
-            support = 0
+            phase, support = -1, 0
         else:
             (cx, cy, _), (dx, dy) = targets.com, targets.com_offset
             xi_x, xi_y = targets.dcm_planned
             w = self.omega
-            plan, support = (dx, dy, w * (xi_x - (cx - dx)), w * (xi_y - (cy - dy))), SUPPORT_CODES[targets.support]
+            plan = (dx, dy, w * (xi_x - (cx - dx)), w * (xi_y - (cy - dy)))
+            phase, support = targets.phase, SUPPORT_CODES[targets.support]
         self._pack(
             self._buffer, k * self._row_bytes, *self._subtree_linvel[base].tolist(), *self._cvel[base].tolist(),
-            *left_foot, *right_foot, *feet, *plan, support, LEVEL_CODES[level],
+            *left_foot, *right_foot, *feet, *plan, phase, support, LEVEL_CODES[level],
         )  # fmt: skip
 
     def finish(self, ticks: int) -> TickRecord:
@@ -229,8 +237,10 @@ class TickLog:
             loaded=feet[:, :, 8] == 1.0,
             com_offset=plan[:, 0:2].copy(),
             cog_velocity_planned=plan[:, 2:4].copy(),
-            support_control=plan[:, 4].astype(np.int8),
-            level=plan[:, 5].astype(np.int8),
+            phase=plan[:, 4].astype(np.int32),
+            support_control=plan[:, 5].astype(np.int8),
+            level=plan[:, 6].astype(np.int8),
+            sole=self.sole,
             omega=self.omega,
             contact_lag=self.physics_dt,
         )
