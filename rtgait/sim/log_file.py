@@ -149,7 +149,9 @@ def sim_events(result: SimResult) -> list[dict[str, Any]]:
     """The events table of ``result``, in time order: the controller's events (``landing``, ``touchdown``,
     ``touchdown-refused``, ``step-adjustment``, ``replan``: :class:`~rtgait.sim.control_settings.ControlEvent`),
     ``push`` and ``push-end`` (``detail``: the force in N), ``tip-over`` and ``fall`` (``detail``: its cause). Each is
-    ``{"t", "tick", "kind", "side", "detail", "x", "y"}`` (s, walk clock; tick index; m or ``None``)."""
+    ``{"t", "tick", "kind", "side", "detail", "x", "y"}``: the time of the tick it happened at (s, walk clock), that
+    tick's index, and a position (m, world frame) or ``None``: where a foot landed or was re-anchored, the new landing
+    of a step adjustment."""
     rows: list[tuple[float, str, str, str, float, float]] = [
         (e.t, e.kind, e.side, e.detail, e.x, e.y) for e in result.events
     ]
@@ -168,7 +170,7 @@ def sim_events(result: SimResult) -> list[dict[str, Any]]:
         tick = round((t - result.run_start) / result.control_dt)
         if not 0 <= tick < n:  # a push that ends after the run (a fall)
             continue
-        events.append({"t": float(t), "tick": int(tick), "kind": kind, "side": side, "detail": detail,
+        events.append({"t": float(result.times[tick]), "tick": int(tick), "kind": kind, "side": side, "detail": detail,
                        "x": _number(x), "y": _number(y)})  # fmt: skip
     return events
 
