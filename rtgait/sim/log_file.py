@@ -61,8 +61,8 @@ class LogColumn:
     description: str
 
 
-def _vector(prefix: str, unit: str, what: str, axes: Sequence[str] = _XYZ) -> list[LogColumn]:
-    return [LogColumn(f"{prefix}_{axis}", unit, f"{what}, {axis}") for axis in axes]
+def _vector(prefix: str, unit: str, what: str, axes: Sequence[str] = _XYZ, sep: str = "_") -> list[LogColumn]:
+    return [LogColumn(f"{prefix}{sep}{axis}", unit, f"{what}, {axis}") for axis in axes]
 
 
 _WRENCH_TIME = "controller's measurement, one physics step before t"
@@ -113,9 +113,9 @@ def log_columns(joint_names: Sequence[str]) -> list[LogColumn]:
         *_vector("dcm_planned", "m", "the plan's DCM; NaN in the transition", "xy"),
         *_vector("dcm_control", "m", f"the DCM the controller acted on ({_WRENCH_TIME}); NaN in the transition", "xy"),
         *_vector("base", "m", "floating-base position, at t"),
-        *_vector("base_q", "", "floating-base orientation, unit quaternion", ("x", "y", "z", "w")),
-        *_vector("base_v", "m/s", "floating-base velocity at its origin, world frame, at t"),
-        *_vector("base_w", "rad/s", "floating-base angular velocity, world frame, at t"),
+        *_vector("base_q", "", "floating-base orientation, unit quaternion", ("x", "y", "z", "w"), sep=""),
+        *_vector("base_v", "m/s", "floating-base velocity at its origin, world frame, at t", sep=""),
+        *_vector("base_w", "rad/s", "floating-base angular velocity, world frame, at t", sep=""),
         LogColumn("legs_touch", "", "the legs' collision boxes touch each other, at t"),
     ]
     for side in _SIDES:
@@ -246,9 +246,9 @@ def _columns(result: SimResult, events: list[dict[str, Any]]) -> dict[str, np.nd
         "events": _event_column(events, n),
     }
 
-    def put(prefix: str, array: np.ndarray, axes: Sequence[str] = _XYZ) -> None:
+    def put(prefix: str, array: np.ndarray, axes: Sequence[str] = _XYZ, sep: str = "_") -> None:
         for i, axis in enumerate(axes):
-            values[f"{prefix}_{axis}"] = array[:, i]
+            values[f"{prefix}{sep}{axis}"] = array[:, i]
 
     put("zmp", result.zmp, "xy")
     put("zmp_planned", result.zmp_planned, "xy")
@@ -263,9 +263,9 @@ def _columns(result: SimResult, events: list[dict[str, Any]]) -> dict[str, np.nd
     put("dcm_planned", result.dcm_planned, "xy")
     put("dcm_control", result.dcm, "xy")
     put("base", result.base_position)
-    put("base_q", result.base_quaternion, ("x", "y", "z", "w"))
-    put("base_v", linear)
-    put("base_w", angular)
+    put("base_q", result.base_quaternion, ("x", "y", "z", "w"), sep="")
+    put("base_v", linear, sep="")
+    put("base_w", angular, sep="")
     values["legs_touch"] = result.legs_touch
     for i, side in enumerate(_SIDES):
         values[f"{side}_contact"] = result.contact[:, i]
