@@ -360,8 +360,9 @@ def read_zmp_sim_run(folder: str | Path) -> ZmpSimRun:
     parquet = folder / LOG_FILE
     if parquet.is_file() and parquet_available():
         return _from_parquet(parquet)
+    run = _from_csv(folder, summary)  # read and checked first: a folder that is no run is one error line
     why = "pyarrow is not installed" if parquet.is_file() else f"the run has no {LOG_FILE}"
     warnings.warn(
         f"zmp_sim drawn from sim.csv ({why}): without sole edges, with the measured double supports", stacklevel=2
     )
-    return _from_csv(folder, summary)
+    return run

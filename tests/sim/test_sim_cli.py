@@ -267,7 +267,7 @@ def test_zmp_sim_in_any_format_on_the_walks_clock_with_its_error_measures(
     printed = capsys.readouterr().out
     assert "stabilized" in printed and "from the robot description" in printed and "5.0 N s at 1.00 s" in printed
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
-    assert summary["files"] == ["sim.csv", "summary.json", "zmp_sim.svg"]
+    assert summary["files"] == ["sim.csv", "sim.parquet", "summary.json", "zmp_sim.svg"]
     assert ElementTree.parse(out / "zmp_sim.svg").getroot().tag == "{http://www.w3.org/2000/svg}svg"
     # The walk's clock: the start transition at negative times, the push where --push said, on that clock.
     assert summary["run_start"] == pytest.approx(-1.5) and summary["pushes"][0]["start"] == 1.0

@@ -281,3 +281,48 @@ def test_sole_extent_is_that_of_the_soles_corners(yaw: float) -> None:
     np.testing.assert_allclose(extent[0], np.column_stack([alone.min(axis=0), alone.max(axis=0)]), atol=1e-12)
     np.testing.assert_allclose(extent[1], np.column_stack([both.min(axis=0), both.max(axis=0)]), atol=1e-12)
     assert np.isnan(extent[2]).all()
+
+
+# ----- the figure drawn again from the file ----------------------------------------------------------------------
+def _drawing(figure: Any) -> list[tuple[str, np.ndarray]]:
+    """Every line and band of every panel, the panels' limits and titles: what the figure shows, as numbers."""
+    shown: list[tuple[str, np.ndarray]] = []
+    for ax in figure.axes:
+        shown += [(str(line.get_label()), np.asarray(line.get_xydata(), dtype=float)) for line in ax.get_lines()]
+        shown += [("band", np.concatenate([p.vertices for p in band.get_paths()])) for band in ax.collections]
+        shown.append((ax.get_title(), np.array([*ax.get_xlim(), *ax.get_ylim()])))
+    return shown
+
+
+def test_zmp_sim_drawn_from_sim_parquet_is_that_of_the_run(logged: tuple[Any, Path]) -> None:
+    pytest.importorskip("matplotlib")
+    from rtgait.sim.figure import ZmpSimRun, draw_zmp_sim, read_zmp_sim_run
+
+    result, out = logged
+    in_memory = _drawing(draw_zmp_sim(ZmpSimRun.from_result(result, "short (quasi-real-time)")))
+    from_file = _drawing(draw_zmp_sim(read_zmp_sim_run(out)))
+    assert len(in_memory) == len(from_file) > 10
+    labels = [label for label, _ in in_memory]
+    assert "_sole low" in labels and "measured ZMP (contact CoP)" in labels  # the sole edges are drawn
+    for (label_a, a), (label_b, b) in zip(in_memory, from_file, strict=True):
+        assert label_a == label_b
+        np.testing.assert_array_equal(a, b)  # full precision: the very same numbers
+
+
+def test_without_pyarrow_simulate_says_so_in_one_line_and_writes_the_rest(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import rtgait.sim.log_file
+    import rtgait.sim.outputs
+    from rtgait.cli import main
+
+    for module in (rtgait.sim.log_file, rtgait.sim.outputs):
+        monkeypatch.setattr(module, "parquet_available", lambda: False)
+    path = tmp_path / "tiny.toml"
+    path.write_text(scenario_text(name="tiny", single_support=0.7, double_support=0.1, dt=0.005, steps=1,
+                                  step_length=0.05, short_ends=True), encoding="utf-8")  # fmt: skip
+    out = tmp_path / "out"
+    assert main(["simulate", str(path), "--no-figures", "--quiet", "--out", str(out)]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "pyarrow" in err[0] and "sim.parquet" in err[0], err
+    assert sorted(p.name for p in out.iterdir()) == ["sim.csv", "summary.json"]
