@@ -205,7 +205,7 @@ def test_simulate_writes_nothing_outside_out_and_reports_mujocos_warnings(
     assert main(args) == 0
     assert "warnings    MuJoCo: Nan, Inf or huge value in QACC" in capsys.readouterr().out
     assert [p.name for p in work.iterdir()] == ["out"]
-    assert sorted(p.name for p in (work / "out").iterdir()) == ["sim.csv", "summary.json"]
+    assert sorted(p.name for p in (work / "out").iterdir()) == ["sim.csv", "sim.parquet", "summary.json"]
     summary = json.loads((work / "out" / "summary.json").read_text(encoding="utf-8"))
     assert summary["fell"] is True and any("unstable" in text for text in summary["mujoco_warnings"])
 
