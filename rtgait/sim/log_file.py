@@ -102,7 +102,7 @@ def log_columns(joint_names: Sequence[str]) -> list[LogColumn]:
         LogColumn("events", "", "what happened at this tick, 'kind:side' joined by ';' (the events table)"),
         *_vector("zmp", "m", "measured ZMP (centre of pressure of the sole contacts), at t; NaN in the air", "xy"),
         *_vector("zmp_planned", "m", "the planner's ZMP (in the transition: the COM target's projection)", "xy"),
-        *_vector("zmp_command", "m", "the ZMP the controller asked the feet for (DCM law; the plan's open loop)", "xy"),
+        *_vector("zmp_command", "m", "ZMP asked of the feet (the DCM law's; the plan's in open-loop)", "xy"),
         *_vector("zmp_motion", "m", "multibody ZMP of the commanded motion (Pinocchio); NaN off the ground", "xy"),
         *_vector("cog", "m", "measured COM, at t"),
         *_vector("cog_planned", "m", "the IK's COM target: the plan's COM plus the controller's correction"),
