@@ -1,9 +1,11 @@
 """``rtgait plot DIR``: draw a finished run's figures again from its files, in any format.
 
 A ``plan`` run is read from ``trajectory.csv`` and ``summary.json``, a ``simulate --model lipm`` run from ``sim.csv``
-and ``summary.json`` (:mod:`rtgait.viz.run_data`); the figures are the ones the run wrote, drawn by the same code
-from the same numbers. Only figures are written (all or nothing, like a run's outputs); ``summary.json`` is left as
-the run wrote it. A MuJoCo simulation's ``zmp_sim.png`` is not remade yet: that is bad input (exit 2).
+and ``summary.json`` (:mod:`rtgait.viz.run_data`), a ``simulate`` run in MuJoCo from ``sim.parquet`` (or, without it,
+``sim.csv`` and ``summary.json``: :func:`rtgait.sim.figure.read_zmp_sim_run`); the figures are the ones the run
+wrote, drawn by the same code from the same numbers. Only figures are written (all or nothing, like a run's
+outputs); ``summary.json`` is left as the run wrote it. A MuJoCo run's ``replay.html`` is not a figure and needs the
+robot's meshes: it is not remade (``rtgait simulate --html`` writes it).
 """
 
 from __future__ import annotations
@@ -17,16 +19,24 @@ from typing import Any
 
 from rtgait.commands.common import add_format_option, out_folder, require_extras
 from rtgait.outputs import check_destination, staged_outputs
-from rtgait.viz.run_data import PENDULUM_FIGURE, figure_file, plan_figure_files, read_plan_run, run_kind
+from rtgait.viz.run_data import (
+    PENDULUM_FIGURE,
+    RunFilesError,
+    figure_file,
+    plan_figure_files,
+    read_plan_run,
+    read_summary,
+    run_kind,
+)
 
 
 def add_parser(commands: Any) -> None:
     plot = commands.add_parser(
         "plot",
-        help="draw a finished run's figures again from its files (rtgait plan, rtgait simulate --model lipm)",
-        description="Read the files of a finished run in DIR (trajectory.csv and summary.json of rtgait plan, or "
-        "sim.csv and summary.json of rtgait simulate --model lipm) and write its figures again, in the format "
-        "asked for. MuJoCo simulations are not supported yet.",
+        help="draw a finished run's figures again from its files (rtgait plan, rtgait simulate)",
+        description="Read the files of a finished run in DIR (trajectory.csv and summary.json of rtgait plan, "
+        "sim.csv and summary.json of rtgait simulate --model lipm, sim.parquet (or sim.csv and summary.json) of "
+        "rtgait simulate in MuJoCo) and write its figures again, in the format asked for.",
     )
     plot.add_argument("folder", metavar="DIR", type=out_folder, help="the output folder of a finished run")
     add_format_option(plot)
@@ -40,9 +50,14 @@ def run(args: argparse.Namespace) -> int:
     fmt: str = args.figure_format
     # Everything is read and checked before anything is drawn: a bad DIR is one line and exit 2 (RunFilesError is a
     # ValueError), and the output folder is not touched.
-    kind = run_kind(folder)
+    kind = "mujoco" if _mujoco_run(folder) else run_kind(folder)
     require_extras(figures=True, html=False)
-    if kind == "plan":
+    if kind == "mujoco":
+        from rtgait.sim.figure import ZMP_SIM_FIGURE, read_zmp_sim_run
+
+        simulation = read_zmp_sim_run(folder)
+        names = [figure_file(ZMP_SIM_FIGURE, fmt)]
+    elif kind == "plan":
         plan, info, summary = read_plan_run(folder)
         names = plan_figure_files(fmt)
         if any(name.startswith("multibody_zmp.") for name in summary.get("files", [])):
@@ -56,7 +71,11 @@ def run(args: argparse.Namespace) -> int:
         names = [figure_file(PENDULUM_FIGURE, fmt)]
     check_destination(out, names)
     with staged_outputs(out) as staging:
-        if kind == "plan":
+        if kind == "mujoco":
+            from rtgait.sim.figure import plot_zmp_sim
+
+            plot_zmp_sim(simulation, staging.folder / names[0])
+        elif kind == "plan":
             from rtgait.viz.figures import render_all
 
             render_all(plan, info, staging.folder, fmt)
@@ -67,5 +86,18 @@ def run(args: argparse.Namespace) -> int:
         for name in names:
             staging.add(name)
     if not args.quiet:
-        sys.stdout.write(f"figures     {out}{os.sep}: {', '.join(names)} (from the {kind} run in {folder})\n")
+        what = "MuJoCo simulation" if kind == "mujoco" else f"{kind} run"
+        sys.stdout.write(f"figures     {out}{os.sep}: {', '.join(names)} (from the {what} in {folder})\n")
     return 0
+
+
+def _mujoco_run(folder: Path) -> bool:
+    """Whether ``folder`` holds a MuJoCo simulation's files (its summary or ``sim.parquet`` say so); any problem
+    with the folder is left to :func:`rtgait.viz.run_data.run_kind` to report."""
+    if (folder / "sim.parquet").is_file():
+        return True
+    try:
+        summary = read_summary(folder)
+    except RunFilesError:
+        return False
+    return summary.get("model") == "mujoco" or "walk_start" in summary

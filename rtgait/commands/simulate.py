@@ -7,6 +7,7 @@ import itertools
 import json
 import math
 import sys
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import asdict
 from pathlib import Path
@@ -45,8 +46,9 @@ def add_parser(commands: Any) -> None:
         help="walk a scenario on a robot in MuJoCo physics (planner + whole-body IK + position servos at 1 kHz)",
         description="Walk the scenario in closed loop in MuJoCo at 1 kHz: each tick the online planner samples, "
         "the whole-body IK solves and the joint servos track; the measured ZMP (centre of pressure of the contact "
-        "forces), base pose, COG and contacts are logged, and falls end the run. Writes sim.csv, summary.json "
-        "and zmp_sim.png (and with --html, replay.html: the simulated motion in 3D). A scenario with a [guide] path "
+        "forces), base pose, COG and contacts are logged, and falls end the run. Writes sim.csv, sim.parquet (the "
+        "complete log, docs/logs.md; needs pyarrow), summary.json and zmp_sim.png (and with --html, replay.html: "
+        "the simulated motion in 3D). A scenario with a [guide] path "
         "(e.g. guided) is walked led by the hand: a person pulls the robot's hand along it. A walk the robot "
         "cannot reach kinematically is refused before simulating, as by plan --robot.",
     )
@@ -323,6 +325,7 @@ def _check_simulation(
     args: argparse.Namespace, scenario: Scenario, velocity: tuple[float, ...] | None, out: Path
 ) -> list[Push]:  # velocity: the first command, enough to tell a walk by command
     """Everything about a simulation that can be checked before loading the robot; returns the pushes."""
+    from rtgait.sim.log_file import LOG_FILE, parquet_available
     from rtgait.sim.outputs import sim_figure_file
     from rtgait.sim.run import simulated_time
 
@@ -333,6 +336,11 @@ def _check_simulation(
     figures = not args.no_figures
     require_extras(figures, args.html)
     names = ["sim.csv", "summary.json"] + ([sim_figure_file(args.figure_format)] if figures else [])
+    if parquet_available():
+        names.append(LOG_FILE)
+    else:
+        warnings.warn(f"pyarrow is not installed: {LOG_FILE} (the complete log) is not written; pip install "
+                      "'rtgait[sim]'", stacklevel=1)  # fmt: skip
     check_destination(out, names + (["replay.html"] if args.html else []))
     return pushes
 

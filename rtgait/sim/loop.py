@@ -54,6 +54,7 @@ from rtgait.sim.foot_control import FootOffsets, add_ankle_offsets, find_ankle_j
 from rtgait.sim.measure import SimMeasurer
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SUPPORT_CODES, SimResult
+from rtgait.sim.tick_log import TickLog
 
 __all__ = [
     "LANDING_WINDOW",
@@ -285,6 +286,7 @@ def run_closed_loop(
     left_site, right_site, base_body = sim.left_sole_site, sim.right_sole_site, sim.base_body
     servo = ReferenceInterpolator(sim.actuation, q[7:])
     joints_previous = q[7:].copy()
+    log = TickLog(sim, data, servo, n_ticks, planner.w)  # the complete per-tick record (sim.parquet)
     pending: list[ScheduledChange] = []
     ramp = options.start_ramp
     events: list = []
@@ -368,6 +370,7 @@ def run_closed_loop(
             replay_soles[replay_row, 1] = site_xpos[right_site]
         cog[k] = subtree_com[base_body]
         _, _, fl, fr = contacts.measure(k, t)
+        log.record(k, left_foot, right_foot, *((out, measurement) if k >= k0 else (None, None)), controller.level)
         for i in range(1, n_sub):
             servo.apply(i, ctrl)
             step(model, data)
@@ -445,4 +448,5 @@ def run_closed_loop(
         replans=planner.replan_count if planner.started else 0,
         model=robot.model,
         gravity=gravity,
+        log=log.finish(ticks),
     )

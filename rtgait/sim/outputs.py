@@ -1,5 +1,5 @@
-"""The files of a walk in physics: ``sim.csv``, ``summary.json``, the ZMP figure, the 3D replay, and the lines
-``rtgait simulate`` prints about them.
+"""The files of a walk in physics: ``sim.csv``, ``sim.parquet`` (the complete log, :mod:`rtgait.sim.log_file`),
+``summary.json``, the ZMP figure, the 3D replay, and the lines ``rtgait simulate`` prints about them.
 
 Every file is written to a temporary name first and renamed when complete (:mod:`rtgait.outputs`). Times are on the
 walk's clock (t = 0 when the walk starts; the start transition from half-sitting at negative times).
@@ -16,6 +16,7 @@ import numpy as np
 
 from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.robot.model import RobotModel
+from rtgait.sim.log_file import LOG_FILE, parquet_available, write_sim_log
 from rtgait.sim.result import SimResult
 
 __all__ = [
@@ -45,8 +46,9 @@ the servo applied (N m), its mean over the tick's physics substeps. One row per 
 TORQUE_COLUMN_PREFIX = "tau_"
 """Prefix of the joint torque columns of ``sim.csv``, followed by the URDF joint name."""
 
-SIM_FILES = ("sim.csv", "summary.json", "zmp_sim.png")
-"""Files written by :func:`write_sim_outputs` with the figure in PNG (the figure only when asked for)."""
+SIM_FILES = ("sim.csv", "sim.parquet", "summary.json", "zmp_sim.png")
+"""Files written by :func:`write_sim_outputs` with the figure in PNG (``sim.parquet`` when pyarrow is installed, the
+figure when asked for)."""
 
 _FLOAT_FORMAT = "%.10g"
 _PHASE_LABELS = {0: "double support", 1: "left support", 2: "right support"}
@@ -169,9 +171,10 @@ def write_sim_outputs(
     extra: dict[str, Any] | None = None,
     replay: RobotModel | None = None,
     sole: Any = None,
+    log: bool = True,
 ) -> dict[str, Any]:
-    """Write ``sim.csv``, ``summary.json``, with ``figure`` ``zmp_sim.<figure_format>`` and with ``replay``
-    ``replay.html`` into ``out_dir``.
+    """Write ``sim.csv``, ``summary.json``, with ``log`` ``sim.parquet`` (when pyarrow is installed and the result has
+    its tick log), with ``figure`` ``zmp_sim.<figure_format>`` and with ``replay`` ``replay.html`` into ``out_dir``.
 
     Args:
         result: the simulated walk.
@@ -183,6 +186,7 @@ def write_sim_outputs(
         replay: the robot simulated, to write the 3D replay of the simulated motion (:func:`write_sim_replay`,
             needs meshcat).
         sole: the replay's footprint rectangle (m): the sole the walk was planned with.
+        log: also write ``sim.parquet``, the complete per-tick log (:mod:`rtgait.sim.log_file`, ``docs/logs.md``).
 
     Returns:
         The summary, also written as ``summary.json``: :meth:`SimResult.summary` (``fell``, ``fall_time``,
@@ -194,11 +198,16 @@ def write_sim_outputs(
     out.mkdir(parents=True, exist_ok=True)
     files = ["sim.csv", "summary.json"]
     write_atomic(out / "sim.csv", lambda path: _write_csv(result, path))
+    if log and result.log is not None and parquet_available():
+        facts = {**(extra or {}), "title": title}
+        write_atomic(out / LOG_FILE, lambda path: write_sim_log(result, path, facts))
+        files.insert(1, LOG_FILE)
     if figure:
-        from rtgait.sim.figure import plot_zmp_sim
+        from rtgait.sim.figure import ZmpSimRun, plot_zmp_sim
 
         name = sim_figure_file(figure_format)
-        write_atomic(out / name, lambda path: plot_zmp_sim(result, path, title, figure_format))
+        run = ZmpSimRun.from_result(result, title)
+        write_atomic(out / name, lambda path: plot_zmp_sim(run, path, figure_format))
         files.append(name)
     if replay is not None:
         label = f"{title} on {replay.name}" if title else replay.name

@@ -39,6 +39,7 @@ if TYPE_CHECKING:
 
     from rtgait.core.stepping import StepDecision
     from rtgait.sim.controllers import ControlEvent
+    from rtgait.sim.tick_log import TickRecord
 
 __all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SUPPORT_CODES", "SimResult", "Stance", "stances"]
 
@@ -189,6 +190,8 @@ class SimResult:
         replay_soles: MuJoCo's left and right sole site positions at those ticks (m), shape ``(m, 2, 3)``.
         footprints: the planner's footprints ``F[0..]`` as planned at the end of the run.
         model: the reduced Pinocchio model of :attr:`commanded_q` (for the multibody ZMP), or ``None``.
+        log: the rest of the per-tick record (joint and base velocities, per-foot wrench, feet targets, ...:
+            :class:`~rtgait.sim.tick_log.TickRecord`), or ``None`` for a result made without it.
         at_rest_speed: mean horizontal COM speed over the run's last 0.1 s (m/s).
     """
 
@@ -238,6 +241,7 @@ class SimResult:
     replans: int = 0
     model: pin.Model | None = field(default=None, repr=False)
     gravity: float = 9.81
+    log: TickRecord | None = field(default=None, repr=False)
 
     # ----- time ------------------------------------------------------------------------------------------------------
     @property

@@ -205,7 +205,7 @@ def test_simulate_writes_nothing_outside_out_and_reports_mujocos_warnings(
     assert main(args) == 0
     assert "warnings    MuJoCo: Nan, Inf or huge value in QACC" in capsys.readouterr().out
     assert [p.name for p in work.iterdir()] == ["out"]
-    assert sorted(p.name for p in (work / "out").iterdir()) == ["sim.csv", "summary.json"]
+    assert sorted(p.name for p in (work / "out").iterdir()) == ["sim.csv", "sim.parquet", "summary.json"]
     summary = json.loads((work / "out" / "summary.json").read_text(encoding="utf-8"))
     assert summary["fell"] is True and any("unstable" in text for text in summary["mujoco_warnings"])
 
@@ -267,7 +267,7 @@ def test_zmp_sim_in_any_format_on_the_walks_clock_with_its_error_measures(
     printed = capsys.readouterr().out
     assert "stabilized" in printed and "from the robot description" in printed and "5.0 N s at 1.00 s" in printed
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
-    assert summary["files"] == ["sim.csv", "summary.json", "zmp_sim.svg"]
+    assert summary["files"] == ["sim.csv", "sim.parquet", "summary.json", "zmp_sim.svg"]
     assert ElementTree.parse(out / "zmp_sim.svg").getroot().tag == "{http://www.w3.org/2000/svg}svg"
     # The walk's clock: the start transition at negative times, the push where --push said, on that clock.
     assert summary["run_start"] == pytest.approx(-1.5) and summary["pushes"][0]["start"] == 1.0

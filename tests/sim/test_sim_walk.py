@@ -140,7 +140,7 @@ def test_outputs(short_walk, tmp_path):
     assert summary["control_dt"] == 0.001 and summary["physics_dt"] == 0.001
     assert math.isfinite(summary["zmp_tracking_error_rms"])
     assert (folder / "zmp_sim.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert sorted(p.name for p in folder.iterdir()) == ["sim.csv", "summary.json", "zmp_sim.png"]
+    assert sorted(p.name for p in folder.iterdir()) == ["sim.csv", "sim.parquet", "summary.json", "zmp_sim.png"]
 
 
 def test_bad_input(talos, talos_sim, shorten):

@@ -1,0 +1,246 @@
+"""The complete per-tick record of a walk in physics, beyond what :class:`~rtgait.sim.result.SimResult` keeps.
+
+:class:`TickLog` preallocates every array once and fills one row per control tick with :meth:`TickLog.record`
+(no allocation per tick beyond a few Python floats: five row copies, one ``struct`` packing into a preallocated
+table, one MuJoCo call, ``mj_subtreeVel``);
+:meth:`TickLog.finish` trims them to the ticks simulated and derives the rest with numpy, into a :class:`TickRecord`.
+
+**Which instant.** :meth:`TickLog.record` is called right after the first physics step of tick ``k``: MuJoCo's
+kinematics, velocities and actuator state then describe the state at the tick's time ``t`` (``mj_step`` computes them
+for the state it starts from before integrating it), the same instant as the ZMP, COG, base pose and contacts that
+:class:`~rtgait.sim.contact.ContactMonitor` records there. Measured at ``t``:
+
+* joint positions and velocities: ``actuator_length / gear`` and ``actuator_velocity / gear`` (each actuator drives
+  one joint through a joint transmission, so these are the joint's ``qpos`` and ``qvel``);
+* the base's spatial velocity, MuJoCo's ``cvel`` of the base body: its angular velocity ``w`` and the velocity ``v_c``
+  of its point at the robot's COM ``c`` (world frame); the base origin ``p`` moves at ``v_p = v_c + w x (p - c)``
+  (:meth:`TickRecord.base_velocity`; ``mj_objectVelocity`` would give the base link's centre of mass instead);
+* the COM velocity, ``subtree_linvel`` of the base (``mj_subtreeVel``, the robot being the base's subtree);
+* each sole frame's position and orientation (``site_xpos``, ``site_xmat``), turned into ``(x, y, z, yaw, pitch,
+  roll)`` with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` as :mod:`rtgait.sim.measure` does.
+
+The per-foot **contact wrench** and centre of pressure are the controller's own measurement of the tick
+(:class:`~rtgait.sim.measure.Measurement`), which reads the contact forces of the last physics step, i.e. of the
+state one physics step *before* ``t``: recording them costs nothing (measuring the contacts again at ``t`` would
+cost as much as the controller's whole measurement, a tenth of a tick). They are NaN during the start transition,
+when the controller does not measure yet.
+
+Commanded at the tick: the joint velocity reference the servos were given (``ReferenceInterpolator.qd``), the IK's
+sole targets ``(x, y, z, yaw)`` (the planner's feet with the controller's landing and force-control heights), the
+support the controller acts on, its COM correction, the plan's COM velocity ``v = w (xi_plan - c_plan)`` (from the
+plan's DCM ``xi_plan`` and COM ``c_plan``, the IK's COM target minus the correction), and the controller level.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from rtgait.core.closed_loop import CONTROLLERS
+from rtgait.core.footsteps import SoleRect
+from rtgait.sim.result import SUPPORT_CODES
+
+if TYPE_CHECKING:
+    from rtgait.sim.actuation import ReferenceInterpolator
+    from rtgait.sim.control_settings import ControlTargets
+    from rtgait.sim.measure import Measurement
+    from rtgait.sim.model import SimModel
+
+__all__ = ["LEVEL_CODES", "TickLog", "TickRecord"]
+
+LEVEL_CODES = {level: code for code, level in enumerate(CONTROLLERS)}
+"""Controller level per tick in :attr:`TickRecord.level`: its index in :data:`rtgait.core.closed_loop.CONTROLLERS`."""
+
+# The per-tick scalars, packed into one row of a float64 table with one ``struct`` call (a numpy assignment from a
+# tuple of Python floats costs several times more): COM velocity (3), base spatial velocity (6), IK sole targets
+# (2 x 4), per foot force (3), torque (3), CoP (2) and load (1), then COM correction (2), planned COM velocity (2),
+# the planner's phase, support code, level code.
+_COG_VELOCITY = 0
+_BASE_VELOCITY = 3
+_TARGETS = 9
+_FEET = 17
+_FOOT = 9
+_PLAN = _FEET + 2 * _FOOT
+_SCALARS = _PLAN + 7
+_NAN_FEET = (math.nan,) * (2 * _FOOT)
+_NAN_PLAN = (math.nan,) * 4
+
+
+@dataclass(frozen=True, eq=False)
+class TickRecord:
+    """What :class:`TickLog` recorded, one row per simulated tick (``k`` rows; world frame, SI units).
+
+    Attributes:
+        joint_position: measured joint positions at the tick (rad), shape ``(k, n)``, in the simulation's
+            ``joint_names`` order (the torques' order).
+        joint_velocity: measured joint velocities (rad/s), shape ``(k, n)``.
+        joint_velocity_command: the joint velocity references the servos were given (rad/s), shape ``(k, n)``.
+        base_spatial_velocity: MuJoCo's ``cvel`` of the base, ``(w, v_c)``: its angular velocity (rad/s) and the
+            velocity of the point fixed to it at the robot's COM (m/s), world frame, shape ``(k, 6)``;
+            :meth:`base_velocity` moves it to the base's origin.
+        cog_velocity: measured COM velocity (m/s), shape ``(k, 3)``.
+        sole_pose: each sole frame's ``(x, y, z, yaw, pitch, roll)`` (m, rad), shape ``(k, 2, 6)``, left then right.
+        foot_target: the IK's sole targets ``(x, y, z, yaw)`` (m, rad), shape ``(k, 2, 4)``.
+        force: contact force of the ground on each foot (N), shape ``(k, 2, 3)``; one physics step before the tick
+            (module docstring); NaN during the start transition.
+        torque: its moment about the sole frame's origin (N m), shape ``(k, 2, 3)``; likewise.
+        cop: each foot's centre of pressure on the ground (m), shape ``(k, 2, 2)``; NaN when the foot is unloaded.
+        loaded: each foot's load state after the measurer's hysteresis, shape ``(k, 2)``.
+        com_offset: the controller's COM correction (m), shape ``(k, 2)``; NaN during the start transition.
+        cog_velocity_planned: the plan's COM velocity (m/s), shape ``(k, 2)``; NaN during the start transition.
+        phase: the planner's phase index (0: the standing start, odd: single supports), -1 during the start
+            transition, shape ``(k,)``.
+        support_control: the support the controller acts on, codes :data:`~rtgait.sim.result.SUPPORT_CODES`,
+            shape ``(k,)``; double during the start transition.
+        level: the controller level, codes :data:`LEVEL_CODES`, shape ``(k,)``.
+        sole: the robot's sole rectangle around the sole frame (m).
+        omega: the planner's ``w = sqrt(g / z_c)`` (1/s), for the measured DCM ``c + c'/w``.
+        contact_lag: how long before the tick the contact wrench was measured (s): one physics step.
+    """
+
+    joint_position: np.ndarray
+    joint_velocity: np.ndarray
+    joint_velocity_command: np.ndarray
+    base_spatial_velocity: np.ndarray
+    cog_velocity: np.ndarray
+    sole_pose: np.ndarray
+    foot_target: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+    cop: np.ndarray
+    loaded: np.ndarray
+    com_offset: np.ndarray
+    cog_velocity_planned: np.ndarray
+    phase: np.ndarray
+    support_control: np.ndarray
+    level: np.ndarray
+    sole: SoleRect
+    omega: float
+    contact_lag: float
+
+    def base_velocity(self, base_position: np.ndarray, cog: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The base's linear velocity at its origin ``v_p = v_c + w x (p - c)`` (m/s) and its angular velocity ``w``
+        (rad/s), world frame, each ``(k, 3)``, from the base origin ``p`` and the COM ``c`` at the ticks (m,
+        ``(k, 3)``: :attr:`SimResult.base_position` and :attr:`SimResult.cog`)."""
+        angular = self.base_spatial_velocity[:, 0:3]
+        linear = self.base_spatial_velocity[:, 3:6] + np.cross(angular, base_position - cog)
+        return linear, angular.copy()
+
+
+def _euler(rotation: np.ndarray) -> np.ndarray:
+    """``(yaw, pitch, roll)`` (rad) of row-major rotation matrices ``(..., 9)``, ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    yaw = np.arctan2(rotation[..., 3], rotation[..., 0])
+    pitch = np.arcsin(np.clip(-rotation[..., 6], -1.0, 1.0))
+    roll = np.arctan2(rotation[..., 7], rotation[..., 8])
+    return np.stack([yaw, pitch, roll], axis=-1)
+
+
+class TickLog:
+    """Preallocated per-tick record of a closed-loop run (module docstring).
+
+    Args:
+        sim: the simulated robot.
+        data: the MuJoCo state the run steps (its fixed-size arrays are read through views kept here).
+        servo: the joint servos' reference interpolator, read for the commanded joint velocities.
+        n_ticks: rows to allocate.
+        omega: the planner's pendulum frequency (1/s).
+    """
+
+    def __init__(
+        self, sim: SimModel, data: mujoco.MjData, servo: ReferenceInterpolator, n_ticks: int, omega: float
+    ) -> None:
+        model = sim.model
+        nu = model.nu
+        self._model, self._data, self._servo = model, data, servo
+        self._base = sim.base_body
+        self._sites = (sim.left_sole_site, sim.right_sole_site)
+        self._gear = model.actuator_gear[:, 0].copy()
+        self.omega = float(omega)
+        self.sole = sim.robot.description.sole
+        self.physics_dt = float(sim.timestep)
+        self._joints = np.full((n_ticks, 3, nu), math.nan)  # position, velocity, velocity reference
+        # Every site (the model has the two sole sites only, so one assignment copies both).
+        self._sites_position = np.full((n_ticks, model.nsite, 3), math.nan)
+        self._sites_rotation = np.full((n_ticks, model.nsite, 9), math.nan)
+        self._scalars = np.full((n_ticks, _SCALARS), math.nan)
+        self._buffer = memoryview(self._scalars).cast("B")
+        self._row_bytes = _SCALARS * self._scalars.itemsize
+        self._pack = struct.Struct(f"={_SCALARS}d").pack_into
+        # Views of MuJoCo's fixed-size arrays stay valid for the life of ``data``.
+        self._length, self._actuator_velocity = data.actuator_length, data.actuator_velocity
+        self._site_xpos, self._site_xmat, self._subtree_linvel = data.site_xpos, data.site_xmat, data.subtree_linvel
+        self._cvel = data.cvel
+
+    def record(
+        self,
+        k: int,
+        left_foot: tuple[float, float, float, float] | list[float],
+        right_foot: tuple[float, float, float, float] | list[float],
+        targets: ControlTargets | None,
+        measurement: Measurement | None,
+        level: str,
+    ) -> None:
+        """Record tick ``k``, right after its first physics step: the IK's sole targets ``(x, y, z, yaw)`` (m, rad),
+        the controller's output and measurement (``None`` during the start transition) and its level."""
+        rows = self._joints[k]
+        rows[0] = self._length
+        rows[1] = self._actuator_velocity
+        rows[2] = self._servo.qd
+        self._sites_position[k] = self._site_xpos
+        self._sites_rotation[k] = self._site_xmat
+        base = self._base
+        mujoco.mj_subtreeVel(self._model, self._data)
+        if measurement is None:
+            feet = _NAN_FEET
+        else:
+            lf, rf = measurement.left, measurement.right
+            feet = (*lf.force, *lf.torque, *lf.cop, lf.loaded, *rf.force, *rf.torque, *rf.cop, rf.loaded)
+        if targets is None:
+            plan: tuple[float, ...] = _NAN_PLAN
+            phase, support = -1, 0
+        else:
+            (cx, cy, _), (dx, dy) = targets.com, targets.com_offset
+            xi_x, xi_y = targets.dcm_planned
+            w = self.omega
+            plan = (dx, dy, w * (xi_x - (cx - dx)), w * (xi_y - (cy - dy)))
+            phase, support = targets.phase, SUPPORT_CODES[targets.support]
+        self._pack(
+            self._buffer, k * self._row_bytes, *self._subtree_linvel[base].tolist(), *self._cvel[base].tolist(),
+            *left_foot, *right_foot, *feet, *plan, phase, support, LEVEL_CODES[level],
+        )  # fmt: skip
+
+    def finish(self, ticks: int) -> TickRecord:
+        """The record of the first ``ticks`` ticks, with the derived quantities (module docstring)."""
+        joints = self._joints[:ticks]
+        gear = self._gear
+        scalars = self._scalars[:ticks]
+        feet = scalars[:, _FEET:_PLAN].reshape(ticks, 2, _FOOT)
+        sites = list(self._sites)
+        position, rotation = self._sites_position[:ticks, sites], self._sites_rotation[:ticks, sites]
+        plan = scalars[:, _PLAN:]
+        return TickRecord(
+            joint_position=joints[:, 0] / gear,
+            joint_velocity=joints[:, 1] / gear,
+            joint_velocity_command=joints[:, 2].copy(),
+            base_spatial_velocity=scalars[:, _BASE_VELOCITY:_TARGETS].copy(),
+            cog_velocity=scalars[:, _COG_VELOCITY:_BASE_VELOCITY].copy(),
+            sole_pose=np.concatenate([position, _euler(rotation)], axis=-1),
+            foot_target=scalars[:, _TARGETS:_FEET].reshape(ticks, 2, 4).copy(),
+            force=feet[:, :, 0:3].copy(),
+            torque=feet[:, :, 3:6].copy(),
+            cop=feet[:, :, 6:8].copy(),
+            loaded=feet[:, :, 8] == 1.0,
+            com_offset=plan[:, 0:2].copy(),
+            cog_velocity_planned=plan[:, 2:4].copy(),
+            phase=plan[:, 4].astype(np.int32),
+            support_control=plan[:, 5].astype(np.int8),
+            level=plan[:, 6].astype(np.int8),
+            sole=self.sole,
+            omega=self.omega,
+            contact_lag=self.physics_dt,
+        )
