@@ -21,11 +21,9 @@ from rtgait.commands.common import add_format_option, out_folder, require_extras
 from rtgait.outputs import check_destination, staged_outputs
 from rtgait.viz.run_data import (
     PENDULUM_FIGURE,
-    RunFilesError,
     figure_file,
     plan_figure_files,
     read_plan_run,
-    read_summary,
     run_kind,
 )
 
@@ -50,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     fmt: str = args.figure_format
     # Everything is read and checked before anything is drawn: a bad DIR is one line and exit 2 (RunFilesError is a
     # ValueError), and the output folder is not touched.
-    kind = "mujoco" if _mujoco_run(folder) else run_kind(folder)
+    kind = run_kind(folder)
     require_extras(figures=True, html=False)
     if kind == "mujoco":
         from rtgait.sim.figure import ZMP_SIM_FIGURE, read_zmp_sim_run
@@ -90,14 +88,3 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(f"figures     {out}{os.sep}: {', '.join(names)} (from the {what} in {folder})\n")
     return 0
 
-
-def _mujoco_run(folder: Path) -> bool:
-    """Whether ``folder`` holds a MuJoCo simulation's files (its summary or ``sim.parquet`` say so); any problem
-    with the folder is left to :func:`rtgait.viz.run_data.run_kind` to report."""
-    if (folder / "sim.parquet").is_file():
-        return True
-    try:
-        summary = read_summary(folder)
-    except RunFilesError:
-        return False
-    return summary.get("model") == "mujoco" or "walk_start" in summary

@@ -64,6 +64,7 @@ _TIME_TOLERANCE = 1e-9  # s: far below any control period, far above the round-o
 
 PLAN_CSV = "trajectory.csv"
 SIM_CSV = "sim.csv"
+SIM_PARQUET = "sim.parquet"
 SUMMARY = "summary.json"
 # Columns only the MuJoCo loop writes into its sim.csv (rtgait.sim.run.SIM_CSV_COLUMNS): a run that has them is a
 # simulation of the robot, whose figure is not drawn here.
@@ -381,25 +382,26 @@ def _csv_header(path: Path) -> list[str]:
 
 
 def run_kind(folder: Path) -> str:
-    """``"plan"`` or ``"lipm"``: the kind of finished run in ``folder``, told by its summary and its CSV file.
+    """``"plan"``, ``"lipm"`` or ``"mujoco"``: the kind of finished run in ``folder``, told by its summary and its
+    files (``sim.parquet`` or the robot's columns of ``sim.csv`` for a MuJoCo simulation).
 
     Raises:
-        RunFilesError: not a folder, no run in it, or a run whose figures cannot be drawn from its files (a MuJoCo
-            simulation: its figure is made by the simulation only, for now).
+        RunFilesError: not a folder, or no run in it.
     """
     folder = Path(folder)
     if not folder.is_dir():
         raise RunFilesError(f"{folder} is not a folder" if folder.exists() else f"{folder} does not exist")
     summary = read_summary(folder)
     sim = folder / SIM_CSV
-    mujoco = "walk_start" in summary or (sim.is_file() and set(_MUJOCO_COLUMNS) <= set(_csv_header(sim)))
     if summary.get("model") == "lipm":
         return "lipm"
-    if mujoco:
-        raise RunFilesError(
-            f"{folder} holds a MuJoCo simulation (sim.csv with the robot's columns): rtgait plot does not remake its "
-            "figures yet; run rtgait simulate again for zmp_sim.png"
-        )
+    if (
+        (folder / SIM_PARQUET).is_file()
+        or summary.get("model") == "mujoco"
+        or "walk_start" in summary
+        or (sim.is_file() and set(_MUJOCO_COLUMNS) <= set(_csv_header(sim)))
+    ):
+        return "mujoco"
     if (folder / PLAN_CSV).is_file() or "zmp_margin_min" in summary:
         return "plan"
-    raise RunFilesError(f"{folder} holds no trajectory.csv (rtgait plan) or sim.csv (rtgait simulate --model lipm)")
+    raise RunFilesError(f"{folder} holds no trajectory.csv (rtgait plan) or sim.csv (rtgait simulate)")
