@@ -32,6 +32,11 @@ start before the planner's clock begins; it runs at negative times on the walk's
 
 ``open-loop`` gives the IK the planner's sample unchanged, which is the loop before the controller levels existed
 (the paper's assumption); the levels are described in :mod:`rtgait.sim.controllers`.
+
+:class:`ClosedLoop` is the loop one tick per :meth:`~ClosedLoop.step`, for callers that act between ticks (a live
+viewer sets the velocity command, pushes, switches the controller level); :func:`run_closed_loop` steps one to the
+walk's end. The record (:mod:`rtgait.sim.loop_record`) is the whole run, or for an open-ended run a ring of its last
+seconds, so that its memory stays bounded however long it lasts.
 """
 
 from __future__ import annotations
@@ -82,11 +87,11 @@ def open_loop_controller(sim: SimModel, planner: OnlinePlanner) -> WalkingContro
 class ClosedLoop:
     """The closed loop of :func:`run_closed_loop`, one control tick per :meth:`step` (see the module docstring).
 
-    Drive it by hand (``while loop.step(): ...``, e.g. a live viewer changing the velocity command between ticks)
-    or through :func:`run_closed_loop`; :meth:`result` makes the :class:`SimResult` of the ticks recorded so far.
-    After each step, the last tick's values are attributes and properties: :attr:`t`, :attr:`phase`,
-    :attr:`zmp_planned`, :attr:`zmp_command`, :attr:`zmp_measured`, :attr:`dcm`, :attr:`dcm_planned`,
-    :attr:`left_foot`, :attr:`right_foot`, :attr:`cog_target`, :attr:`base_position`, and :meth:`footprints`.
+    Drive it by hand (``while loop.step(): ...``, e.g. a live viewer changing the velocity command, pushing or
+    switching the controller level between ticks) or through :func:`run_closed_loop`; :meth:`result` makes the
+    :class:`SimResult` of the ticks recorded so far. After a step, :attr:`last` holds that tick's values (time,
+    phase, planned, commanded and measured ZMP, measured and planned DCM, the IK's COG and feet targets),
+    :meth:`footprints` the plan's footprints, :attr:`base_position` and :attr:`steps_completed` the outcome so far.
 
     Args:
         sim, controller, options, ik, data: as :func:`run_closed_loop`.
