@@ -76,6 +76,7 @@ __all__ = [
 ]
 
 _NO_OFFSETS = FootOffsets()
+_SUPPORTS = {code: name for name, code in SUPPORT_CODES.items()}
 
 
 def open_loop_controller(sim: SimModel, planner: OnlinePlanner) -> WalkingController:
@@ -411,10 +412,11 @@ class ClosedLoop:
     @property
     def last(self) -> TickValues:
         """The last tick's values (those of the first tick's start before any step)."""
-        p = self.record.planned[(max(self.k, 1) - 1) % self.record.capacity].tolist()
+        row = (max(self.k, 1) - 1) % self.record.capacity
+        p = self.record.planned[row].tolist()
         return TickValues(
-            self.t, self.phase, (p[0], p[1]), (p[2], p[3]), self.zmp_measured, (p[4], p[5]), (p[6], p[7]),
-            tuple(self.cog_target), self.left_foot, self.right_foot,
+            self.t, self.phase, _SUPPORTS[int(self.record.support[row])], (p[0], p[1]), (p[2], p[3]),
+            self.zmp_measured, (p[4], p[5]), (p[6], p[7]), tuple(self.cog_target), self.left_foot, self.right_foot,
         )  # fmt: skip
 
     @property

@@ -33,6 +33,7 @@ class TickValues(NamedTuple):
     Attributes:
         t: the tick's time (s).
         phase: the planner's phase index (-1 during the start transition).
+        support: the plan's support, ``"double"``, ``"left"`` or ``"right"`` (the foot on the ground).
         zmp_planned: the planner's ZMP (during the start transition the COG target's ground projection).
         zmp_command: the ZMP the controller asked of the feet.
         zmp_measured: the centre of pressure of the sole contact forces; NaN while no foot touches the floor.
@@ -44,6 +45,7 @@ class TickValues(NamedTuple):
 
     t: float
     phase: int
+    support: str
     zmp_planned: tuple[float, float]
     zmp_command: tuple[float, float]
     zmp_measured: tuple[float, float]

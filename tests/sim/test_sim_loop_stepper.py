@@ -27,9 +27,7 @@ NOT_COMPARED = {"wall_time", "model"}
 def controller(talos, talos_sim, shorten, level="adaptive", steps=3):
     """A controller of ``level`` for fig8 cut to ``steps`` steps (its last one lengthened), as simulate makes it."""
     walk = robot_scenario(shorten("fig8", steps, (ScheduledChange(steps, length=0.12),)), talos)
-    made = make_controller(
-        level, walk.planner_config(), walk.strides(), walk.sole, talos, dt=talos_sim.control_dt
-    )
+    made = make_controller(level, walk.planner_config(), walk.strides(), walk.sole, talos, dt=talos_sim.control_dt)
     return made, walk
 
 
@@ -76,7 +74,7 @@ def test_the_stepper_driven_by_hand_gives_run_closed_loop_s_result(talos, talos_
 
 def test_a_ring_record_keeps_the_last_ticks_of_the_whole_record(talos, talos_sim, shorten):
     """keep=0.5 s: the result is the last 500 ticks of the whole record (and the replay frames among them)."""
-    level, walk = controller(talos, talos_sim, shorten, level="stabilized", steps=2)
+    level, _ = controller(talos, talos_sim, shorten, level="stabilized", steps=2)
     whole = run_closed_loop(talos_sim, level, QUICK)
     level, _ = controller(talos, talos_sim, shorten, level="stabilized", steps=2)
     loop = ClosedLoop(talos_sim, level, QUICK, keep=0.5)
@@ -105,7 +103,7 @@ def test_an_open_ended_walk_by_command_has_bounded_memory(talos, talos_sim):
     walk = robot_scenario(load_scenario("fig8"), talos)
     level = make_controller("adaptive", walk.planner_config(), None, walk.sole, talos, dt=talos_sim.control_dt)
     level.planner.set_velocity(0.1, 0.0, 0.0)
-    with pytest.raises(ValueError, match="needs LoopOptions.stop_after_steps or duration"):
+    with pytest.raises(ValueError, match=r"needs LoopOptions\.stop_after_steps or duration"):
         ClosedLoop(talos_sim, level, QUICK)
     loop = ClosedLoop(talos_sim, level, QUICK, keep=0.2)
     assert loop.n_ticks is None
