@@ -55,7 +55,8 @@ from rtgait.sim.actuation import ReferenceInterpolator
 from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Push, Pushes, measure_contacts
 from rtgait.sim.controllers import ControlEvent, ControllerOptions, RobotInfo, WalkingController
 from rtgait.sim.foot_control import FootOffsets, add_ankle_offsets, find_ankle_joints
-from rtgait.sim.loop_options import LANDING_WINDOW, LoopOptions, minimum_jerk, start_pose, walk_length
+from rtgait.sim.loop_options import LANDING_WINDOW, LoopOptions, minimum_jerk, run_length, start_pose
+from rtgait.sim.loop_push import LivePush
 from rtgait.sim.loop_record import TickRecord, TickValues
 from rtgait.sim.measure import SimMeasurer
 from rtgait.sim.model import SimModel
@@ -150,27 +151,14 @@ class ClosedLoop:
             sim.reset(data, q=q)
         self.data = data
         self.k0 = k0 = math.ceil(options.lead / dt - 1e-9)  # the walk's first tick: the transition's come before it
-        n_ticks: int | None
-        if planner.n_steps is None and stop_after is None:
-            # Ended by on_tick (duration), or open-ended: the number of steps is known only afterwards.
-            self._n_steps = 0
-            self._walk_end = math.inf if options.duration is None else options.duration
-            n_ticks = None if options.duration is None else k0 + math.floor(options.duration / dt + 1e-9) + 1
-        else:
-            # The walk's length is known in advance, also by command: stop() closes the feet after stop_after steps.
-            self._n_steps = planner.n_steps if stop_after is None else stop_after + 1  # type: ignore[assignment]
-            self._walk_end = walk_length(planner, self._n_steps)
-            n_ticks = k0 + math.floor((self._walk_end + options.after) / dt + 1e-9) + 1
+        self._n_steps, self._walk_end, n_ticks = run_length(planner, options, stop_after, k0, dt)
         self.n_ticks = n_ticks
         """Ticks the run lasts (the start transition included), ``None`` for an open-ended walk by command."""
         if keep is None:
-            if n_ticks is None:  # pragma: no cover - refused above
-                raise ValueError("an open-ended walk needs a bounded record (keep)")
+            assert n_ticks is not None  # refused above
             capacity = n_ticks
-        else:
-            capacity = max(1, round(keep / dt))
-            if n_ticks is not None:
-                capacity = min(capacity, n_ticks)
+        else:  # a ring of `keep` seconds (at most the run)
+            capacity = max(1, round(keep / dt)) if n_ticks is None else min(max(1, round(keep / dt)), n_ticks)
 
         # ----- the record, allocated once ------------------------------------------------------------------------
         # The replay's record: a whole qpos every few ticks only (a 1 kHz record of ~40 coordinates would be 30
@@ -188,7 +176,7 @@ class ClosedLoop:
         self._pushes = Pushes(sim, data, options.pushes)
         self.pushes: list[Push] = list(options.pushes)
         """The pushes of the run: the scheduled ones and those given to :meth:`push`."""
-        self._live: tuple[float, tuple[float, float, float], int] | None = None  # (end, force, body) of push()
+        self._live = LivePush(sim, data, planner.config.cog_height, self.gravity)  # push(), from a live session
         self.measurer = SimMeasurer.for_sim(sim, omega=planner.w)
         self.landings = Landings(max(min(planner.config.timing.double_support, LANDING_WINDOW), dt), self.threshold)
         ankles = find_ankle_joints(robot)
@@ -254,8 +242,7 @@ class ClosedLoop:
         i = k % record.capacity  # the record's row of this tick
         t = (k - self.k0) * self.dt
         self._pushes.update(t)
-        if self._live is not None:
-            self._push_live(t)
+        self._live.update(t)
 
         # ----- references ---------------------------------------------------------------------------------------
         if k < self.k0:
@@ -364,49 +351,26 @@ class ClosedLoop:
         if self._ended is None:
             self._ended = time.perf_counter()
             self._pushes.clear()
-            if self._live is not None:
-                self.data.xfrc_applied[self._live[2], 0:3] = 0.0
-                self._live = None
+            self._live.clear()
 
     # ----- pushes --------------------------------------------------------------------------------------------------
     def push(self, force: Sequence[float], duration: float = 0.1, body: str | None = None) -> Push:
         """Push ``body`` (default the floating base) with ``force`` (N, world frame) for ``duration`` (s) from the
-        next tick on; one such push at a time (a new one replaces it), and while it acts it replaces a scheduled
-        push on the same body. It is written every tick, so a viewer that clears the applied forces between ticks
-        (MuJoCo's passive viewer does) does not cut it short.
+        next tick on (:class:`~rtgait.sim.loop_push.LivePush`: one at a time, rewritten every tick so that a viewer
+        clearing the applied forces does not cut it short); it is added to :attr:`pushes`.
 
         Raises:
-            ValueError: a force or duration that is not finite, or beyond physical sense (:meth:`Push.check`), or an
+            ValueError: a force or duration that is not finite, beyond physical sense (:meth:`Push.check`), or an
                 unknown body.
         """
-        start = self.time_of(self.k)
-        fx, fy, fz = (float(v) for v in force)
-        push = Push(start=start, duration=duration, force=(fx, fy, fz), body=body)
-        push.check(self.sim.robot.mass, self.planner.config.cog_height, self.gravity)
-        index = self.sim.base_body
-        if body is not None:
-            index = mujoco.mj_name2id(self.sim.model, mujoco.mjtObj.mjOBJ_BODY, body)
-            if index < 0:
-                raise ValueError(f"push body {body!r}: the MuJoCo model of {self.sim.robot.name} has no such body")
-        if self._live is not None:
-            self.data.xfrc_applied[self._live[2], 0:3] = 0.0
-        self._live = (start + duration, push.force, int(index))
+        push = self._live.start(self.time_of(self.k), force, duration, body)
         self.pushes.append(push)
         return push
 
     @property
     def push_acting(self) -> tuple[float, float, float] | None:
         """The force (N) of the :meth:`push` acting at the last tick, or ``None``."""
-        return None if self._live is None else self._live[1]
-
-    def _push_live(self, t: float) -> None:
-        end, force, body = self._live  # type: ignore[misc]
-        xfrc = self.data.xfrc_applied
-        if t + 1e-9 >= end:
-            xfrc[body, 0:3] = 0.0
-            self._live = None
-        else:
-            xfrc[body, 0:3] = force
+        return self._live.force
 
     # ----- the last tick's values ----------------------------------------------------------------------------------
     @property

@@ -12,7 +12,7 @@ from rtgait.core.online import OnlinePlanner
 from rtgait.core.rollout import ScheduledChange
 from rtgait.sim.contact import FallLimits, Push
 
-__all__ = ["LANDING_WINDOW", "LoopOptions", "minimum_jerk", "start_pose", "walk_length"]
+__all__ = ["LANDING_WINDOW", "LoopOptions", "minimum_jerk", "run_length", "start_pose", "walk_length"]
 
 LANDING_WINDOW = 0.5
 """Longest time after a step's planned touch-down (s) in which its foot must be found on the floor; the double
@@ -116,3 +116,24 @@ def start_pose(planner: OnlinePlanner) -> tuple[list[float], list[float], list[f
     left, right = (first, second) if first.side == "left" else (second, first)
     cog = [0.5 * (left.x + right.x), 0.5 * (left.y + right.y), planner.config.cog_height]
     return cog, [left.x, left.y, 0.0, left.yaw], [right.x, right.y, 0.0, right.yaw]
+
+
+def run_length(
+    planner: OnlinePlanner, options: LoopOptions, stop_after: int | None, k0: int, dt: float
+) -> tuple[int, float, int | None]:
+    """How long a run lasts: the walk's steps, when it has come to rest (s, walk clock) and the run's ticks, the
+    start transition's ``k0`` included (control period ``dt``, s).
+
+    A walk of footsteps, or by command stopped after ``stop_after`` steps (then ``stop_after + 1`` steps, the last
+    closing the feet), is known in advance; a walk by command ended by ``options.on_tick`` lasts
+    ``options.duration`` (its steps are counted afterwards: 0 here); one with neither has no end (``inf``, ``None``
+    ticks).
+    """
+    if planner.n_steps is None and stop_after is None:
+        if options.duration is None:
+            return 0, math.inf, None
+        return 0, options.duration, k0 + math.floor(options.duration / dt + 1e-9) + 1
+    n_steps = planner.n_steps if stop_after is None else stop_after + 1
+    assert n_steps is not None
+    walk_end = walk_length(planner, n_steps)
+    return n_steps, walk_end, k0 + math.floor((walk_end + options.after) / dt + 1e-9) + 1
