@@ -221,3 +221,50 @@ def test_the_robot_walks_where_the_keys_say(tmp_path):
     assert image.shape[:2] == (720, 960)
     assert image[..., :3].std() > 0.05 and len({tuple(p) for p in image[::20, ::20, :3].reshape(-1, 3)}) > 20
     assert math.isfinite(result["real_time_factor"])
+
+
+def test_the_scene_shows_the_plan_s_footprints_and_the_tick_s_points(talos):
+    """draw_walk's geoms: a sole rectangle on each footprint around the step under way (centred where the sole's
+    front/back and inner/outer extents put it), the planned ZMP and the DCMs where the loop says, an arrow during a
+    push. No window needed: an mjvScene is plain memory."""
+    mujoco = pytest.importorskip("mujoco")
+    pytest.importorskip("pinocchio")
+    import numpy as np
+
+    from rtgait.robot.motion import robot_scenario
+    from rtgait.scenario import load_scenario
+    from rtgait.sim.controllers import make_controller
+    from rtgait.sim.live import LiveWalk
+    from rtgait.sim.loop import ClosedLoop, LoopOptions
+    from rtgait.sim.model import SimConfig, build_sim_model
+    from rtgait.viz.live_view import draw_walk
+
+    sim = build_sim_model(talos, SimConfig(meshes=False))
+    walk = robot_scenario(load_scenario("fig8"), talos)
+    level = make_controller("stabilized", walk.planner_config(), walk.strides(), walk.sole, talos)
+    live = LiveWalk(ClosedLoop(sim, level, LoopOptions(start_ramp=0.2, start_hold=0.1), keep=0.0), False, 50.0)
+    while live.loop.t < 1.0:  # into step 1's single support
+        live.step()
+    live.act("push")
+    live.step()
+    scene = mujoco.MjvScene(sim.model, 100)
+    draw_walk(scene, live, walk.sole)
+    geoms = [scene.geoms[i] for i in range(scene.ngeom)]
+    boxes = [g for g in geoms if g.type == mujoco.mjtGeom.mjGEOM_BOX]
+    spheres = [g for g in geoms if g.type == mujoco.mjtGeom.mjGEOM_SPHERE]
+    arrows = [g for g in geoms if g.type == mujoco.mjtGeom.mjGEOM_ARROW]
+    values, sole = live.loop.last, walk.sole
+    step = (values.phase + 1) // 2
+    shown = [f for i, f in enumerate(live.loop.footprints()) if step - 2 <= i <= step + 4]
+    assert len(boxes) == len(shown) >= 4
+    for box, foot in zip(boxes, shown, strict=True):
+        side = 1.0 if foot.side == "left" else -1.0
+        local = np.array([(sole.front - sole.back) / 2, side * (sole.outer - sole.inner) / 2])
+        c, s = np.cos(foot.yaw), np.sin(foot.yaw)
+        centre = np.array([foot.x, foot.y]) + np.array([[c, -s], [s, c]]) @ local
+        assert np.allclose(box.pos[:2], centre, atol=1e-6)
+        assert np.allclose(box.size[:2], [(sole.front + sole.back) / 2, (sole.inner + sole.outer) / 2], atol=1e-6)
+    assert np.allclose(spheres[0].pos[:2], values.zmp_planned, atol=1e-6)
+    assert np.allclose(spheres[-2].pos[:2], values.dcm, atol=1e-6)
+    assert np.allclose(spheres[-1].pos[:2], values.dcm_planned, atol=1e-6)
+    assert len(arrows) == 1 and live.loop.push_acting is not None
