@@ -191,12 +191,20 @@ class ClosedLoop:
         self._stopped = stop_after is None
         self.events: list[ControlEvent] = []
         self._events_kept = math.inf if keep is None else keep  # an open-ended run keeps the last `keep` seconds
-        # What every tick uses, bound once (MuJoCo's arrays of fixed size are views that stay valid).
+        # What every tick uses, bound once: a tuple unpacked into locals costs less than a dozen attribute lookups
+        # (MuJoCo's arrays of fixed size are views that stay valid).
         self._hot = (
-            controller.tick, self.measurer.measure, ik.solve, self._servo, self.contacts, self.landings, model, data,
-            data.ctrl, data.qpos, data.subtree_com, data.site_xpos, data.actuator_force, sim.left_sole_site,
-            sim.right_sole_site, sim.base_body, sim.substeps, ankles, self.record,
+            controller.tick, self.measurer.measure, ik.solve, self._servo, self.contacts, self.landings,
+            self._pushes.update, self._live.update, mujoco.mj_step, model, data, data.ctrl, data.qpos,
+            data.subtree_com, data.site_xpos, data.actuator_force, sim.left_sole_site, sim.right_sole_site,
+            sim.base_body, sim.substeps, ankles, dt, k0, -1 if n_ticks is None else n_ticks,
         )  # fmt: skip
+        r = self.record
+        self._rows = (
+            r.planned, r.cog, r.cog_planned, r.base, r.support, r.torque, r.commanded, r.replay_qpos, r.replay_soles,
+            r.capacity, r.replay_every, r.replay_capacity,
+        )  # fmt: skip
+        self._over = False
         self.k = 0
         """Ticks run so far."""
         self.fell, self.fall_time, self.fall_cause = False, None, None
@@ -221,7 +229,7 @@ class ClosedLoop:
     @property
     def done(self) -> bool:
         """Whether the run is over: fallen, or its last tick run."""
-        return self.fell or (self.n_ticks is not None and self.k >= self.n_ticks)
+        return self._over
 
     def step(self) -> bool:
         """Run one control tick (module docstring: measure, footstep changes, control, IK, servos, physics).
@@ -232,22 +240,25 @@ class ClosedLoop:
         Raises:
             RuntimeError: the run is already over.
         """
-        if self.done:
+        if self._over:
             raise RuntimeError("the closed loop is over (fallen or at its last tick): make its result()")
-        (tick, measure, solve, servo, contacts, landings, model, data, ctrl, qpos, subtree_com, site_xpos,
-         actuator_force, left_site, right_site, base_body, n_sub, ankles, record) = self._hot  # fmt: skip
+        (tick, measure, solve, servo, contacts, landings, pushes, live_push, mj_step, model, data, ctrl, qpos,
+         subtree_com, site_xpos, actuator_force, left_site, right_site, base_body, n_sub, ankles, dt, k0,
+         n_ticks) = self._hot  # fmt: skip
+        (planned, cog, cog_planned, bases, support, torque, commanded, replay_qpos, replay_soles, capacity,
+         replay_every, replay_capacity) = self._rows  # fmt: skip
         if self._began is None:
             self._began = time.perf_counter()
         k = self.k
-        i = k % record.capacity  # the record's row of this tick
-        t = (k - self.k0) * self.dt
-        self._pushes.update(t)
-        self._live.update(t)
+        i = k % capacity  # the record's row of this tick
+        t = (k - k0) * dt
+        pushes(t)
+        live_push(t)
 
         # ----- references ---------------------------------------------------------------------------------------
-        if k < self.k0:
+        if k < k0:
             ramp = self.options.start_ramp
-            s = minimum_jerk(k * self.dt / ramp) if ramp > 0.0 else 1.0
+            s = minimum_jerk(k * dt / ramp) if ramp > 0.0 else 1.0
             target_cog = [a + s * (b - a) for a, b in zip(self._cog_half_sitting, self._cog_start, strict=True)]
             left_foot, right_foot = self._left_start, self._right_start
             planned_x = command_x = target_cog[0]
@@ -256,7 +267,7 @@ class ClosedLoop:
             dcm = dcm_planned = (math.nan, math.nan)
         else:
             measurement = measure(data, t)
-            if k == self.k0:
+            if k == k0:
                 self.controller.start(0.0, measurement)
                 self._pending = sorted(self.options.changes, key=lambda c: self.planner.change_deadline(c.step))
             self._walk_inputs(t, data)
@@ -276,37 +287,37 @@ class ClosedLoop:
         if offsets != _NO_OFFSETS:
             joints = joints.copy()
             add_ankle_offsets(joints, ankles, offsets)
-        servo.command(joints, (joints - self._joints_previous) / self.dt)
+        servo.command(joints, (joints - self._joints_previous) / dt)
         self._joints_previous = joints
-        row = record.commanded[i]
+        row = commanded[i]
         row[0:7] = q[0:7]
         row[7:] = joints
 
         # ----- physics: the control period's substeps -----------------------------------------------------------
-        base = record.base[i]
+        base = bases[i]
         base[:] = qpos[0:7]  # the state at t, before the steps integrate it to t + dt
-        replay_row = (k // record.replay_every) % record.replay_capacity if k % record.replay_every == 0 else -1
+        replay_row = (k // replay_every) % replay_capacity if k % replay_every == 0 else -1
         if replay_row >= 0:
-            record.replay_qpos[replay_row] = qpos
-        tau = record.torque[i]
+            replay_qpos[replay_row] = qpos
+        tau = torque[i]
         servo.apply(0, ctrl)
-        mujoco.mj_step(model, data)
+        mj_step(model, data)
         # mj_step computed the kinematics, contacts and forces of the state it started from: the state at t.
         tau[:] = actuator_force
         if replay_row >= 0:
-            record.replay_soles[replay_row, 0] = site_xpos[left_site]
-            record.replay_soles[replay_row, 1] = site_xpos[right_site]
-        record.cog[i] = subtree_com[base_body]
+            replay_soles[replay_row, 0] = site_xpos[left_site]
+            replay_soles[replay_row, 1] = site_xpos[right_site]
+        cog[i] = subtree_com[base_body]
         zx, zy, fl, fr = contacts.measure(i, t)
         for j in range(1, n_sub):
             servo.apply(j, ctrl)
-            mujoco.mj_step(model, data)
+            mj_step(model, data)
             tau += actuator_force
         if n_sub > 1:
             tau *= 1.0 / n_sub
-        record.planned[i] = planned_x, planned_y, command_x, command_y, *dcm, *dcm_planned
-        record.cog_planned[i] = target_cog
-        record.support[i] = code
+        planned[i] = planned_x, planned_y, command_x, command_y, *dcm, *dcm_planned
+        cog_planned[i] = target_cog
+        support[i] = code
         landings.update(t, phase, code, fl, fr)
 
         # ----- the last tick's values, and falls ----------------------------------------------------------------
@@ -315,9 +326,11 @@ class ClosedLoop:
         cause = contacts.fall(base)
         if cause is not None:
             self.fell, self.fall_time, self.fall_cause = True, t, cause
-        if self.done:
             self._finish()
-        return not self.fell
+            return False
+        if k + 1 == n_ticks:
+            self._finish()
+        return True
 
     def _walk_inputs(self, t: float, data: mujoco.MjData) -> None:
         """What reaches the planner at ``t`` before the controller runs: the ``on_tick`` hook, the footstep changes
@@ -348,6 +361,7 @@ class ClosedLoop:
 
     def _finish(self) -> None:
         """The run is over: the clock stops and the pushes are lifted."""
+        self._over = True
         if self._ended is None:
             self._ended = time.perf_counter()
             self._pushes.clear()
