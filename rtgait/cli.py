@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 from typing import Any, NoReturn
 
 from rtgait import __version__
-from rtgait.commands import plan, plot, simulate
+from rtgait.commands import plan, play, plot, simulate
 from rtgait.commands.common import PROG, RunError, print_error
 from rtgait.outputs import OutputError
 from rtgait.scenario import builtin_scenarios
@@ -85,6 +85,7 @@ def _build_parser() -> argparse.ArgumentParser:
     commands.add_parser("scenarios", help="list the built-in scenarios", description="List the built-in scenarios.")
     plan.add_parser(commands)
     simulate.add_parser(commands)
+    play.add_parser(commands)
     plot.add_parser(commands)
     sweep_cli.add_parser(commands)
     return parser
@@ -102,6 +103,7 @@ _COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "scenarios": _scenarios,
     "plan": plan.run,
     "simulate": simulate.run,
+    "play": play.run,
     "plot": plot.run,
     "sweep": sweep_cli.run,
 }

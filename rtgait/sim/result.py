@@ -39,7 +39,7 @@ if TYPE_CHECKING:
 
     from rtgait.core.stepping import StepDecision
     from rtgait.sim.controllers import ControlEvent
-    from rtgait.sim.tick_log import TickRecord
+    from rtgait.sim.tick_log import CompleteLog
 
 __all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SUPPORT_CODES", "SimResult", "Stance", "stances"]
 
@@ -191,7 +191,7 @@ class SimResult:
         footprints: the planner's footprints ``F[0..]`` as planned at the end of the run.
         model: the reduced Pinocchio model of :attr:`commanded_q` (for the multibody ZMP), or ``None``.
         log: the rest of the per-tick record (joint and base velocities, per-foot wrench, feet targets, ...:
-            :class:`~rtgait.sim.tick_log.TickRecord`), or ``None`` for a result made without it.
+            :class:`~rtgait.sim.tick_log.CompleteLog`), or ``None`` for a result made without it.
         at_rest_speed: mean horizontal COM speed over the run's last 0.1 s (m/s).
     """
 
@@ -241,7 +241,7 @@ class SimResult:
     replans: int = 0
     model: pin.Model | None = field(default=None, repr=False)
     gravity: float = 9.81
-    log: TickRecord | None = field(default=None, repr=False)
+    log: CompleteLog | None = field(default=None, repr=False)
 
     # ----- time ------------------------------------------------------------------------------------------------------
     @property

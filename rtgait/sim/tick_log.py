@@ -3,7 +3,7 @@
 :class:`TickLog` preallocates every array once and fills one row per control tick with :meth:`TickLog.record`
 (no allocation per tick beyond a few Python floats: five row copies, one ``struct`` packing into a preallocated
 table, one MuJoCo call, ``mj_subtreeVel``);
-:meth:`TickLog.finish` trims them to the ticks simulated and derives the rest with numpy, into a :class:`TickRecord`.
+:meth:`TickLog.finish` trims them to the ticks simulated and derives the rest with numpy, into a :class:`CompleteLog`.
 
 **Which instant.** :meth:`TickLog.record` is called right after the first physics step of tick ``k``: MuJoCo's
 kinematics, velocities and actuator state then describe the state at the tick's time ``t`` (``mj_step`` computes them
@@ -14,7 +14,7 @@ for the state it starts from before integrating it), the same instant as the ZMP
   one joint through a joint transmission, so these are the joint's ``qpos`` and ``qvel``);
 * the base's spatial velocity, MuJoCo's ``cvel`` of the base body: its angular velocity ``w`` and the velocity ``v_c``
   of its point at the robot's COM ``c`` (world frame); the base origin ``p`` moves at ``v_p = v_c + w x (p - c)``
-  (:meth:`TickRecord.base_velocity`; ``mj_objectVelocity`` would give the base link's centre of mass instead);
+  (:meth:`CompleteLog.base_velocity`; ``mj_objectVelocity`` would give the base link's centre of mass instead);
 * the COM velocity, ``subtree_linvel`` of the base (``mj_subtreeVel``, the robot being the base's subtree);
 * each sole frame's position and orientation (``site_xpos``, ``site_xmat``), turned into ``(x, y, z, yaw, pitch,
   roll)`` with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` as :mod:`rtgait.sim.measure` does.
@@ -51,10 +51,10 @@ if TYPE_CHECKING:
     from rtgait.sim.measure import Measurement
     from rtgait.sim.model import SimModel
 
-__all__ = ["LEVEL_CODES", "TickLog", "TickRecord"]
+__all__ = ["LEVEL_CODES", "CompleteLog", "TickLog"]
 
 LEVEL_CODES = {level: code for code, level in enumerate(CONTROLLERS)}
-"""Controller level per tick in :attr:`TickRecord.level`: its index in :data:`rtgait.core.closed_loop.CONTROLLERS`."""
+"""Controller level per tick in :attr:`CompleteLog.level`: its index in :data:`rtgait.core.closed_loop.CONTROLLERS`."""
 
 # The per-tick scalars, packed into one row of a float64 table with one ``struct`` call (a numpy assignment from a
 # tuple of Python floats costs several times more): COM velocity (3), base spatial velocity (6), IK sole targets
@@ -72,7 +72,7 @@ _NAN_PLAN = (math.nan,) * 4
 
 
 @dataclass(frozen=True, eq=False)
-class TickRecord:
+class CompleteLog:
     """What :class:`TickLog` recorded, one row per simulated tick (``k`` rows; world frame, SI units).
 
     Attributes:
@@ -214,7 +214,7 @@ class TickLog:
             *left_foot, *right_foot, *feet, *plan, phase, support, LEVEL_CODES[level],
         )  # fmt: skip
 
-    def finish(self, ticks: int) -> TickRecord:
+    def finish(self, ticks: int) -> CompleteLog:
         """The record of the first ``ticks`` ticks, with the derived quantities (module docstring)."""
         joints = self._joints[:ticks]
         gear = self._gear
@@ -223,7 +223,7 @@ class TickLog:
         sites = list(self._sites)
         position, rotation = self._sites_position[:ticks, sites], self._sites_rotation[:ticks, sites]
         plan = scalars[:, _PLAN:]
-        return TickRecord(
+        return CompleteLog(
             joint_position=joints[:, 0] / gear,
             joint_velocity=joints[:, 1] / gear,
             joint_velocity_command=joints[:, 2].copy(),
