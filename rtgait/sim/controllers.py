@@ -129,8 +129,9 @@ class WalkingController:
         self._swing_phase = [-2, -2]  # phase of each foot's last swing
         self._z = [0.0, 0.0]  # height of each foot's target above the plan (m): landing heights, late descent
         self._blend: list[tuple[float, float, float] | None] = [None, None]  # (height, swing start, duration)
-        # A late foot that landed: the measured ground height (m) its target returns to while it stands.
-        self._ground: list[float | None] = [None, None]
+        # A late foot that landed: its target's height returns from where it landed to the measured ground's, over
+        # its stance's single support: (height at the landing, ground height, from, until) (m, m, s, s).
+        self._ground: list[tuple[float, float, float, float] | None] = [None, None]
 
     def start(self, t0: float, measurement: Measurement | None = None) -> None:
         """Start the walk at ``t0`` (s). ``"adaptive"`` with a measurement starts the planner from the measured feet
@@ -292,6 +293,7 @@ class WalkingController:
             return False
         decision = planner.step_adjustments[-1]
         return not decision.emergency or decision.step == (q + 1) // 2 + (q + 1) % 2
+
     # ----- landings and the feet's targets ---------------------------------------------------------------------------
     def _enter_phase(self, q: int, support: str, m: Measurement) -> None:
         """Bookkeeping when the plan enters phase ``q``: a swing that ended in the air is late; a new swing blends
@@ -352,9 +354,14 @@ class WalkingController:
             # Lowered to find the ground: stand where the sole met it. The target went below the plan because the
             # foot was higher than planned when the swing ended (a body that rose or rolled, or a lower ground);
             # the measured sole height is the ground's, and keeping the target's own depth instead would extend
-            # the stance leg, lift the body and make the next landing later still.
+            # the stance leg, lift the body and make the next landing later still. The target returns to it over
+            # the single support this foot carries next (a loaded foot's target moved at the descent's speed made
+            # the ankle damping chatter).
             limit = self.options.late_descent_limit
-            self._ground[i] = min(0.0, max(-limit, landing.z))
+            ground = min(0.0, max(-limit, landing.z))
+            stance = q + 1 if support == "double" else q
+            until = planner.phase_start(stance) + planner.timeline.duration(stance)
+            self._ground[i] = (self._z[i], ground, t, max(until, t + self.dt))
         self._late[i] = False
         if kind == "early":
             # Stand on it from now on where it landed; it goes on down with the plan (a stiff robot sags: most early
@@ -387,11 +394,13 @@ class WalkingController:
             elif self._late[i] and t >= self._late_from[i]:
                 limit = self.options.late_descent_limit
                 self._z[i] = max(self._z[i] - self.options.late_descent_speed * self.dt, -limit)
-            elif self._ground[i] is not None:  # landed late: back to the ground's height at the descent's speed
-                ground, z, rate = self._ground[i], self._z[i], self.options.late_descent_speed * self.dt
-                self._z[i] = min(z + rate, ground) if z < ground else max(z - rate, ground)
-                if self._z[i] == ground:
-                    self._ground[i] = None
+            elif (ground := self._ground[i]) is not None:  # landed late: back to the ground's height
+                landed, level, start, until = ground
+                s = (t - start) / (until - start)
+                if s >= 1.0:
+                    self._z[i], self._ground[i] = level, None
+                else:
+                    self._z[i] = landed + (level - landed) * max(s, 0.0)
 
     def _foot_target(self, i: int, planned: list[float]) -> tuple[float, float, float, float]:
         """Foot ``i``'s target ``(x, y, z, yaw)`` before foot force control."""

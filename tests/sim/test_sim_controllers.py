@@ -229,8 +229,9 @@ def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_gro
     steps = [a - b for a, b in itertools.pairwise(heights)]
     assert steps[0] == pytest.approx(options.late_descent_speed * DT, abs=1e-9)
     assert heights[-1] == pytest.approx(-options.late_descent_limit), "down to the limit, no further"
-    # It lands with its sole at `ground` (m): re-anchored; its target goes back up to the measured ground at the
-    # descent's speed (the target's own depth kept would extend the stance leg and lift the body).
+    # It lands with its sole at `ground` (m): re-anchored; its target goes back up to the measured ground over the
+    # single support it carries next, phase 3 (the target's own depth kept would extend the stance leg and lift the
+    # body).
     target = planner.footprints()[2]
     landing = Landing(t, side, target.x - 0.01, target.y, ground, target.yaw, 0.0, 0.0, 40.0)
     values, support, _ = planner.sample_values(t)
@@ -240,13 +241,15 @@ def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_gro
     assert planner.footprints()[2].x == pytest.approx(landing.x)
     assert out.support == "double"
     assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(-options.late_descent_limit)
-    rise = options.late_descent_speed * DT
-    ticks = math.ceil((ground + options.late_descent_limit) / rise - 1e-9)
-    out, t = walk_to(ctl, t + (ticks - 0.5) * DT, t + DT)  # one tick short of the ground
-    assert (out.left_foot if swing == 0 else out.right_foot)[2] < ground - 1e-12
-    out, t = walk_to(ctl, t + 0.5 * DT, t)
+    landed_at, end = t, planner.phase_start(3) + planner.timeline.duration(3)
+    middle = 0.5 * (landed_at + end)
+    out, t = walk_to(ctl, middle + 0.5 * DT, t + DT)
+    halfway = 0.5 * (ground - options.late_descent_limit)
+    slope = (ground + options.late_descent_limit) / (end - landed_at)
+    assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(halfway, abs=slope * DT)
+    out, t = walk_to(ctl, end + DT, t)
     assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(ground, abs=1e-12)
-    # Through the next single support (phase 3), as the stance foot, it keeps that height; over its own next swing
+    # Through the next double support (phase 4), as the stance foot, it keeps that height; over its own next swing
     # (phase 5) the height is blended out, so it lands at the plan's height.
     out, t = walk_to(ctl, planner.phase_start(5), t)
     assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(ground, abs=1e-12)
