@@ -30,8 +30,13 @@ controller_config`), the pendulum-level loop:
   nothing ``late_grace`` after it, the landing's detection lag): the other foot carries the robot and the foot's
   target descends at ``late_descent_speed`` to ``late_descent_limit`` below the plan (auto_stabilizer
   ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset`` -0.02 m); unlike auto_stabilizer the plan is not
-  delayed. A foot keeps the height it landed at while it stands, and sheds it linearly over its next swing. A foot
-  that lands again in the same stance (a bounce) is re-anchored only if it moved ``relanding_tolerance`` (10 mm).
+  delayed. A late foot stands at the ground's measured height (its target brought there over the single support it
+  carries next: kept as deep as the target went, it would lift the body and make the next landing later still);
+  any other keeps the height it landed at; either is shed linearly over its next swing. A foot that lands again in
+  the same stance (a bounce) is re-anchored only if it moved ``relanding_tolerance`` (10 mm).
+
+  *When no step catches the error, the plan is kept* (:meth:`WalkingController._dcm_error_replan`): no replan for
+  an outward DCM error in single support, and a non-catching step adjustment of a later step is put back.
 
 All on Python floats; the support polygon (numpy) is rebuilt only when the feet in contact move.
 """
