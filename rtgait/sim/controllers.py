@@ -30,8 +30,13 @@ controller_config`), the pendulum-level loop:
   nothing ``late_grace`` after it, the landing's detection lag): the other foot carries the robot and the foot's
   target descends at ``late_descent_speed`` to ``late_descent_limit`` below the plan (auto_stabilizer
   ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset`` -0.02 m); unlike auto_stabilizer the plan is not
-  delayed. A foot keeps the height it landed at while it stands, and sheds it linearly over its next swing. A foot
-  that lands again in the same stance (a bounce) is re-anchored only if it moved ``relanding_tolerance`` (10 mm).
+  delayed. A late foot stands at the ground's measured height (its target brought there over the single support it
+  carries next: kept as deep as the target went, it would lift the body and make the next landing later still);
+  any other keeps the height it landed at; either is shed linearly over its next swing. A foot that lands again in
+  the same stance (a bounce) is re-anchored only if it moved ``relanding_tolerance`` (10 mm).
+
+  *When no step catches the error, the plan is kept* (:meth:`WalkingController._dcm_error_replan`): no replan for
+  an outward DCM error in single support, and a non-catching step adjustment of a later step is put back.
 
 All on Python floats; the support polygon (numpy) is rebuilt only when the feet in contact move.
 """
@@ -129,6 +134,9 @@ class WalkingController:
         self._swing_phase = [-2, -2]  # phase of each foot's last swing
         self._z = [0.0, 0.0]  # height of each foot's target above the plan (m): landing heights, late descent
         self._blend: list[tuple[float, float, float] | None] = [None, None]  # (height, swing start, duration)
+        # A late foot that landed: its target's height returns from where it landed to the measured ground's, over
+        # its stance's single support: (height at the landing, ground height, from, until) (m, m, s, s).
+        self._ground: list[tuple[float, float, float, float] | None] = [None, None]
 
     def start(self, t0: float, measurement: Measurement | None = None) -> None:
         """Start the walk at ``t0`` (s). ``"adaptive"`` with a measurement starts the planner from the measured feet
@@ -156,7 +164,7 @@ class WalkingController:
         if adaptive:
             planner.observe(t, m.com[:2], m.com_vel[:2])  # with "always", may replan at once (DCM error)
         values, support, q = planner.sample_values(t)
-        if self._on_error and self._dcm_error_replan(t, m, values, q):
+        if self._on_error and self._dcm_error_replan(t, m, values, support, q, events):
             values, support, q = planner.sample_values(t)
         if q != self._phase:
             self._enter_phase(q, support, m)
@@ -193,11 +201,22 @@ class WalkingController:
             planned_support, (values[21], values[22]),
         )  # fmt: skip
 
-    def _dcm_error_replan(self, t: float, m: Measurement, values: list[float], q: int) -> bool:
+    def _dcm_error_replan(
+        self, t: float, m: Measurement, values: list[float], support: str, q: int, events: list[ControlEvent]
+    ) -> bool:
         """``"on-error"``: replan from the measured state when the measured DCM is more than ``replan_dcm_error`` off
         the plan's, as the core's ``observe`` does with ``feedback="measured"`` (at most every
         :data:`ERROR_REPLAN_INTERVAL`, not within :data:`ERROR_REPLAN_MIN_REMAINDER` of a phase's end); returns
-        whether it replanned."""
+        whether it replanned.
+
+        *A step that does not catch the push is not taken.* The replan's step adjustment moves a landing; when no
+        candidate keeps the plan's ZMP inside the support (the core's emergency decision: the best margin, still
+        outside), the landing is put back and the plan under way goes on from its own state: the measured state
+        stays out of the plan, the stiff servos keep pulling the COM back to the plan and the DCM law with the foot
+        force control recovers what the sole can (the ``"stabilized"`` level's recovery). Such a step is the
+        inner foot moved toward an outward push (the helpful one would cross the stance foot, which the stride box
+        forbids, and it narrows the stance), or a later step's landing moved far to reshape the plan's connection
+        while the robot must first stand a single support on the foot away from the push."""
         threshold = self.options.replan_dcm_error
         w = self.planner.w
         ex = m.com[0] + m.com_vel[0] / w - values[21]
@@ -209,13 +228,27 @@ class WalkingController:
         if remainder < ERROR_REPLAN_MIN_REMAINDER:
             return False
         self._last_error_replan = t
+        if self._only_crossing_catches(values, support, ex, ey):
+            events.append(ControlEvent(t, "replan-skipped", support, "outward DCM error in single support"))
+            return False
+        landings = self._landings_ahead(q)
+        decided = planner.step_adjustment_count
         # The core takes the measured state into a plan, and adjusts steps, when its configuration says so: for this
         # one replan.
         config = planner.config
         planner.config = dataclasses.replace(config, feedback="measured", step_adjustment=self.options.step_adjustment)
         try:
             replanned = planner.replan_now(t, "dcm-error") is not None
-            if replanned and self.options.com_reference == "planned":
+            walk = planner.walk
+            moved = [(j, old) for j, old in landings if walk.footprint(j) != old]
+            if moved and not self._catches(decided, q):
+                for j, old in moved:  # F[j] is the landing of step j - 1
+                    walk.move_landing(j - 1, old.x, old.y)
+                planner.config = dataclasses.replace(config, feedback="planned")
+                planner.replan_now(t, "dcm-error-kept")
+                decision = planner.step_adjustments[-1]
+                events.append(ControlEvent(t, "step-refused", "", decision.reason, *decision.landing))
+            elif replanned and self.options.com_reference == "planned":
                 # The footsteps are the measured state's; the COM goes on from where the plan had it, so that the
                 # servos keep pulling the robot back: the plan under way remade from the state sampled before.
                 planner.observe(t, (values[0], values[1]), (values[3], values[4]))
@@ -225,6 +258,46 @@ class WalkingController:
             return replanned
         finally:
             planner.config = config
+
+    @staticmethod
+    def _only_crossing_catches(values: list[float], support: str, ex: float, ey: float) -> bool:
+        """Whether, in a single support, the DCM error ``(ex, ey)`` (m) points outward from the stance foot more
+        than along it: the capture point then moves away from where the swing foot may land (the stride box keeps
+        it on its own side, the leg collision model would refuse a crossing step), so no landing catches it and
+        the plan under way is kept."""
+        if support not in _SIDES:
+            return False
+        i = 13 if support == "left" else 17  # the stance foot's (x, y, z, yaw) in the sample
+        yaw = values[i + 3]
+        c, s = math.cos(yaw), math.sin(yaw)
+        along, lateral = c * ex + s * ey, -s * ex + c * ey
+        outward = lateral if support == "left" else -lateral
+        return outward > abs(along)
+
+    def _landings_ahead(self, q: int) -> list[tuple[int, Footstep]]:
+        """The footprints a step adjustment in phase ``q`` may move (the landings of the step under way and the next
+        two), with their indices."""
+        planner = self.planner
+        first = (q + 1) // 2 + 1
+        landings = []
+        for j in range(first, first + 3):
+            try:
+                landings.append((j, planner.walk.footprint(j)))
+            except IndexError:  # the walk ends before
+                break
+        return landings
+
+    def _catches(self, decided: int, q: int) -> bool:
+        """Whether the step adjustment of the replan just made (in phase ``q``) is one to take: a new decision that
+        finds a landing keeping the ZMP inside the support, or, when none does, the best landing for the step
+        swinging now (a single support) or lifting off next (a double support): that foot can still go toward
+        the capture point. A later step's landing moved without catching the push only reshapes the plan's
+        connection (the core logs a repeated emergency decision once: no new decision is one of those)."""
+        planner = self.planner
+        if planner.step_adjustment_count <= decided:
+            return False
+        decision = planner.step_adjustments[-1]
+        return not decision.emergency or decision.step == (q + 1) // 2 + (q + 1) % 2
 
     # ----- landings and the feet's targets ---------------------------------------------------------------------------
     def _enter_phase(self, q: int, support: str, m: Measurement) -> None:
@@ -249,6 +322,7 @@ class WalkingController:
             i = 1 if support == "left" else 0
             self._swing_phase[i] = q
             self._landed[i] = self._late[i] = False
+            self._ground[i] = None
             planner = self.planner
             self._blend[i] = (self._z[i], planner.phase_start(q), planner.timeline.duration(q))
 
@@ -281,6 +355,18 @@ class WalkingController:
             if moved < tolerance and abs(math.remainder(landing.yaw - anchor[2], math.tau)) < 2.0 * tolerance:
                 return False  # where it was anchored: nothing to re-anchor
         self._landed[i] = True
+        if self._late[i] and t >= self._late_from[i]:
+            # Lowered to find the ground: stand where the sole met it. The target went below the plan because the
+            # foot was higher than planned when the swing ended (a body that rose or rolled, or a lower ground);
+            # the measured sole height is the ground's, and keeping the target's own depth instead would extend
+            # the stance leg, lift the body and make the next landing later still. The target returns to it over
+            # the single support this foot carries next (a loaded foot's target moved at the descent's speed made
+            # the ankle damping chatter).
+            limit = self.options.late_descent_limit
+            ground = min(0.0, max(-limit, landing.z))
+            stance = q + 1 if support == "double" else q
+            until = planner.phase_start(stance) + planner.timeline.duration(stance)
+            self._ground[i] = (self._z[i], ground, t, max(until, t + self.dt))
         self._late[i] = False
         if kind == "early":
             # Stand on it from now on where it landed; it goes on down with the plan (a stiff robot sags: most early
@@ -313,6 +399,13 @@ class WalkingController:
             elif self._late[i] and t >= self._late_from[i]:
                 limit = self.options.late_descent_limit
                 self._z[i] = max(self._z[i] - self.options.late_descent_speed * self.dt, -limit)
+            elif (ground := self._ground[i]) is not None:  # landed late: back to the ground's height
+                landed, level, start, until = ground
+                s = (t - start) / (until - start)
+                if s >= 1.0:
+                    self._z[i], self._ground[i] = level, None
+                else:
+                    self._z[i] = landed + (level - landed) * max(s, 0.0)
 
     def _foot_target(self, i: int, planned: list[float]) -> tuple[float, float, float, float]:
         """Foot ``i``'s target ``(x, y, z, yaw)`` before foot force control."""

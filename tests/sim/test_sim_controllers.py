@@ -208,7 +208,8 @@ def test_adaptive_early_touchdown_reanchors_and_switches_support():
     assert foot == pytest.approx((landing.x, landing.y, max(0.0, floor), landing.yaw), abs=1e-9)
 
 
-def test_adaptive_late_touchdown_lowers_the_foot_then_keeps_its_height():
+@pytest.mark.parametrize("ground", [-0.004, 0.0])
+def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_ground(ground):
     # Heights: ours only (no foot force control); late at once (no grace for the landing's detection).
     ctl = controller("adaptive", options=ControllerOptions(measurement_filter=0.0, foot=None, late_grace=0.0))
     start, duration, swing = first_swing(ctl)
@@ -228,9 +229,11 @@ def test_adaptive_late_touchdown_lowers_the_foot_then_keeps_its_height():
     steps = [a - b for a, b in itertools.pairwise(heights)]
     assert steps[0] == pytest.approx(options.late_descent_speed * DT, abs=1e-9)
     assert heights[-1] == pytest.approx(-options.late_descent_limit), "down to the limit, no further"
-    # It lands: re-anchored, and its target stays at the height it landed at.
+    # It lands with its sole at `ground` (m): re-anchored; its target goes back up to the measured ground over the
+    # single support it carries next, phase 3 (the target's own depth kept would extend the stance leg and lift the
+    # body).
     target = planner.footprints()[2]
-    landing = Landing(t, side, target.x - 0.01, target.y, -0.004, target.yaw, 0.0, 0.0, 40.0)
+    landing = Landing(t, side, target.x - 0.01, target.y, ground, target.yaw, 0.0, 0.0, 40.0)
     values, support, _ = planner.sample_values(t)
     out = ctl.tick(t, on_plan(t, values, support, landings=[landing], loaded=(True, True)))
     assert [e.detail for e in out.events if e.kind == "landing"] == ["late"]
@@ -238,15 +241,23 @@ def test_adaptive_late_touchdown_lowers_the_foot_then_keeps_its_height():
     assert planner.footprints()[2].x == pytest.approx(landing.x)
     assert out.support == "double"
     assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(-options.late_descent_limit)
-    # Through the next single support (phase 3), as the stance foot, it keeps that height; over its own next swing
+    landed_at, end = t, planner.phase_start(3) + planner.timeline.duration(3)
+    middle = 0.5 * (landed_at + end)
+    out, t = walk_to(ctl, middle + 0.5 * DT, t + DT)
+    halfway = 0.5 * (ground - options.late_descent_limit)
+    slope = (ground + options.late_descent_limit) / (end - landed_at)
+    assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(halfway, abs=slope * DT)
+    out, t = walk_to(ctl, end + DT, t)
+    assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(ground, abs=1e-12)
+    # Through the next double support (phase 4), as the stance foot, it keeps that height; over its own next swing
     # (phase 5) the height is blended out, so it lands at the plan's height.
-    out, t = walk_to(ctl, planner.phase_start(5), t + DT)
-    assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(-options.late_descent_limit)
+    out, t = walk_to(ctl, planner.phase_start(5), t)
+    assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(ground, abs=1e-12)
     middle = planner.phase_start(5) + 0.5 * planner.timeline.duration(5)
     values = planner.sample_values(middle)[0]
     out, t = walk_to(ctl, middle + DT, t)
     blended = (out.left_foot if swing == 0 else out.right_foot)[2] - values[15 + 4 * swing]
-    assert blended == pytest.approx(-0.5 * options.late_descent_limit, abs=1e-9)
+    assert blended == pytest.approx(0.5 * ground, abs=1e-9)
     out, t = walk_to(ctl, planner.phase_start(6) + DT, t)
     assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(0.0, abs=1e-9)
 
@@ -279,3 +290,32 @@ def test_step_limits_scale_with_the_robot_and_keep_the_soles_apart():
     assert ctl.options.step_adjustment == adjust
     with pytest.raises(ValueError, match="must be one of"):
         make_controller("stiff", CONFIG, None, SOLE, INFO)
+
+
+@pytest.mark.parametrize("outward", [True, False])
+def test_adaptive_keeps_the_plan_for_an_outward_dcm_error_in_single_support(outward):
+    # The first single support: F[1] carries it; an error away from the swing foot cannot be caught by any landing
+    # on the swing foot's side, so the plan under way is kept; toward the swing foot it replans from the measured
+    # state.
+    ctl, plan = controller("adaptive"), reference()
+    start, duration, _ = first_swing(ctl)
+    stance = ctl.planner.footprints()[1]
+    away = 1.0 if stance.side == "left" else -1.0
+    error = (0.0, 0.04 * (away if outward else -away))
+    before = ctl.planner.footprints()
+    events, worst = [], 0.0
+    for k in range(round((start + 0.3 * duration) / DT), round((start + 0.6 * duration) / DT)):
+        t = k * DT
+        values, support, _ = plan.sample_values(t)
+        if k == round((start + 0.3 * duration) / DT):
+            walk_to(ctl, t)
+        out = ctl.tick(t, on_plan(t, values, support, dcm_error=error))
+        events += out.events
+        worst = max(worst, math.dist(out.com[:2], (values[0], values[1])) - math.hypot(*out.com_offset))
+    kinds = {e.kind for e in events}
+    if outward:
+        assert "replan-skipped" in kinds and "replan" not in kinds
+        assert ctl.planner.footprints() == before
+        assert worst < 1e-9, "the IK's COM target is the plan's with the feedback law's correction"
+    else:
+        assert "replan" in kinds and "replan-skipped" not in kinds
