@@ -92,11 +92,14 @@ class PlanLayout:
     """What a replan needs to know about one plan shape: its operator and where its anchors come from."""
 
     __slots__ = (
-        "G", "G_eager", "_end_rows", "_zmp_rows", "anchor_phases", "anchor_sources", "durations", "first_kind",
-        "offsets",
+        "G", "G_eager", "_end_rows", "_variants", "_zmp_rows", "anchor_phases", "anchor_sources", "durations",
+        "first_kind", "key", "kinds", "offsets",
     )  # fmt: skip
 
     def __init__(self, operator: PlanOperator, kinds: tuple[str, ...]) -> None:
+        self.key = operator.key
+        self.kinds = kinds
+        self._variants: dict[tuple, tuple[list[PlanLayout], dict[int, np.ndarray]]] = {}
         self.G = operator.G
         self.G_eager = np.ascontiguousarray(operator.G[: 12 * EAGER_SEGMENTS])
         self.durations = operator.durations.tolist()
@@ -122,6 +125,26 @@ class PlanLayout:
             a, A, V, W = block[: DEGREE + 1], block[DEGREE + 1 : 2 * DEGREE + 2], block[-2], block[-1]
             rows = np.array([powers @ a, slopes @ a, ch * V + sh * W + powers @ A, w * (sh * V + ch * W) + slopes @ A])
             self._end_rows[j] = rows
+        return rows
+
+    def variants(self, segment: int, durations: tuple[float, ...]) -> list[PlanLayout]:
+        """This plan shape with segment ``segment`` lasting each of ``durations`` (s) instead: candidate step
+        timings. Built in one vectorised pass on first use and kept (a few per layout)."""
+        found = self._variants.get((segment, durations))
+        if found is None:
+            table = np.repeat(np.asarray(self.durations)[None], len(durations), axis=0)
+            table[:, segment] = durations
+            layouts = [PlanLayout(op, self.kinds) for op in PlanOperator.for_durations(self.key, table)]
+            found = self._variants[(segment, durations)] = (layouts, {})
+        return found[0]
+
+    def variant_zmp_rows(self, segment: int, durations: tuple[float, ...], samples: int) -> np.ndarray:
+        """The :meth:`zmp_rows` of every :meth:`variants` layout, stacked ``(D, samples, n_inputs)`` (kept)."""
+        layouts = self.variants(segment, durations)
+        stacked = self._variants[(segment, durations)][1]
+        rows = stacked.get(samples)
+        if rows is None:
+            rows = stacked[samples] = np.stack([layout.zmp_rows(samples) for layout in layouts])
         return rows
 
     def zmp_rows(self, samples: int) -> np.ndarray:

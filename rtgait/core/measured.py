@@ -24,7 +24,13 @@ from rtgait.core.batch import halfplane_margin, polygon_halfplanes
 from rtgait.core.footsteps import Footstep, Side, Stride
 from rtgait.core.pattern import MOVING_KINDS, PatternKey, PlanOperator
 from rtgait.core.sample import PlanRecord
-from rtgait.core.stepping import StepDecision, propose_landing
+from rtgait.core.stepping import (
+    StepDecision,
+    TimingOptions,
+    propose_landing,
+    shorter_remainders,
+    shorter_single_supports,
+)
 from rtgait.core.support import support_polygon
 
 if TYPE_CHECKING:
@@ -119,7 +125,7 @@ class MeasuredPlanning:
             raise RuntimeError(f"no foot is swinging at t={t} s")
         rel = t - self._t0
         pose, vel = phase.swing_state(rel, self.config.step_height)
-        self._swing_retarget = (phase.index, (rel, pose, vel))
+        self._swing_retarget = (phase.index, (rel, pose, vel, phase.lift_progress(rel)))
         return pose
 
     def _midphase_layout(self, q: int, remainder: float) -> PlanLayout:
@@ -223,9 +229,10 @@ class MeasuredPlanning:
         rows, zmp, before = self._free_segment_margin(halfplanes)
         if before >= adjust.required_margin:
             return None
+        timings = self._timing_options if self._adapts_timing() else None
         proposal = propose_landing(
             adjust, walk, q, t, self.phase_start, rows, zmp, halfplanes, plan.layout.anchor_phases,
-            lambda: self._freeze_swing(t)[:2],
+            lambda: self._freeze_swing(t)[:2], timings,
         )  # fmt: skip
         if proposal is None:
             if planned is not None:
@@ -235,6 +242,16 @@ class MeasuredPlanning:
         walk.move_landing(k, *landing)
         moved = math.hypot(landing[0] - nominal.x, landing[1] - nominal.y)
         reason = f"ZMP margin {before * 1e3:+.1f} mm: step {k} lands {moved:.3f} m away"
+        layout = None
+        if proposal.timing >= 0:
+            layout = self._timing_layouts(k, proposal.swinging)[proposal.timing]
+            walk.set_single_support(k, proposal.single_support)
+            if self._next_replan_phase is not None:  # the phases after step k's single support moved
+                self._next_replan_time = self.phase_start(self._next_replan_phase)
+            reason += (
+                f", {proposal.nominal_single_support - proposal.single_support:.3f} s sooner "
+                f"(single support {proposal.single_support:.3f} s)"
+            )
         n = walk.n_steps
         if not proposal.enough:
             reason += f"; no landing keeps the ZMP inside (best {proposal.margin * 1e3:+.1f} mm)"
@@ -245,11 +262,12 @@ class MeasuredPlanning:
             else:
                 reason += ": walking on from the planned state, the feedback law recovers"
         self._phase = None
-        self._reconnect(planned if planned is not None and not proposal.enough else None)
+        self._reconnect(planned if planned is not None and not proposal.enough else None, layout)
         after = self._free_segment_margin(halfplanes)[2]
         decision = StepDecision(
-            t, k, (nominal.x, nominal.y), landing, before, after, proposal.candidates, not proposal.enough, reason
-        )
+            t, k, (nominal.x, nominal.y), landing, before, after, proposal.candidates, not proposal.enough, reason,
+            proposal.single_support, proposal.nominal_single_support,
+        )  # fmt: skip
         last = self.step_adjustments[-1] if self.step_adjustments else None
         repeated = last is not None and last.step == k and math.dist(last.landing, landing) < 1e-3 and last.emergency
         if not repeated:  # a disturbance that persists re-decides the same capture step: log it once
@@ -257,15 +275,55 @@ class MeasuredPlanning:
             self.step_adjustment_count += 1
         return decision
 
-    def _reconnect(self, state: list[float] | None = None) -> None:
+    def _timing_durations(self, k: int, swinging: bool) -> tuple[int, tuple[float, ...], np.ndarray] | None:
+        """The candidate timings of step ``k`` for the plan under way: the plan's segment whose duration changes,
+        its candidate durations (s) and the step's single support under each (s); ``None`` when the step cannot be
+        shortened. Swinging, the segment is the free one, the rest of the single support
+        (:func:`~rtgait.core.stepping.shorter_remainders`); else the step's whole single support
+        (:func:`~rtgait.core.stepping.shorter_single_supports`)."""
+        adjust = self.config.step_adjustment
+        plan = self._plan
+        if swinging:
+            durations = shorter_remainders(adjust, plan.elapsed, plan.durations[0])
+            return None if durations is None else (0, durations, plan.elapsed + np.array(durations))
+        segment = 2 * k - 1 - plan.phase0
+        if segment >= len(plan.durations) or plan.layout.kinds[segment] != "single":
+            return None
+        durations = shorter_single_supports(adjust, plan.durations[segment])
+        return None if durations is None else (segment, durations, np.array(durations))
+
+    def _adapts_timing(self) -> bool:
+        """Step adjustment may change step timings (not with the auto connection: it needs uniform timing)."""
+        adjust = self.config.step_adjustment
+        return adjust is not None and adjust.adapt_timing and self.config.connection != "auto"
+
+    def _timing_layouts(self, k: int, swinging: bool) -> list[PlanLayout]:
+        """The plan under way's layout under each candidate timing of step ``k`` (:meth:`_timing_durations`)."""
+        segment, durations, _ = self._timing_durations(k, swinging)
+        return self._plan.layout.variants(segment, durations)
+
+    def _timing_options(self, k: int, swinging: bool) -> TimingOptions | None:
+        """What :func:`~rtgait.core.stepping.propose_landing` weighs for a new timing of step ``k``: the plans
+        under the candidate timings, from the same inputs ``y`` (the state and the footprints do not change; the
+        operators do: built ahead for the plans of double-support starts, in one batch per plan shape)."""
+        found = self._timing_durations(k, swinging)
+        if found is None:
+            return None
+        segment, durations, singles = found
+        plan = self._plan
+        rows = plan.layout.variant_zmp_rows(segment, durations, self.config.step_adjustment.samples)
+        return TimingOptions(singles, rows, rows @ plan.y)
+
+    def _reconnect(self, state: list[float] | None = None, layout: PlanLayout | None = None) -> None:
         """Remake the plan under way at its own start, after its footprints (or the walk's length) changed at that
-        instant: from its own initial state, or from ``state`` (``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]``)."""
+        instant: from its own initial state, or from ``state`` (``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]``);
+        with ``layout`` (after a new step timing), in that shape."""
         plan = self._plan
         q, elapsed = plan.phase0, plan.elapsed
         if self._next_replan_phase is not None:
             self._prepare_layouts(self._next_replan_phase)
-        if elapsed == 0.0 and self.timeline.kind(q) in MOVING_KINDS:
+        if layout is None and elapsed == 0.0 and self.timeline.kind(q) in MOVING_KINDS:
             layout = self._layout(q, self._plan_span(q))
-        else:
+        elif layout is None:
             layout = self._midphase_layout(q, plan.durations[0])
         self._connect(plan.t_start, q, layout, plan.y[:4].ravel().tolist() if state is None else state, elapsed)

@@ -50,7 +50,7 @@ from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey, PlanOperator
 from rtgait.core.phases import PhaseInfo, SwingRetarget, phase_info
 from rtgait.core.sample import SAMPLE_FIELDS, GaitSample, PlanRecord
 from rtgait.core.spline import PiecewisePolynomial
-from rtgait.core.stepping import StepDecision
+from rtgait.core.stepping import StepDecision, shorter_single_supports
 from rtgait.core.support import signed_margin, support_polygon
 from rtgait.core.walk import (
     CommandClampedWarning,
@@ -332,6 +332,14 @@ class OnlinePlanner(MeasuredPlanning):
         n = self.n_steps
         last_replan = first_phase + 2 if n is None else 2 * n
         self._layout_at = {q: self._layout(q, self._plan_span(q)) for q in range(first_phase, last_replan + 1, 2)}
+        if self._adapts_timing():
+            # The candidate timings of the step after each double-support start, ahead (one batch per plan shape).
+            adjust = self.config.step_adjustment
+            for layout in self._layout_at.values():
+                if len(layout.kinds) > 1 and layout.kinds[1] == "single":
+                    durations = shorter_single_supports(adjust, layout.durations[1])
+                    if durations is not None:
+                        layout.variant_zmp_rows(1, durations, adjust.samples)
 
     def _layout(self, first: int, last: int) -> PlanLayout:
         """Operator and anchor bookkeeping for the plan over phases ``first..last`` (cached by plan shape and, when
@@ -341,7 +349,9 @@ class OnlinePlanner(MeasuredPlanning):
         # The phase kinds of a plan depend only on these three facts, so they key the cache cheaply; with one
         # timing for every step they also fix the durations.
         shape: tuple = (first == 0, last - first, n is not None and last == 2 * n + 1)
-        if not timeline.uniform:
+        if not timeline.uniform or self._adapts_timing():
+            # With step timing adaptation the walk may turn per-step at any decision: key by the durations from
+            # the start, so that the layouts built so far are found again then.
             shape = (*shape, timeline.durations(first, last))
         layout = self._layouts.get(shape)
         if layout is None:

@@ -15,8 +15,14 @@ Why it is cheap: moving the landing ``F[k+1]`` by ``delta`` moves every later fo
 are relative), so every anchor of the plan moves by ``w_a delta`` with ``w_a`` in {0, 1/2, 1}, and the ZMP of the
 free segment at time ``t_i`` moves by ``g_i delta`` with ``g_i = sum_a M[i, a] w_a``. For ``C`` candidates and
 ``T`` sample times the margins are one ``(C, T, 2)`` array against the polygon's half-planes: a thousand
-candidates in a few hundred microseconds. (Changing the single-support duration too, as Morisawa et al. 2006
-do, needs a different operator per duration; it is not done here.)
+candidates in a few hundred microseconds.
+
+Step timing (Morisawa et al. 2006), with ``adapt_timing``: the single support of the step being adjusted may also
+end sooner, a landing sooner moving the ZMP's anchors sooner. A new duration changes the plan's operator, not its
+inputs, so each candidate duration ``d`` has its own rows ``M_d`` (built in one batch, ahead where the durations
+are known ahead, and kept with the plan's layout); the landings are then weighed against every duration at once,
+``(D, C)`` margins, and the choice minimises ``|delta|^2 + (time_cost * (d - d_nominal))^2`` among the candidates
+that reach the margin (``docs/closed_loop.md``).
 """
 
 from __future__ import annotations
@@ -51,6 +57,16 @@ class StepAdjustment:
         on_failure: when no candidate reaches ``required_margin``, the best one is taken and then ``"continue"``
             walks on (the default: at the pendulum level it recovers more, see ``docs/closed_loop.md``) or
             ``"stop"`` stops the walk after that step (an emergency sequence: capture step, then stop).
+        adapt_timing: also choose the single-support duration of the step being adjusted (Morisawa et al. 2006):
+            ``durations`` candidates evenly from the shortest allowed to the nominal one (nominal included), so
+            ``grid**2 * durations`` candidates in all. Off by default (the decisions are then those of landings
+            alone). Not with ``connection="auto"`` (it needs one timing for every step): ignored there.
+        durations: candidate single-support durations per decision, nominal included (2..16).
+        min_single_support: shortest single support a step may be given (s). A swinging foot also never lands
+            sooner than ``min_time_to_touchdown`` from the decision.
+        time_cost: how many metres of landing departure one second of timing change weighs (m/s): the departure
+            is ``|delta|^2 + (time_cost * dT)^2``. 0.5 m/s, about a walking speed: shortening a step by ``dT``
+            moves the body about as much as landing ``0.5 dT`` elsewhere.
     """
 
     sole: SoleRect
@@ -63,6 +79,10 @@ class StepAdjustment:
     grid: int = 32
     samples: int = 16
     on_failure: str = "continue"
+    adapt_timing: bool = False
+    durations: int = 4
+    min_single_support: float = 0.4
+    time_cost: float = 0.5
 
     def __post_init__(self) -> None:
         if not isinstance(self.sole, SoleRect):
@@ -80,9 +100,15 @@ class StepAdjustment:
                 raise ValueError(f"step_adjustment.{name} must be within [0, 1], got {value}")
         if self.on_failure not in ("continue", "stop"):
             raise ValueError(f"step_adjustment.on_failure must be 'continue' or 'stop', got {self.on_failure!r}")
-        for name, low, high in (("grid", 2, 200), ("samples", 2, 200)):
+        if not isinstance(self.adapt_timing, bool):
+            raise ValueError(f"step_adjustment.adapt_timing must be true or false, got {self.adapt_timing!r}")
+        for name, low, high in (("min_single_support", 0.05, 5.0), ("time_cost", 0.0, 100.0)):
             value = getattr(self, name)
-            if not (isinstance(value, int) and low <= value <= high):
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and low <= value <= high):
+                raise ValueError(f"step_adjustment.{name} must be within [{low:g}, {high:g}], got {value!r}")
+        for name, low, high in (("grid", 2, 200), ("samples", 2, 200), ("durations", 2, 16)):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and low <= value <= high):
                 raise ValueError(f"step_adjustment.{name} must be an integer in {low}..{high}, got {value!r}")
 
 
@@ -98,6 +124,9 @@ class StepDecision(NamedTuple):
         candidates: candidates evaluated.
         emergency: no candidate kept the ZMP inside; the walk stops after this step.
         reason: one line for the log.
+        single_support: the step's single-support duration now (s).
+        nominal_single_support: the step's single-support duration before the decision (s); differs from
+            ``single_support`` only with ``adapt_timing``.
     """
 
     t: float
@@ -109,6 +138,8 @@ class StepDecision(NamedTuple):
     candidates: int
     emergency: bool
     reason: str
+    single_support: float = math.nan
+    nominal_single_support: float = math.nan
 
 
 def candidate_landings(adjust: StepAdjustment, stance: Footstep, nominal: Footstep) -> np.ndarray:
@@ -137,7 +168,8 @@ def choose_landing(
     swing_from: tuple[float, float],
     time_left: float,
 ) -> tuple[np.ndarray, float, bool] | None:
-    """The landing to take among ``candidates`` ``(C, 2)``, its margin (m) and whether it reaches the required one.
+    """The landing to take among ``candidates`` ``(C, 2)``, its margin (m) and whether it reaches the required one:
+    :func:`choose_step` with the nominal timing alone.
 
     Args:
         nominal: the landing of the walk as commanded (m).
@@ -148,35 +180,107 @@ def choose_landing(
 
     Returns ``None`` when no candidate can be reached in the time left.
     """
-    reach = adjust.max_swing_speed * time_left
-    reachable = np.hypot(candidates[:, 0] - swing_from[0], candidates[:, 1] - swing_from[1]) <= reach
+    choice = choose_step(
+        adjust, candidates, nominal, zmp[None], gain[None], halfplanes, swing_from, np.array([time_left]),
+        np.zeros(1),
+    )  # fmt: skip
+    return None if choice is None else choice[1:]
+
+
+def choose_step(
+    adjust: StepAdjustment,
+    candidates: np.ndarray,
+    nominal: tuple[float, float],
+    zmp: np.ndarray,
+    gain: np.ndarray,
+    halfplanes: tuple[np.ndarray, np.ndarray],
+    swing_from: tuple[float, float],
+    time_left: np.ndarray,
+    time_change: np.ndarray,
+) -> tuple[int, np.ndarray, float, bool] | None:
+    """The timing and landing to take among ``D`` timings and ``candidates`` ``(C, 2)``: the timing's index, the
+    landing, its margin (m) and whether that reaches ``required_margin``.
+
+    Args:
+        zmp: the free segment's ZMP with the nominal landing under each timing, ``(D, T, 2)`` (m).
+        gain: how much that ZMP moves per metre the landing moves, under each timing, ``(D, T)``.
+        time_left: until the touch-down under each timing (s), ``(D,)``: a landing is reachable if the swing foot
+            covers the distance from ``swing_from`` (m) at ``max_swing_speed`` in that time.
+        time_change: each timing's change of the single support (s), ``(D,)``; 0 for the nominal one, which
+            comes first (of equal departures the first candidate wins, so the nominal timing does).
+
+    The margin of candidate ``(d, c)`` is ``min_t min_k b_k - n_k . (zmp[d, t] + gain[d, t] delta_c)``; among the
+    candidates reaching ``required_margin`` the least departure ``|delta_c|^2 + (time_cost time_change_d)^2``
+    wins; when none does, the largest margin, and of candidates within a millimetre of it the least departure.
+    Returns ``None`` when no candidate can be reached in time.
+    """
+    distance = np.hypot(candidates[:, 0] - swing_from[0], candidates[:, 1] - swing_from[1])
+    reachable = distance[None, :] <= adjust.max_swing_speed * np.asarray(time_left)[:, None]  # (D, C)
     if not reachable.any():
         return None
-    options = candidates[reachable]
-    delta = options - np.asarray(nominal)
-    # margin(c, t, k) = b_k - n_k . (zmp_t + g_t delta_c) = A[t, k] - g_t D[c, k]: two small products, one
-    # broadcast, instead of moving every (candidate, time) point through the polygon.
+    delta = candidates - np.asarray(nominal)
+    # margin(d, c, t, k) = b_k - n_k . (zmp_dt + g_dt delta_c) = A[d, t, k] - g_dt D[c, k]: two small products and
+    # one broadcast per edge, instead of moving every (timing, candidate, time) point through the polygon.
     normals, offsets = halfplanes
-    base = offsets[None, :] - zmp @ normals.T  # (T, K)
+    base = offsets - zmp @ normals.T  # (D, T, K)
     along = delta @ normals.T  # (C, K)
-    margin = np.full(len(options), np.inf)
-    for k in range(base.shape[1]):  # per edge: (C, T) stays in cache; a (C, T, K) broadcast is twice as slow
-        np.minimum(margin, (base[None, :, k] - np.multiply.outer(along[:, k], gain)).min(axis=1), out=margin)
-    departure = np.einsum("cd,cd->c", delta, delta)
+    margin = np.full(reachable.shape, np.inf)
+    for k in range(base.shape[-1]):  # per edge: (D, C, T) stays in cache; a (D, C, T, K) broadcast is slower
+        spread = np.multiply(along[None, :, k, None], gain[:, None, :])  # (D, C, T)
+        np.minimum(margin, (base[:, None, :, k] - spread).min(axis=2), out=margin)
+    margin[~reachable] = -np.inf
+    timing_departure = (adjust.time_cost * np.asarray(time_change))[:, None] ** 2
+    departure = np.einsum("cd,cd->c", delta, delta)[None, :] + timing_departure
     enough = margin >= adjust.required_margin
     if enough.any():
         best = int(np.argmin(np.where(enough, departure, np.inf)))
     else:
-        # Nothing is enough: the largest margin, and of landings within a millimetre of it the nearest one (the
+        # Nothing is enough: the largest margin, and of candidates within a millimetre of it the nearest one (the
         # margin is often flat along one axis of the box).
         near_best = margin >= margin.max() - 1e-3
         best = int(np.argmin(np.where(near_best, departure, np.inf)))
-    return options[best], float(margin[best]), bool(enough[best])
+    d, c = divmod(best, margin.shape[1])
+    return d, candidates[c], float(margin[d, c]), bool(enough[d, c])
+
+
+def shorter_single_supports(adjust: StepAdjustment, nominal: float) -> tuple[float, ...] | None:
+    """Candidate single supports (s) of a step that has not lifted off, nominal ``nominal`` (s): ``durations``
+    evenly spaced from ``min_single_support`` to the nominal one, the nominal one left out (it is the plan as
+    made); rounded to 1 ns (they key the operator cache). ``None`` if the step cannot be shortened."""
+    if adjust.min_single_support > nominal - 1e-3:
+        return None
+    return tuple(np.round(np.linspace(adjust.min_single_support, nominal, adjust.durations)[:-1], 9).tolist())
+
+
+def shorter_remainders(adjust: StepAdjustment, elapsed: float, remainder: float) -> tuple[float, ...] | None:
+    """Candidate rests (s) of a single support ``elapsed`` s old with ``remainder`` s to go: from the latest of
+    ``min_time_to_touchdown`` and ``min_single_support - elapsed`` up to the nominal rest, as in
+    :func:`shorter_single_supports`."""
+    low = max(adjust.min_time_to_touchdown, adjust.min_single_support - elapsed)
+    if low > remainder - 1e-3:
+        return None
+    return tuple(np.round(np.linspace(low, remainder, adjust.durations)[:-1], 9).tolist())
+
+
+class TimingOptions(NamedTuple):
+    """Other single-support durations the step being adjusted may take, as the planner evaluates them.
+
+    Attributes:
+        single_support: each candidate's single-support duration of the step (s), ``(D,)``.
+        rows: each candidate plan's free-segment ZMP rows ``M_d`` (``zmp = M_d @ y``), ``(D, T, n_inputs)``.
+        zmp: each candidate plan's free-segment ZMP with the nominal landing, ``(D, T, 2)`` (m).
+    """
+
+    single_support: np.ndarray
+    rows: np.ndarray
+    zmp: np.ndarray
 
 
 class LandingProposal(NamedTuple):
     """Where step adjustment would land ``step``: the landing ``(x, y)`` (m), the margin it predicts (m), whether
-    that reaches the required margin, how many candidates were weighed, and whether the step is swinging now."""
+    that reaches the required margin, how many candidates were weighed, whether the step is swinging now, its
+    single-support duration (s) and nominal one, and which of the planner's :class:`TimingOptions` it takes
+    (``-1``: the nominal timing)."""
 
     step: int
     nominal: Footstep
@@ -185,6 +289,9 @@ class LandingProposal(NamedTuple):
     enough: bool
     candidates: int
     swinging: bool
+    single_support: float = math.nan
+    nominal_single_support: float = math.nan
+    timing: int = -1
 
 
 def propose_landing(
@@ -198,14 +305,16 @@ def propose_landing(
     halfplanes: tuple[np.ndarray, np.ndarray],
     anchor_phases: Sequence[int],
     swing_position: Callable[[], tuple[float, float]],
+    timings: Callable[[int, bool], TimingOptions | None] | None = None,
 ) -> LandingProposal | None:
-    """The landing of the next step that can still change, for a plan starting at phase ``q`` whose free segment's
-    ZMP at the sample times is ``zmp = rows @ y`` (m); ``None`` if no step can move (the last one has landed, or no
-    candidate can be reached in time).
+    """The landing (and, with ``timings``, the single-support duration) of the next step that can still change,
+    for a plan starting at phase ``q`` whose free segment's ZMP at the sample times is ``zmp = rows @ y`` (m);
+    ``None`` if no step can move (the last one has landed, or no candidate can be reached in time).
 
     The step is the one swinging in a single support, unless it lands within ``min_time_to_touchdown`` of ``t``
     (s), else the next one to lift off. ``phase_start(p)`` is the absolute start of phase ``p`` (s);
-    ``swing_position()`` where the swinging foot is now (m).
+    ``swing_position()`` where the swinging foot is now (m); ``timings(step, swinging)`` the other durations the
+    planner offers for that step (:class:`TimingOptions`), or ``None``.
     """
     kind = walk.timeline.kind(q)
     k = (q + 1) // 2 if kind == "single" else q // 2 + 1
@@ -226,22 +335,36 @@ def propose_landing(
     # Every anchor resting on F[k + 1] or later moves with the landing; one between the final feet, half as much.
     weights = np.array([(a >= k + 1) + (b >= k + 1) for a, b in walk.anchor_sources(q, anchor_phases)]) * 0.5
     candidates = candidate_landings(adjust, walk.footprint(k), nominal)
-    choice = choose_landing(
-        adjust, candidates, (nominal.x, nominal.y), zmp, rows[:, 4:] @ weights, halfplanes, swing_from, touchdown - t
+    single = walk.timeline.duration(2 * k - 1)
+    options = timings(k, swinging) if timings is not None else None
+    if options is None:
+        zmps, gains, singles = zmp[None], (rows[:, 4:] @ weights)[None], np.array([single])
+    else:
+        zmps = np.concatenate((zmp[None], options.zmp))
+        gains = np.concatenate(((rows[:, 4:] @ weights)[None], options.rows[:, :, 4:] @ weights))
+        singles = np.concatenate(([single], options.single_support))
+    change = singles - single  # a shorter single support lands that much sooner
+    choice = choose_step(
+        adjust, candidates, (nominal.x, nominal.y), zmps, gains, halfplanes, swing_from, touchdown - t + change, change
     )
     if choice is None:
         return None
-    landing, margin, enough = choice
+    d, landing, margin, enough = choice
     return LandingProposal(
-        k, nominal, (float(landing[0]), float(landing[1])), margin, enough, len(candidates), swinging
-    )
+        k, nominal, (float(landing[0]), float(landing[1])), margin, enough, len(candidates) * len(singles), swinging,
+        float(singles[d]), single, d - 1,
+    )  # fmt: skip
 
 
 __all__ = [
     "LandingProposal",
     "StepAdjustment",
     "StepDecision",
+    "TimingOptions",
     "candidate_landings",
     "choose_landing",
+    "choose_step",
     "propose_landing",
+    "shorter_remainders",
+    "shorter_single_supports",
 ]
