@@ -106,6 +106,7 @@ class OnlinePlanner(MeasuredPlanning):
         )
         self._layouts: dict[tuple, PlanLayout] = {}
         self._layout_at: dict[int, PlanLayout] = {}  # the layout of each regular replan still to come, by phase
+        self._prepared: tuple | None = None  # (first phase, timeline, config) _layout_at was prepared for
         self._midphase_layouts: dict[PatternKey, PlanLayout] = {}
         self._plan: ActivePlan | None = None
         self._next_replan_time = math.inf
@@ -310,6 +311,7 @@ class OnlinePlanner(MeasuredPlanning):
         self._replaced()
         self._next_replan_phase = 0  # the first plan is made by the first sample, like every later one
         self._next_replan_time = self._t0
+        self._prepared = None
         self._prepare_layouts(0)
 
     def _plan_span(self, q: int) -> int:
@@ -328,28 +330,29 @@ class OnlinePlanner(MeasuredPlanning):
 
     def _prepare_layouts(self, first_phase: int) -> None:
         """Build the operators of every plan shape still to come (with per-step timings: of every shape and
-        durations), so that no replan pays for one (a fraction of a millisecond each, once per shape)."""
+        durations), so that no replan pays for one (a fraction of a millisecond each, once per shape).
+
+        Nothing to do when neither the first phase, the timeline (its length and timings: a new one whenever they
+        change) nor the configuration changed since the last call: step adjustment calls this at every decision."""
+        timeline, prepared = self.timeline, self._prepared
+        if prepared is not None and prepared == (first_phase, timeline, self.config):
+            return
         n = self.n_steps
         last_replan = first_phase + 2 if n is None else 2 * n
         self._layout_at = {q: self._layout(q, self._plan_span(q)) for q in range(first_phase, last_replan + 1, 2)}
-        if self._adapts_timing():
-            # The candidate timings of the step after each double-support start, ahead (one batch per plan shape).
-            adjust = self.config.step_adjustment
-            for layout in self._layout_at.values():
-                if len(layout.kinds) > 1 and layout.kinds[1] == "single":
-                    durations = shorter_single_supports(adjust, layout.durations[1])
-                    if durations is not None:
-                        layout.variant_zmp_rows(1, durations, adjust.samples)
+        self._prepared = (first_phase, timeline, self.config)
 
     def _layout(self, first: int, last: int) -> PlanLayout:
         """Operator and anchor bookkeeping for the plan over phases ``first..last`` (cached by plan shape and, when
-        steps have their own timing, by the phases' durations too)."""
+        steps have their own timing, by the phases' durations too). With step timing adaptation, a new layout
+        also gets the operators of the candidate timings of the step that follows (one batch, built ahead)."""
         n = self.n_steps
         timeline = self.timeline
         # The phase kinds of a plan depend only on these three facts, so they key the cache cheaply; with one
         # timing for every step they also fix the durations.
         shape: tuple = (first == 0, last - first, n is not None and last == 2 * n + 1)
-        if not timeline.uniform or self._adapts_timing():
+        adapts = self._adapts_timing()
+        if not timeline.uniform or adapts:
             # With step timing adaptation the walk may turn per-step at any decision: key by the durations from
             # the start, so that the layouts built so far are found again then.
             shape = (*shape, timeline.durations(first, last))
@@ -363,8 +366,12 @@ class OnlinePlanner(MeasuredPlanning):
                 first_degree=self.config.first_degree,
             )
             layout = self._layouts[shape] = PlanLayout(PlanOperator(key), kinds)
+            if adapts and len(kinds) > 1 and kinds[1] == "single":
+                adjust = self.config.step_adjustment
+                durations = shorter_single_supports(adjust, layout.durations[1])
+                if durations is not None:
+                    layout.variant_zmp_rows(1, durations, adjust.samples)
         return layout
-
 
     def _state_at_phase_start(self, q: int) -> np.ndarray | list[float]:
         """``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]`` at the start of phase ``q`` (m, m/s).

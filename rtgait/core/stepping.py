@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -146,16 +147,24 @@ def candidate_landings(adjust: StepAdjustment, stance: Footstep, nominal: Footst
     """Grid of landing points ``(grid**2, 2)`` (m) in the stride box around ``stance``, oriented along the mean
     heading of the stance and the nominal landing (as :func:`~rtgait.core.footsteps.place_step` measures a
     stride)."""
-    g = adjust.grid
-    along = np.linspace(-adjust.max_length, adjust.max_length, g)
-    lateral = np.linspace(adjust.min_width, adjust.max_width, g)
-    if nominal.side == "right":
-        lateral = -lateral
-    a, b = np.meshgrid(along, lateral, indexing="ij")
+    local = _stride_box_grid(adjust.max_length, adjust.min_width, adjust.max_width, adjust.grid, nominal.side)
     heading = stance.yaw + 0.5 * math.remainder(nominal.yaw - stance.yaw, 2.0 * math.pi)
     c, s = math.cos(heading), math.sin(heading)
-    local = np.stack([a.ravel(), b.ravel()], axis=1)
     return local @ np.array([[c, s], [-s, c]]) + np.array([stance.x, stance.y])
+
+
+@lru_cache(maxsize=64)
+def _stride_box_grid(max_length: float, min_width: float, max_width: float, grid: int, side: str) -> np.ndarray:
+    """The candidate grid in the stance foot's frame, ``(grid**2, 2)`` (m, read-only): along, then lateral
+    (toward the landing's side)."""
+    along = np.linspace(-max_length, max_length, grid)
+    lateral = np.linspace(min_width, max_width, grid)
+    if side == "right":
+        lateral = -lateral
+    a, b = np.meshgrid(along, lateral, indexing="ij")
+    local = np.stack([a.ravel(), b.ravel()], axis=1)
+    local.setflags(write=False)
+    return local
 
 
 def choose_landing(
@@ -222,12 +231,18 @@ def choose_step(
     # margin(d, c, t, k) = b_k - n_k . (zmp_dt + g_dt delta_c) = A[d, t, k] - g_dt D[c, k]: two small products and
     # one broadcast per edge, instead of moving every (timing, candidate, time) point through the polygon.
     normals, offsets = halfplanes
-    base = offsets - zmp @ normals.T  # (D, T, K)
-    along = delta @ normals.T  # (C, K)
+    # Laid out (K, T, D, C) so that the minimum over the sample times is a reduction over the leading axis (fast
+    # elementwise minima of contiguous rows, not a short reduction per candidate), one edge at a time (an edge's
+    # (T, D, C) block stays in cache).
+    base = np.ascontiguousarray((offsets - zmp @ normals.T).transpose(2, 1, 0))[..., None]  # (K, T, D, 1)
+    along = np.ascontiguousarray((delta @ normals.T).T)  # (K, C)
+    spread = np.ascontiguousarray(np.asarray(gain).T)[:, :, None]  # (T, D, 1)
     margin = np.full(reachable.shape, np.inf)
-    for k in range(base.shape[-1]):  # per edge: (D, C, T) stays in cache; a (D, C, T, K) broadcast is slower
-        spread = np.multiply(along[None, :, k, None], gain[:, None, :])  # (D, C, T)
-        np.minimum(margin, (base[:, None, :, k] - spread).min(axis=2), out=margin)
+    block = np.empty((spread.shape[0], *reachable.shape))
+    for k in range(base.shape[0]):
+        np.multiply(spread, along[k], out=block)
+        np.subtract(base[k], block, out=block)
+        np.minimum(margin, np.minimum.reduce(block, axis=0), out=margin)
     margin[~reachable] = -np.inf
     timing_departure = (adjust.time_cost * np.asarray(time_change))[:, None] ** 2
     departure = np.einsum("cd,cd->c", delta, delta)[None, :] + timing_departure
@@ -247,19 +262,23 @@ def shorter_single_supports(adjust: StepAdjustment, nominal: float) -> tuple[flo
     """Candidate single supports (s) of a step that has not lifted off, nominal ``nominal`` (s): ``durations``
     evenly spaced from ``min_single_support`` to the nominal one, the nominal one left out (it is the plan as
     made); rounded to 1 ns (they key the operator cache). ``None`` if the step cannot be shortened."""
-    if adjust.min_single_support > nominal - 1e-3:
-        return None
-    return tuple(np.round(np.linspace(adjust.min_single_support, nominal, adjust.durations)[:-1], 9).tolist())
+    return _evenly(adjust.min_single_support, nominal, adjust.durations)
 
 
 def shorter_remainders(adjust: StepAdjustment, elapsed: float, remainder: float) -> tuple[float, ...] | None:
     """Candidate rests (s) of a single support ``elapsed`` s old with ``remainder`` s to go: from the latest of
     ``min_time_to_touchdown`` and ``min_single_support - elapsed`` up to the nominal rest, as in
     :func:`shorter_single_supports`."""
-    low = max(adjust.min_time_to_touchdown, adjust.min_single_support - elapsed)
-    if low > remainder - 1e-3:
+    return _evenly(max(adjust.min_time_to_touchdown, adjust.min_single_support - elapsed), remainder, adjust.durations)
+
+
+def _evenly(low: float, nominal: float, count: int) -> tuple[float, ...] | None:
+    """``count`` values evenly from ``low`` to ``nominal`` without the last, rounded to 1 ns; ``None`` if ``low``
+    is not at least 1 ms below ``nominal`` (plain floats: this runs at every decision and replan)."""
+    if low > nominal - 1e-3:
         return None
-    return tuple(np.round(np.linspace(low, remainder, adjust.durations)[:-1], 9).tolist())
+    step = (nominal - low) / (count - 1)
+    return tuple(round(low + i * step, 9) for i in range(count - 1))
 
 
 class TimingOptions(NamedTuple):
