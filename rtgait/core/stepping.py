@@ -88,11 +88,10 @@ class StepAdjustment:
     def __post_init__(self) -> None:
         if not isinstance(self.sole, SoleRect):
             raise ValueError("step_adjustment.sole must be a SoleRect")
-        positive = ("max_length", "min_width", "max_width", "max_swing_speed")
-        for name in positive:
+        for name, high in (("max_length", 2.0), ("min_width", 2.0), ("max_width", 2.0), ("max_swing_speed", 20.0)):
             value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 < value <= 2.0):
-                raise ValueError(f"step_adjustment.{name} must be within (0, 2], got {value}")
+            if not (math.isfinite(value) and 0.0 < value <= high):
+                raise ValueError(f"step_adjustment.{name} must be within (0, {high:g}], got {value}")
         if self.min_width >= self.max_width:
             raise ValueError(f"step_adjustment.min_width ({self.min_width}) must be < max_width ({self.max_width})")
         for name in ("min_time_to_touchdown", "required_margin"):
@@ -111,6 +110,63 @@ class StepAdjustment:
             value = getattr(self, name)
             if not (isinstance(value, int) and not isinstance(value, bool) and low <= value <= high):
                 raise ValueError(f"step_adjustment.{name} must be an integer in {low}..{high}, got {value!r}")
+
+
+STEPPING_KEYS = (
+    "max_length", "min_width", "max_width", "max_swing_speed", "min_time_to_touchdown", "min_single_support",
+)  # fmt: skip
+"""The limits of a robot's stepping (:class:`SteppingLimits`), as a robot description's ``[stepping]`` table names
+them."""
+
+
+@dataclass(frozen=True)
+class SteppingLimits:
+    """What a robot's legs allow step adjustment (a robot description's ``[stepping]`` table; SI units).
+
+    Attributes:
+        max_length: forward and backward reach of a landing from the stance foot (m).
+        min_width: least lateral distance between the two foot frames (m): the feet never cross, and with soles
+            ``inner`` wide toward each other their inner edges stay ``min_width - 2 inner`` apart.
+        max_width: largest lateral distance between the foot frames (m).
+        max_swing_speed: largest average horizontal speed of the swing foot (m/s).
+        min_time_to_touchdown: no landing or timing changes closer than this to touch-down (s).
+        min_single_support: shortest single support step timing adaptation may give a step (s).
+
+    The defaults are :class:`StepAdjustment`'s (an HRP-2-like robot, COM 0.8 m high).
+    """
+
+    max_length: float = 0.35
+    min_width: float = 0.12
+    max_width: float = 0.45
+    max_swing_speed: float = 1.5
+    min_time_to_touchdown: float = 0.2
+    min_single_support: float = 0.4
+
+    def __post_init__(self) -> None:
+        # (lowest, highest, unit, lowest allowed itself): lengths and the speed must be positive.
+        ranges = {"max_length": (0.0, 2.0, "m", False), "min_width": (0.0, 2.0, "m", False),
+                  "max_width": (0.0, 2.0, "m", False), "max_swing_speed": (0.0, 20.0, "m/s", False),
+                  "min_time_to_touchdown": (0.0, 1.0, "s", True), "min_single_support": (0.05, 5.0, "s", True)}
+        for name, (low, high, unit, closed) in ranges.items():
+            value = getattr(self, name)
+            number = not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+            if not (number and (low <= value if closed else low < value) and value <= high):
+                interval = f"{'[' if closed else '('}{low:g}, {high:g}]"
+                raise ValueError(f"stepping.{name} must be a number within {interval} {unit}, got {value!r}")
+        if self.min_width >= self.max_width:
+            raise ValueError(f"stepping.min_width ({self.min_width}) must be < max_width ({self.max_width})")
+
+    @classmethod
+    def from_table(cls, table: dict) -> SteppingLimits:
+        """From a ``[stepping]`` table (keys :data:`STEPPING_KEYS`, all optional: the defaults fill in)."""
+        unknown = sorted(set(table) - set(STEPPING_KEYS))
+        if unknown:
+            raise ValueError(f"stepping: unknown key {unknown[0]!r} (known: {', '.join(STEPPING_KEYS)})")
+        return cls(**table)
+
+    def adjustment(self, sole: SoleRect, **options) -> StepAdjustment:
+        """The :class:`StepAdjustment` with these limits for ``sole`` (its other settings from ``options``)."""
+        return StepAdjustment(sole, **{name: getattr(self, name) for name in STEPPING_KEYS}, **options)
 
 
 class StepDecision(NamedTuple):
@@ -376,9 +432,11 @@ def propose_landing(
 
 
 __all__ = [
+    "STEPPING_KEYS",
     "LandingProposal",
     "StepAdjustment",
     "StepDecision",
+    "SteppingLimits",
     "TimingOptions",
     "candidate_landings",
     "choose_landing",
