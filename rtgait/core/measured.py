@@ -74,10 +74,10 @@ class MeasuredPlanning:
         plan = self._plan
         if threshold is None or plan is None or self.config.feedback != "measured" or t < self._latest:
             return
-        planned = plan.state(*plan.locate(t), self.w)
         w = self.w
-        ex = values[1] + values[3] / w - planned[4] - planned[6] / w
-        ey = values[2] + values[4] / w - planned[5] - planned[7] / w
+        px, py, pvx, pvy = plan.cog_at(t, w)
+        ex = values[1] + values[3] / w - px - pvx / w
+        ey = values[2] + values[4] / w - py - pvy / w
         if ex * ex + ey * ey > threshold * threshold and t - self._last_auto_replan >= AUTO_REPLAN_INTERVAL:
             phase, rel = self._phase, t - self._t0
             if phase is not None and phase.start <= rel < phase.end and phase.end - rel < AUTO_MIN_REMAINDER:
@@ -156,12 +156,14 @@ class MeasuredPlanning:
         if abs(d) > OBSERVATION_MAX_AGE:
             return
         w = self.w
-        planned = plan.state(*plan.locate(t_obs), w)
+        px, py, pvx, pvy = plan.cog_at(t_obs, w)
         ch, sh = math.cosh(w * d), math.sinh(w * d)
-        for axis, (c, v) in enumerate(((cx, vx), (cy, vy))):
-            e, de = c - planned[4 + axis], v - planned[6 + axis]
-            state[4 + axis] += e * ch + de / w * sh
-            state[6 + axis] += e * w * sh + de * ch
+        e, de = cx - px, vx - pvx
+        state[4] += e * ch + de / w * sh
+        state[6] += e * w * sh + de * ch
+        e, de = cy - py, vy - pvy
+        state[5] += e * ch + de / w * sh
+        state[7] += e * w * sh + de * ch
 
     def replan_now(self, t: float, reason: str = "request") -> PlanRecord | None:
         """Replan at absolute time ``t`` (s), inside any phase: the free first segment is the remainder of the
@@ -189,7 +191,8 @@ class MeasuredPlanning:
         state = self._plan.state(*self._plan.locate(t), self.w)
         planned = None
         if self.config.feedback == "measured":
-            planned = list(state)
+            if self.config.step_adjustment is not None:
+                planned = list(state)  # step adjustment may fall back to the planned state
             self._measured_cog(t, state)
         layout = self._midphase_layout(q, remainder)
         self._connect(t, q, layout, state, rel - phase.start)

@@ -390,18 +390,16 @@ class OnlinePlanner(MeasuredPlanning):
         if sources is None:
             sources = layout.anchor_sources = self._walk.relative_anchor_sources(q, layout.anchor_phases)
         anchors = self._walk.anchors_from(q >> 1, sources)
-        y = np.empty((4 + len(sources), 2))
-        flat = y.ravel()  # a view: y is C-contiguous
-        flat[:8] = state
-        flat[8:] = anchors
+        y = np.array([*state, *anchors])  # one conversion of Python floats, then viewed as (inputs, axes)
+        y.shape = (4 + len(sources), 2)
         # Reference of the free segment: the cubic transfer the footsteps alone would ask for over the whole
-        # phase (for a plan made mid-phase: the one of the plan made when the phase began).
-        px, py, ax, ay = flat[0], flat[1], anchors[0], anchors[1]
+        # phase (for a plan made mid-phase: the one of the plan made when the phase began). Python floats: the
+        # samples of the segment evaluate it.
+        px, py, ax, ay = float(state[0]), float(state[1]), anchors[0], anchors[1]
         offset = 0.0
         previous = self._plan
         if elapsed == 0.0 and layout.first_kind in MOVING_KINDS:
-            duration = layout.durations[0]
-            k2, k3 = 3.0 / duration**2, -2.0 / duration**3
+            k2, k3 = layout.transfer
             reference = ((px, 0.0, k2 * (ax - px), k3 * (ax - px)), (py, 0.0, k2 * (ay - py), k3 * (ay - py)))
         elif layout.first_kind in MOVING_KINDS and previous is not None and previous.phase0 == q:
             reference, offset = previous.first_reference, elapsed
@@ -422,7 +420,8 @@ class OnlinePlanner(MeasuredPlanning):
         t_start = self._next_replan_time
         planned = None
         if self.config.feedback == "measured":
-            planned = list(state)
+            if self.config.step_adjustment is not None:
+                planned = list(state)  # step adjustment may fall back to the planned state
             self._measured_cog(t_start, state)
         self._connect(t_start, q, layout, state, 0.0)
         if n is None or q + 2 <= 2 * n:
