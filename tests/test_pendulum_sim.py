@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import itertools
 import json
 import math
 import types
@@ -118,7 +119,7 @@ def test_the_step_limits_given_bound_every_landing(short_walk):
 
     def widest(result) -> float:
         prints = result.footprints
-        return max(abs(b.y - a.y) for a, b in zip(prints[1:], prints[2:]))  # lateral: the walk heads +x
+        return max(abs(b.y - a.y) for a, b in itertools.pairwise(prints[1:]))  # lateral: the walk heads +x
 
     default = simulate_pendulum(short_walk, "adaptive", [push])
     assert default.step_adjustment_count and widest(default) > 0.3

@@ -431,7 +431,7 @@ class OnlinePlanner(MeasuredPlanning):
             self._next_replan_phase, self._next_replan_time = None, math.inf
         self._record(t_start, q, layout, began, "start" if q == 0 else "double-support")
         if self.config.step_adjustment is not None:
-            self._adjust_step(t, planned)
+            self._adjust_step(t, planned, self.config.step_adjustment)
 
     def _record(self, t_start: float, q: int, layout: PlanLayout, began: float, reason: str) -> None:
         elapsed = time.perf_counter() - began

@@ -41,6 +41,10 @@ if TYPE_CHECKING:
     from rtgait.core.walk import Walk
 
 
+ON_FAILURE = ("continue", "stop", "keep")
+"""What step adjustment does when no candidate reaches the required margin (:class:`StepAdjustment`)."""
+
+
 @dataclass(frozen=True)
 class StepAdjustment:
     """Limits and preferences of step adjustment (``PlannerConfig(step_adjustment=...)``).
@@ -55,9 +59,10 @@ class StepAdjustment:
         required_margin: ZMP margin a plan must keep to need no adjustment, and that a candidate must reach (m).
         grid: candidates per axis of the stride box (``grid**2`` in all).
         samples: sample times of the free segment at which the margin is checked.
-        on_failure: when no candidate reaches ``required_margin``, the best one is taken and then ``"continue"``
-            walks on (the default: at the pendulum level it recovers more, see ``docs/closed_loop.md``) or
-            ``"stop"`` stops the walk after that step (an emergency sequence: capture step, then stop).
+        on_failure: when no candidate reaches ``required_margin``: ``"continue"`` takes the best one and walks on
+            (the default: at the pendulum level it recovers more, see ``docs/closed_loop.md``), ``"stop"`` takes it
+            and stops the walk after that step (an emergency sequence: capture step, then stop), ``"keep"`` keeps
+            the walk as planned (no landing or timing moves; the plan goes on from the planned state).
         adapt_timing: also choose the single-support duration of the step being adjusted (Morisawa et al. 2006):
             ``durations`` candidates evenly from the shortest allowed to the nominal one (nominal included), so
             ``grid**2 * durations`` candidates in all. Off by default (the decisions are then those of landings
@@ -98,8 +103,8 @@ class StepAdjustment:
             value = getattr(self, name)
             if not (math.isfinite(value) and 0.0 <= value <= 1.0):
                 raise ValueError(f"step_adjustment.{name} must be within [0, 1], got {value}")
-        if self.on_failure not in ("continue", "stop"):
-            raise ValueError(f"step_adjustment.on_failure must be 'continue' or 'stop', got {self.on_failure!r}")
+        if self.on_failure not in ON_FAILURE:
+            raise ValueError(f"step_adjustment.on_failure must be one of {ON_FAILURE}, got {self.on_failure!r}")
         if not isinstance(self.adapt_timing, bool):
             raise ValueError(f"step_adjustment.adapt_timing must be true or false, got {self.adapt_timing!r}")
         for name, low, high in (("min_single_support", 0.05, 5.0), ("time_cost", 0.0, 100.0)):
@@ -432,6 +437,7 @@ def propose_landing(
 
 
 __all__ = [
+    "ON_FAILURE",
     "STEPPING_KEYS",
     "LandingProposal",
     "StepAdjustment",

@@ -246,3 +246,61 @@ def test_bad_timing_settings_are_refused_naming_the_key(options, match):
     with pytest.raises(ValueError, match=f"step_adjustment.{match}"):
         StepAdjustment(sole=SOLE, **options)
 
+
+
+# ----- per-call overrides and on_failure="keep" --------------------------------------------------------------------
+def _walked(config: PlannerConfig) -> tuple[OnlinePlanner, float]:
+    """The planner walked (observing its own plan) to 35 % into step 3's single support, and that instant (s)."""
+    planner = OnlinePlanner(config, straight_walk(config, 8, 0.1))
+    planner.start(0.0)
+    t = planner.phase_start(5) + 0.35 * 0.7
+    for u in np.arange(0.0, t, DT):
+        s = planner.sample(float(u))
+        planner.observe(float(u), s.cog[:2], s.cog_vel[:2])
+    return planner, t
+
+
+def test_replan_now_overrides_feedback_and_step_adjustment_for_one_call():
+    config = PlannerConfig(timing=Timing(0.7, 0.1), connection="quasi-real-time")  # planned, no adjustment
+    planner, t = _walked(config)
+    s = planner.sample(t)
+    pushed = s.cog_vel[:2] + np.array([0.0, -0.25])
+    planner.observe(t, s.cog[:2], pushed)
+    planner.replan_now(t)  # the config's: from the plan itself, the observation ignored
+    assert planner.sample(t).cog_vel[:2] == pytest.approx(s.cog_vel[:2], abs=1e-12)
+    planner.replan_now(t, feedback="measured", step_adjustment=TIMING)
+    assert planner.sample(t).cog_vel[:2] == pytest.approx(pushed, abs=1e-12), "from the measured state"
+    assert planner.step_adjustment_count == 1 and not planner.step_adjustments[-1].emergency
+    assert planner.config.step_adjustment is None and planner.timeline.duration(5) < 0.7
+    # The other way round: a measured, adjusting planner told to do neither for one replan.
+    measured = PlannerConfig(
+        timing=Timing(0.7, 0.1), connection="quasi-real-time", feedback="measured", step_adjustment=TIMING
+    )
+    other, t = _walked(measured)
+    s = other.sample(t)
+    other.observe(t, s.cog[:2], s.cog_vel[:2] + np.array([0.0, -0.25]))
+    other.replan_now(t, feedback="planned", step_adjustment=False)
+    assert other.sample(t).cog_vel[:2] == pytest.approx(s.cog_vel[:2], abs=1e-12)
+    assert other.step_adjustment_count == 0
+    with pytest.raises(ValueError, match="feedback must be one of"):
+        other.replan_now(t, feedback="estimated")
+    with pytest.raises(ValueError, match="step_adjustment must be"):
+        other.replan_now(t, step_adjustment=True)
+
+
+def test_on_failure_keep_keeps_the_walk_as_planned():
+    keep = StepAdjustment(sole=SOLE, on_failure="keep")
+    config = PlannerConfig(
+        timing=Timing(0.7, 0.1), connection="quasi-real-time", feedback="measured", step_adjustment=keep
+    )
+    planner, t = _walked(config)
+    prints = planner.footprints(10)
+    timeline = planner.timeline
+    s = planner.sample(t)
+    planner.observe(t, s.cog[:2], s.cog_vel[:2] + np.array([0.0, 0.6]))  # outward: no step can catch it
+    planner.replan_now(t)
+    decision = planner.step_adjustments[-1]
+    assert decision.emergency and "kept as planned" in decision.reason
+    assert decision.landing == decision.nominal
+    assert planner.footprints(10) == prints and planner.timeline is timeline and planner.n_steps == 9
+    assert planner.sample(t).cog_vel[:2] == pytest.approx(s.cog_vel[:2], abs=1e-12), "from the planned state"

@@ -207,5 +207,5 @@ def test_a_partial_stepping_table_takes_the_defaults_and_none_gives_none(tmp_pat
     partial = load_robot(write(tmp_path, without + table, "partial.toml")).stepping
     assert partial.max_length == 0.2 and partial.max_width == 0.45 and partial.min_time_to_touchdown == 0.2
     # The core's default no-crossing limit (0.12 m) is too narrow for Talos's soles: said in one line.
-    with pytest.raises(RobotError, match="stepping.min_width"):
+    with pytest.raises(RobotError, match=r"stepping\.min_width"):
         load_robot(write(tmp_path, without + "[stepping]\nmax_length = 0.2\n", "narrow.toml"))
