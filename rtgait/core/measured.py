@@ -77,7 +77,9 @@ class MeasuredPlanning:
         if threshold is None or plan is None or self.config.feedback != "measured" or t < self._latest:
             return
         w = self.w
-        px, py, pvx, pvy = plan.cog_at(t, w)
+        planned = plan.cog_at(t, w)
+        self._observed_on_plan = (plan, t, planned)  # the connection from this observation needs it again
+        px, py, pvx, pvy = planned
         ex = values[1] + values[3] / w - px - pvx / w
         ey = values[2] + values[4] / w - py - pvy / w
         if ex * ex + ey * ey > threshold * threshold and t - self._last_auto_replan >= AUTO_REPLAN_INTERVAL:
@@ -158,7 +160,11 @@ class MeasuredPlanning:
         if abs(d) > OBSERVATION_MAX_AGE:
             return
         w = self.w
-        px, py, pvx, pvy = plan.cog_at(t_obs, w)
+        known = self._observed_on_plan
+        if known is not None and known[0] is plan and known[1] == t_obs:
+            px, py, pvx, pvy = known[2]
+        else:
+            px, py, pvx, pvy = plan.cog_at(t_obs, w)
         ch, sh = math.cosh(w * d), math.sinh(w * d)
         e, de = cx - px, vx - pvx
         state[4] += e * ch + de / w * sh

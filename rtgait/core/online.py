@@ -116,6 +116,7 @@ class OnlinePlanner(MeasuredPlanning):
         self._phase: PhaseInfo | None = None  # cached facts about the phase last sampled
         self._start_state: list[float] | None = None
         self._observed: tuple[float, float, float, float, float] | None = None
+        self._observed_on_plan: tuple | None = None  # (plan, t, its COG state then) from observe's DCM check
         history = config.history_steps
         self.plans: deque[PlanRecord] = deque(maxlen=history)
         """Every replanning, oldest first (the last ``history_steps`` of them)."""
@@ -306,6 +307,7 @@ class OnlinePlanner(MeasuredPlanning):
         self._phase = None
         self._plan = None
         self._observed = None
+        self._observed_on_plan = None
         self.plans.clear()
         self.replan_count = 0
         self._replaced()
