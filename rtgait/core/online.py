@@ -41,16 +41,15 @@ from rtgait.core.config import (
     PlannerConfig,
 )
 from rtgait.core.footsteps import Footstep, SoleRect, Stride, Timeline, check_step_timings, midpoint
+from rtgait.core.layouts import PlanShapes
 from rtgait.core.limits import MAX_REPLANS_PER_SAMPLE, MAX_STEPS
 from rtgait.core.lipm import CogTrajectory, omega
-from rtgait.core.measured import (
-    MeasuredPlanning,
-)
-from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey, PlanOperator
+from rtgait.core.measured import MeasuredPlanning
+from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey
 from rtgait.core.phases import PhaseInfo, SwingRetarget, phase_info
 from rtgait.core.sample import SAMPLE_FIELDS, GaitSample, PlanRecord
 from rtgait.core.spline import PiecewisePolynomial
-from rtgait.core.stepping import StepDecision, shorter_single_supports
+from rtgait.core.stepping import StepDecision
 from rtgait.core.support import signed_margin, support_polygon
 from rtgait.core.walk import (
     CommandClampedWarning,
@@ -62,7 +61,7 @@ from rtgait.core.walk import (
 )
 
 
-class OnlinePlanner(MeasuredPlanning):
+class OnlinePlanner(MeasuredPlanning, PlanShapes):
     """Walking pattern generator that replans at every double-support start and can change steps on the fly.
 
     Args:
@@ -315,65 +314,6 @@ class OnlinePlanner(MeasuredPlanning):
         self._next_replan_time = self._t0
         self._prepared = None
         self._prepare_layouts(0)
-
-    def _plan_span(self, q: int) -> int:
-        """Last phase covered by a plan made in phase ``q`` (a plan made mid-step looks as far ahead as the one
-        made when the step began, so that a plan from a state on it reproduces it)."""
-        n = self.n_steps
-        last = (q - (q & 1)) + 2 * self.config.horizon_steps
-        return 2 * n + 1 if n is not None and last >= 2 * n else last
-
-    def layout_for_replan(self, q: int) -> PlanLayout:
-        """The layout of the plan made when double support ``q`` begins (its operator and anchor phases), as
-        :meth:`sample` uses it; for evaluating many walks of this shape at once (:mod:`rtgait.core.batch`)."""
-        if not self.started:
-            raise RuntimeError("call start() before layout_for_replan()")
-        return self._layout(q, self._plan_span(q))
-
-    def _prepare_layouts(self, first_phase: int) -> None:
-        """Build the operators of every plan shape still to come (with per-step timings: of every shape and
-        durations), so that no replan pays for one (a fraction of a millisecond each, once per shape).
-
-        Nothing to do when neither the first phase, the timeline (its length and timings: a new one whenever they
-        change) nor the configuration changed since the last call: step adjustment calls this at every decision."""
-        timeline, prepared = self.timeline, self._prepared
-        if prepared is not None and prepared == (first_phase, timeline, self.config):
-            return
-        n = self.n_steps
-        last_replan = first_phase + 2 if n is None else 2 * n
-        self._layout_at = {q: self._layout(q, self._plan_span(q)) for q in range(first_phase, last_replan + 1, 2)}
-        self._prepared = (first_phase, timeline, self.config)
-
-    def _layout(self, first: int, last: int) -> PlanLayout:
-        """Operator and anchor bookkeeping for the plan over phases ``first..last`` (cached by plan shape and, when
-        steps have their own timing, by the phases' durations too). With step timing adaptation, a new layout
-        also gets the operators of the candidate timings of the step that follows (one batch, built ahead)."""
-        n = self.n_steps
-        timeline = self.timeline
-        # The phase kinds of a plan depend only on these three facts, so they key the cache cheaply; with one
-        # timing for every step they also fix the durations.
-        shape: tuple = (first == 0, last - first, n is not None and last == 2 * n + 1)
-        adapts = self._adapts_timing()
-        if not timeline.uniform or adapts:
-            # With step timing adaptation the walk may turn per-step at any decision: key by the durations from
-            # the start, so that the layouts built so far are found again then.
-            shape = (*shape, timeline.durations(first, last))
-        layout = self._layouts.get(shape)
-        if layout is None:
-            kinds = tuple(timeline.kind(q) for q in range(first, last + 1))
-            key = PatternKey(
-                kinds=kinds,
-                durations=timeline.durations(first, last),
-                w=self.w,
-                first_degree=self.config.first_degree,
-            )
-            layout = self._layouts[shape] = PlanLayout(PlanOperator(key), kinds)
-            if adapts and len(kinds) > 1 and kinds[1] == "single":
-                adjust = self.config.step_adjustment
-                durations = shorter_single_supports(adjust, layout.durations[1])
-                if durations is not None:
-                    layout.variant_zmp_rows(1, durations, adjust.samples)
-        return layout
 
     def _state_at_phase_start(self, q: int) -> np.ndarray | list[float]:
         """``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]`` at the start of phase ``q`` (m, m/s).
