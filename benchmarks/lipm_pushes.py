@@ -19,17 +19,21 @@ for the same instant and the step limits of the adaptive level's :class:`~rtgait
 * first landing after ``max(remaining swing, min_time_to_touchdown)``, later ones every ``T_s + T_dbl``;
 * the planned DCM's offset from the stance ankle at the push's centre.
 
-``bound_1`` is the one-step bound, ``bound_N`` the bound for any number of steps. They treat the push as an impulse
-at its centre (for a 0.1 s push the DCM moves ``sinh(w T / 2) / (w T / 2)`` = 1.005 times as far), the foot and the
-reach as discs, and the ZMP as jumping to the new foot at touch-down (no double support): a guide, not a hard limit,
-most of all across the stance foot, where the other foot's sole cannot be used before it lands. ``share`` is the
-largest impulse survived divided by ``bound_1``.
+``bound_1`` is the one-step bound, ``bound_N`` the bound for any number of steps. With ``--adapt-timing`` (step
+timing adaptation, :class:`~rtgait.core.stepping.StepAdjustment` ``adapt_timing``), ``bound_1 early`` is the
+one-step bound with the earliest touch-down the adjustment may choose (the single support shortened to
+``min_single_support``, but never sooner than ``min_time_to_touchdown`` after the push's centre).
+
+The bounds treat the push as an impulse at its centre (for a 0.1 s push the DCM moves ``sinh(w T / 2) / (w T /
+2)`` = 1.005 times as far), the foot and the reach as discs, and the ZMP as jumping to the new foot at touch-down
+(no double support): a guide, not a hard limit, most of all across the stance foot, where the other foot's sole
+cannot be used before it lands. ``share`` is the largest impulse survived divided by ``bound_1``.
 
 A walk that the pendulum does not survive even unpushed gets 0 (the point mass is unstable: ``open-loop`` on fig8,
 12.7 s long, falls at about 10 s from round-off amplified by ``e^{w t}``; see :mod:`rtgait.core.closed_loop`).
 
 Usage: ``python benchmarks/lipm_pushes.py [--json] [--controller C ...] [--scenario fig8] [--mass 57] [--dt 0.002]
-[--phase single|double ...] [--tolerance 0.25]``
+[--phase single|double ...] [--tolerance 0.25] [--adapt-timing] [--grid 32] [--durations 4]``
 """
 
 from __future__ import annotations
@@ -110,9 +114,11 @@ def landing_reach(adjust: StepAdjustment, stance: Footstep, direction: np.ndarra
     return max(reach, 0.0)
 
 
-def bounds(scenario: Scenario, site: PushSite, mass: float, direction_deg: float) -> tuple[float, float]:
-    """One-step and any-number-of-steps capturability bounds (N s) of an impulse at ``site`` along the direction."""
-    adjust = StepAdjustment(sole=scenario.sole)
+def bounds(
+    scenario: Scenario, site: PushSite, mass: float, direction_deg: float, adjust: StepAdjustment
+) -> tuple[float, float, float]:
+    """One-step and any-number-of-steps capturability bounds (N s) of an impulse at ``site`` along the direction,
+    and the one-step bound with the earliest touch-down step timing adaptation may choose."""
     u = np.array([math.cos(math.radians(direction_deg)), math.sin(math.radians(direction_deg))])
     stance = site.stance
     r_max = reach_along(scenario.sole.corners(stance), stance.position, u)
@@ -125,14 +131,19 @@ def bounds(scenario: Scenario, site: PushSite, mass: float, direction_deg: float
     offset = site.dcm - stance.position
     one = float(max_capturable_impulse(offset, u, steps=1, **common))
     many = float(max_capturable_impulse(offset, u, steps=math.inf, **common))
-    return one, many
+    shortening = max(scenario.timing.single_support - adjust.min_single_support, 0.0)
+    common["remaining"] = min(site.remaining, max(site.remaining - shortening, adjust.min_time_to_touchdown))
+    early = float(max_capturable_impulse(offset, u, steps=1, **common))
+    return one, many, early
 
 
-def survives(scenario: Scenario, controller: str, mass: float, dt: float, push: Push | None) -> bool:
+def survives(
+    scenario: Scenario, controller: str, mass: float, dt: float, push: Push | None, adjust: StepAdjustment
+) -> bool:
     """Whether the walk with ``push`` ends at rest without a fall."""
     result = run_closed_loop(
         scenario.planner_config(), scenario.strides(), scenario.sole, controller=controller, mass=mass, dt=dt,
-        pushes=() if push is None else (push,), changes=scenario.changes,
+        pushes=() if push is None else (push,), changes=scenario.changes, step_adjustment=adjust,
     )  # fmt: skip
     return not result.fell and result.ended_at_rest
 
@@ -146,13 +157,15 @@ def largest_impulse(
     direction_deg: float,
     ceiling: float,
     tolerance: float,
+    adjust: StepAdjustment,
 ) -> tuple[float, int]:
     """Bisection for the largest impulse (N s) survived along the direction, within ``tolerance``; and the runs."""
     u = (math.cos(math.radians(direction_deg)), math.sin(math.radians(direction_deg)))
 
     def ok(impulse: float) -> bool:
         force = impulse / PUSH_DURATION
-        return survives(scenario, controller, mass, dt, Push(site.start, PUSH_DURATION, (force * u[0], force * u[1])))
+        push = Push(site.start, PUSH_DURATION, (force * u[0], force * u[1]))
+        return survives(scenario, controller, mass, dt, push, adjust)
 
     low, high, runs = 0.0, ceiling, 0
     while ok(high):  # the ceiling should fail; widen it if not
@@ -170,21 +183,29 @@ def largest_impulse(
 
 
 def run(
-    scenario: Scenario, controllers: Sequence[str], phases: Sequence[str], mass: float, dt: float, tolerance: float
+    scenario: Scenario,
+    controllers: Sequence[str],
+    phases: Sequence[str],
+    mass: float,
+    dt: float,
+    tolerance: float,
+    adjust: StepAdjustment | None = None,
 ) -> list[dict]:
+    """Every case; ``adjust``: the adaptive level's step adjustment (default ``StepAdjustment(sole=scenario.sole)``)."""
+    adjust = adjust if adjust is not None else StepAdjustment(sole=scenario.sole)
     cases = []
     sites = {phase: push_site(scenario, phase, dt) for phase in phases}
     for controller in controllers:
-        unpushed = survives(scenario, controller, mass, dt, None)
+        unpushed = survives(scenario, controller, mass, dt, None, adjust)
         for phase in phases:
             site = sites[phase]
             for direction in DIRECTIONS:
-                one, many = bounds(scenario, site, mass, direction)
+                one, many, early = bounds(scenario, site, mass, direction, adjust)
                 began = time.perf_counter()
                 if unpushed:
                     # A ceiling that no controller can survive: twice the any-steps bound, at least 20 N s.
                     best, runs = largest_impulse(
-                        scenario, controller, mass, dt, site, direction, max(2.0 * many, 20.0), tolerance
+                        scenario, controller, mass, dt, site, direction, max(2.0 * many, 20.0), tolerance, adjust
                     )
                 else:
                     best, runs = 0.0, 0
@@ -199,6 +220,7 @@ def run(
                         "max_impulse_Ns": best,
                         "capturability_bound_Ns": one,
                         "n_step_bound_Ns": many,
+                        "capturability_bound_early_Ns": early,
                         "recovered_share": best / one if one > 0.0 else None,
                         "recovered_share_n_step": best / many if many > 0.0 else None,
                         "unpushed_survives": unpushed,
@@ -209,16 +231,19 @@ def run(
     return cases
 
 
-def table(cases: list[dict]) -> str:
+def table(cases: list[dict], early: bool = False) -> str:
+    """The cases as a text table; ``early``: with the column of the earliest-touch-down one-step bound."""
+    extra = (f" {'b_1 early':>9}", f" {'N s':>9}") if early else ("", "")
     lines = [
-        f"{'controller':<11} {'phase':<7} {'dir':>4} {'max J':>7} {'bound_1':>8} {'bound_N':>8} {'share':>6}",
-        f"{'':<11} {'':<7} {'deg':>4} {'N s':>7} {'N s':>8} {'N s':>8} {'':>6}",
+        f"{'controller':<11} {'phase':<7} {'dir':>4} {'max J':>7} {'bound_1':>8} {'bound_N':>8}{extra[0]} {'share':>6}",
+        f"{'':<11} {'':<7} {'deg':>4} {'N s':>7} {'N s':>8} {'N s':>8}{extra[1]} {'':>6}",
     ]
     for case in cases:
         share = case["recovered_share"]
+        column = f" {case['capturability_bound_early_Ns']:>9.1f}" if early else ""
         lines.append(
             f"{case['controller']:<11} {case['phase']:<7} {case['direction_deg']:>4} {case['max_impulse_Ns']:>7.1f} "
-            f"{case['capturability_bound_Ns']:>8.1f} {case['n_step_bound_Ns']:>8.1f} "
+            f"{case['capturability_bound_Ns']:>8.1f} {case['n_step_bound_Ns']:>8.1f}{column} "
             f"{'-' if share is None else f'{share:.2f}':>6}"
             + ("" if case["unpushed_survives"] else "  (falls unpushed)")
         )
@@ -234,17 +259,27 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--dt", type=float, default=0.002, help="control period in s (default 0.002)")
     parser.add_argument("--phase", action="append", choices=PHASES, help="push instant(s) (default both)")
     parser.add_argument("--tolerance", type=float, default=0.25, help="bisection resolution in N s (default 0.25)")
+    parser.add_argument("--adapt-timing", action="store_true", help="adaptive: step timing adaptation on")
+    parser.add_argument("--grid", type=int, default=32, help="adaptive: landing candidates per axis (default 32)")
+    parser.add_argument("--durations", type=int, default=4, help="with --adapt-timing: durations (default 4)")
     args = parser.parse_args(argv)
     scenario = load_scenario(args.scenario)
+    try:
+        adjust = StepAdjustment(
+            sole=scenario.sole, grid=args.grid, adapt_timing=args.adapt_timing, durations=args.durations
+        )
+    except ValueError as error:
+        parser.error(str(error))
     controllers = args.controller or list(CONTROLLERS)
     phases = args.phase or list(PHASES)
     began = time.perf_counter()
-    cases = run(scenario, controllers, phases, args.mass, args.dt, args.tolerance)
+    cases = run(scenario, controllers, phases, args.mass, args.dt, args.tolerance, adjust)
     elapsed = time.perf_counter() - began
     if args.json:
         settings = {
             "scenario": scenario.name, "mass": args.mass, "dt": args.dt, "tolerance_Ns": args.tolerance,
-            "push_duration": PUSH_DURATION, "seconds": elapsed,
+            "push_duration": PUSH_DURATION, "seconds": elapsed, "adapt_timing": args.adapt_timing,
+            "grid": args.grid, "durations": args.durations if args.adapt_timing else 1,
         }  # fmt: skip
         json.dump({"settings": settings, "cases": cases}, sys.stdout, indent=2)
         print()
@@ -253,7 +288,7 @@ def main(argv: Sequence[str] | None = None) -> None:
             f"{scenario.name}: {args.mass:g} kg point mass, dt {args.dt * 1e3:g} ms, 0.1 s pushes on step "
             f"{cases[0]['step'] if cases else '-'}, bisection to {args.tolerance:g} N s ({elapsed:.0f} s)"
         )
-        print(table(cases))
+        print(table(cases, early=args.adapt_timing))
 
 
 if __name__ == "__main__":

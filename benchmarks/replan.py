@@ -11,9 +11,13 @@ replan connects a genuinely new plan (3-step horizon, both axes). Reported:
 * ``replan_back_to_back_us``: replans of consecutive double supports with nothing in between (warm caches);
 * ``operator_build_us``: building one plan shape's operator, which ``start()`` does once per shape.
 
+With ``--feedback measured`` the planner is told the measured COG state before every sample (``observe``; here the
+plan's own state of the tick before, as a robot that follows it), so every replan connects from it.
+
 Wall times on a shared virtual machine vary from run to run by a factor of two or more: run it a few times.
 
-Usage: ``python benchmarks/replan.py [--json] [--steps N] [--dt S] [--mode real-time|quasi-real-time]``
+Usage: ``python benchmarks/replan.py [--json] [--steps N] [--dt S] [--mode real-time|quasi-real-time]
+[--feedback planned|measured] [--no-gc]``
 """
 
 from __future__ import annotations
@@ -31,8 +35,17 @@ from rtgait.core.online import OnlinePlanner, PlannerConfig, StepChangeTooLateEr
 from rtgait.core.pattern import PatternKey, PlanOperator
 
 
-def run(steps: int, dt: float, mode: str, horizon: int, seed: int, collect_garbage: bool = True) -> dict:
-    config = PlannerConfig(timing=Timing(0.8, 0.2), connection=mode, horizon_steps=horizon)
+def run(
+    steps: int,
+    dt: float,
+    mode: str,
+    horizon: int,
+    seed: int,
+    collect_garbage: bool = True,
+    feedback: str = "planned",
+) -> dict:
+    config = PlannerConfig(timing=Timing(0.8, 0.2), connection=mode, horizon_steps=horizon, feedback=feedback)
+    measured = feedback == "measured"
     planner = OnlinePlanner(config, straight_walk(config, steps, 0.1))
     rng = np.random.default_rng(seed)
     planner.start(0.0)
@@ -44,16 +57,21 @@ def run(steps: int, dt: float, mode: str, horizon: int, seed: int, collect_garba
     replanned = np.zeros(n_ticks, dtype=bool)
     clock = time.perf_counter_ns
     next_change_step = 2
+    cog, vel = (0.0, 0.0), (0.0, 0.0)
     for k in range(n_ticks):
         t = k * dt
         if next_change_step <= steps and t >= planner.change_deadline(next_change_step) - 0.5:
             with contextlib.suppress(StepChangeTooLateError):
                 planner.change_step(next_change_step, length=rng.uniform(0.0, 0.2), width=rng.uniform(0.17, 0.23))
             next_change_step += 1
+        if measured:
+            planner.observe(t, cog, vel)
         plans_before = len(planner.plans)
         began = clock()
-        planner.sample(t)
+        sample = planner.sample(t)
         sample_ns[k] = clock() - began
+        if measured:
+            cog, vel = sample.cog[:2].tolist(), sample.cog_vel[:2].tolist()
         replanned[k] = len(planner.plans) != plans_before
     steady = np.array([p.compute_time for p in list(planner.plans)[1:]]) * 1e6  # all but the initial plan
     samples = sample_ns[~replanned] / 1e3
@@ -66,6 +84,7 @@ def run(steps: int, dt: float, mode: str, horizon: int, seed: int, collect_garba
         "samples": len(samples),
         "settings": {
             "steps": steps, "dt": dt, "connection": mode, "horizon_steps": horizon, "gc": collect_garbage,
+            "feedback": feedback,
         },
     }
 
@@ -106,15 +125,19 @@ def main() -> None:
     parser.add_argument("--horizon", type=int, default=3, help="horizon in steps (default 3)")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--no-gc", action="store_true", help="disable Python's cyclic garbage collector while timing")
+    parser.add_argument("--feedback", default="planned", choices=("planned", "measured"))
     args = parser.parse_args()
-    result = run(args.steps, args.dt, args.mode, args.horizon, args.seed, collect_garbage=not args.no_gc)
+    result = run(
+        args.steps, args.dt, args.mode, args.horizon, args.seed, collect_garbage=not args.no_gc,
+        feedback=args.feedback,
+    )  # fmt: skip
     gc.enable()
     if args.json:
         print(json.dumps(result))
         return
     print(
         f"walk: {args.steps} steps, dt {args.dt * 1e3:g} ms, {args.mode}, horizon {args.horizon} steps, "
-        f"garbage collector {'off' if args.no_gc else 'on'}"
+        f"garbage collector {'off' if args.no_gc else 'on'}, feedback {args.feedback}"
     )
     print(f"replan : median {result['replan_us']['median']:7.2f} us   p99 {result['replan_us']['p99']:7.2f} us"
           f"   ({result['replans']} replans)")

@@ -6,11 +6,15 @@
 * ``adjust_us``: one ``replan_now`` that needs a step adjustment (a push at mid single support, 24 directions and
   sizes): the plan from the measured state, the decision over ``grid**2`` candidates, the plan remade with the new
   landing; operators warm (each case is run twice and the second timed);
-* ``decision_us`` and ``candidates_per_s``: the decision alone (:func:`rtgait.core.stepping.propose_landing`).
+* ``decision_us`` and ``candidates_per_s``: the decision alone (:func:`rtgait.core.stepping.propose_landing`);
+* ``timing_adaptation``: the same three with step timing adaptation on (``adapt_timing``: ``--durations`` single
+  supports times the square of ``--timing-grid`` landings, 4 x 256 = 1,024 candidates by default), the operators of the
+  candidate timings included (built in one batch at the decision when the plan starts mid-phase, as here: every case
+  has a fresh planner).
 
 Wall times on a shared virtual machine vary between runs: run it a few times.
 
-Usage: ``python benchmarks/stepping.py [--json] [--grid N]``
+Usage: ``python benchmarks/stepping.py [--json] [--grid N] [--timing-grid N] [--durations D]``
 """
 
 from __future__ import annotations
@@ -33,11 +37,11 @@ SOLE = SoleRect(0.13, 0.10, 0.07, 0.07)
 DT = 0.001
 
 
-def _config(grid: int) -> PlannerConfig:
+def _config(grid: int, durations: int | None = None) -> PlannerConfig:
+    adjust = StepAdjustment(SOLE, grid=grid, adapt_timing=durations is not None, durations=durations or 4)
     return PlannerConfig(
-        timing=Timing(0.7, 0.1), connection="quasi-real-time", feedback="measured",
-        step_adjustment=StepAdjustment(SOLE, grid=grid),
-    )  # fmt: skip
+        timing=Timing(0.7, 0.1), connection="quasi-real-time", feedback="measured", step_adjustment=adjust
+    )
 
 
 def tick_cost(grid: int) -> dict:
@@ -80,9 +84,9 @@ def _pushed_planner(config: PlannerConfig, push: tuple[float, float]) -> tuple[O
     return planner, t
 
 
-def adjust_cost(grid: int) -> dict:
-    config = _config(grid)
-    total, decision = [], []
+def adjust_cost(grid: int, durations: int | None = None) -> dict:
+    config = _config(grid, durations)
+    total, decision, retimed = [], [], 0
     original = stepping.propose_landing
 
     def timed(*args, **kwargs):
@@ -106,6 +110,8 @@ def adjust_cost(grid: int) -> dict:
                     elapsed = time.perf_counter() - began
                     if attempt == 1 and planner.step_adjustment_count:
                         total.append((elapsed, decision[-1]))
+                        last = planner.step_adjustments[-1]
+                        retimed += last.single_support < last.nominal_single_support
     finally:
         measured.propose_landing = original
     whole = np.array([a for a, _ in total]) * 1e6
@@ -113,8 +119,10 @@ def adjust_cost(grid: int) -> dict:
     return {
         "adjust_us": {"median": float(np.median(whole)), "p99": float(np.percentile(whole, 99))},
         "decision_us": {"median": float(np.median(alone)), "p99": float(np.percentile(alone, 99))},
-        "candidates_per_s": float(grid * grid / (np.median(alone) * 1e-6)),
+        "candidates_per_s": float(grid * grid * (durations or 1) / (np.median(alone) * 1e-6)),
         "adjustments": len(total),
+        "candidates": grid * grid * (durations or 1),
+        **({"retimed": retimed} if durations else {}),
     }
 
 
@@ -122,9 +130,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--grid", type=int, default=32, help="candidates per axis (default 32: 1,024 candidates)")
+    parser.add_argument("--timing-grid", type=int, default=16, help="with timing adaptation (default 16)")
+    parser.add_argument("--durations", type=int, default=4, help="single supports per decision (default 4)")
     args = parser.parse_args()
     gc.collect()
-    result = {"tick_us": tick_cost(args.grid), **adjust_cost(args.grid), "candidates": args.grid**2}
+    result = {"tick_us": tick_cost(args.grid), **adjust_cost(args.grid)}
+    result["timing_adaptation"] = adjust_cost(args.timing_grid, args.durations)
     if args.json:
         print(json.dumps(result))
         return
@@ -135,6 +146,11 @@ def main() -> None:
           f"median {adjust['median']:.0f} us, p99 {adjust['p99']:.0f} us ({result['adjustments']} pushes)")
     print(f"the decision alone: median {decide['median']:.0f} us, p99 {decide['p99']:.0f} us: "
           f"{result['candidates_per_s']:.3g} candidates/s")
+    timing = result["timing_adaptation"]
+    print(f"with timing adaptation ({args.durations} single supports x {args.timing_grid**2} landings): replan_now "
+          f"median {timing['adjust_us']['median']:.0f} us, p99 {timing['adjust_us']['p99']:.0f} us; the decision "
+          f"median {timing['decision_us']['median']:.0f} us; {timing['retimed']} of {timing['adjustments']} "
+          "shortened the step")
 
 
 if __name__ == "__main__":

@@ -40,6 +40,7 @@ from rtgait.core.closed_loop import (
     run_closed_loop,
 )
 from rtgait.core.plant import Push
+from rtgait.core.stepping import StepAdjustment
 from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.scenario import Scenario
 
@@ -103,6 +104,7 @@ def simulate_pendulum(
     mass: float | None = None,
     dt: float | None = None,
     progress: Callable[[float], None] | None = None,
+    step_adjustment: StepAdjustment | None = None,
 ) -> ClosedLoopResult:
     """Walk ``scenario`` on the point-mass pendulum with the controller level ``controller``.
 
@@ -116,6 +118,8 @@ def simulate_pendulum(
         dt: control period (s); default 1 ms (the scenario's ``dt`` is the rollout's sampling period, not a
             controller's).
         progress: called now and then with the fraction done.
+        step_adjustment: ``"adaptive"``'s step adjustment; default ``StepAdjustment(sole=scenario.sole)`` (a robot's
+            ``[stepping]`` limits: ``robot.description.stepping.adjustment(scenario.sole)``).
 
     Returns:
         :class:`~rtgait.core.closed_loop.ClosedLoopResult`; its :meth:`~ClosedLoopResult.summary` carries the
@@ -136,6 +140,7 @@ def simulate_pendulum(
         pushes=[as_push(p) for p in pushes],
         changes=scenario.changes,
         progress=progress,
+        step_adjustment=step_adjustment,
     )
     result.extra["scenario"] = scenario.name
     return result

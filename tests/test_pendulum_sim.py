@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import itertools
 import json
 import math
 import types
@@ -103,3 +104,25 @@ def test_a_fall_is_written_with_its_time(short_walk, tmp_path):
     assert summary["fall_time"] == pytest.approx(result.times[-1])
     last = (tmp_path / "sim.csv").read_text().splitlines()[-1].split(",")
     assert math.isnan(float(last[PENDULUM_CSV_COLUMNS.index("zmp_command_x")]))
+
+
+def test_the_step_limits_given_bound_every_landing(short_walk):
+    """``step_adjustment`` (a robot's ``[stepping]`` limits, as ``simulate --model lipm --robot R`` passes them):
+    every landing the pushed walk makes stays in that stride box around the footprint before it, which the core's
+    default box (0.45 m wide) would not keep to."""
+    from rtgait.core.online import OnlinePlanner
+    from rtgait.core.stepping import SteppingLimits
+
+    planner = OnlinePlanner(short_walk.planner_config(), short_walk.strides())
+    planner.start(0.0)
+    push = Push(planner.phase_start(3) + 0.3, 0.1, (0.0, -1500.0))  # 15 N s to the right, mid single support
+
+    def widest(result) -> float:
+        prints = result.footprints
+        return max(abs(b.y - a.y) for a, b in itertools.pairwise(prints[1:]))  # lateral: the walk heads +x
+
+    default = simulate_pendulum(short_walk, "adaptive", [push])
+    assert default.step_adjustment_count and widest(default) > 0.3
+    limits = SteppingLimits(min_width=0.15, max_width=0.25)
+    bounded = simulate_pendulum(short_walk, "adaptive", [push], step_adjustment=limits.adjustment(short_walk.sole))
+    assert bounded.step_adjustment_count and widest(bounded) <= 0.25 + 1e-9

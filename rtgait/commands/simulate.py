@@ -279,10 +279,12 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) 
     if scenario.guide is not None:
         raise ScenarioError(f"{scenario.name} is led by the hand ([guide]): that needs --model mujoco")
     mass = args.mass
+    stepping = None
     if args.robot is not None:
         robot = load_robot(args.robot)
         scenario = robot_walk(scenario, robot)
         mass = robot.mass if mass is None else mass
+        stepping = robot.description.stepping  # the robot's step limits ([stepping]), if it has them
     if mass is not None and not (math.isfinite(mass) and 1.0 <= mass <= 500.0):
         raise ScenarioError(f"--mass must be within [1, 500] kg, got {mass}")
     dt = 0.001 if args.control_dt is None else args.control_dt
@@ -299,7 +301,10 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) 
     show = not args.quiet and sys.stderr.isatty()
     progress = progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
     try:
-        result = simulate_pendulum(scenario, controller, pushes, mass=mass, dt=dt, progress=progress)
+        adjust = None if stepping is None else stepping.adjustment(scenario.sole)
+        result = simulate_pendulum(
+            scenario, controller, pushes, mass=mass, dt=dt, progress=progress, step_adjustment=adjust
+        )
     except ValueError as error:  # a push beyond physical sense, caught by the plant
         raise ScenarioError(f"--push: {error}") from None
     if show:

@@ -51,13 +51,15 @@ class ActivePlan:
         self.first_reference = first_reference  # [axis] -> cubic coefficients of segment 1's reference ZMP
         self.reference_offset = reference_offset  # time into that cubic at which segment 1 starts (s)
         segments: list = [None] * len(layout.durations)
-        segments[0] = tuple((layout.G_eager @ y).T.tolist())  # EAGER_SEGMENTS = 1: the rows of segment 0
+        eager = layout.eager_out  # EAGER_SEGMENTS = 1: the rows of segment 0, into the layout's scratch array
+        np.matmul(layout.G_eager, y, out=eager)
+        segments[0] = eager.T.tolist()  # copied out as floats, so the scratch array is free again at once
         self.segments = segments
 
-    def segment(self, j: int) -> tuple[list[float], list[float]]:
+    def segment(self, j: int) -> list[list[float]]:
         seg = self.segments[j]
         if seg is None:
-            seg = self.segments[j] = tuple((self.layout.G[12 * j : 12 * j + 12] @ self.y).T.tolist())
+            seg = self.segments[j] = (self.layout.G[12 * j : 12 * j + 12] @ self.y).T.tolist()
         return seg
 
     def locate(self, t: float) -> tuple[int, float]:
@@ -70,9 +72,26 @@ class ActivePlan:
         tau = min(max(rel - offsets[j], 0.0), self.durations[j])
         return j, tau
 
-    def end_state(self, j: int, w: float) -> np.ndarray:
-        """:meth:`state` at the end of segment ``j``: one precomputed product, as every replan needs it."""
-        return (self.layout.end_state_rows(j, w) @ self.y).ravel()
+    def end_state(self, j: int, w: float) -> list[float]:
+        """:meth:`state` at the end of segment ``j``: one precomputed product, as every replan needs it (Python
+        floats: the replan goes on with scalar arithmetic)."""
+        return (self.layout.end_state_rows(j, w) @ self.y).ravel().tolist()
+
+    def cog_at(self, t: float, w: float) -> tuple[float, float, float, float]:
+        """COG ``(cx, cy, dcx, dcy)`` at absolute time ``t`` (s, clamped to the plan; m, m/s): :meth:`state`'s COG
+        part, with the same arithmetic, for the measured-state connection (which needs nothing else)."""
+        j, tau = self.locate(t)
+        e = math.exp(w * tau)
+        ch, sh = 0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e)
+        (_, _, _, _, _, Ax0, Ax1, Ax2, Ax3, Ax4, Vx, Wx), (_, _, _, _, _, Ay0, Ay1, Ay2, Ay3, Ay4, Vy, Wy) = (
+            self.segment(j)
+        )
+        return (
+            Vx * ch + Wx * sh + Ax0 + tau * (Ax1 + tau * (Ax2 + tau * (Ax3 + tau * Ax4))),
+            Vy * ch + Wy * sh + Ay0 + tau * (Ay1 + tau * (Ay2 + tau * (Ay3 + tau * Ay4))),
+            w * (Vx * sh + Wx * ch) + Ax1 + tau * (2.0 * Ax2 + tau * (3.0 * Ax3 + tau * 4.0 * Ax4)),
+            w * (Vy * sh + Wy * ch) + Ay1 + tau * (2.0 * Ay2 + tau * (3.0 * Ay3 + tau * 4.0 * Ay4)),
+        )
 
     def state(self, j: int, tau: float, w: float) -> list[float]:
         """``[px, py, dpx, dpy, cx, cy, dcx, dcy]`` on segment ``j`` at local time ``tau`` (m, m/s)."""
@@ -92,16 +111,23 @@ class PlanLayout:
     """What a replan needs to know about one plan shape: its operator and where its anchors come from."""
 
     __slots__ = (
-        "G", "G_eager", "_end_rows", "_zmp_rows", "anchor_phases", "anchor_sources", "durations", "first_kind",
-        "offsets",
+        "G", "G_eager", "_end_rows", "_variants", "_zmp_rows", "anchor_phases", "anchor_sources", "durations",
+        "eager_out", "first_kind", "key", "kinds", "offsets", "transfer",
     )  # fmt: skip
 
     def __init__(self, operator: PlanOperator, kinds: tuple[str, ...]) -> None:
+        self.key = operator.key
+        self.kinds = kinds
+        self._variants: dict[tuple, tuple[list[PlanLayout], dict[int, np.ndarray]]] = {}
         self.G = operator.G
         self.G_eager = np.ascontiguousarray(operator.G[: 12 * EAGER_SEGMENTS])
+        self.eager_out = np.empty((12 * EAGER_SEGMENTS, 2))  # scratch for the product each replan makes
         self.durations = operator.durations.tolist()
         self.offsets = np.concatenate(([0.0], np.cumsum(operator.durations[:-1]))).tolist()
         self.first_kind = kinds[0]
+        # The reference transfer over the first segment, p0 + (3 / T^2) D tau^2 - (2 / T^3) D tau^3: its gains.
+        first = self.durations[0]
+        self.transfer = (3.0 / first**2, -2.0 / first**3)
         # Phases (relative to the plan's first) at whose end the reference ZMP rests on an anchor: the first
         # phase always (its free polynomial ends there), then every phase in which the reference travels.
         self.anchor_phases = (0, *(k for k, kind in enumerate(kinds) if k > 0 and kind in MOVING_KINDS))
@@ -122,6 +148,26 @@ class PlanLayout:
             a, A, V, W = block[: DEGREE + 1], block[DEGREE + 1 : 2 * DEGREE + 2], block[-2], block[-1]
             rows = np.array([powers @ a, slopes @ a, ch * V + sh * W + powers @ A, w * (sh * V + ch * W) + slopes @ A])
             self._end_rows[j] = rows
+        return rows
+
+    def variants(self, segment: int, durations: tuple[float, ...]) -> list[PlanLayout]:
+        """This plan shape with segment ``segment`` lasting each of ``durations`` (s) instead: candidate step
+        timings. Built in one vectorised pass on first use and kept (a few per layout)."""
+        found = self._variants.get((segment, durations))
+        if found is None:
+            table = np.repeat(np.asarray(self.durations)[None], len(durations), axis=0)
+            table[:, segment] = durations
+            layouts = [PlanLayout(op, self.kinds) for op in PlanOperator.for_durations(self.key, table)]
+            found = self._variants[(segment, durations)] = (layouts, {})
+        return found[0]
+
+    def variant_zmp_rows(self, segment: int, durations: tuple[float, ...], samples: int) -> np.ndarray:
+        """The :meth:`zmp_rows` of every :meth:`variants` layout, stacked ``(D, samples, n_inputs)`` (kept)."""
+        layouts = self.variants(segment, durations)
+        stacked = self._variants[(segment, durations)][1]
+        rows = stacked.get(samples)
+        if rows is None:
+            rows = stacked[samples] = np.stack([layout.zmp_rows(samples) for layout in layouts])
         return rows
 
     def zmp_rows(self, samples: int) -> np.ndarray:

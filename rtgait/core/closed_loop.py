@@ -492,7 +492,8 @@ def run_closed_loop(
             landing_phase = q
             landing_time = planner.phase_start(q + 1) if support != "double" else math.inf
         replans = planner.replan_count
-        if t + dt >= landing_time:
+        t_next = (k + 1) * dt  # the next tick's own time, not t + dt: the two may differ in the last bit
+        if t_next >= landing_time:
             landing_time = math.inf
             steps_completed += 1
             if adaptive:
@@ -501,8 +502,8 @@ def run_closed_loop(
                 i = (q + 1) // 2
                 foot = planner.walk.footprint(i + 1)
                 planner.touchdown(t, foot.side, foot.x, foot.y, foot.yaw)
-        hand_over(t + dt)
-        following = planner.sample_values(t + dt)
+        hand_over(t_next)
+        following = planner.sample_values(t_next)
         upcoming = following[0]
         if adaptive and planner.replan_count != replans:
             # A plan from the measured state began inside the tick: the two DCMs belong to different plans.

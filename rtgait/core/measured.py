@@ -15,16 +15,24 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
 from rtgait.core.active_plan import PlanLayout
 from rtgait.core.batch import halfplane_margin, polygon_halfplanes
+from rtgait.core.config import FEEDBACK_MODES, FeedbackMode
 from rtgait.core.footsteps import Footstep, Side, Stride
 from rtgait.core.pattern import MOVING_KINDS, PatternKey, PlanOperator
 from rtgait.core.sample import PlanRecord
-from rtgait.core.stepping import StepDecision, propose_landing
+from rtgait.core.stepping import (
+    StepAdjustment,
+    StepDecision,
+    TimingOptions,
+    propose_landing,
+    shorter_remainders,
+    shorter_single_supports,
+)
 from rtgait.core.support import support_polygon
 
 if TYPE_CHECKING:
@@ -68,10 +76,12 @@ class MeasuredPlanning:
         plan = self._plan
         if threshold is None or plan is None or self.config.feedback != "measured" or t < self._latest:
             return
-        planned = plan.state(*plan.locate(t), self.w)
         w = self.w
-        ex = values[1] + values[3] / w - planned[4] - planned[6] / w
-        ey = values[2] + values[4] / w - planned[5] - planned[7] / w
+        planned = plan.cog_at(t, w)
+        self._observed_on_plan = (plan, t, planned)  # the connection from this observation needs it again
+        px, py, pvx, pvy = planned
+        ex = values[1] + values[3] / w - px - pvx / w
+        ey = values[2] + values[4] / w - py - pvy / w
         if ex * ex + ey * ey > threshold * threshold and t - self._last_auto_replan >= AUTO_REPLAN_INTERVAL:
             phase, rel = self._phase, t - self._t0
             if phase is not None and phase.start <= rel < phase.end and phase.end - rel < AUTO_MIN_REMAINDER:
@@ -119,7 +129,7 @@ class MeasuredPlanning:
             raise RuntimeError(f"no foot is swinging at t={t} s")
         rel = t - self._t0
         pose, vel = phase.swing_state(rel, self.config.step_height)
-        self._swing_retarget = (phase.index, (rel, pose, vel))
+        self._swing_retarget = (phase.index, (rel, pose, vel, phase.lift_progress(rel)))
         return pose
 
     def _midphase_layout(self, q: int, remainder: float) -> PlanLayout:
@@ -150,17 +160,36 @@ class MeasuredPlanning:
         if abs(d) > OBSERVATION_MAX_AGE:
             return
         w = self.w
-        planned = plan.state(*plan.locate(t_obs), w)
+        known = self._observed_on_plan
+        if known is not None and known[0] is plan and known[1] == t_obs:
+            px, py, pvx, pvy = known[2]
+        else:
+            px, py, pvx, pvy = plan.cog_at(t_obs, w)
         ch, sh = math.cosh(w * d), math.sinh(w * d)
-        for axis, (c, v) in enumerate(((cx, vx), (cy, vy))):
-            e, de = c - planned[4 + axis], v - planned[6 + axis]
-            state[4 + axis] += e * ch + de / w * sh
-            state[6 + axis] += e * w * sh + de * ch
+        e, de = cx - px, vx - pvx
+        state[4] += e * ch + de / w * sh
+        state[6] += e * w * sh + de * ch
+        e, de = cy - py, vy - pvy
+        state[5] += e * ch + de / w * sh
+        state[7] += e * w * sh + de * ch
 
-    def replan_now(self, t: float, reason: str = "request") -> PlanRecord | None:
+    def replan_now(
+        self,
+        t: float,
+        reason: str = "request",
+        *,
+        feedback: FeedbackMode | None = None,
+        step_adjustment: StepAdjustment | Literal[False] | None = None,
+    ) -> PlanRecord | None:
         """Replan at absolute time ``t`` (s), inside any phase: the free first segment is the remainder of the
         phase under way (``docs/closed_loop.md`` gives the equations). The plan starts from the measured state
         with ``feedback="measured"`` (else from the plan itself, which reproduces it).
+
+        Args:
+            feedback: for this replan only, ``"planned"`` or ``"measured"`` instead of ``config.feedback`` (so a
+                controller that replans from the measured state only on a disturbance need not swap the config).
+            step_adjustment: for this replan only, a :class:`~rtgait.core.stepping.StepAdjustment` instead of
+                ``config.step_adjustment``, or ``False`` for none; ``None``: the config's.
 
         Returns the new plan's record, or ``None`` when the phase ends within :data:`MIN_REMAINDER` (the regular
         replan at the next double-support start is imminent) or the walk is settling.
@@ -168,6 +197,16 @@ class MeasuredPlanning:
         began = time.perf_counter()
         if not math.isfinite(t):
             raise ValueError(f"t must be finite, got {t}")
+        if feedback is None:
+            feedback = self.config.feedback
+        elif feedback not in FEEDBACK_MODES:
+            raise ValueError(f"feedback must be one of {FEEDBACK_MODES} or None, got {feedback!r}")
+        if step_adjustment is None:
+            adjust = self.config.step_adjustment
+        elif step_adjustment is False or isinstance(step_adjustment, StepAdjustment):
+            adjust = step_adjustment or None
+        else:
+            raise ValueError(f"step_adjustment must be a StepAdjustment, False or None, got {step_adjustment!r}")
         if self._plan is None:
             raise RuntimeError("replan_now needs a plan under way: call start() and sample() first")
         if t < self._latest:
@@ -182,59 +221,76 @@ class MeasuredPlanning:
             return None
         state = self._plan.state(*self._plan.locate(t), self.w)
         planned = None
-        if self.config.feedback == "measured":
-            planned = list(state)
+        if feedback == "measured":
+            if adjust is not None:
+                planned = list(state)  # step adjustment may fall back to the planned state
             self._measured_cog(t, state)
         layout = self._midphase_layout(q, remainder)
         self._connect(t, q, layout, state, rel - phase.start)
         self._record(t, q, layout, began, reason)
         record = self.plans[-1]
-        if self.config.step_adjustment is not None:
-            self._adjust_step(t, planned)
+        if adjust is not None:
+            self._adjust_step(t, planned, adjust)
         return record
 
     # ----- step adjustment -------------------------------------------------------------------------------
-    def _free_segment_margin(self, halfplanes) -> tuple[np.ndarray, np.ndarray, float]:
-        """The plan's free segment: its layout's ZMP rows ``M``, its ZMP at the sample times and its margin."""
+    def _free_segment_margin(self, halfplanes, samples: int) -> tuple[np.ndarray, np.ndarray, float]:
+        """The plan's free segment: its layout's ZMP rows ``M`` at ``samples`` times, its ZMP then and its margin."""
         plan = self._plan
-        rows = plan.layout.zmp_rows(self.config.step_adjustment.samples)
+        rows = plan.layout.zmp_rows(samples)
         zmp = rows @ plan.y
         return rows, zmp, float(halfplane_margin(zmp, *halfplanes).min())
 
-    def _adjust_step(self, t: float, planned: list[float] | None) -> StepDecision | None:
+    def _adjust_step(self, t: float, planned: list[float] | None, adjust: StepAdjustment) -> StepDecision | None:
         """After a replan: if its free segment asks for a ZMP outside the support polygon, move the landing of the
         next step that can still change to the candidate that keeps it inside with the least departure
         (:mod:`rtgait.core.stepping`).
 
-        With none, the landing with the largest margin is taken all the same (a capture step), and
-        ``StepAdjustment.on_failure`` decides what follows: ``"continue"`` walks on, ``"stop"`` stops after that
-        step. A plan made from the measured state is then replaced by the one from the planned state
+        With none, ``StepAdjustment.on_failure`` decides: ``"continue"`` takes the landing with the largest margin
+        all the same (a capture step) and walks on, ``"stop"`` takes it and stops after that step, ``"keep"`` keeps
+        the walk as planned (footprints and timing). A plan made from the measured state is then replaced by the
+        one from the planned state
         ``planned``, with the new landing: a plan no foot can realise would ask the feedback law to follow it, while
         from the planned state it asks only for what the ankle can do and the law, saturated at the sole's edge,
         recovers the rest (at the pendulum level this recovers 5-25 % more impulse than the measured plan).
         """
-        adjust = self.config.step_adjustment
         plan = self._plan
         q = plan.phase0
         walk = self._walk
         if self.timeline.kind(q) in ("end", "settle"):
             return None
         halfplanes = polygon_halfplanes(support_polygon(walk.contact_feet(q), adjust.sole))
-        rows, zmp, before = self._free_segment_margin(halfplanes)
+        rows, zmp, before = self._free_segment_margin(halfplanes, adjust.samples)
         if before >= adjust.required_margin:
             return None
+        timings = None
+        if self._adapts_timing(adjust):
+            def timings(k: int, swinging: bool) -> TimingOptions | None:
+                return self._timing_options(k, swinging, adjust)
         proposal = propose_landing(
             adjust, walk, q, t, self.phase_start, rows, zmp, halfplanes, plan.layout.anchor_phases,
-            lambda: self._freeze_swing(t)[:2],
+            lambda: self._freeze_swing(t)[:2], timings,
         )  # fmt: skip
         if proposal is None:
             if planned is not None:
                 self._connect(plan.t_start, q, plan.layout, planned, plan.elapsed)
             return None
         k, nominal, landing = proposal.step, proposal.nominal, proposal.landing
+        if not proposal.enough and adjust.on_failure == "keep":
+            return self._keep_walk(t, planned, proposal, before, halfplanes, adjust)
         walk.move_landing(k, *landing)
         moved = math.hypot(landing[0] - nominal.x, landing[1] - nominal.y)
         reason = f"ZMP margin {before * 1e3:+.1f} mm: step {k} lands {moved:.3f} m away"
+        layout = None
+        if proposal.timing >= 0:
+            layout = self._timing_layouts(k, proposal.swinging, adjust)[proposal.timing]
+            walk.set_single_support(k, proposal.single_support)
+            if self._next_replan_phase is not None:  # the phases after step k's single support moved
+                self._next_replan_time = self.phase_start(self._next_replan_phase)
+            reason += (
+                f", {proposal.nominal_single_support - proposal.single_support:.3f} s sooner "
+                f"(single support {proposal.single_support:.3f} s)"
+            )
         n = walk.n_steps
         if not proposal.enough:
             reason += f"; no landing keeps the ZMP inside (best {proposal.margin * 1e3:+.1f} mm)"
@@ -245,11 +301,35 @@ class MeasuredPlanning:
             else:
                 reason += ": walking on from the planned state, the feedback law recovers"
         self._phase = None
-        self._reconnect(planned if planned is not None and not proposal.enough else None)
-        after = self._free_segment_margin(halfplanes)[2]
+        self._reconnect(planned if planned is not None and not proposal.enough else None, layout)
+        after = self._free_segment_margin(halfplanes, adjust.samples)[2]
         decision = StepDecision(
-            t, k, (nominal.x, nominal.y), landing, before, after, proposal.candidates, not proposal.enough, reason
+            t, k, (nominal.x, nominal.y), landing, before, after, proposal.candidates, not proposal.enough, reason,
+            proposal.single_support, proposal.nominal_single_support,
+        )  # fmt: skip
+        return self._log_decision(decision)
+
+    def _keep_walk(self, t: float, planned: list[float] | None, proposal, before: float, halfplanes, adjust):
+        """``on_failure="keep"`` and no candidate is enough: the footprints and timing stay as planned; a plan from
+        the measured state gives way to the one from the planned state (as when no step can move)."""
+        plan = self._plan
+        if planned is not None:
+            self._connect(plan.t_start, plan.phase0, plan.layout, planned, plan.elapsed)
+        nominal = proposal.nominal
+        after = self._free_segment_margin(halfplanes, adjust.samples)[2]
+        reason = (
+            f"ZMP margin {before * 1e3:+.1f} mm; no landing keeps the ZMP inside (best {proposal.margin * 1e3:+.1f} "
+            f"mm): step {proposal.step} kept as planned"
         )
+        decision = StepDecision(
+            t, proposal.step, (nominal.x, nominal.y), (nominal.x, nominal.y), before, after, proposal.candidates, True,
+            reason, proposal.nominal_single_support, proposal.nominal_single_support,
+        )  # fmt: skip
+        return self._log_decision(decision)
+
+    def _log_decision(self, decision: StepDecision) -> StepDecision:
+        """Log ``decision`` (once: a disturbance that persists re-decides the same capture step) and return it."""
+        k, landing = decision.step, decision.landing
         last = self.step_adjustments[-1] if self.step_adjustments else None
         repeated = last is not None and last.step == k and math.dist(last.landing, landing) < 1e-3 and last.emergency
         if not repeated:  # a disturbance that persists re-decides the same capture step: log it once
@@ -257,15 +337,57 @@ class MeasuredPlanning:
             self.step_adjustment_count += 1
         return decision
 
-    def _reconnect(self, state: list[float] | None = None) -> None:
+    def _timing_durations(
+        self, k: int, swinging: bool, adjust: StepAdjustment
+    ) -> tuple[int, tuple[float, ...], np.ndarray] | None:
+        """The candidate timings of step ``k`` for the plan under way: the plan's segment whose duration changes,
+        its candidate durations (s) and the step's single support under each (s); ``None`` when the step cannot be
+        shortened. Swinging, the segment is the free one, the rest of the single support
+        (:func:`~rtgait.core.stepping.shorter_remainders`); else the step's whole single support
+        (:func:`~rtgait.core.stepping.shorter_single_supports`)."""
+        plan = self._plan
+        if swinging:
+            durations = shorter_remainders(adjust, plan.elapsed, plan.durations[0])
+            return None if durations is None else (0, durations, plan.elapsed + np.array(durations))
+        segment = 2 * k - 1 - plan.phase0
+        if segment >= len(plan.durations) or plan.layout.kinds[segment] != "single":
+            return None
+        durations = shorter_single_supports(adjust, plan.durations[segment])
+        return None if durations is None else (segment, durations, np.array(durations))
+
+    def _adapts_timing(self, adjust: StepAdjustment | None = None) -> bool:
+        """Step adjustment (``adjust``, default the config's) may change step timings (not with the auto
+        connection: it needs uniform timing)."""
+        adjust = adjust if adjust is not None else self.config.step_adjustment
+        return adjust is not None and adjust.adapt_timing and self.config.connection != "auto"
+
+    def _timing_layouts(self, k: int, swinging: bool, adjust: StepAdjustment) -> list[PlanLayout]:
+        """The plan under way's layout under each candidate timing of step ``k`` (:meth:`_timing_durations`)."""
+        segment, durations, _ = self._timing_durations(k, swinging, adjust)
+        return self._plan.layout.variants(segment, durations)
+
+    def _timing_options(self, k: int, swinging: bool, adjust: StepAdjustment) -> TimingOptions | None:
+        """What :func:`~rtgait.core.stepping.propose_landing` weighs for a new timing of step ``k``: the plans
+        under the candidate timings, from the same inputs ``y`` (the state and the footprints do not change; the
+        operators do: built ahead for the plans of double-support starts, in one batch per plan shape)."""
+        found = self._timing_durations(k, swinging, adjust)
+        if found is None:
+            return None
+        segment, durations, singles = found
+        plan = self._plan
+        rows = plan.layout.variant_zmp_rows(segment, durations, adjust.samples)
+        return TimingOptions(singles, rows, rows @ plan.y)
+
+    def _reconnect(self, state: list[float] | None = None, layout: PlanLayout | None = None) -> None:
         """Remake the plan under way at its own start, after its footprints (or the walk's length) changed at that
-        instant: from its own initial state, or from ``state`` (``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]``)."""
+        instant: from its own initial state, or from ``state`` (``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]``);
+        with ``layout`` (after a new step timing), in that shape."""
         plan = self._plan
         q, elapsed = plan.phase0, plan.elapsed
         if self._next_replan_phase is not None:
             self._prepare_layouts(self._next_replan_phase)
-        if elapsed == 0.0 and self.timeline.kind(q) in MOVING_KINDS:
+        if layout is None and elapsed == 0.0 and self.timeline.kind(q) in MOVING_KINDS:
             layout = self._layout(q, self._plan_span(q))
-        else:
+        elif layout is None:
             layout = self._midphase_layout(q, plan.durations[0])
         self._connect(plan.t_start, q, layout, plan.y[:4].ravel().tolist() if state is None else state, elapsed)

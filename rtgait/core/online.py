@@ -41,12 +41,11 @@ from rtgait.core.config import (
     PlannerConfig,
 )
 from rtgait.core.footsteps import Footstep, SoleRect, Stride, Timeline, check_step_timings, midpoint
+from rtgait.core.layouts import PlanShapes
 from rtgait.core.limits import MAX_REPLANS_PER_SAMPLE, MAX_STEPS
 from rtgait.core.lipm import CogTrajectory, omega
-from rtgait.core.measured import (
-    MeasuredPlanning,
-)
-from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey, PlanOperator
+from rtgait.core.measured import MeasuredPlanning
+from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey
 from rtgait.core.phases import PhaseInfo, SwingRetarget, phase_info
 from rtgait.core.sample import SAMPLE_FIELDS, GaitSample, PlanRecord
 from rtgait.core.spline import PiecewisePolynomial
@@ -62,7 +61,7 @@ from rtgait.core.walk import (
 )
 
 
-class OnlinePlanner(MeasuredPlanning):
+class OnlinePlanner(MeasuredPlanning, PlanShapes):
     """Walking pattern generator that replans at every double-support start and can change steps on the fly.
 
     Args:
@@ -106,6 +105,7 @@ class OnlinePlanner(MeasuredPlanning):
         )
         self._layouts: dict[tuple, PlanLayout] = {}
         self._layout_at: dict[int, PlanLayout] = {}  # the layout of each regular replan still to come, by phase
+        self._prepared: tuple | None = None  # (first phase, timeline, config) _layout_at was prepared for
         self._midphase_layouts: dict[PatternKey, PlanLayout] = {}
         self._plan: ActivePlan | None = None
         self._next_replan_time = math.inf
@@ -115,6 +115,7 @@ class OnlinePlanner(MeasuredPlanning):
         self._phase: PhaseInfo | None = None  # cached facts about the phase last sampled
         self._start_state: list[float] | None = None
         self._observed: tuple[float, float, float, float, float] | None = None
+        self._observed_on_plan: tuple | None = None  # (plan, t, its COG state then) from observe's DCM check
         history = config.history_steps
         self.plans: deque[PlanRecord] = deque(maxlen=history)
         """Every replanning, oldest first (the last ``history_steps`` of them)."""
@@ -305,56 +306,14 @@ class OnlinePlanner(MeasuredPlanning):
         self._phase = None
         self._plan = None
         self._observed = None
+        self._observed_on_plan = None
         self.plans.clear()
         self.replan_count = 0
         self._replaced()
         self._next_replan_phase = 0  # the first plan is made by the first sample, like every later one
         self._next_replan_time = self._t0
+        self._prepared = None
         self._prepare_layouts(0)
-
-    def _plan_span(self, q: int) -> int:
-        """Last phase covered by a plan made in phase ``q`` (a plan made mid-step looks as far ahead as the one
-        made when the step began, so that a plan from a state on it reproduces it)."""
-        n = self.n_steps
-        last = (q - (q & 1)) + 2 * self.config.horizon_steps
-        return 2 * n + 1 if n is not None and last >= 2 * n else last
-
-    def layout_for_replan(self, q: int) -> PlanLayout:
-        """The layout of the plan made when double support ``q`` begins (its operator and anchor phases), as
-        :meth:`sample` uses it; for evaluating many walks of this shape at once (:mod:`rtgait.core.batch`)."""
-        if not self.started:
-            raise RuntimeError("call start() before layout_for_replan()")
-        return self._layout(q, self._plan_span(q))
-
-    def _prepare_layouts(self, first_phase: int) -> None:
-        """Build the operators of every plan shape still to come (with per-step timings: of every shape and
-        durations), so that no replan pays for one (a fraction of a millisecond each, once per shape)."""
-        n = self.n_steps
-        last_replan = first_phase + 2 if n is None else 2 * n
-        self._layout_at = {q: self._layout(q, self._plan_span(q)) for q in range(first_phase, last_replan + 1, 2)}
-
-    def _layout(self, first: int, last: int) -> PlanLayout:
-        """Operator and anchor bookkeeping for the plan over phases ``first..last`` (cached by plan shape and, when
-        steps have their own timing, by the phases' durations too)."""
-        n = self.n_steps
-        timeline = self.timeline
-        # The phase kinds of a plan depend only on these three facts, so they key the cache cheaply; with one
-        # timing for every step they also fix the durations.
-        shape: tuple = (first == 0, last - first, n is not None and last == 2 * n + 1)
-        if not timeline.uniform:
-            shape = (*shape, timeline.durations(first, last))
-        layout = self._layouts.get(shape)
-        if layout is None:
-            kinds = tuple(timeline.kind(q) for q in range(first, last + 1))
-            key = PatternKey(
-                kinds=kinds,
-                durations=timeline.durations(first, last),
-                w=self.w,
-                first_degree=self.config.first_degree,
-            )
-            layout = self._layouts[shape] = PlanLayout(PlanOperator(key), kinds)
-        return layout
-
 
     def _state_at_phase_start(self, q: int) -> np.ndarray | list[float]:
         """``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]`` at the start of phase ``q`` (m, m/s).
@@ -373,18 +332,16 @@ class OnlinePlanner(MeasuredPlanning):
         if sources is None:
             sources = layout.anchor_sources = self._walk.relative_anchor_sources(q, layout.anchor_phases)
         anchors = self._walk.anchors_from(q >> 1, sources)
-        y = np.empty((4 + len(sources), 2))
-        flat = y.ravel()  # a view: y is C-contiguous
-        flat[:8] = state
-        flat[8:] = anchors
+        y = np.array([*state, *anchors])  # one conversion of Python floats, then viewed as (inputs, axes)
+        y.shape = (4 + len(sources), 2)
         # Reference of the free segment: the cubic transfer the footsteps alone would ask for over the whole
-        # phase (for a plan made mid-phase: the one of the plan made when the phase began).
-        px, py, ax, ay = flat[0], flat[1], anchors[0], anchors[1]
+        # phase (for a plan made mid-phase: the one of the plan made when the phase began). Python floats: the
+        # samples of the segment evaluate it.
+        px, py, ax, ay = float(state[0]), float(state[1]), anchors[0], anchors[1]
         offset = 0.0
         previous = self._plan
         if elapsed == 0.0 and layout.first_kind in MOVING_KINDS:
-            duration = layout.durations[0]
-            k2, k3 = 3.0 / duration**2, -2.0 / duration**3
+            k2, k3 = layout.transfer
             reference = ((px, 0.0, k2 * (ax - px), k3 * (ax - px)), (py, 0.0, k2 * (ay - py), k3 * (ay - py)))
         elif layout.first_kind in MOVING_KINDS and previous is not None and previous.phase0 == q:
             reference, offset = previous.first_reference, elapsed
@@ -405,7 +362,8 @@ class OnlinePlanner(MeasuredPlanning):
         t_start = self._next_replan_time
         planned = None
         if self.config.feedback == "measured":
-            planned = list(state)
+            if self.config.step_adjustment is not None:
+                planned = list(state)  # step adjustment may fall back to the planned state
             self._measured_cog(t_start, state)
         self._connect(t_start, q, layout, state, 0.0)
         if n is None or q + 2 <= 2 * n:
@@ -415,7 +373,7 @@ class OnlinePlanner(MeasuredPlanning):
             self._next_replan_phase, self._next_replan_time = None, math.inf
         self._record(t_start, q, layout, began, "start" if q == 0 else "double-support")
         if self.config.step_adjustment is not None:
-            self._adjust_step(t, planned)
+            self._adjust_step(t, planned, self.config.step_adjustment)
 
     def _record(self, t_start: float, q: int, layout: PlanLayout, began: float, reason: str) -> None:
         elapsed = time.perf_counter() - began

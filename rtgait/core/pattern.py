@@ -297,6 +297,19 @@ class PlanOperator:
         self.G = G
 
     @classmethod
+    def for_durations(cls, key: PatternKey, durations: np.ndarray) -> list[PlanOperator]:
+        """Operators of ``key``'s phase kinds for every row of ``durations`` ``(B, m)`` (s), built in one
+        vectorised pass (for candidate step timings)."""
+        durations = np.asarray(durations, dtype=float)
+        Gs = plan_operator_matrices(key.kinds, durations, key.w, key.first_degree)
+        operators = []
+        for row, G in zip(durations, Gs, strict=True):
+            operator = cls.__new__(cls)
+            operator._set(replace(key, durations=tuple(row.tolist())), row, G)
+            operators.append(operator)
+        return operators
+
+    @classmethod
     def for_first_durations(cls, key: PatternKey, first_durations: Sequence[float] | np.ndarray) -> list[PlanOperator]:
         """Operators of ``key`` with its first duration replaced by each of ``first_durations`` (s), built in
         one vectorised pass (for choosing a step timing, or the remainder of a phase, among candidates)."""

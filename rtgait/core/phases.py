@@ -11,12 +11,14 @@ from __future__ import annotations
 import math
 
 from rtgait.core.footsteps import Footstep, Timeline
-from rtgait.core.swing import retargeted_swing, swing_pose, swing_velocity
+from rtgait.core.swing import lift, retargeted_swing, swing_pose, swing_velocity
 from rtgait.core.walk import Walk
 
-SwingRetarget = tuple[float, tuple[float, float, float], tuple[float, float, float]]
-"""``(since, pose, velocity)``: time (s from the walk's start) the landing moved, the swing foot's horizontal pose
-``(x, y, yaw)`` (m, rad) and velocity (m/s, rad/s) then."""
+SwingRetarget = tuple[float, tuple[float, float, float], tuple[float, float, float], float]
+"""``(since, pose, velocity, lift)``: time (s from the walk's start) the landing (or the touch-down time) moved, the
+swing foot's horizontal pose ``(x, y, yaw)`` (m, rad) and velocity (m/s, rad/s) then, and its progress along the
+height profile then (0..1): the height goes on from there to touch-down, so a swing shortened by step timing
+adaptation keeps a continuous height."""
 
 
 class PhaseInfo:
@@ -43,13 +45,21 @@ class PhaseInfo:
 
     def swing(self, rel: float, height: float) -> tuple[float, float, float, float]:
         """Swing foot pose ``(x, y, z, yaw)`` (m, rad) at ``rel`` (s from the walk's start)."""
-        pose = swing_pose(self.swing_from, self.swing_to, (rel - self.start) / self.duration, height)
         if self.retarget is None:
-            return pose
-        since, pose0, vel0 = self.retarget
+            return swing_pose(self.swing_from, self.swing_to, (rel - self.start) / self.duration, height)
+        since, pose0, vel0, _ = self.retarget
         span = self.end - since
         x, y, yaw = retargeted_swing(pose0, vel0, self.swing_to, (rel - since) / span, span)
-        return (x, y, pose[2], yaw)
+        return (x, y, height * lift(min(max(self.lift_progress(rel), 0.0), 1.0))[0], yaw)
+
+    def lift_progress(self, rel: float) -> float:
+        """Progress along the height profile at ``rel`` (s from the walk's start): ``(rel - start) / duration``, or
+        after a retarget at ``since`` with progress ``s0``, ``s0 + (1 - s0) (rel - since) / (end - since)`` (the
+        same when the touch-down time did not move)."""
+        if self.retarget is None:
+            return (rel - self.start) / self.duration
+        since, _, _, s0 = self.retarget
+        return s0 + (1.0 - s0) * (rel - since) / (self.end - since)
 
     def swing_state(self, rel: float, height: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         """Horizontal pose ``(x, y, yaw)`` and velocity of the swing foot at ``rel``, to retarget from."""

@@ -429,6 +429,20 @@ class Walk:
         self._strides[step - 1 - self.base] = stride_between(stance, Footstep(x, y, old.yaw, old.side))
         self._rebuild(step)
 
+    def set_single_support(self, step: int, duration: float) -> None:
+        """Give ``step`` (1-based) a single support of ``duration`` (s), keeping its double support: for step
+        timing adaptation (:mod:`rtgait.core.stepping`), which no deadline limits; the step must not have landed.
+        The later phases shift with it (per-step timing, :class:`~rtgait.core.footsteps.Timeline`)."""
+        if self.latest_phase is not None and 2 * step <= self.latest_phase:
+            raise StepChangeTooLateError(f"step {step} has already landed")
+        if not (math.isfinite(duration) and duration > 0.0):
+            raise ValueError(f"single support must be a finite duration > 0 s, got {duration}")
+        timeline = self._timeline
+        timings = [timeline.step_timing(k) for k in range(1, max(step, len(self._step_timings)) + 1)]
+        timings[step - 1] = (float(duration), timings[step - 1][1])
+        self._step_timings = tuple(timings)
+        self._walk_changed()
+
     def retarget(self, index: int, footprint: Footstep) -> None:
         """Replace ``F[index]`` by ``footprint`` (where a foot really is); later footprints follow it, their
         strides unchanged."""

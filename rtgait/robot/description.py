@@ -49,6 +49,14 @@ loaded by name (``load_robot("talos")``); any other file is loaded by path. Ever
     rotor_inertia = 1e-5                 # kg m^2; armature = rotor_inertia * gear_ratio^2 (or give armature)
     gear_ratio = 100.0                   # also: kp, kd, effort_limit, natural_frequency, damping_ratio
 
+    [stepping]                           # optional: step adjustment's limits (rtgait.core.stepping.SteppingLimits);
+    max_length = 0.30                    # m, forward and back from the stance foot; every key optional
+    min_width = 0.15                     # m between the foot frames, at least 2 x feet.sole.inner (no crossing)
+    max_width = 0.40                     # m
+    max_swing_speed = 1.0                # m/s, average over the swing
+    min_time_to_touchdown = 0.2          # s: no change closer to touch-down
+    min_single_support = 0.5             # s: the shortest step timing adaptation may make
+
 A joint's actuation is resolved key by key: the last matching ``[[actuation.joints]]`` group that sets the key,
 else ``[gains]`` (kp, kd), else a default derived from the URDF by :mod:`rtgait.sim.actuation`.
 
@@ -69,6 +77,7 @@ from types import MappingProxyType
 from typing import Any
 
 from rtgait.core.footsteps import SoleRect
+from rtgait.core.stepping import STEPPING_KEYS, SteppingLimits
 from rtgait.robot.data import RobotDataError, robots_dir, share_dir
 from rtgait.tomlfile import TomlFiles, is_finite_number
 
@@ -193,6 +202,9 @@ class RobotDescription:
         kp, kd: optional joint gains for the physics layer (``[gains]``), one number for all joints or joint name ->
             value.
         actuation: the ``[actuation]`` table (defaults when absent); :meth:`joint_actuation` resolves one joint.
+        stepping: the ``[stepping]`` table, step adjustment's limits (keys missing from it take
+            :class:`~rtgait.core.stepping.SteppingLimits`'s defaults); ``None`` when the description has none (then
+            each user picks its defaults: the pendulum loop the core's, the MuJoCo loop limits scaled by leg length).
         source: where the description came from (``"builtin"`` or a file path); informative only.
     """
 
@@ -211,6 +223,7 @@ class RobotDescription:
     kp: float | Mapping[str, float] | None = None
     kd: float | Mapping[str, float] | None = None
     actuation: ActuationSpec = field(default_factory=ActuationSpec)
+    stepping: SteppingLimits | None = None
     source: str = field(default="", compare=False)
 
     def posture_angle(self, joint: str) -> float:
@@ -393,7 +406,9 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         source: where it came from, for messages.
         base: folder that relative paths are resolved against (the TOML file's folder); ``None`` for built-ins.
     """
-    _FILES.check_keys(data, "", ("name", "model", "feet", "walking", "posture"), ("description", "gains", "actuation"))
+    _FILES.check_keys(
+        data, "", ("name", "model", "feet", "walking", "posture"), ("description", "gains", "actuation", "stepping")
+    )
     name = _FILES.string(data, "name", non_empty=True)
     if not _NAME_PATTERN.fullmatch(name):
         raise RobotError(f"name must be letters, digits, '.', '_' or '-', got {name!r}")
@@ -475,6 +490,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         kp = _gain(gains["kp"], "gains.kp", names)
         kd = _gain(gains["kd"], "gains.kd", names)
     actuation = _actuation(data["actuation"], names) if "actuation" in data else ActuationSpec()
+    stepping = _stepping(data["stepping"], sole) if "stepping" in data else None
 
     return RobotDescription(
         name=name,
@@ -492,8 +508,25 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         kp=kp,
         kd=kd,
         actuation=actuation,
+        stepping=stepping,
         source=source,
     )
+
+
+def _stepping(raw: Any, sole: SoleRect) -> SteppingLimits:
+    """The ``[stepping]`` table (:class:`~rtgait.core.stepping.SteppingLimits` checks the values)."""
+    table = _FILES.table(raw, "stepping")
+    _FILES.check_keys(table, "stepping", (), STEPPING_KEYS)
+    try:
+        limits = SteppingLimits.from_table(table)
+    except ValueError as error:
+        raise RobotError(str(error)) from None
+    if limits.min_width < 2.0 * sole.inner:
+        raise RobotError(
+            f"stepping.min_width ({limits.min_width:g} m) must be at least 2 x feet.sole.inner "
+            f"({2.0 * sole.inner:g} m): the soles would overlap"
+        )
+    return limits
 
 
 # ----- finding descriptions -------------------------------------------------------------------------------------

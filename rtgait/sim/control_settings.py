@@ -11,7 +11,7 @@ from rtgait.core.closed_loop import DEFAULT_REPLAN_DCM_ERROR
 from rtgait.core.feedback import DcmFeedbackGains
 from rtgait.core.footsteps import SoleRect
 from rtgait.core.measured import AUTO_MIN_REMAINDER, AUTO_REPLAN_INTERVAL
-from rtgait.core.stepping import StepAdjustment
+from rtgait.core.stepping import StepAdjustment, SteppingLimits
 from rtgait.robot.ik import IKTargets
 from rtgait.sim.foot_control import FootControlGains, FootOffsets
 
@@ -73,11 +73,14 @@ class RobotInfo:
         return cls(robot.mass, sole or robot.description.sole, robot.description.cog_height)
 
 
-def step_limits(info: RobotInfo) -> StepAdjustment:
-    """Step adjustment's stride box for a robot: :class:`~rtgait.core.stepping.StepAdjustment`'s defaults (set for an
+def step_limits(info: RobotInfo, stepping: SteppingLimits | None = None) -> StepAdjustment:
+    """Step adjustment's stride box for a robot: the robot description's ``[stepping]`` table when given
+    (``robot.description.stepping``), else :class:`~rtgait.core.stepping.StepAdjustment`'s defaults (set for an
     HRP-2-like walk, COM 0.8 m high: 0.35 m forward or back, 0.12-0.45 m sideways) scaled by ``leg_length / 0.8``, with
     the soles kept 2 cm apart at the least; its swing speed and last-moment limits as they are (no change in the
     last 0.2 s before touch-down: auto_stabilizer's ``overwritableRemainTime``)."""
+    if stepping is not None:
+        return stepping.adjustment(info.sole)
     scale = info.leg_length / 0.8
     min_width = max(0.12 * scale, 2.0 * info.sole.inner + 0.02)
     max_width = max(0.45 * scale, min_width + 0.1)

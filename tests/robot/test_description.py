@@ -126,6 +126,16 @@ BAD = [
      "posture.leg_left_4_joint must be a finite number"),
     ("negative gain", TALOS_TEXT + "\n[gains]\nkp = -1.0\nkd = 1.0\n", "gains.kp must be a number >= 0"),
     ("gain for an unknown joint", TALOS_TEXT + "\n[gains]\nkp = 1.0\nkd = { elbow = 1.0 }\n", "gains.kd.elbow"),
+    ("unknown stepping key", edited("max_length = 0.29", "max_lenght = 0.29"), "stepping.max_lenght"),
+    ("negative step length", edited("max_length = 0.29", "max_length = -0.29"), "stepping.max_length must be"),
+    ("step length as text", edited("max_length = 0.29", 'max_length = "far"'), "stepping.max_length must be"),
+    ("boolean swing speed", edited("max_swing_speed = 1.0", "max_swing_speed = true"), "stepping.max_swing_speed"),
+    ("too short a single support", edited("min_single_support = 0.5", "min_single_support = 0.01"),
+     "stepping.min_single_support must be"),
+    ("stride box inside out", edited("max_width = 0.40", "max_width = 0.1"), "stepping.min_width (0.15) must be <"),
+    ("soles overlapping", edited("min_width = 0.15", "min_width = 0.1"),
+     "stepping.min_width (0.1 m) must be at least 2 x feet.sole.inner (0.13 m)"),
+    ("stepping not a table", edited("[stepping]", "stepping = 1\n[stepping_]"), "stepping"),
 ]  # fmt: skip
 
 
@@ -174,3 +184,28 @@ def test_description_values_are_finite():
         description = load_robot(name)
         assert all(math.isfinite(v) for v in description.posture.values())
         assert description.cog_height > 0.0
+
+
+def test_step_limits_come_from_the_stepping_table():
+    talos, g1 = load_robot("talos"), load_robot("g1")
+    assert talos.stepping is not None and g1.stepping is not None
+    assert (talos.stepping.max_length, talos.stepping.min_width, talos.stepping.max_width) == (0.29, 0.15, 0.40)
+    assert g1.stepping.max_swing_speed == 1.5 and g1.stepping.min_single_support == 0.35
+    # The no-crossing limit leaves the soles apart on both robots.
+    for robot in (talos, g1):
+        assert robot.stepping.min_width > 2.0 * robot.sole.inner
+    adjust = talos.stepping.adjustment(talos.sole, adapt_timing=True)
+    assert adjust.sole == talos.sole and adjust.max_length == 0.29 and adjust.min_single_support == 0.5
+    assert adjust.adapt_timing
+
+
+def test_a_partial_stepping_table_takes_the_defaults_and_none_gives_none(tmp_path):
+    start = TALOS_TEXT.index("[stepping]")
+    without = TALOS_TEXT[:start]
+    assert load_robot(write(tmp_path, without)).stepping is None
+    table = "[stepping]\nmax_length = 0.2\nmin_width = 0.16\n"
+    partial = load_robot(write(tmp_path, without + table, "partial.toml")).stepping
+    assert partial.max_length == 0.2 and partial.max_width == 0.45 and partial.min_time_to_touchdown == 0.2
+    # The core's default no-crossing limit (0.12 m) is too narrow for Talos's soles: said in one line.
+    with pytest.raises(RobotError, match=r"stepping\.min_width"):
+        load_robot(write(tmp_path, without + "[stepping]\nmax_length = 0.2\n", "narrow.toml"))
