@@ -66,17 +66,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from rtgait.core.polygon import ConvexPolygon
+
 MIN_DT = 1e-6
 """Shortest control period accepted (s)."""
 MAX_DT = 1.0
 """Longest control period accepted (s): beyond it (1) is no model of a balancing robot's tick."""
 MAX_OMEGA = 1000.0
 """Largest pendulum frequency accepted (1/s); a COM 1 cm high on Earth gives 31 1/s."""
-
-# The polygon's inside test tolerates this much negative cross product, relative to the squared size of the
-# polygon: a point that the projection put on an edge must count as inside on the next tick, despite round-off.
-_INSIDE_TOLERANCE = 1e-12
-
 
 def _check_real(name: str, value: object, low: float, high: float, unit: str, optional: bool = False) -> float | None:
     """``value`` as a float if a finite real within ``[low, high]`` (or ``None`` when ``optional``), else a
@@ -191,104 +188,6 @@ def _pair(name: str, value: object) -> tuple[float, float]:
         raise ValueError(f"{name} must be a pair (x, y) of numbers in m, got {value!r}") from None
 
 
-def _polygon_array(polygon: object) -> np.ndarray:
-    """``polygon`` as a finite ``(k, 2)`` float array with ``k >= 3``, else a ValueError."""
-    try:
-        vertices = np.array(polygon, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"polygon must be an array (k, 2) of vertices in m, got {polygon!r}") from None
-    if vertices.ndim != 2 or vertices.shape[1] != 2 or vertices.shape[0] < 3:
-        raise ValueError(f"polygon must be an array (k, 2) with k >= 3 vertices in m, got shape {vertices.shape}")
-    if not np.all(np.isfinite(vertices)):
-        raise ValueError("polygon vertices must be finite (m)")
-    return vertices
-
-
-Edges = tuple[tuple[float, float, float, float, float], ...]
-"""A polygon's edges as ``(ax, ay, ex, ey, 1/|e|^2)``: start vertex and edge vector (m), for the tick path."""
-
-
-def _polygon_edges(polygon: object) -> tuple[Edges, float]:
-    """The edges of a convex counter-clockwise polygon and the tolerance (m^2) of its inside test.
-
-    Raises ValueError unless the polygon is convex and counter-clockwise, winding once (its edges turn through
-    exactly one full turn, all to the left). Repeated vertices are dropped and collinear ones kept: a single
-    foot's rectangle and scipy's hulls both qualify. Pure Python: for a few vertices it is faster than numpy.
-    """
-    points = _polygon_array(polygon).tolist()
-    count = len(points)
-    edges = []
-    for i, (ax, ay) in enumerate(points):
-        bx, by = points[(i + 1) % count]
-        ex, ey = bx - ax, by - ay
-        if ex != 0.0 or ey != 0.0:
-            edges.append((ax, ay, ex, ey, 1.0 / (ex * ex + ey * ey)))
-    xs = [x for x, _ in points]
-    ys = [y for _, y in points]
-    tolerance = _INSIDE_TOLERANCE * max(max(xs) - min(xs), max(ys) - min(ys)) ** 2
-    turning = 0.0
-    convex = len(edges) >= 3
-    for i, (_, _, ex, ey, _) in enumerate(edges):
-        _, _, fx, fy, _ = edges[(i + 1) % len(edges)]
-        cross = ex * fy - ey * fx
-        convex = convex and cross >= -tolerance
-        turning += math.atan2(cross, ex * fx + ey * fy)
-    if not (convex and abs(turning - 2.0 * math.pi) < 1e-6):
-        raise ValueError("polygon must be convex with counter-clockwise vertices, winding once, of positive area")
-    return tuple(edges), tolerance
-
-
-def _project(px: float, py: float, edges: Edges, tolerance: float) -> tuple[float, float, bool]:
-    """Nearest point of the polygon to ``(px, py)`` and whether it moved: ``(qx, qy, moved)`` (m).
-
-    A point left of every counter-clockwise edge is inside and stays. Otherwise the nearest boundary point lies on
-    an edge whose outer side holds the point (at a vertex, on one of its two edges: the normal cone of a convex
-    vertex is spanned by their outward normals), so only those edges are searched.
-    """
-    best = math.inf
-    qx = qy = 0.0
-    for ax, ay, ex, ey, inverse in edges:
-        rx = px - ax
-        ry = py - ay
-        if ex * ry - ey * rx >= -tolerance:
-            continue
-        t = (rx * ex + ry * ey) * inverse
-        t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
-        cx = ax + t * ex
-        cy = ay + t * ey
-        d2 = (px - cx) ** 2 + (py - cy) ** 2
-        if d2 < best:
-            best, qx, qy = d2, cx, cy
-    if best == math.inf:
-        return px, py, False
-    return qx, qy, True
-
-
-def project_to_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
-    """Nearest points (m) of a convex counter-clockwise ``polygon`` ``(k, 2)`` to ``points`` (``(2,)`` or ``(n, 2)``).
-
-    Points inside or on the boundary are returned unchanged; the result has the shape of ``points``. Vectorised
-    over the points, for batches; :meth:`DcmFeedback.update` does the same for one point without numpy.
-    """
-    array = np.asarray(points, dtype=float)
-    if array.ndim not in (1, 2) or array.shape[-1] != 2 or not np.all(np.isfinite(array)):
-        raise ValueError(f"points must be finite, of shape (2,) or (n, 2) in m, got shape {array.shape}")
-    vertices = _polygon_array(polygon)
-    _, tolerance = _polygon_edges(vertices)  # validation: convex, counter-clockwise
-    flat = array.reshape(-1, 2)
-    edge = np.roll(vertices, -1, axis=0) - vertices
-    length2 = np.einsum("kd,kd->k", edge, edge)
-    edge, start, length2 = edge[length2 > 0.0], vertices[length2 > 0.0], length2[length2 > 0.0]
-    rel = flat[:, None, :] - start[None, :, :]  # (n, k, 2)
-    cross = edge[None, :, 0] * rel[..., 1] - edge[None, :, 1] * rel[..., 0]
-    inside = np.all(cross >= -tolerance, axis=1)
-    along = np.clip(np.einsum("nkd,kd->nk", rel, edge) / length2[None, :], 0.0, 1.0)
-    nearest = start[None] + along[..., None] * edge[None]  # nearest point of each edge, (n, k, 2)
-    best = np.argmin(np.einsum("nkd,nkd->nk", flat[:, None, :] - nearest, flat[:, None, :] - nearest), axis=1)
-    projected = nearest[np.arange(len(flat)), best]
-    return np.where(inside[:, None], flat, projected).reshape(array.shape)
-
-
 class DcmFeedback:
     """The DCM feedback law of eq. (2) with saturation, anti-windup and the COM correction of eq. (4).
 
@@ -322,8 +221,7 @@ class DcmFeedback:
         self._leak_i = self._input_i = self._leak_c = self._input_c = 0.0
         # Last polygon seen, its bytes as the cache key, and its edges as floats.
         self._polygon_key: tuple[object, ...] | None = None
-        self._edges: Edges = ()
-        self._tolerance = 0.0
+        self._polygon: ConvexPolygon | None = None
         self.reset()
 
     def reset(self) -> None:
@@ -377,7 +275,7 @@ class DcmFeedback:
         self._tick_dt = checked
 
     def _set_polygon(self, polygon: object, key: tuple[object, ...] | None) -> None:
-        self._edges, self._tolerance = _polygon_edges(polygon)
+        self._polygon = ConvexPolygon(polygon)
         self._polygon_key = key
 
     def update(
@@ -451,7 +349,7 @@ class DcmFeedback:
                 ux = self._ox + step_x * scale
                 uy = self._oy + step_y * scale
                 limited = True
-        zx, zy, projected = _project(px_ref + ux, py_ref + uy, self._edges, self._tolerance)
+        zx, zy, projected = self._polygon.nearest(px_ref + ux, py_ref + uy)  # type: ignore[union-attr]
         saturated = limited or projected
         self._ox = zx - px_ref
         self._oy = zy - py_ref

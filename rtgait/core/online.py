@@ -260,9 +260,6 @@ class OnlinePlanner(MeasuredPlanning, PlanShapes):
         self._replaced()
         self._changed(self._walk.stop())
 
-
-
-
     # ----- planning ---------------------------------------------------------------------------------------
     def start(
         self,

@@ -57,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rtgait.core.lipm import GRAVITY, omega
+from rtgait.core.polygon import ConvexPolygon
 from rtgait.core.support import signed_margin
 
 DEFAULT_MAX_LEAN = math.radians(25.0)
@@ -154,82 +155,8 @@ def push_impulse(pushes: Iterable[Push], t0: float, t1: float) -> np.ndarray:
     return np.array([jx, jy])
 
 
-class _ConvexPolygon:
-    """A convex counter-clockwise polygon prepared for many nearest-point queries with plain floats.
-
-    Python floats, not numpy: for the 4-8 vertices of a support polygon a float loop is several times faster than
-    the fixed overhead of numpy calls, and a tick must stay within a few microseconds.
-    """
-
-    __slots__ = ("edges", "key", "vertices")
-
-    def __init__(self, vertices: list[list[float]]) -> None:
-        k = len(vertices)
-        if k == 0:
-            raise ValueError("the support polygon is empty: no foot on the ground, so no ZMP exists")
-        for v in vertices:
-            if len(v) != 2 or not (math.isfinite(v[0]) and math.isfinite(v[1])):
-                raise ValueError(f"support polygon vertices must be finite (x, y) pairs in m, got {v!r}")
-        self.key = vertices
-        self.vertices = [(v[0], v[1]) for v in vertices]
-        # Per edge: start point, direction, 1/|e|^2 (0 for a repeated vertex, so its projection is the vertex).
-        self.edges: list[tuple[float, float, float, float, float]] = []
-        for i in range(k):
-            ax, ay = self.vertices[i]
-            bx, by = self.vertices[(i + 1) % k]
-            ex, ey = bx - ax, by - ay
-            length2 = ex * ex + ey * ey
-            self.edges.append((ax, ay, ex, ey, 1.0 / length2 if length2 > 0.0 else 0.0))
-        if k >= 3:
-            self._check_convex_ccw()
-
-    def _check_convex_ccw(self) -> None:
-        area2 = sum(ax * ey - ay * ex for ax, ay, ex, ey, _ in self.edges)  # twice the signed area
-        scale = max(max(abs(c) for v in self.vertices for c in v), 1e-300)
-        if not area2 > 0.0:
-            raise ValueError("support polygon must have counter-clockwise vertices and a positive area")
-        k = len(self.edges)
-        for i in range(k):
-            _, _, e1x, e1y, _ = self.edges[i]
-            _, _, e2x, e2y, _ = self.edges[(i + 1) % k]
-            if e1x * e2y - e1y * e2x < -1e-12 * scale * scale:
-                raise ValueError("support polygon must be convex with counter-clockwise vertices")
-
-    def nearest(self, x: float, y: float) -> tuple[float, float, bool]:
-        """Nearest point of the closed polygon to ``(x, y)`` and whether ``(x, y)`` is in it.
-
-        For a convex polygon and a point outside, the nearest point lies on an edge whose supporting line has the
-        point on its outer side (if it is inside an edge, the offset is that edge's outward normal; if it is a vertex,
-        the offset lies between the outward normals of its two edges, so outside at least one of them, and the
-        projection onto that edge is clamped to the vertex). So only those edges are searched.
-        """
-        if len(self.vertices) < 3:
-            return self._nearest_degenerate(x, y)
-        best = math.inf
-        qx = qy = 0.0
-        for ax, ay, ex, ey, inv2 in self.edges:
-            rx, ry = x - ax, y - ay
-            if ex * ry - ey * rx < 0.0:  # right of a counter-clockwise edge: outside its line
-                s = (rx * ex + ry * ey) * inv2
-                s = 0.0 if s < 0.0 else 1.0 if s > 1.0 else s
-                nx, ny = ax + s * ex, ay + s * ey
-                d2 = (x - nx) ** 2 + (y - ny) ** 2
-                if d2 < best:
-                    best, qx, qy = d2, nx, ny
-        if best == math.inf:
-            return x, y, True
-        return qx, qy, False
-
-    def _nearest_degenerate(self, x: float, y: float) -> tuple[float, float, bool]:
-        # One vertex (a point contact) or two (a line contact): the set is the segment itself.
-        ax, ay, ex, ey, inv2 = self.edges[0]
-        s = ((x - ax) * ex + (y - ay) * ey) * inv2
-        s = 0.0 if s < 0.0 else 1.0 if s > 1.0 else s
-        qx, qy = ax + s * ex, ay + s * ey
-        return qx, qy, qx == x and qy == y
-
-
 def _as_vertex_list(polygon: np.ndarray | Sequence[Sequence[float]]) -> list[list[float]]:
+    """The polygon's vertices as lists of floats, cheaply: compared every tick with the cached polygon's."""
     if polygon is None:
         raise ValueError("the support polygon is None: no foot on the ground, so no ZMP exists")
     if isinstance(polygon, np.ndarray):
@@ -237,17 +164,6 @@ def _as_vertex_list(polygon: np.ndarray | Sequence[Sequence[float]]) -> list[lis
             raise ValueError(f"support polygon must have shape (k, 2), got {polygon.shape}")
         return polygon.tolist()
     return [[float(c) for c in v] for v in polygon]
-
-
-def clip_to_polygon(point: Sequence[float] | np.ndarray, polygon: np.ndarray) -> np.ndarray:
-    """The point of the convex counter-clockwise ``polygon`` ``(k, 2)`` nearest to ``point`` ``(2,)`` (m).
-
-    ``point`` itself when inside. One or two vertices are accepted too (a point or line contact). An empty polygon
-    raises :class:`ValueError`: with no contact there is no ZMP.
-    """
-    x, y = _floats2("point", point)
-    qx, qy, _ = _ConvexPolygon(_as_vertex_list(polygon)).nearest(x, y)
-    return np.array([qx, qy])
 
 
 class LipmPlant:
@@ -313,7 +229,7 @@ class LipmPlant:
         self.set_state(cog, cog_vel, time)
         self._dt = math.nan  # last full-tick duration and its cosh/sinh, reused at a constant control period
         self._cosh = self._sinh = math.nan
-        self._poly: _ConvexPolygon | None = None
+        self._poly: ConvexPolygon | None = None
         self._zmp: tuple[float, float] | None = None
         self._pushes: list[Push] = []
         self._live = 0  # pushes before this index have ended
@@ -435,11 +351,11 @@ class LipmPlant:
         self._vy += jy / self._m
 
     # ----- integration --------------------------------------------------------------------------------------
-    def _polygon(self, polygon: np.ndarray) -> _ConvexPolygon:
+    def _polygon(self, polygon: np.ndarray) -> ConvexPolygon:
         vertices = _as_vertex_list(polygon)
         poly = self._poly
         if poly is None or poly.key != vertices:  # rebuild only when the contacts change
-            poly = self._poly = _ConvexPolygon(vertices)
+            poly = self._poly = ConvexPolygon(vertices, min_vertices=1)  # one foot's edge or corner is a contact
         return poly
 
     def _advance(self, tau: float, ex: float, ey: float, full_tick: bool) -> None:
@@ -528,8 +444,8 @@ class LipmPlant:
     # ----- verdicts -----------------------------------------------------------------------------------------
     def distance_to_polygon(self, polygon: np.ndarray) -> float:
         """Horizontal distance (m) from the COM to the support polygon; 0 inside."""
-        qx, qy, inside = self._polygon(polygon).nearest(self._x, self._y)
-        return 0.0 if inside else math.hypot(self._x - qx, self._y - qy)
+        qx, qy, moved = self._polygon(polygon).nearest(self._x, self._y)
+        return math.hypot(self._x - qx, self._y - qy) if moved else 0.0
 
     def fallen(self, polygon: np.ndarray) -> bool:
         """True when the COM is farther than :attr:`fall_distance` from the support polygon (module docstring)."""
@@ -547,8 +463,8 @@ class LipmPlant:
         if math.hypot(self._vx, self._vy) > speed_tol:
             return False
         poly = self._polygon(polygon)
-        if len(poly.vertices) < 3:  # a point or line contact has no inside: the DCM must lie on it
+        if poly.degenerate:  # a point or line contact has no inside: the DCM must lie on it
             xi = self.dcm
-            on = poly.nearest(float(xi[0]), float(xi[1]))[2]
-            return on and margin <= 0.0
-        return bool(signed_margin(self.dcm, np.asarray(poly.vertices, dtype=float))[0] >= margin)
+            moved = poly.nearest(float(xi[0]), float(xi[1]))[2]
+            return not moved and margin <= 0.0
+        return bool(signed_margin(self.dcm, np.asarray(poly.key, dtype=float))[0] >= margin)

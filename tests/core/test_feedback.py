@@ -13,9 +13,10 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.spatial import ConvexHull
 
-from rtgait.core.feedback import DcmFeedback, DcmFeedbackGains, project_to_polygon
+from rtgait.core.feedback import DcmFeedback, DcmFeedbackGains
 from rtgait.core.footsteps import Footstep, SoleRect
 from rtgait.core.lipm import omega
+from rtgait.core.polygon import project_to_polygon
 from rtgait.core.support import signed_margin, support_polygon
 
 W = omega(0.8)  # 1/s, a COM 0.8 m high

@@ -16,10 +16,10 @@ from rtgait.core.plant import (
     PUSH_SPEED_LIMIT,
     LipmPlant,
     Push,
-    clip_to_polygon,
     push_force,
     push_impulse,
 )
+from rtgait.core.polygon import clip_to_polygon
 from rtgait.core.support import signed_margin, support_polygon
 
 ZC, MASS = 0.8, 50.0
