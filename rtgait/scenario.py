@@ -76,7 +76,6 @@ from rtgait.core.footsteps import (
     Stride,
     Timeline,
     Timing,
-    check_step_timings,
     place_footsteps,
     standing_feet,
     stride_between,
@@ -86,19 +85,25 @@ from rtgait.core.limits import (
     MAX_GRAVITY,
     MAX_HORIZON_STEPS,
     MAX_PHASE_DURATION,
-    MAX_PHASE_W_T,
-    MAX_ROLLOUT_TICKS,
     MAX_STEPS,
     MAX_STRIDE,
     MIN_COG_HEIGHT,
     MIN_DT,
     MIN_GRAVITY,
     MIN_PHASE_DURATION,
-    check_range,
 )
 from rtgait.core.online import ConnectionMode, PlannerConfig
 from rtgait.core.rollout import ScheduledChange
-from rtgait.tomlfile import NumberRule, TomlFiles, is_finite_number
+from rtgait.guide_path import GuidePath
+from rtgait.scenario_checks import (
+    PHASES,
+    ScenarioError,
+    check_distinct_steps,
+    check_phase_lengths,
+    check_ticks,
+    within,
+)
+from rtgait.tomlfile import NumberRule, TomlFiles
 
 __all__ = [
     "MAX_WALK_STEPS",
@@ -114,8 +119,6 @@ __all__ = [
 _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 # Stride.turn must stay strictly inside +-pi/2; checking yaws with this rule gives the error a TOML field name.
 _YAW_RULE: NumberRule = "|x| < pi/2"
-PHASES = ("single_support", "double_support", "start", "end", "settle")
-"""The :class:`Timing` fields, each a phase duration (s)."""
 MAX_WALK_STEPS = MAX_STEPS - 1
 """Most forward steps of a scenario: the closing step makes :data:`~rtgait.core.limits.MAX_STEPS`."""
 _STEPS_WHY = f"one closing step is added and a walk has at most {MAX_STEPS} steps"
@@ -128,67 +131,6 @@ _WIDTH_BOUNDS = (0.0, MAX_STRIDE)
 _MASS_BOUNDS = (1.0, 500.0)  # kg: from a toy biped to the heaviest humanoid built
 
 
-class ScenarioError(ValueError):
-    """A scenario is unknown, unreadable or invalid. The message is one line naming the field."""
-
-
-@dataclass(frozen=True)
-class GuidePath:
-    """The path along which a person leads the robot by the hand: straight, an arc, straight, then a stop.
-
-    The path starts at the robot's hand and heads where the robot faces.
-
-    Attributes:
-        forward: length of the first straight part (m, >= 0).
-        turn: angle of the arc (rad, positive to the left, |turn| <= pi).
-        radius: radius of the arc (m, > 0).
-        after: length of the straight part after the arc (m, >= 0).
-        speed: the person's speed along the path (m/s, > 0).
-    """
-
-    forward: float = 1.0
-    turn: float = math.pi / 2
-    radius: float = 1.0
-    after: float = 0.5
-    speed: float = 0.15
-
-    def __post_init__(self) -> None:
-        checks = {
-            "forward": self.forward >= 0.0,
-            "radius": self.radius > 0.0,
-            "after": self.after >= 0.0,
-            "speed": self.speed > 0.0,
-            "turn": abs(self.turn) <= math.pi,
-        }
-        for name, ok in checks.items():
-            value = getattr(self, name)
-            if not (math.isfinite(value) and ok):
-                raise ScenarioError(f"guide.{name} is out of range, got {value}")
-
-    @property
-    def length(self) -> float:
-        """Length of the whole path (m)."""
-        return self.forward + abs(self.turn) * self.radius + self.after
-
-    @property
-    def duration(self) -> float:
-        """Time the person walks (s)."""
-        return self.length / self.speed
-
-    def at(self, s: float) -> tuple[float, float, float]:
-        """Position ``(x, y)`` (m) and heading (rad) after ``s`` metres along the path, relative to its start
-        (heading +x); ``s`` is clipped to ``[0, length]``."""
-        s = min(max(s, 0.0), self.length)
-        if s <= self.forward:
-            return s, 0.0, 0.0
-        arc = abs(self.turn) * self.radius
-        side = 1.0 if self.turn >= 0.0 else -1.0
-        angle = side * min(s - self.forward, arc) / self.radius
-        # The arc's centre is `radius` to the side of the end of the first straight part.
-        x = self.forward + side * self.radius * math.sin(angle)
-        y = side * self.radius * (1.0 - math.cos(angle))
-        rest = max(s - self.forward - arc, 0.0)
-        return x + rest * math.cos(angle), y + rest * math.sin(angle), angle
 
 
 _FILES = TomlFiles(kind="scenario", folder="scenarios", error=ScenarioError)
@@ -260,24 +202,24 @@ class Scenario:
             raise ScenarioError(
                 f"connection must be one of {', '.join(ALL_CONNECTION_MODES)}, got {self.connection!r}"
             )
-        _within("auto_margin", self.auto_margin, (-MAX_AUTO_MARGIN, MAX_AUTO_MARGIN), "m")
+        within("auto_margin", self.auto_margin, (-MAX_AUTO_MARGIN, MAX_AUTO_MARGIN), "m")
         if self.connection == "auto" and not self.timing.uniform:
             raise ScenarioError('connection = "auto" needs one timing for every step: per-step timings are unsupported')
-        _within("cog_height", self.cog_height, _COG_HEIGHT_BOUNDS, "m")
-        _within("gravity", self.gravity, _GRAVITY_BOUNDS, "m/s^2")
+        within("cog_height", self.cog_height, _COG_HEIGHT_BOUNDS, "m")
+        within("gravity", self.gravity, _GRAVITY_BOUNDS, "m/s^2")
         if self.mass is not None:
-            _within("mass", self.mass, _MASS_BOUNDS, "kg")
+            within("mass", self.mass, _MASS_BOUNDS, "kg")
         self._check_period()
         _FILES.count(self.steps, "steps", high=MAX_WALK_STEPS, why=_STEPS_WHY)
         _FILES.count(self.horizon_steps, "horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY)
-        _check_phase_lengths(self.timing, self.cog_height, self.gravity)
-        _check_ticks(self.duration, self.dt)
+        check_phase_lengths(self.timing, self.cog_height, self.gravity)
+        check_ticks(self.duration, self.dt)
         for index, change in enumerate(self.changes):
             if not 1 <= change.step <= self.steps:
                 raise ScenarioError(
                     f"walk.change[{index}].step must be a step of the walk (1..{self.steps}), got {change.step}"
                 )
-        _check_distinct_steps([change.step for change in self.changes], "walk.change")
+        check_distinct_steps([change.step for change in self.changes], "walk.change")
         if self.footholds is not None:
             if len(self.footholds) != self.steps + 1:
                 raise ScenarioError(
@@ -342,59 +284,6 @@ class Scenario:
         return t.start + n * t.single_support + (n - 1) * t.double_support + t.end + t.settle
 
 
-# ----- checks shared by the file loader and the dataclass -------------------------------------------------------
-
-
-def _within(name: str, value: float, bounds: tuple[float, float], unit: str) -> None:
-    """``value`` is a finite number within ``bounds`` (inclusive), in the core's wording of the message."""
-    if not is_finite_number(value):
-        raise ScenarioError(f"{name} must be a finite number ({unit}), got {value!r}")
-    try:
-        check_range(name, value, *bounds, unit)
-    except ValueError as error:
-        raise ScenarioError(str(error)) from None
-
-
-def _check_phase_lengths(timing: Timing, cog_height: float, gravity: float) -> None:
-    """Every phase satisfies ``w T <= MAX_PHASE_W_T``: beyond it the cosh/sinh terms of the closed form cancel
-    with too much round-off (:mod:`rtgait.core.limits`)."""
-    w = math.sqrt(gravity / cog_height)
-    for name in PHASES:
-        duration = getattr(timing, name)
-        if w * duration > MAX_PHASE_W_T:
-            raise ScenarioError(
-                f"timing.{name} = {duration:g} s is too long for a COG {cog_height:g} m high: w*T = {w * duration:.3g}"
-                f" must be at most {MAX_PHASE_W_T:g} (w = sqrt(gravity / cog_height) = {w:.3g} 1/s), i.e. phases of "
-                f"at most {MAX_PHASE_W_T / w:.3g} s"
-            )
-    try:
-        check_step_timings(timing, w)
-    except ValueError as error:
-        raise ScenarioError(str(error)) from None
-
-
-def _check_ticks(duration: float, dt: float) -> None:
-    """A rollout of ``duration`` (s) sampled every ``dt`` (s) holds at most MAX_ROLLOUT_TICKS rows in memory."""
-    ticks = math.floor(duration / dt + 1e-9) + 1  # as rtgait.core.rollout counts them
-    if ticks > MAX_ROLLOUT_TICKS:
-        raise ScenarioError(
-            f"dt {dt:g} s is too short for a walk of {duration:g} s: duration / dt + 1 = {ticks} samples, at most "
-            f"{MAX_ROLLOUT_TICKS}; use a longer dt or fewer walk.steps"
-        )
-
-
-def _check_distinct_steps(steps: list[int], where: str) -> None:
-    """No two changes of the same step: which one should win would be a guess (the last one silently did)."""
-    first: dict[int, int] = {}
-    for index, step in enumerate(steps):
-        if step in first:
-            raise ScenarioError(
-                f"{where}[{first[step]}] and {where}[{index}] both change step {step}: give each step one entry "
-                "(with all of its length, width and yaw)"
-            )
-        first[step] = index
-
-
 # ----- TOML parsing ---------------------------------------------------------------------------------------------
 
 
@@ -414,7 +303,7 @@ def _number(
     shown_unit = f"(in {unit})" if rule == "any" and unit else unit
     value = _FILES.number(data[key], path, rule=rule, unit=shown_unit)
     if bounds is not None:
-        _within(path, value, bounds, unit)
+        within(path, value, bounds, unit)
     return value
 
 
@@ -458,7 +347,10 @@ def _parse_guide(raw: Any) -> GuidePath:
     _FILES.check_keys(table, "guide", (), keys)
     units = {"forward": "m", "turn": "rad", "radius": "m", "after": "m", "speed": "m/s"}
     values = {key: _number(table, key, "guide", unit=units[key]) for key in keys if key in table}
-    return GuidePath(**values)
+    try:
+        return GuidePath(**values)
+    except ValueError as error:
+        raise ScenarioError(str(error)) from None
 
 
 def parse_common(data: dict[str, Any]) -> dict[str, Any]:
