@@ -235,6 +235,7 @@ def write_plan_outputs(
     robot_run: RobotRun | None = None,
     html: bool = False,
     fmt: str = "png",
+    background: str = "sky",
 ) -> dict[str, Any]:
     """Write what ``rtgait plan`` writes into the folder ``out``, replacing the previous outputs of the same names
     together or not at all (:func:`rtgait.outputs.staged_outputs`); returns the summary.
@@ -247,6 +248,7 @@ def write_plan_outputs(
         robot_run: the walk on a robot: adds ``joints.csv`` and the robot's numbers to the summary.
         html: with a robot, also the 3D replay ``replay.html`` (needs meshcat).
         fmt: the figures' file format, ``"png"``, ``"pdf"`` or ``"svg"``.
+        background: the replay's background, ``"sky"`` or ``"white"``.
 
     Raises:
         rtgait.outputs.OutputError: the outputs could not be written; ``out`` is unchanged.
@@ -261,7 +263,7 @@ def write_plan_outputs(
         if figures:
             _write_figures(result, scenario, robot_run, staging, fmt)
         if html and robot_run is not None:
-            _write_replay(result, scenario, robot_run, staging.add("replay.html"))
+            _write_replay(result, scenario, robot_run, staging.add("replay.html"), background)
         summary["rows"] = rows
         summary["files"] = list(staging.files)
         summary_path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
@@ -289,7 +291,9 @@ def _write_figures(
         )  # fmt: skip
 
 
-def _write_replay(result: Rollout, scenario: Scenario, robot_run: RobotRun, path: Path) -> None:
+def _write_replay(
+    result: Rollout, scenario: Scenario, robot_run: RobotRun, path: Path, background: str = "sky"
+) -> None:
     from rtgait.robot.pipeline import visual_model
     from rtgait.viz.replay import write_replay_html
 
@@ -306,6 +310,7 @@ def _write_replay(result: Rollout, scenario: Scenario, robot_run: RobotRun, path
         cog=robot_run.check.cog,
         zmp=np.column_stack([result.column("zmp_x"), result.column("zmp_y")]),
         title=f"rtgait: {scenario.name} on {robot.name}",
+        background=background,
     )
 
 

@@ -41,6 +41,16 @@ def add_format_option(
     parser.add_argument("--format", choices=FIGURE_FORMATS, default=default, dest="figure_format", help=description)
 
 
+def add_replay_background_option(parser: argparse.ArgumentParser) -> None:
+    """``--replay-background sky|white``: the 3D replay's background, as ``args.replay_background``."""
+    parser.add_argument(
+        "--replay-background",
+        choices=("sky", "white"),
+        default="sky",
+        help="with --html: the replay's background, sky (meshcat's blue gradient, default) or white (for print)",
+    )
+
+
 def require_extras(figures: bool, html: bool) -> None:
     """Fail fast, before a long run, when an output asked for needs a package that is not installed."""
     if figures:

@@ -14,6 +14,7 @@ from typing import Any
 from rtgait.commands.common import (
     PROG,
     add_format_option,
+    add_replay_background_option,
     load_robot,
     out_folder,
     progress_printer,
@@ -63,6 +64,7 @@ def add_parser(commands: Any) -> None:
     plan.add_argument(
         "--html", action="store_true", help="write replay.html, a 3D replay of the robot (implies --robot talos)"
     )
+    add_replay_background_option(plan)
     plan.add_argument(
         "--export-footsteps",
         metavar="FILE",
@@ -137,8 +139,9 @@ def run(args: argparse.Namespace) -> int:
         # The robot's check: an IK error beyond its limit anywhere (UnreachableError) refuses the walk.
         robot_run = run_on_robot(robot, result, scenario.cog_height, scenario.gravity, args.compensate)
     summary = write_plan_outputs(
-        result, scenario, out, figures=figures, robot_run=robot_run, html=args.html, fmt=fmt
-    )
+        result, scenario, out, figures=figures, robot_run=robot_run, html=args.html, fmt=fmt,
+        background=args.replay_background,
+    )  # fmt: skip
     if args.export_footsteps is not None:
         write_text_atomic(args.export_footsteps, footstep_plan_text(scenario, result.footprints))
     if not args.quiet:

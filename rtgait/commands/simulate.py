@@ -17,6 +17,7 @@ from rtgait.commands.common import (
     PROG,
     RunError,
     add_format_option,
+    add_replay_background_option,
     check_run_length,
     load_robot,
     numbers,
@@ -117,6 +118,7 @@ def add_parser(commands: Any) -> None:
     simulate.add_argument(
         "--html", action="store_true", help="write replay.html, a 3D replay of the simulated motion (needs meshcat)"
     )
+    add_replay_background_option(simulate)
     simulate.add_argument("--quiet", action="store_true", help="print nothing on success")
 
 
@@ -395,6 +397,7 @@ def _write_simulation(
             result, staging.folder, figure=not args.no_figures, figure_format=args.figure_format,
             title=f"{scenario.name} ({scenario.connection})", extra=extra, replay=robot if args.html else None,
             sole=walk.sole,  # the sole the walk was planned with
+            background=args.replay_background,
         )  # fmt: skip
         for name in summary["files"]:
             staging.add(name)

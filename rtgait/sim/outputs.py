@@ -113,7 +113,13 @@ def replay_paths(result: SimResult) -> tuple[np.ndarray, np.ndarray]:
 
 
 def write_sim_replay(
-    result: SimResult, robot: RobotModel, path: str | Path, *, sole: Any = None, title: str = ""
+    result: SimResult,
+    robot: RobotModel,
+    path: str | Path,
+    *,
+    sole: Any = None,
+    title: str = "",
+    background: str = "sky",
 ) -> Path:
     """Write ``path`` (HTML): the 3D replay of the SIMULATED motion from the walk's start on (its clock is the
     walk's), with the planner's footprints, the measured COG and ZMP, the planned COG (the IK's target) and ZMP, and
@@ -126,6 +132,7 @@ def write_sim_replay(
         sole: the footprints' sole rectangle (m), e.g. the walked scenario's ``sole``; the replay's default if
             ``None``.
         title: the page title.
+        background: ``"sky"`` or ``"white"`` (:func:`rtgait.viz.replay.write_replay_html`).
 
     Returns:
         The path written.
@@ -158,6 +165,7 @@ def write_sim_replay(
         phases=[_PHASE_LABELS[int(code)] for code in result.support[index]],
         path_source="measured",
         title=title or f"rtgait: {result.robot} in MuJoCo",
+        background=background,
     )
 
 
@@ -172,6 +180,7 @@ def write_sim_outputs(
     replay: RobotModel | None = None,
     sole: Any = None,
     log: bool = True,
+    background: str = "sky",
 ) -> dict[str, Any]:
     """Write ``sim.csv``, ``summary.json``, with ``log`` ``sim.parquet`` (when pyarrow is installed and the result has
     its tick log), with ``figure`` ``zmp_sim.<figure_format>`` and with ``replay`` ``replay.html`` into ``out_dir``.
@@ -186,6 +195,7 @@ def write_sim_outputs(
         replay: the robot simulated, to write the 3D replay of the simulated motion (:func:`write_sim_replay`,
             needs meshcat).
         sole: the replay's footprint rectangle (m): the sole the walk was planned with.
+        background: the replay's background, ``"sky"`` or ``"white"``.
         log: also write ``sim.parquet``, the complete per-tick log (:mod:`rtgait.sim.log_file`, ``docs/logs.md``).
 
     Returns:
@@ -211,7 +221,9 @@ def write_sim_outputs(
         files.append(name)
     if replay is not None:
         label = f"{title} on {replay.name}" if title else replay.name
-        write_sim_replay(result, replay, out / "replay.html", sole=sole, title=f"rtgait: {label} in MuJoCo")
+        write_sim_replay(
+            result, replay, out / "replay.html", sole=sole, title=f"rtgait: {label} in MuJoCo", background=background
+        )
         files.append("replay.html")
     summary: dict[str, Any] = {**(extra or {}), **result.summary(), "rows": len(result.times), "files": files}
     write_text_atomic(out / "summary.json", json.dumps(summary, indent=2, allow_nan=False) + "\n")
