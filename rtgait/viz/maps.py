@@ -112,9 +112,9 @@ def plot_map(rows: list[dict[str, Any]], meta: dict[str, Any], physics: list[dic
         if compare:
             _comparison(grid[i, -1], fields, single)
     for ax in grid[-1]:
-        ax.set_xlabel("step change (m)")
+        ax.set_xlabel("step change [m]")
     for ax in grid[:, 0]:
-        ax.set_ylabel("double support T_dbl (s)")
+        ax.set_ylabel("double support T_dbl [s]")
     from matplotlib.ticker import FixedLocator, NullLocator
 
     ticks = [t for t in DOUBLE_TICKS if min(axes["timing.double_support"]) <= t <= max(axes["timing.double_support"])]
@@ -209,7 +209,7 @@ def _comparison(ax, fields, single: float) -> None:
             ax.contour(x, y, field, levels=[0.0], colors="k", linewidths=1.0, linestyles=style)
     ax.set_title(f"quasi-real-time minus real-time\nT_s = {single:g} s (solid/dashed: their boundaries)", fontsize=9)
     bar = ax.figure.colorbar(mesh, ax=ax, shrink=0.85, extend="max")
-    bar.set_label("margin gained (mm)", fontsize=8)
+    bar.set_label("margin gained [mm]", fontsize=8)
 
 
 def _legend_handles(meta: dict[str, Any]) -> list:
