@@ -120,7 +120,8 @@ def _setup(robot_name: str, scenario_name: str) -> tuple[Any, Any, Any]:
         from rtgait.sim.model import SimConfig, build_sim_model
 
         robot = RobotModel.load(robot_name)
-        _CACHE[key] = (robot, build_sim_model(robot, SimConfig(meshes=False, physics_dt=PHYSICS_DT["value"])), load_scenario(scenario_name))
+        sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=PHYSICS_DT["value"]))
+        _CACHE[key] = (robot, sim, load_scenario(scenario_name))
     return _CACHE[key]
 
 

@@ -131,9 +131,8 @@ def velocity_schedule(name: str, seconds: float) -> list[tuple[float, float, flo
 
 def walk_case(job: dict[str, Any]) -> dict[str, Any]:
     """One walk of ``--walks`` (a worker's task): its outcome and measures."""
-    from rtgait.sim.run import mujoco_messages
-
     from rtgait.sim.controllers import ControllerOptions
+    from rtgait.sim.run import mujoco_messages
 
     robot = RobotModel.load(job["robot"])
     sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=job["physics_dt"]))
