@@ -23,7 +23,8 @@ Writes ``pushes.csv``, ``pushes.json`` and ``pushes.png`` (a polar plot per phas
 ``--out`` (default ``out/pushes-<robot>``), and prints the table (or, with ``--json``, the JSON document).
 
 Usage: ``python benchmarks/pushes.py [--robot R] [--controller C ...] [--json] [--scenario fig8]
-[--phase single|double ...] [--directions 8] [--tolerance 1.0] [--workers 2] [--out DIR]``
+[--phase single|double ...] [--directions 8] [--tolerance 1.0] [--workers 2] [--out DIR] [--physics-dt S]
+[--option NAME=JSON ...]``
 """
 
 from __future__ import annotations
@@ -101,16 +102,26 @@ def direction_name(site: Site, angle_deg: float) -> str:
 _CACHE: dict[str, Any] = {}
 
 
+PHYSICS_DT = {"value": 0.001}
+"""The physics step of the runs (s; ``--physics-dt``), handed to every worker by :func:`_init_worker`."""
+
+
+def _init_worker(physics_dt: float) -> None:
+    PHYSICS_DT["value"] = physics_dt
+
+
 def _setup(robot_name: str, scenario_name: str) -> tuple[Any, Any, Any]:
-    """The robot, its MuJoCo model (no meshes: the same physics) and the scenario, built once per process."""
-    key = f"{robot_name}|{scenario_name}"
+    """The robot, its MuJoCo model (no meshes: the same physics; the ``--physics-dt`` step) and the scenario, built
+    once per process."""
+    key = f"{robot_name}|{scenario_name}|{PHYSICS_DT['value']}"
     if key not in _CACHE:
         from rtgait.robot.model import RobotModel
         from rtgait.scenario import load_scenario
         from rtgait.sim.model import SimConfig, build_sim_model
 
         robot = RobotModel.load(robot_name)
-        _CACHE[key] = (robot, build_sim_model(robot, SimConfig(meshes=False)), load_scenario(scenario_name))
+        sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=PHYSICS_DT["value"]))
+        _CACHE[key] = (robot, sim, load_scenario(scenario_name))
     return _CACHE[key]
 
 
@@ -191,17 +202,20 @@ def run(
     workers: int,
     progress: bool = True,
     options: dict[str, Any] | None = None,
+    physics_dt: float = 0.001,
 ) -> tuple[list[dict[str, Any]], dict[str, Any]]:
     """Every bisection of the benchmark; returns the cases and the settings. ``options``: controller options
-    (:class:`~rtgait.sim.controllers.ControllerOptions` fields) for the closed-loop levels."""
+    (:class:`~rtgait.sim.controllers.ControllerOptions` fields) for the closed-loop levels; ``physics_dt``: the
+    physics step (s)."""
     from tqdm import tqdm
 
+    _init_worker(physics_dt)
     robot, _, scenario = _setup(robot_name, scenario_name)
     w = math.sqrt(scenario.gravity / robot.description.cog_height)
     first = START_DCM_SHIFT * robot.mass * w
     sites = {phase: push_site(scenario, robot, phase) for phase in phases}
     angles = [360.0 * i / directions for i in range(directions)]
-    with ProcessPoolExecutor(workers) as pool:
+    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(physics_dt,)) as pool:
         options = options or {}
         levels = {c: (options if c != "open-loop" else {}) for c in controllers}
         unpushed = dict(pool.map(_unpushed, [(robot_name, scenario_name, c, levels[c]) for c in controllers]))
@@ -227,6 +241,7 @@ def run(
         "robot": robot.name, "mass": robot.mass, "scenario": scenario.name, "push_duration": PUSH_DURATION,
         "push_body": "floating base", "tolerance_Ns": tolerance, "first_impulse_Ns": first, "workers": workers,
         "sites": {phase: dataclasses.asdict(site) for phase, site in sites.items()}, "controller_options": options,
+        "physics_dt": physics_dt,
     }  # fmt: skip
     return cases, settings
 
@@ -306,6 +321,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--tolerance", type=float, default=1.0, help="bisection resolution, N s (default 1)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--out", type=Path, help="output folder (default out/pushes-<robot>)")
+    parser.add_argument("--physics-dt", type=float, default=0.001, help="physics step, s (default 0.001)")
     parser.add_argument(
         "--option", action="append", default=[], metavar="NAME=JSON",
         help="a ControllerOptions field of the closed-loop levels, e.g. com_reference='\"planned\"' (for experiments)",
@@ -321,7 +337,8 @@ def main(argv: Sequence[str] | None = None) -> None:
     except ValueError:
         parser.error("--option needs NAME=JSON, e.g. replan_dcm_error=0.04")
     cases, settings = run(args.robot, args.scenario, controllers, phases, args.directions, args.tolerance,
-                          args.workers, progress=sys.stderr.isatty(), options=options)  # fmt: skip
+                          args.workers, progress=sys.stderr.isatty(), options=options,
+                          physics_dt=args.physics_dt)  # fmt: skip
     settings["seconds"] = time.perf_counter() - began
     out = args.out or Path("out") / f"pushes-{settings['robot']}"
     write_outputs(cases, settings, out)

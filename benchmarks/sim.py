@@ -18,7 +18,7 @@ RMS), the largest stance-foot slip and the real-time factor, over worker process
 
 Usage: ``python benchmarks/sim.py [--json] [--robot NAME] [--scenario NAME] [--repeat N] [--control-dt S]
 [--physics-dt S] [--controller C]`` or ``python benchmarks/sim.py --walks [--velocity-walks] [--robot NAME ...]
-[--controller C ...] [--walk-time S] [--workers N] [--json]``
+[--controller C ...] [--walk-time S] [--workers N] [--physics-dt S] [--option NAME=JSON ...] [--json]``
 """
 
 from __future__ import annotations
@@ -131,10 +131,11 @@ def velocity_schedule(name: str, seconds: float) -> list[tuple[float, float, flo
 
 def walk_case(job: dict[str, Any]) -> dict[str, Any]:
     """One walk of ``--walks`` (a worker's task): its outcome and measures."""
+    from rtgait.sim.controllers import ControllerOptions
     from rtgait.sim.run import mujoco_messages
 
     robot = RobotModel.load(job["robot"])
-    sim = build_sim_model(robot, SimConfig(meshes=False))
+    sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=job["physics_dt"]))
     scenario = load_scenario(job["scenario"])
     velocity = None
     if job["velocity"] is not None:
@@ -143,7 +144,10 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
         scenario = dataclasses.replace(scenario, steps=steps)
         velocity = velocity_schedule(job["velocity"], job["seconds"])
     with mujoco_messages():
-        result = simulate(scenario, robot, sim=sim, controller=job["controller"], velocity=velocity)
+        options = ControllerOptions(**job["options"]) if job["options"] else None
+        result = simulate(
+            scenario, robot, sim=sim, controller=job["controller"], velocity=velocity, controller_options=options
+        )
     errors = result.zmp_errors()
     return {
         "robot": robot.name,
@@ -168,19 +172,21 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
 def walks(args: argparse.Namespace) -> list[dict[str, Any]]:
     """The outcome table of ``--walks`` (module docstring)."""
     controllers = args.controller or ["open-loop", "stabilized", "adaptive"]
+    common = {"physics_dt": args.physics_dt, "options": args.options}
     jobs = [
-        {"robot": robot, "scenario": case, "controller": c, "velocity": None, "seconds": 0.0}
+        {"robot": robot, "scenario": case, "controller": c, "velocity": None, "seconds": 0.0, **common}
         for robot in args.robots or ["talos"]
         for case in ("fig6", "fig7", "fig8")
         for c in controllers
     ]
     if args.velocity_walks:
         jobs += [
-            {"robot": robot, "scenario": "fig8", "controller": c, "velocity": name, "seconds": args.walk_time}
+            {"robot": robot, "scenario": "fig8", "controller": c, "velocity": name, "seconds": args.walk_time,
+             **common}
             for robot in args.robots or ["talos"]
             for name in [*VELOCITY_WALKS, "changes"]
             for c in controllers
-        ]
+        ]  # fmt: skip
     with ProcessPoolExecutor(args.workers) as pool:
         return list(pool.map(walk_case, jobs))
 
@@ -217,7 +223,15 @@ def main() -> None:
     parser.add_argument("--velocity-walks", action="store_true", help="with --walks: the walks by command too")
     parser.add_argument("--walk-time", type=float, default=60.0, help="length of a walk by command (s)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes of --walks (default 2)")
+    parser.add_argument(
+        "--option", action="append", default=[], metavar="NAME=JSON",
+        help="with --walks: a ControllerOptions field of the closed-loop levels, e.g. adapt_timing=true",
+    )  # fmt: skip
     args = parser.parse_args()
+    try:
+        args.options = {name: json.loads(value) for name, value in (text.split("=", 1) for text in args.option)}
+    except ValueError:
+        parser.error("--option needs NAME=JSON, e.g. adapt_timing=true")
     if args.walks:
         began = time.perf_counter()
         rows = walks(args)

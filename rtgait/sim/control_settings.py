@@ -4,7 +4,7 @@ to the controller, its gains and landing handling, and what one tick gives the I
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, NamedTuple
 
 from rtgait.core.closed_loop import DEFAULT_REPLAN_DCM_ERROR
@@ -27,6 +27,7 @@ __all__ = [
     "ControlTargets",
     "ControllerOptions",
     "RobotInfo",
+    "controller_step_adjustment",
     "step_limits",
 ]
 
@@ -60,31 +61,48 @@ class RobotInfo:
     Attributes:
         mass: (kg).
         sole: the sole rectangle around the sole frame (m).
-        leg_length: scale of the stride box (m): the walking COM height serves (:meth:`from_robot`).
+        leg_length: scale of the stride box (m) when ``stepping`` is ``None``: the walking COM height serves
+            (:meth:`from_robot`).
+        stepping: the robot description's ``[stepping]`` limits (:class:`~rtgait.core.stepping.SteppingLimits`),
+            the stride box of step adjustment (:func:`step_limits`); ``None``: none described.
     """
 
     mass: float
     sole: SoleRect
     leg_length: float
+    stepping: SteppingLimits | None = None
 
     @classmethod
     def from_robot(cls, robot: RobotModel, sole: SoleRect | None = None) -> RobotInfo:
-        """From a loaded robot: its mass, its described sole (or ``sole``) and its walking COM height."""
-        return cls(robot.mass, sole or robot.description.sole, robot.description.cog_height)
+        """From a loaded robot: its mass, its described sole (or ``sole``), its walking COM height and its
+        ``[stepping]`` limits."""
+        description = robot.description
+        return cls(robot.mass, sole or description.sole, description.cog_height, description.stepping)
 
 
 def step_limits(info: RobotInfo, stepping: SteppingLimits | None = None) -> StepAdjustment:
-    """Step adjustment's stride box for a robot: the robot description's ``[stepping]`` table when given
-    (``robot.description.stepping``), else :class:`~rtgait.core.stepping.StepAdjustment`'s defaults (set for an
-    HRP-2-like walk, COM 0.8 m high: 0.35 m forward or back, 0.12-0.45 m sideways) scaled by ``leg_length / 0.8``, with
-    the soles kept 2 cm apart at the least; its swing speed and last-moment limits as they are (no change in the
-    last 0.2 s before touch-down: auto_stabilizer's ``overwritableRemainTime``)."""
+    """Step adjustment's stride box for a robot: ``stepping`` when given, else the robot description's
+    ``[stepping]`` table (``info.stepping``, from ``robot.description.stepping``), else
+    :class:`~rtgait.core.stepping.StepAdjustment`'s defaults (set for an HRP-2-like walk, COM 0.8 m high: 0.35 m
+    forward or back, 0.12-0.45 m sideways) scaled by ``leg_length / 0.8``, with the soles kept 2 cm apart at the
+    least; its swing speed and last-moment limits as they are (no change in the last 0.2 s before touch-down:
+    auto_stabilizer's ``overwritableRemainTime``)."""
+    stepping = stepping if stepping is not None else info.stepping
     if stepping is not None:
         return stepping.adjustment(info.sole)
     scale = info.leg_length / 0.8
     min_width = max(0.12 * scale, 2.0 * info.sole.inner + 0.02)
     max_width = max(0.45 * scale, min_width + 0.1)
     return StepAdjustment(info.sole, max_length=0.35 * scale, min_width=min_width, max_width=max_width)
+
+
+def controller_step_adjustment(options: ControllerOptions, info: RobotInfo) -> StepAdjustment:
+    """The step adjustment of the ``"adaptive"`` level: ``options.step_adjustment``, else the robot's
+    :func:`step_limits`; with ``options.adapt_timing``, its step timing adaptation on."""
+    adjust = options.step_adjustment or step_limits(info)
+    if options.adapt_timing and not adjust.adapt_timing:
+        adjust = replace(adjust, adapt_timing=True)
+    return adjust
 
 
 @dataclass(frozen=True)
@@ -102,6 +120,9 @@ class ControllerOptions:
             22 mm with 5 ms).
         replan_dcm_error: ``"adaptive"``: DCM error that triggers an immediate replan (m).
         step_adjustment: ``"adaptive"``: stride box and limits; default :func:`step_limits` of the robot.
+        adapt_timing: ``"adaptive"``: step adjustment may also shorten the single support of the step it moves
+            (:class:`~rtgait.core.stepping.StepAdjustment` ``adapt_timing``, Morisawa et al. 2006), down to the
+            limits' ``min_single_support``.
         early_touchdown_fraction: a landing counts as an early touch-down from this fraction of the swing on; before,
             it is ignored (a scuff).
         late_descent_speed: how fast a late foot's target goes down (m/s).
@@ -138,6 +159,7 @@ class ControllerOptions:
     on_time_window: float = 0.08
     relanding_tolerance: float = 0.01
     com_reference: str = "measured"
+    adapt_timing: bool = False
 
     def __post_init__(self) -> None:
         names = ("measurement_filter", "late_descent_speed", "late_descent_limit", "late_grace", "on_time_window",
@@ -150,6 +172,8 @@ class ControllerOptions:
             raise ValueError(f"com_reference must be 'measured' or 'planned', got {self.com_reference!r}")
         if self.measured_replanning not in ("on-error", "always"):
             raise ValueError(f"measured_replanning must be 'on-error' or 'always', got {self.measured_replanning!r}")
+        if not isinstance(self.adapt_timing, bool):
+            raise ValueError(f"adapt_timing must be true or false, got {self.adapt_timing!r}")
         if not 0.0 <= self.early_touchdown_fraction <= 1.0:
             raise ValueError(f"early_touchdown_fraction must be within [0, 1], got {self.early_touchdown_fraction}")
 

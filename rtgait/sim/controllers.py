@@ -36,7 +36,8 @@ controller_config`), the pendulum-level loop:
   the same stance (a bounce) is re-anchored only if it moved ``relanding_tolerance`` (10 mm).
 
   *When no step catches the error, the plan is kept* (:meth:`WalkingController._dcm_error_replan`): no replan for
-  an outward DCM error in single support, and a non-catching step adjustment of a later step is put back.
+  an outward DCM error in single support, and a later step's landing and timing are kept when no candidate for it
+  catches the error (the core's ``on_failure="keep"``).
 
 All on Python floats; the support polygon (numpy) is rebuilt only when the feet in contact move.
 """
@@ -62,6 +63,7 @@ from rtgait.sim.control_settings import (
     ControllerOptions,
     ControlTargets,
     RobotInfo,
+    controller_step_adjustment,
     step_limits,
 )
 from rtgait.sim.foot_control import FootForceControl, FootOffsets, split_zmp
@@ -209,14 +211,16 @@ class WalkingController:
         :data:`ERROR_REPLAN_INTERVAL`, not within :data:`ERROR_REPLAN_MIN_REMAINDER` of a phase's end); returns
         whether it replanned.
 
-        *A step that does not catch the push is not taken.* The replan's step adjustment moves a landing; when no
-        candidate keeps the plan's ZMP inside the support (the core's emergency decision: the best margin, still
-        outside), the landing is put back and the plan under way goes on from its own state: the measured state
-        stays out of the plan, the stiff servos keep pulling the COM back to the plan and the DCM law with the foot
-        force control recovers what the sole can (the ``"stabilized"`` level's recovery). Such a step is the
-        inner foot moved toward an outward push (the helpful one would cross the stance foot, which the stride box
-        forbids, and it narrows the stance), or a later step's landing moved far to reshape the plan's connection
-        while the robot must first stand a single support on the foot away from the push."""
+        *A step that does not catch the push is not taken when it is a later step's.* The replan's step adjustment
+        moves the landing of the step swinging now or, within the limits' ``min_time_to_touchdown`` of its
+        touch-down, the next one's. For that later step, when no candidate keeps the plan's ZMP inside the support
+        (the core's emergency decision: the best margin, still outside), the core's ``on_failure="keep"`` keeps its
+        landing and timing, and the plan goes on from the planned state: the measured state stays out of the plan,
+        the stiff servos keep pulling the COM back to the plan and the DCM law with the foot force control recover
+        what the sole can (the ``"stabilized"`` level's recovery). Such a step would be a later landing moved far
+        to reshape the plan's connection while the robot must first stand a single support on the foot away from
+        the push. The step swinging now, or lifting off next, still takes its best landing (``"continue"``): that
+        foot can still go toward the capture point."""
         threshold = self.options.replan_dcm_error
         w = self.planner.w
         ex = m.com[0] + m.com_vel[0] / w - values[21]
@@ -231,33 +235,17 @@ class WalkingController:
         if self._only_crossing_catches(values, support, ex, ey):
             events.append(ControlEvent(t, "replan-skipped", support, "outward DCM error in single support"))
             return False
-        landings = self._landings_ahead(q)
-        decided = planner.step_adjustment_count
-        # The core takes the measured state into a plan, and adjusts steps, when its configuration says so: for this
-        # one replan.
-        config = planner.config
-        planner.config = dataclasses.replace(config, feedback="measured", step_adjustment=self.options.step_adjustment)
-        try:
-            replanned = planner.replan_now(t, "dcm-error") is not None
-            walk = planner.walk
-            moved = [(j, old) for j, old in landings if walk.footprint(j) != old]
-            if moved and not self._catches(decided, q):
-                for j, old in moved:  # F[j] is the landing of step j - 1
-                    walk.move_landing(j - 1, old.x, old.y)
-                planner.config = dataclasses.replace(config, feedback="planned")
-                planner.replan_now(t, "dcm-error-kept")
-                decision = planner.step_adjustments[-1]
-                events.append(ControlEvent(t, "step-refused", "", decision.reason, *decision.landing))
-            elif replanned and self.options.com_reference == "planned":
-                # The footsteps are the measured state's; the COM goes on from where the plan had it, so that the
-                # servos keep pulling the robot back: the plan under way remade from the state sampled before.
-                planner.observe(t, (values[0], values[1]), (values[3], values[4]))
-                planner.config = dataclasses.replace(config, feedback="measured")
-                planner.replan_now(t, "dcm-error-plan")
-                planner.observe(t, m.com[:2], m.com_vel[:2])
-            return replanned
-        finally:
-            planner.config = config
+        adjust = self.options.step_adjustment
+        if adjust is not None and support in _SIDES and remainder < adjust.min_time_to_touchdown:
+            adjust = dataclasses.replace(adjust, on_failure="keep")  # the core moves the next step's landing
+        replanned = planner.replan_now(t, "dcm-error", feedback="measured", step_adjustment=adjust or False)
+        if replanned is not None and self.options.com_reference == "planned":
+            # The footsteps are the measured state's; the COM goes on from where the plan had it, so that the
+            # servos keep pulling the robot back: the plan under way remade from the state sampled before.
+            planner.observe(t, (values[0], values[1]), (values[3], values[4]))
+            planner.replan_now(t, "dcm-error-plan", feedback="measured", step_adjustment=False)
+            planner.observe(t, m.com[:2], m.com_vel[:2])
+        return replanned is not None
 
     @staticmethod
     def _only_crossing_catches(values: list[float], support: str, ex: float, ey: float) -> bool:
@@ -273,31 +261,6 @@ class WalkingController:
         along, lateral = c * ex + s * ey, -s * ex + c * ey
         outward = lateral if support == "left" else -lateral
         return outward > abs(along)
-
-    def _landings_ahead(self, q: int) -> list[tuple[int, Footstep]]:
-        """The footprints a step adjustment in phase ``q`` may move (the landings of the step under way and the next
-        two), with their indices."""
-        planner = self.planner
-        first = (q + 1) // 2 + 1
-        landings = []
-        for j in range(first, first + 3):
-            try:
-                landings.append((j, planner.walk.footprint(j)))
-            except IndexError:  # the walk ends before
-                break
-        return landings
-
-    def _catches(self, decided: int, q: int) -> bool:
-        """Whether the step adjustment of the replan just made (in phase ``q``) is one to take: a new decision that
-        finds a landing keeping the ZMP inside the support, or, when none does, the best landing for the step
-        swinging now (a single support) or lifting off next (a double support): that foot can still go toward
-        the capture point. A later step's landing moved without catching the push only reshapes the plan's
-        connection (the core logs a repeated emergency decision once: no new decision is one of those)."""
-        planner = self.planner
-        if planner.step_adjustment_count <= decided:
-            return False
-        decision = planner.step_adjustments[-1]
-        return not decision.emergency or decision.step == (q + 1) // 2 + (q + 1) % 2
 
     # ----- landings and the feet's targets ---------------------------------------------------------------------------
     def _enter_phase(self, q: int, support: str, m: Measurement) -> None:
@@ -458,7 +421,8 @@ class WalkingController:
             self._adjustments = planner.step_adjustment_count
             for decision in list(planner.step_adjustments)[-new:]:
                 x, y = decision.landing
-                events.append(ControlEvent(t, "step-adjustment", "", decision.reason, x, y))
+                kept = decision.emergency and decision.landing == decision.nominal  # on_failure="keep"
+                events.append(ControlEvent(t, "step-refused" if kept else "step-adjustment", "", decision.reason, x, y))
         new = planner.replan_count - self._replans
         if new:
             self._replans = planner.replan_count
@@ -501,7 +465,7 @@ class WalkingController:
         from rtgait.sim.level_fade import LEVEL_FADE, FeedbackFade, FootFade
 
         options, planner = self.options, self.planner
-        adjust = (options.step_adjustment or step_limits(self.info)) if level == "adaptive" else None
+        adjust = controller_step_adjustment(options, self.info) if level == "adaptive" else None
         config = controller_config(
             planner.config, level, self.sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
         )
@@ -560,8 +524,8 @@ def make_controller(
     options = options or ControllerOptions()
     info = robot if isinstance(robot, RobotInfo) else RobotInfo.from_robot(robot, sole)
     if info.sole != sole:
-        info = RobotInfo(info.mass, sole, info.leg_length)
-    adjust = (options.step_adjustment or step_limits(info)) if level == "adaptive" else None
+        info = dataclasses.replace(info, sole=sole)
+    adjust = controller_step_adjustment(options, info) if level == "adaptive" else None
     config = controller_config(
         planner_config, level, sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
     )

@@ -13,6 +13,7 @@ pytest.importorskip("pinocchio")
 from rtgait.core.closed_loop import controller_config
 from rtgait.core.footsteps import SoleRect, Timing
 from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
+from rtgait.core.stepping import SteppingLimits
 from rtgait.sim.controllers import (
     CONTROLLERS,
     ControllerOptions,
@@ -319,3 +320,49 @@ def test_adaptive_keeps_the_plan_for_an_outward_dcm_error_in_single_support(outw
         assert worst < 1e-9, "the IK's COM target is the plan's with the feedback law's correction"
     else:
         assert "replan" in kinds and "replan-skipped" not in kinds
+
+
+def test_step_limits_come_from_the_robot_description(talos):
+    # A described [stepping] table is the stride box of step adjustment, not the leg-length scaling.
+    limits = SteppingLimits(max_length=0.2, min_width=0.16, max_width=0.3, max_swing_speed=0.9, min_single_support=0.5)
+    info = RobotInfo(90.0, SOLE, 0.84, limits)
+    ctl = make_controller("adaptive", CONFIG, straight_walk(CONFIG, 3, 0.1), SOLE, info, dt=DT)
+    adjust = ctl.options.step_adjustment
+    assert (adjust.max_length, adjust.min_width, adjust.max_width) == (0.2, 0.16, 0.3)
+    assert (adjust.max_swing_speed, adjust.min_single_support, adjust.adapt_timing) == (0.9, 0.5, False)
+    assert step_limits(info) == adjust and step_limits(info, SteppingLimits()).max_length == 0.35
+    # A loaded robot carries its description's table, also through a sole given apart.
+    assert RobotInfo.from_robot(talos).stepping == talos.description.stepping is not None
+    other = SoleRect(0.1, 0.1, 0.06, 0.06)
+    ctl = make_controller("adaptive", CONFIG, None, other, talos, options=ControllerOptions(adapt_timing=True))
+    adjust = ctl.options.step_adjustment
+    assert adjust.max_length == talos.description.stepping.max_length and adjust.sole == other
+    assert adjust.adapt_timing
+    with pytest.raises(ValueError, match="adapt_timing"):
+        ControllerOptions(adapt_timing=1)
+
+
+def test_a_later_step_that_catches_nothing_is_kept_and_the_swinging_one_moves():
+    # A forward DCM error far beyond any step: late in a single support (within min_time_to_touchdown of the
+    # touch-down) the step adjustment would move the next step's landing without catching it: the core keeps it
+    # (on_failure="keep"); earlier, the swinging foot's own landing takes the best candidate.
+    error = (0.3, 0.0)
+    for when, kept in ((0.85, True), (0.4, False)):
+        ctl, plan = controller("adaptive"), reference()
+        start, duration, _ = first_swing(ctl)
+        t = round((start + when * duration) / DT) * DT
+        walk_to(ctl, t)
+        before = ctl.planner.footprints()
+        values, support, _ = plan.sample_values(t)
+        events = ctl.tick(t, on_plan(t, values, support, dcm_error=error)).events
+        kinds = [e.kind for e in events]
+        assert "replan" in kinds
+        decision = ctl.planner.step_adjustments[-1]
+        assert decision.emergency
+        if kept:
+            assert "step-refused" in kinds and "step-adjustment" not in kinds
+            assert decision.step == 2 and ctl.planner.footprints() == before
+        else:
+            assert "step-adjustment" in kinds and decision.step == 1
+            moved = [a for a, b in zip(ctl.planner.footprints(), before, strict=True) if a != b]
+            assert moved and moved[0].x > before[2].x  # the swinging foot lands ahead, toward the error
