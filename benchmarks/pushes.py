@@ -102,11 +102,11 @@ def direction_name(site: Site, angle_deg: float) -> str:
 _CACHE: dict[str, Any] = {}
 
 
-PHYSICS_DT = {"value": 0.001}
+PHYSICS_DT: dict[str, float | None] = {"value": None}
 """The physics step of the runs (s; ``--physics-dt``), handed to every worker by :func:`_init_worker`."""
 
 
-def _init_worker(physics_dt: float) -> None:
+def _init_worker(physics_dt: float | None) -> None:
     PHYSICS_DT["value"] = physics_dt
 
 
@@ -202,7 +202,7 @@ def run(
     workers: int,
     progress: bool = True,
     options: dict[str, Any] | None = None,
-    physics_dt: float = 0.001,
+    physics_dt: float | None = None,
 ) -> tuple[list[dict[str, Any]], dict[str, Any]]:
     """Every bisection of the benchmark; returns the cases and the settings. ``options``: controller options
     (:class:`~rtgait.sim.controllers.ControllerOptions` fields) for the closed-loop levels; ``physics_dt``: the
@@ -241,7 +241,7 @@ def run(
         "robot": robot.name, "mass": robot.mass, "scenario": scenario.name, "push_duration": PUSH_DURATION,
         "push_body": "floating base", "tolerance_Ns": tolerance, "first_impulse_Ns": first, "workers": workers,
         "sites": {phase: dataclasses.asdict(site) for phase, site in sites.items()}, "controller_options": options,
-        "physics_dt": physics_dt,
+        "physics_dt": physics_dt if physics_dt is not None else robot.description.actuation.physics_dt,
     }  # fmt: skip
     return cases, settings
 
@@ -321,7 +321,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--tolerance", type=float, default=1.0, help="bisection resolution, N s (default 1)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--out", type=Path, help="output folder (default out/pushes-<robot>)")
-    parser.add_argument("--physics-dt", type=float, default=0.001, help="physics step, s (default 0.001)")
+    parser.add_argument("--physics-dt", type=float, default=None, help="physics step, s (default: the robot's)")
     parser.add_argument(
         "--option", action="append", default=[], metavar="NAME=JSON",
         help="a ControllerOptions field of the closed-loop levels, e.g. com_reference='\"planned\"' (for experiments)",

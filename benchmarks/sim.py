@@ -216,7 +216,7 @@ def main() -> None:
     parser.add_argument("--scenario", default="fig8")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--control-dt", type=float, default=None, help="control period (s); default the robot's")
-    parser.add_argument("--physics-dt", type=float, default=0.001, help="physics step (s); default 0.001")
+    parser.add_argument("--physics-dt", type=float, default=None, help="physics step (s); default: the robot's")
     parser.add_argument("--controller", action="append", choices=("open-loop", "stabilized", "adaptive"),
                         help="controller level(s); the speed report takes the first (default adaptive)")  # fmt: skip
     parser.add_argument("--walks", action="store_true", help="report the outcomes of fig6/7/8 instead of speed")

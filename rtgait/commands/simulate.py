@@ -251,9 +251,10 @@ def _physics_config(robot: RobotModel, control_dt: float | None, physics_dt: flo
     from rtgait.sim.run import sim_config
 
     config = sim_config(None, control_dt, physics_dt)
-    control = robot.description.actuation.control_dt if control_dt is None else control_dt
+    actuation = robot.description.actuation
+    control = actuation.control_dt if control_dt is None else control_dt
     try:
-        substeps(control, config.physics_dt)
+        substeps(control, actuation.physics_dt if config.physics_dt is None else config.physics_dt)
     except ValueError as error:
         raise ScenarioError(f"--physics-dt: {error} (the control period of {robot.name})") from None
     return config

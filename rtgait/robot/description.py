@@ -112,6 +112,8 @@ _FILES = TomlFiles(kind="robot", folder="robots", error=RobotError)
 
 DEFAULT_CONTROL_DT = 0.001
 """Control period (s) without ``actuation.control_dt``: 1 kHz, the usual rate of a humanoid's joint loop."""
+DEFAULT_PHYSICS_DT = 0.001
+"""Physics step (s) of the MuJoCo model without ``actuation.physics_dt``."""
 DEFAULT_NATURAL_FREQUENCY = 10.0
 """Loaded natural frequency (Hz) of the derived gains (see :mod:`rtgait.sim.actuation`)."""
 DEFAULT_DAMPING_RATIO = 1.0
@@ -169,6 +171,8 @@ class ActuationSpec:
 
     Attributes:
         control_dt: period at which the controller sends joint references (s).
+        physics_dt: the MuJoCo model's physics step (s), a divisor of ``control_dt``: the step at which the robot's
+            outcomes have converged (``docs/robots.md``); ``rtgait simulate --physics-dt`` overrides it.
         natural_frequency: default target natural frequency of a loaded joint (Hz).
         damping_ratio: default damping ratio of the derived kd.
         armature_per_torque: default armature per N m of effort limit (s^2), :data:`DEFAULT_ARMATURE_PER_TORQUE`.
@@ -176,6 +180,7 @@ class ActuationSpec:
     """
 
     control_dt: float = DEFAULT_CONTROL_DT
+    physics_dt: float = DEFAULT_PHYSICS_DT
     natural_frequency: float = DEFAULT_NATURAL_FREQUENCY
     damping_ratio: float = DEFAULT_DAMPING_RATIO
     armature_per_torque: float = DEFAULT_ARMATURE_PER_TORQUE
@@ -350,9 +355,9 @@ def _gain(raw: Any, where: str, names: _UrdfNames) -> float | Mapping[str, float
 
 _GROUP_KEYS = ("kp", "kd", "armature", "rotor_inertia", "gear_ratio", "effort_limit", "natural_frequency",
                "damping_ratio")  # fmt: skip
-_TABLE_KEYS = ("control_dt", "natural_frequency", "damping_ratio", "armature_per_torque")
+_TABLE_KEYS = ("control_dt", "physics_dt", "natural_frequency", "damping_ratio", "armature_per_torque")
 _UNITS = {"kp": "N m/rad", "kd": "N m s/rad", "armature": "kg m^2", "rotor_inertia": "kg m^2", "effort_limit": "N m",
-          "natural_frequency": "Hz", "control_dt": "s", "armature_per_torque": "s^2"}  # fmt: skip
+          "natural_frequency": "Hz", "control_dt": "s", "physics_dt": "s", "armature_per_torque": "s^2"}  # fmt: skip
 _MAY_BE_ZERO = ("kd", "armature", "rotor_inertia", "armature_per_torque")
 
 
@@ -395,7 +400,13 @@ def _actuation(raw: Any, names: _UrdfNames) -> ActuationSpec:
     if not isinstance(raw_groups, list):
         raise RobotError("actuation.joints must be an array of tables ([[actuation.joints]])")
     groups = tuple(_actuator_group(g, f"actuation.joints[{i}]", names) for i, g in enumerate(raw_groups))
-    return ActuationSpec(groups=groups, **_numbers(table, "actuation", _TABLE_KEYS))
+    spec = ActuationSpec(groups=groups, **_numbers(table, "actuation", _TABLE_KEYS))
+    ratio = spec.control_dt / spec.physics_dt
+    if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-6 * ratio:
+        raise RobotError(
+            f"actuation.physics_dt = {spec.physics_dt:g} s must divide actuation.control_dt = {spec.control_dt:g} s"
+        )
+    return spec
 
 
 def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None) -> RobotDescription:

@@ -29,6 +29,7 @@ qy, qz)``; joints are matched by URDF name, never by order.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 import xml.etree.ElementTree as ElementTree
@@ -65,9 +66,10 @@ class SimConfig:
 
     Why the defaults:
 
-    * ``physics_dt = 1 ms``, the control period of Talos (G1's 2 ms period gets two physics steps): a shorter step
-      costs wall time in proportion and changes no outcome of the built-in scenarios (``python
-      benchmarks/physics_ensemble.py`` runs them at 0.5 ms too).
+    * ``physics_dt``: the robot description's ``actuation.physics_dt`` (1 ms for Talos, its control period; 0.5 ms
+      for G1, four steps per 2 ms control period), the step at which the robot's outcomes have converged: G1's
+      walks by command fall at 1 ms and walk at 0.5 and 0.25 ms, Talos's walk at 1 and 0.5 ms (``docs/robots.md``).
+      A shorter step costs wall time in proportion.
     * A contact time constant of 10 ms (10 physics steps at the default step) with critical damping (ratio 1,
       MuJoCo's default): Talos's soles sink 0.16 mm under its weight, like a thin rubber sole on a hard floor,
       and settle without ringing. Stiffer contacts (2-5 ms) make the stiff robot rock harder on its sole edges
@@ -78,7 +80,8 @@ class SimConfig:
     * Friction 1: rubber on a dry floor.
 
     Attributes:
-        physics_dt: physics step (s); must divide the control period.
+        physics_dt: physics step (s); must divide the control period; ``None``: the description's
+            ``actuation.physics_dt``.
         control_dt: control period (s): a new joint reference every period; ``None``: the description's
             ``actuation.control_dt`` (1 ms for Talos, 2 ms for G1).
         friction: sliding friction coefficient between soles and floor.
@@ -93,7 +96,7 @@ class SimConfig:
         meshes: keep the visual meshes (for viewing); without them the model builds faster and simulates the same.
     """
 
-    physics_dt: float = 0.001
+    physics_dt: float | None = None
     control_dt: float | None = None
     friction: float = 1.0
     contact_timeconst: float = 0.01
@@ -107,21 +110,28 @@ class SimConfig:
     meshes: bool = True
 
     def __post_init__(self) -> None:
+        step = self.physics_dt
         rules = {
-            "physics_dt": (self.physics_dt > 0.0, "> 0 s"),
             "friction": (self.friction > 0.0, "> 0"),
-            "contact_timeconst": (self.contact_timeconst >= 2.0 * self.physics_dt, ">= 2 physics steps (s)"),
+            # Two physics steps at the least; checked again against the description's step when the model is built.
+            "contact_timeconst": (
+                self.contact_timeconst > 0.0 and self.contact_timeconst >= 2.0 * (step or 0.0),
+                ">= 2 physics steps (s)",
+            ),
             "contact_dampratio": (self.contact_dampratio > 0.0, "> 0"),
             "sole_thickness": (self.sole_thickness > 0.0, "> 0 m"),
             "gain_scale": (self.gain_scale > 0.0, "> 0"),
             "armature_scale": (self.armature_scale > 0.0, "> 0"),
         }
+        if step is not None:
+            rules["physics_dt"] = (step > 0.0, "> 0 s")
         for name, (ok, rule) in rules.items():
             value = getattr(self, name)
             if not (math.isfinite(value) and ok):
                 raise ValueError(f"SimConfig.{name} must be finite and {rule}, got {value}")
         if self.control_dt is not None:
-            substeps(self.control_dt, self.physics_dt)  # raises on a step longer than, or not dividing, the period
+            # Raises on a period that is not > 0, or a step longer than it or not dividing it.
+            substeps(self.control_dt, self.control_dt if step is None else step)
         if not (isinstance(self.noslip_iterations, int) and 0 <= self.noslip_iterations <= 1000):
             raise ValueError(
                 f"SimConfig.noslip_iterations must be an integer in [0, 1000], got {self.noslip_iterations}"
@@ -132,10 +142,20 @@ class SimConfig:
                 f"SimConfig.contact_impedance must be (low, high) with 0 < low <= high < 1, got {(low, high)}"
             )
 
-    @property
-    def timestep(self) -> float:
-        """The physics step (s), :attr:`physics_dt`."""
-        return self.physics_dt
+    def resolved(self, robot: RobotModel) -> SimConfig:
+        """These settings with the physics step and control period of ``robot``'s description where not given.
+
+        Raises:
+            ValueError: the contact time constant is shorter than two of the resolved physics steps.
+        """
+        actuation = robot.description.actuation
+        step = self.physics_dt if self.physics_dt is not None else actuation.physics_dt
+        if self.contact_timeconst < 2.0 * step:
+            raise ValueError(
+                f"SimConfig.contact_timeconst must be >= 2 physics steps ({2.0 * step:g} s for {robot.name}), "
+                f"got {self.contact_timeconst}"
+            )
+        return dataclasses.replace(self, physics_dt=step)
 
 
 @dataclass(frozen=True, eq=False)
@@ -429,7 +449,7 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
     """
     if not isinstance(robot, RobotModel):
         robot = RobotModel.load(robot)
-    config = config or SimConfig()
+    config = (config or SimConfig()).resolved(robot)
     description = robot.description
     try:
         spec = mujoco.MjSpec.from_string(_urdf_for_mujoco(description, config.meshes))

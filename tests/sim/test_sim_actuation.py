@@ -89,6 +89,7 @@ def test_actuation_from_the_description(tmp_path: Path) -> None:
     [
         ('[actuation]\ncontrol_dt = 0\n', "actuation.control_dt must be a number > 0 s"),
         ('[actuation]\nrate = 2\n', "unknown key actuation.rate"),
+        ('[actuation]\ncontrol_dt = 0.002\nphysics_dt = 0.0015\n', "physics_dt = 0.0015 s must divide"),
         ('[[actuation.joints]]\nmatch = "knee_*"\nkp = 1.0\n', "'knee_*' matches no movable joint"),
         ('[[actuation.joints]]\nmatch = "leg_*"\nrotor_inertia = 1e-5\n', "rotor_inertia and gear_ratio go together"),
         ('[[actuation.joints]]\nmatch = "leg_*"\narmature = 0.1\nrotor_inertia = 1e-5\ngear_ratio = 9.0\n',

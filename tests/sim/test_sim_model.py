@@ -136,8 +136,19 @@ def test_meshes_are_visual_only(talos):
     ],
 )
 def test_bad_config(field, value):
+    extra = {"physics_dt": 0.001} if field == "contact_timeconst" else {}  # two steps of a step given
     with pytest.raises(ValueError, match=field):
-        SimConfig(**{field: value})
+        SimConfig(**{field: value}, **extra)
+
+
+def test_the_physics_step_is_the_descriptions_unless_given():
+    from rtgait.robot.model import RobotModel
+
+    g1 = RobotModel.load("g1")
+    assert SimConfig().resolved(g1).physics_dt == g1.description.actuation.physics_dt == 0.0005
+    assert SimConfig(physics_dt=0.001).resolved(g1).physics_dt == 0.001
+    with pytest.raises(ValueError, match="contact_timeconst"):
+        SimConfig(contact_timeconst=0.0008).resolved(g1)  # fewer than two of G1's 0.5 ms steps
 
 
 ROMEO = """name = "romeo"
