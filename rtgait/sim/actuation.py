@@ -28,7 +28,7 @@ Defaults derived from the URDF when the description does not give a value (``[ac
 
 * **torque limit** = the URDF's ``<limit effort>`` (none when it is missing, 0 or infinite);
 * **armature** = ``armature_per_torque`` x the torque limit (a motor family's rotor inertia per N m times the gear
-  ratio; see :data:`rtgait.robot.description.DEFAULT_ARMATURE_PER_TORQUE`);
+  ratio; see :data:`rtgait.robot.actuation_table.DEFAULT_ARMATURE_PER_TORQUE`);
 * **kp** from a target natural frequency ``f`` on the inertia the joint moves: ``kp = (2 pi f)^2 (armature +
   I_carried)``. ``I_carried`` is the inertia about the joint axis at half-sitting of what the joint carries: for
   a joint of a leg, the larger of the part beyond it (swing) and the rest of the robot pivoting about it with
