@@ -323,7 +323,7 @@ class MeasuredPlanning:
         )
         decision = StepDecision(
             t, proposal.step, (nominal.x, nominal.y), (nominal.x, nominal.y), before, after, proposal.candidates, True,
-            reason, proposal.nominal_single_support, proposal.nominal_single_support,
+            reason, proposal.nominal_single_support, proposal.nominal_single_support, kept=True,
         )  # fmt: skip
         return self._log_decision(decision)
 

@@ -57,7 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rtgait.core.lipm import GRAVITY, omega
-from rtgait.core.polygon import ConvexPolygon
+from rtgait.core.polygon import ConvexPolygon, vertex_list
 from rtgait.core.support import signed_margin
 
 DEFAULT_MAX_LEAN = math.radians(25.0)
@@ -153,17 +153,6 @@ def push_impulse(pushes: Iterable[Push], t0: float, t1: float) -> np.ndarray:
             jx += push.force[0] * overlap
             jy += push.force[1] * overlap
     return np.array([jx, jy])
-
-
-def _as_vertex_list(polygon: np.ndarray | Sequence[Sequence[float]]) -> list[list[float]]:
-    """The polygon's vertices as lists of floats, cheaply: compared every tick with the cached polygon's."""
-    if polygon is None:
-        raise ValueError("the support polygon is None: no foot on the ground, so no ZMP exists")
-    if isinstance(polygon, np.ndarray):
-        if polygon.ndim != 2 or (polygon.size and polygon.shape[1] != 2):
-            raise ValueError(f"support polygon must have shape (k, 2), got {polygon.shape}")
-        return polygon.tolist()
-    return [[float(c) for c in v] for v in polygon]
 
 
 class LipmPlant:
@@ -352,7 +341,7 @@ class LipmPlant:
 
     # ----- integration --------------------------------------------------------------------------------------
     def _polygon(self, polygon: np.ndarray) -> ConvexPolygon:
-        vertices = _as_vertex_list(polygon)
+        vertices = vertex_list(polygon)
         poly = self._poly
         if poly is None or poly.key != vertices:  # rebuild only when the contacts change
             poly = self._poly = ConvexPolygon(vertices, min_vertices=1)  # one foot's edge or corner is a contact

@@ -24,7 +24,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["INSIDE_TOLERANCE", "ConvexPolygon", "clip_to_polygon", "project_to_polygon"]
+__all__ = ["INSIDE_TOLERANCE", "ConvexPolygon", "clip_to_polygon", "project_to_polygon", "vertex_list"]
 
 INSIDE_TOLERANCE = 1e-12
 """Negative cross product (relative to the polygon's squared size) still counted inside."""
@@ -33,23 +33,36 @@ Edge = tuple[float, float, float, float, float]
 """An edge as ``(ax, ay, ex, ey, 1/|e|^2)``: its start vertex and its vector (m)."""
 
 
-def _vertex_list(polygon: object, min_vertices: int) -> list[list[float]]:
-    """``polygon`` as a list of finite ``[x, y]`` pairs, at least ``min_vertices`` of them, else a ValueError."""
+def vertex_list(polygon: object) -> list[list[float]]:
+    """``polygon`` (``(k, 2)`` array or pairs) as lists of floats, cheaply: what :attr:`ConvexPolygon.key` holds,
+    so a caller that keeps a prepared polygon can tell every tick whether the contacts changed.
+
+    Raises:
+        ValueError: ``None``, or anything that is not ``k`` pairs of numbers.
+    """
     if polygon is None:
         raise ValueError("the support polygon is None: no foot on the ground, so no ZMP exists")
+    if type(polygon) is np.ndarray and polygon.ndim == 2 and polygon.shape[1:] == (2,):
+        return polygon.tolist()  # the tick path: one C call
     try:
         vertices = np.array(polygon, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"polygon must be an array (k, 2) of vertices in m, got {polygon!r}") from None
-    if vertices.size == 0:
-        raise ValueError("the support polygon is empty: no foot on the ground, so no ZMP exists")
-    if vertices.ndim != 2 or vertices.shape[1] != 2 or vertices.shape[0] < min_vertices:
-        raise ValueError(
-            f"polygon must be an array (k, 2) with k >= {min_vertices} vertices in m, got shape {vertices.shape}"
-        )
-    if not np.all(np.isfinite(vertices)):
-        raise ValueError("polygon vertices must be finite (m)")
+    if vertices.size and (vertices.ndim != 2 or vertices.shape[1] != 2):
+        raise ValueError(f"polygon must be an array (k, 2) of vertices in m, got shape {vertices.shape}")
     return vertices.tolist()
+
+
+def _checked_vertex_list(polygon: object, min_vertices: int) -> list[list[float]]:
+    """:func:`vertex_list`, with at least ``min_vertices`` vertices, all finite, else a ValueError."""
+    points = vertex_list(polygon)
+    if not points:
+        raise ValueError("the support polygon is empty: no foot on the ground, so no ZMP exists")
+    if len(points) < min_vertices:
+        raise ValueError(f"polygon must be an array (k, 2) with k >= {min_vertices} vertices in m, got {len(points)}")
+    if not all(math.isfinite(x) and math.isfinite(y) for x, y in points):
+        raise ValueError("polygon vertices must be finite (m)")
+    return points
 
 
 class ConvexPolygon:
@@ -69,7 +82,7 @@ class ConvexPolygon:
     __slots__ = ("edges", "key", "tolerance")
 
     def __init__(self, vertices: object, min_vertices: int = 3) -> None:
-        points = _vertex_list(vertices, min_vertices)
+        points = _checked_vertex_list(vertices, min_vertices)
         self.key = points
         """The vertices as given (lists of floats): compare with a new polygon's to know whether it changed."""
         count = len(points)

@@ -189,6 +189,7 @@ class StepDecision(NamedTuple):
         single_support: the step's single-support duration now (s).
         nominal_single_support: the step's single-support duration before the decision (s); differs from
             ``single_support`` only with ``adapt_timing``.
+        kept: nothing moved: no candidate was enough and ``on_failure="keep"`` kept the step as planned.
     """
 
     t: float
@@ -202,6 +203,7 @@ class StepDecision(NamedTuple):
     reason: str
     single_support: float = math.nan
     nominal_single_support: float = math.nan
+    kept: bool = False
 
 
 def candidate_landings(adjust: StepAdjustment, stance: Footstep, nominal: Footstep) -> np.ndarray:

@@ -421,8 +421,8 @@ class WalkingController:
             self._adjustments = planner.step_adjustment_count
             for decision in list(planner.step_adjustments)[-new:]:
                 x, y = decision.landing
-                kept = decision.emergency and decision.landing == decision.nominal  # on_failure="keep"
-                events.append(ControlEvent(t, "step-refused" if kept else "step-adjustment", "", decision.reason, x, y))
+                kind = "step-refused" if decision.kept else "step-adjustment"
+                events.append(ControlEvent(t, kind, "", decision.reason, x, y))
         new = planner.replan_count - self._replans
         if new:
             self._replans = planner.replan_count
