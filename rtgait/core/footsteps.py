@@ -221,12 +221,6 @@ class Timing:
         return min(values)
 
     @property
-    def longest_phase(self) -> float:
-        """Longest duration of any phase (s), per-step ones included."""
-        return max(self.single_support, self.double_support, self.start, self.end, self.settle,
-                   *(d for pair in self.per_step for d in pair))  # fmt: skip
-
-    @property
     def step_period(self) -> float:
         """Time from one lift-off to the next (s)."""
         return self.single_support + self.double_support

@@ -230,35 +230,6 @@ def _stride_box_grid(max_length: float, min_width: float, max_width: float, grid
     return local
 
 
-def choose_landing(
-    adjust: StepAdjustment,
-    candidates: np.ndarray,
-    nominal: tuple[float, float],
-    zmp: np.ndarray,
-    gain: np.ndarray,
-    halfplanes: tuple[np.ndarray, np.ndarray],
-    swing_from: tuple[float, float],
-    time_left: float,
-) -> tuple[np.ndarray, float, bool] | None:
-    """The landing to take among ``candidates`` ``(C, 2)``, its margin (m) and whether it reaches the required one:
-    :func:`choose_step` with the nominal timing alone.
-
-    Args:
-        nominal: the landing of the walk as commanded (m).
-        zmp: the free segment's ZMP with the nominal landing, at the sample times, ``(T, 2)`` (m).
-        gain: how much that ZMP moves per metre the landing moves, ``(T,)``.
-        halfplanes: the support polygon of the free segment (:func:`~rtgait.core.batch.polygon_halfplanes`).
-        swing_from: where the swing foot is now (m); time_left: until its touch-down (s).
-
-    Returns ``None`` when no candidate can be reached in the time left.
-    """
-    choice = choose_step(
-        adjust, candidates, nominal, zmp[None], gain[None], halfplanes, swing_from, np.array([time_left]),
-        np.zeros(1),
-    )  # fmt: skip
-    return None if choice is None else choice[1:]
-
-
 def choose_step(
     adjust: StepAdjustment,
     candidates: np.ndarray,
@@ -447,7 +418,6 @@ __all__ = [
     "SteppingLimits",
     "TimingOptions",
     "candidate_landings",
-    "choose_landing",
     "choose_step",
     "propose_landing",
     "shorter_remainders",
