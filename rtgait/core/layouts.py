@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from rtgait.core.active_plan import PlanLayout
 from rtgait.core.pattern import PatternKey, PlanOperator
-from rtgait.core.stepping import shorter_single_supports
+from rtgait.core.stepping import single_support_options
 
 
 class PlanShapes:
@@ -71,7 +71,7 @@ class PlanShapes:
             layout = self._layouts[shape] = PlanLayout(PlanOperator(key), kinds)
             if adapts and len(kinds) > 1 and kinds[1] == "single":
                 adjust = self.config.step_adjustment
-                durations = shorter_single_supports(adjust, layout.durations[1])
+                durations = single_support_options(adjust, layout.durations[1])
                 if durations is not None:
                     layout.variant_zmp_rows(1, durations, adjust.samples)
         return layout

@@ -30,8 +30,8 @@ from rtgait.core.stepping import (
     StepDecision,
     TimingOptions,
     propose_landing,
-    shorter_remainders,
-    shorter_single_supports,
+    remainder_options,
+    single_support_options,
 )
 from rtgait.core.support import support_polygon
 
@@ -287,8 +287,9 @@ class MeasuredPlanning:
             walk.set_single_support(k, proposal.single_support)
             if self._next_replan_phase is not None:  # the phases after step k's single support moved
                 self._next_replan_time = self.phase_start(self._next_replan_phase)
+            change = proposal.single_support - proposal.nominal_single_support
             reason += (
-                f", {proposal.nominal_single_support - proposal.single_support:.3f} s sooner "
+                f", {abs(change):.3f} s {'later' if change > 0 else 'sooner'} "
                 f"(single support {proposal.single_support:.3f} s)"
             )
         n = walk.n_steps
@@ -341,18 +342,18 @@ class MeasuredPlanning:
         self, k: int, swinging: bool, adjust: StepAdjustment
     ) -> tuple[int, tuple[float, ...], np.ndarray] | None:
         """The candidate timings of step ``k`` for the plan under way: the plan's segment whose duration changes,
-        its candidate durations (s) and the step's single support under each (s); ``None`` when the step cannot be
-        shortened. Swinging, the segment is the free one, the rest of the single support
-        (:func:`~rtgait.core.stepping.shorter_remainders`); else the step's whole single support
-        (:func:`~rtgait.core.stepping.shorter_single_supports`)."""
+        its candidate durations (s) and the step's single support under each (s); ``None`` when the step's timing
+        cannot change. Swinging, the segment is the free one, the rest of the single support
+        (:func:`~rtgait.core.stepping.remainder_options`); else the step's whole single support
+        (:func:`~rtgait.core.stepping.single_support_options`)."""
         plan = self._plan
         if swinging:
-            durations = shorter_remainders(adjust, plan.elapsed, plan.durations[0])
+            durations = remainder_options(adjust, plan.elapsed, plan.durations[0])
             return None if durations is None else (0, durations, plan.elapsed + np.array(durations))
         segment = 2 * k - 1 - plan.phase0
         if segment >= len(plan.durations) or plan.layout.kinds[segment] != "single":
             return None
-        durations = shorter_single_supports(adjust, plan.durations[segment])
+        durations = single_support_options(adjust, plan.durations[segment])
         return None if durations is None else (segment, durations, np.array(durations))
 
     def _adapts_timing(self, adjust: StepAdjustment | None = None) -> bool:

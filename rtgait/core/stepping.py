@@ -18,7 +18,8 @@ free segment at time ``t_i`` moves by ``g_i delta`` with ``g_i = sum_a M[i, a] w
 candidates in a few hundred microseconds.
 
 Step timing (Morisawa et al. 2006), with ``adapt_timing``: the single support of the step being adjusted may also
-end sooner, a landing sooner moving the ZMP's anchors sooner. A new duration changes the plan's operator, not its
+end sooner, a landing sooner moving the ZMP's anchors sooner, or (with ``max_single_support``) later, which gives
+the stance sole longer to catch a push toward its outside. A new duration changes the plan's operator, not its
 inputs, so each candidate duration ``d`` has its own rows ``M_d`` (built in one batch, ahead where the durations
 are known ahead, and kept with the plan's layout); the landings are then weighed against every duration at once,
 ``(D, C)`` margins, and the choice minimises ``|delta|^2 + (time_cost * (d - d_nominal))^2`` among the candidates
@@ -64,12 +65,18 @@ class StepAdjustment:
             and stops the walk after that step (an emergency sequence: capture step, then stop), ``"keep"`` keeps
             the walk as planned (no landing or timing moves; the plan goes on from the planned state).
         adapt_timing: also choose the single-support duration of the step being adjusted (Morisawa et al. 2006):
-            ``durations`` candidates evenly from the shortest allowed to the nominal one (nominal included), so
-            ``grid**2 * durations`` candidates in all. Off by default (the decisions are then those of landings
-            alone). Not with ``connection="auto"`` (it needs one timing for every step): ignored there.
-        durations: candidate single-support durations per decision, nominal included (2..16).
+            ``durations`` candidates evenly from the shortest allowed to the nominal one (nominal included), and
+            with ``max_single_support`` as many again up to the longest, so ``grid**2 * durations`` (or
+            ``grid**2 * (2 durations - 1)``) candidates in all. Off by default (the decisions are then those of
+            landings alone). Not with ``connection="auto"`` (it needs one timing for every step): ignored there.
+        durations: candidate single-support durations per decision on each side of the nominal one, nominal
+            included (2..16).
         min_single_support: shortest single support a step may be given (s). A swinging foot also never lands
             sooner than ``min_time_to_touchdown`` from the decision.
+        max_single_support: longest single support a step may be given (s), or ``None`` (the default): steps are
+            only shortened. A longer single support is how the ankle catches a push toward the stance foot's
+            outside, which no landing can (the swing foot lands on the other side): the centre of pressure at the
+            sole's outer edge has longer to bring the DCM back before the weight moves to the other foot.
         time_cost: how many metres of landing departure one second of timing change weighs (m/s): the departure
             is ``|delta|^2 + (time_cost * dT)^2``. 0.5 m/s, about a walking speed: shortening a step by ``dT``
             moves the body about as much as landing ``0.5 dT`` elsewhere.
@@ -89,6 +96,7 @@ class StepAdjustment:
     durations: int = 4
     min_single_support: float = 0.4
     time_cost: float = 0.5
+    max_single_support: float | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.sole, SoleRect):
@@ -111,6 +119,7 @@ class StepAdjustment:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and low <= value <= high):
                 raise ValueError(f"step_adjustment.{name} must be within [{low:g}, {high:g}], got {value!r}")
+        _check_longest(self.max_single_support, self.min_single_support, "step_adjustment")
         for name, low, high in (("grid", 2, 200), ("samples", 2, 200), ("durations", 2, 16)):
             value = getattr(self, name)
             if not (isinstance(value, int) and not isinstance(value, bool) and low <= value <= high):
@@ -119,6 +128,7 @@ class StepAdjustment:
 
 STEPPING_KEYS = (
     "max_length", "min_width", "max_width", "max_swing_speed", "min_time_to_touchdown", "min_single_support",
+    "max_single_support",
 )  # fmt: skip
 """The limits of a robot's stepping (:class:`SteppingLimits`), as a robot description's ``[stepping]`` table names
 them."""
@@ -136,6 +146,8 @@ class SteppingLimits:
         max_swing_speed: largest average horizontal speed of the swing foot (m/s).
         min_time_to_touchdown: no landing or timing changes closer than this to touch-down (s).
         min_single_support: shortest single support step timing adaptation may give a step (s).
+        max_single_support: longest single support step timing adaptation may give a step (s), or ``None``: it
+            only shortens steps.
 
     The defaults are :class:`StepAdjustment`'s (an HRP-2-like robot, COM 0.8 m high).
     """
@@ -146,6 +158,7 @@ class SteppingLimits:
     max_swing_speed: float = 1.5
     min_time_to_touchdown: float = 0.2
     min_single_support: float = 0.4
+    max_single_support: float | None = None
 
     def __post_init__(self) -> None:
         # (lowest, highest, unit, lowest allowed itself): lengths and the speed must be positive.
@@ -160,6 +173,7 @@ class SteppingLimits:
                 raise ValueError(f"stepping.{name} must be a number within {interval} {unit}, got {value!r}")
         if self.min_width >= self.max_width:
             raise ValueError(f"stepping.min_width ({self.min_width}) must be < max_width ({self.max_width})")
+        _check_longest(self.max_single_support, self.min_single_support, "stepping")
 
     @classmethod
     def from_table(cls, table: dict) -> SteppingLimits:
@@ -172,6 +186,18 @@ class SteppingLimits:
     def adjustment(self, sole: SoleRect, **options) -> StepAdjustment:
         """The :class:`StepAdjustment` with these limits for ``sole`` (its other settings from ``options``)."""
         return StepAdjustment(sole, **{name: getattr(self, name) for name in STEPPING_KEYS}, **options)
+
+
+def _check_longest(longest: float | None, shortest: float, prefix: str) -> None:
+    """``max_single_support`` is ``None`` or a number of seconds above ``min_single_support`` and at most 10 s."""
+    if longest is None:
+        return
+    number = not isinstance(longest, bool) and isinstance(longest, (int, float)) and math.isfinite(longest)
+    if not (number and shortest < longest <= 10.0):
+        raise ValueError(
+            f"{prefix}.max_single_support must be a number of seconds above min_single_support ({shortest:g} s) "
+            f"and at most 10 s, got {longest!r}"
+        )
 
 
 class StepDecision(NamedTuple):
@@ -249,8 +275,8 @@ def choose_step(
         gain: how much that ZMP moves per metre the landing moves, under each timing, ``(D, T)``.
         time_left: until the touch-down under each timing (s), ``(D,)``: a landing is reachable if the swing foot
             covers the distance from ``swing_from`` (m) at ``max_swing_speed`` in that time.
-        time_change: each timing's change of the single support (s), ``(D,)``; 0 for the nominal one, which
-            comes first (of equal departures the first candidate wins, so the nominal timing does).
+        time_change: each timing's change of the single support (s, negative: sooner), ``(D,)``; 0 for the
+            nominal one, which comes first (of equal departures the first candidate wins, so the nominal timing does).
 
     The margin of candidate ``(d, c)`` is ``min_t min_k b_k - n_k . (zmp[d, t] + gain[d, t] delta_c)``; among the
     candidates reaching ``required_margin`` the least departure ``|delta_c|^2 + (time_cost time_change_d)^2``
@@ -292,18 +318,30 @@ def choose_step(
     return d, candidates[c], float(margin[d, c]), bool(enough[d, c])
 
 
-def shorter_single_supports(adjust: StepAdjustment, nominal: float) -> tuple[float, ...] | None:
+def single_support_options(adjust: StepAdjustment, nominal: float) -> tuple[float, ...] | None:
     """Candidate single supports (s) of a step that has not lifted off, nominal ``nominal`` (s): ``durations``
-    evenly spaced from ``min_single_support`` to the nominal one, the nominal one left out (it is the plan as
-    made); rounded to 1 ns (they key the operator cache). ``None`` if the step cannot be shortened."""
-    return _evenly(adjust.min_single_support, nominal, adjust.durations)
+    evenly spaced from ``min_single_support`` to the nominal one and, with ``max_single_support``, as many from the
+    nominal one to it; the nominal one left out (it is the plan as made); rounded to 1 ns (they key the operator
+    cache). ``None`` if the step can neither be shortened nor lengthened."""
+    return _both_sides(adjust, adjust.min_single_support, nominal, adjust.max_single_support)
 
 
-def shorter_remainders(adjust: StepAdjustment, elapsed: float, remainder: float) -> tuple[float, ...] | None:
+def remainder_options(adjust: StepAdjustment, elapsed: float, remainder: float) -> tuple[float, ...] | None:
     """Candidate rests (s) of a single support ``elapsed`` s old with ``remainder`` s to go: from the latest of
-    ``min_time_to_touchdown`` and ``min_single_support - elapsed`` up to the nominal rest, as in
-    :func:`shorter_single_supports`."""
-    return _evenly(max(adjust.min_time_to_touchdown, adjust.min_single_support - elapsed), remainder, adjust.durations)
+    ``min_time_to_touchdown`` and ``min_single_support - elapsed`` up to the nominal rest and, with
+    ``max_single_support``, on to ``max_single_support - elapsed``, as in :func:`single_support_options`."""
+    low = max(adjust.min_time_to_touchdown, adjust.min_single_support - elapsed)
+    high = None if adjust.max_single_support is None else adjust.max_single_support - elapsed
+    return _both_sides(adjust, low, remainder, high)
+
+
+def _both_sides(adjust: StepAdjustment, low: float, nominal: float, high: float | None) -> tuple[float, ...] | None:
+    """The shorter candidates from ``low`` and the longer ones up to ``high`` (``None``: none), nominal left out."""
+    shorter = _evenly(low, nominal, adjust.durations)
+    longer = None if high is None else _evenly_above(nominal, high, adjust.durations)
+    if longer is None:
+        return shorter
+    return longer if shorter is None else shorter + longer
 
 
 def _evenly(low: float, nominal: float, count: int) -> tuple[float, ...] | None:
@@ -313,6 +351,15 @@ def _evenly(low: float, nominal: float, count: int) -> tuple[float, ...] | None:
         return None
     step = (nominal - low) / (count - 1)
     return tuple(round(low + i * step, 9) for i in range(count - 1))
+
+
+def _evenly_above(nominal: float, high: float, count: int) -> tuple[float, ...] | None:
+    """``count`` values evenly from ``nominal`` to ``high`` without the first, rounded to 1 ns; ``None`` if ``high``
+    is not at least 1 ms above ``nominal``."""
+    if high < nominal + 1e-3:
+        return None
+    step = (high - nominal) / (count - 1)
+    return tuple(round(nominal + i * step, 9) for i in range(1, count))
 
 
 class TimingOptions(NamedTuple):
@@ -420,6 +467,6 @@ __all__ = [
     "candidate_landings",
     "choose_step",
     "propose_landing",
-    "shorter_remainders",
-    "shorter_single_supports",
+    "remainder_options",
+    "single_support_options",
 ]

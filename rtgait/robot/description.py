@@ -56,6 +56,7 @@ loaded by name (``load_robot("talos")``); any other file is loaded by path. Ever
     max_swing_speed = 1.0                # m/s, average over the swing
     min_time_to_touchdown = 0.2          # s: no change closer to touch-down
     min_single_support = 0.5             # s: the shortest step timing adaptation may make
+    max_single_support = 1.2             # s: the longest (omit it: steps are only shortened)
 
 A joint's actuation is resolved key by key: the last matching ``[[actuation.joints]]`` group that sets the key,
 else ``[gains]`` (kp, kd), else a default derived from the URDF by :mod:`rtgait.sim.actuation`.

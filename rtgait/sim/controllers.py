@@ -73,6 +73,7 @@ if TYPE_CHECKING:
 
     import numpy as np
 
+    from rtgait.core.stepping import StepAdjustment
     from rtgait.robot.model import RobotModel
     from rtgait.sim.measure import FootState, Landing, Measurement
 
@@ -232,10 +233,10 @@ class WalkingController:
         if remainder < ERROR_REPLAN_MIN_REMAINDER:
             return False
         self._last_error_replan = t
-        if self._only_crossing_catches(values, support, ex, ey):
+        adjust = self.options.step_adjustment
+        if self._only_crossing_catches(values, support, ex, ey) and not _lengthens(adjust):
             events.append(ControlEvent(t, "replan-skipped", support, "outward DCM error in single support"))
             return False
-        adjust = self.options.step_adjustment
         if adjust is not None and support in _SIDES and remainder < adjust.min_time_to_touchdown:
             adjust = dataclasses.replace(adjust, on_failure="keep")  # the core moves the next step's landing
         replanned = planner.replan_now(t, "dcm-error", feedback="measured", step_adjustment=adjust or False)
@@ -252,7 +253,8 @@ class WalkingController:
         """Whether, in a single support, the DCM error ``(ex, ey)`` (m) points outward from the stance foot more
         than along it: the capture point then moves away from where the swing foot may land (the stride box keeps
         it on its own side, the leg collision model would refuse a crossing step), so no landing catches it and
-        the plan under way is kept."""
+        the plan under way is kept: unless step timing adaptation may lengthen the single support
+        (``max_single_support``), when the replan's decision may hold the stance longer (:func:`_lengthens`)."""
         if support not in _SIDES:
             return False
         i = 13 if support == "left" else 17  # the stance foot's (x, y, z, yaw) in the sample
@@ -497,6 +499,13 @@ class WalkingController:
         else:
             self._late = [False, False]
         self.level = level
+
+
+def _lengthens(adjust: StepAdjustment | None) -> bool:
+    """Whether step adjustment ``adjust`` may give a step a longer single support: then a DCM error toward the
+    stance foot's outside has an answer, the stance held longer while the sole's centre of pressure at its outer
+    edge brings the DCM back, and the controller replans for it."""
+    return adjust is not None and adjust.adapt_timing and adjust.max_single_support is not None
 
 
 def make_controller(

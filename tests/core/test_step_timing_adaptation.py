@@ -21,7 +21,7 @@ from rtgait.core.footsteps import SoleRect, Timing
 from rtgait.core.lipm import GRAVITY
 from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
 from rtgait.core.plant import Push
-from rtgait.core.stepping import StepAdjustment, choose_step, shorter_remainders, shorter_single_supports
+from rtgait.core.stepping import StepAdjustment, choose_step, remainder_options, single_support_options
 from rtgait.core.support import signed_margin
 
 SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.07)
@@ -203,12 +203,12 @@ def test_the_batched_choice_is_the_direct_evaluation_of_every_candidate(required
 
 def test_candidate_timings_stay_within_the_limits():
     adjust = StepAdjustment(sole=SOLE, adapt_timing=True, durations=4, min_single_support=0.4)
-    assert shorter_single_supports(adjust, 0.7) == pytest.approx((0.4, 0.5, 0.6))
-    assert shorter_single_supports(adjust, 0.4) is None
+    assert single_support_options(adjust, 0.7) == pytest.approx((0.4, 0.5, 0.6))
+    assert single_support_options(adjust, 0.4) is None
     # 0.35 s into a 0.7 s single support: touch-down no sooner than 0.2 s from now (nor a 0.4 s single support).
-    assert shorter_remainders(adjust, 0.35, 0.35) == pytest.approx((0.2, 0.25, 0.3))
-    assert shorter_remainders(adjust, 0.1, 0.6) == pytest.approx((0.3, 0.4, 0.5))
-    assert shorter_remainders(adjust, 0.55, 0.15) is None  # already within the last 0.2 s
+    assert remainder_options(adjust, 0.35, 0.35) == pytest.approx((0.2, 0.25, 0.3))
+    assert remainder_options(adjust, 0.1, 0.6) == pytest.approx((0.3, 0.4, 0.5))
+    assert remainder_options(adjust, 0.55, 0.15) is None  # already within the last 0.2 s
 
 
 def test_candidate_operators_of_double_support_starts_are_built_ahead():

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -293,12 +294,19 @@ def test_step_limits_scale_with_the_robot_and_keep_the_soles_apart():
         make_controller("stiff", CONFIG, None, SOLE, INFO)
 
 
-@pytest.mark.parametrize("outward", [True, False])
-def test_adaptive_keeps_the_plan_for_an_outward_dcm_error_in_single_support(outward):
+LENGTHENING = ControllerOptions(
+    measurement_filter=0.0, adapt_timing=True,
+    step_adjustment=dataclasses.replace(step_limits(INFO), max_single_support=1.2),
+)  # fmt: skip
+
+
+@pytest.mark.parametrize(("outward", "options"), [(True, EXACT), (False, EXACT), (True, LENGTHENING)])
+def test_adaptive_keeps_the_plan_for_an_outward_dcm_error_in_single_support(outward, options):
     # The first single support: F[1] carries it; an error away from the swing foot cannot be caught by any landing
     # on the swing foot's side, so the plan under way is kept; toward the swing foot it replans from the measured
-    # state.
-    ctl, plan = controller("adaptive"), reference()
+    # state. With steps that may be held longer (max_single_support), the outward error is replanned too: the
+    # stance held longer is its answer.
+    ctl, plan = controller("adaptive", options=options), reference()
     start, duration, _ = first_swing(ctl)
     stance = ctl.planner.footprints()[1]
     away = 1.0 if stance.side == "left" else -1.0
@@ -314,7 +322,12 @@ def test_adaptive_keeps_the_plan_for_an_outward_dcm_error_in_single_support(outw
         events += out.events
         worst = max(worst, math.dist(out.com[:2], (values[0], values[1])) - math.hypot(*out.com_offset))
     kinds = {e.kind for e in events}
-    if outward:
+    if options is LENGTHENING:
+        assert "replan" in kinds and "replan-skipped" not in kinds
+        decision = ctl.planner.step_adjustments[-1]
+        assert decision.single_support > decision.nominal_single_support, decision.reason
+        assert "later" in decision.reason
+    elif outward:
         assert "replan-skipped" in kinds and "replan" not in kinds
         assert ctl.planner.footprints() == before
         assert worst < 1e-9, "the IK's COM target is the plan's with the feedback law's correction"
