@@ -280,7 +280,8 @@ def choose_step(
 
     The margin of candidate ``(d, c)`` is ``min_t min_k b_k - n_k . (zmp[d, t] + gain[d, t] delta_c)``; among the
     candidates reaching ``required_margin`` the least departure ``|delta_c|^2 + (time_cost time_change_d)^2``
-    wins; when none does, the largest margin, and of candidates within a millimetre of it the least departure.
+    wins; when none does, the largest margin among the timings no longer than the nominal one, and of candidates
+    within a millimetre of it the least departure.
     Returns ``None`` when no candidate can be reached in time.
     """
     distance = np.hypot(candidates[:, 0] - swing_from[0], candidates[:, 1] - swing_from[1])
@@ -311,7 +312,12 @@ def choose_step(
         best = int(np.argmin(np.where(enough, departure, np.inf)))
     else:
         # Nothing is enough: the largest margin, and of candidates within a millimetre of it the nearest one (the
-        # margin is often flat along one axis of the box).
+        # margin is often flat along one axis of the box). Not a longer single support: held longer with its ZMP
+        # still outside the sole, a stance only lets the fall grow (the sole tips about its edge); the step is the
+        # answer then, and it comes no later than planned.
+        later = np.asarray(time_change) > 0.0
+        if later.any() and not later.all():
+            margin[later] = -np.inf
         near_best = margin >= margin.max() - 1e-3
         best = int(np.argmin(np.where(near_best, departure, np.inf)))
     d, c = divmod(best, margin.shape[1])

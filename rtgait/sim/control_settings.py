@@ -120,9 +120,11 @@ class ControllerOptions:
             22 mm with 5 ms).
         replan_dcm_error: ``"adaptive"``: DCM error that triggers an immediate replan (m).
         step_adjustment: ``"adaptive"``: stride box and limits; default :func:`step_limits` of the robot.
-        adapt_timing: ``"adaptive"``: step adjustment may also shorten the single support of the step it moves
-            (:class:`~rtgait.core.stepping.StepAdjustment` ``adapt_timing``, Morisawa et al. 2006), down to the
-            limits' ``min_single_support``.
+        adapt_timing: ``"adaptive"``: step adjustment may also change the single support of the step it moves
+            (:class:`~rtgait.core.stepping.StepAdjustment` ``adapt_timing``, Morisawa et al. 2006): shorten it,
+            down to the limits' ``min_single_support``, and, where the limits set ``max_single_support``,
+            lengthen it (a push toward the stance foot's outside, which no landing catches). On by default: on
+            Talos and G1 it raised the pushes survived in 30 of 32 direction and phase pairs (README, "Pushes").
         early_touchdown_fraction: a landing counts as an early touch-down from this fraction of the swing on; before,
             it is ignored (a scuff).
         late_descent_speed: how fast a late foot's target goes down (m/s).
@@ -159,7 +161,7 @@ class ControllerOptions:
     on_time_window: float = 0.08
     relanding_tolerance: float = 0.01
     com_reference: str = "measured"
-    adapt_timing: bool = False
+    adapt_timing: bool = True
 
     def __post_init__(self) -> None:
         names = ("measurement_filter", "late_descent_speed", "late_descent_limit", "late_grace", "on_time_window",

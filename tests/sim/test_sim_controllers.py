@@ -284,12 +284,14 @@ def test_step_limits_scale_with_the_robot_and_keep_the_soles_apart():
     small = step_limits(RobotInfo(30.0, SoleRect(0.08, 0.05, 0.04, 0.04), 0.4))
     assert small.max_length == pytest.approx(0.175) and small.min_width == pytest.approx(0.1)
     # The core's closed loop ("always"): every plan from the measured state, step adjustment after each.
+    timed = dataclasses.replace(adjust, adapt_timing=True)  # ControllerOptions' default adds step timing adaptation
     ctl = controller("adaptive", options=ControllerOptions(measured_replanning="always"))
-    assert ctl.planner.config.step_adjustment == adjust and ctl.planner.config.feedback == "measured"
+    assert ctl.planner.config.step_adjustment == timed and ctl.planner.config.feedback == "measured"
     # The default ("on-error"): the plan continues itself; the measured state and step adjustment on a DCM error only.
     ctl = controller("adaptive")
     assert ctl.planner.config.step_adjustment is None and ctl.planner.config.feedback == "planned"
-    assert ctl.options.step_adjustment == adjust
+    assert ctl.options.step_adjustment == timed
+    assert controller("adaptive", options=ControllerOptions(adapt_timing=False)).options.step_adjustment == adjust
     with pytest.raises(ValueError, match="must be one of"):
         make_controller("stiff", CONFIG, None, SOLE, INFO)
 
@@ -342,8 +344,8 @@ def test_step_limits_come_from_the_robot_description(talos):
     ctl = make_controller("adaptive", CONFIG, straight_walk(CONFIG, 3, 0.1), SOLE, info, dt=DT)
     adjust = ctl.options.step_adjustment
     assert (adjust.max_length, adjust.min_width, adjust.max_width) == (0.2, 0.16, 0.3)
-    assert (adjust.max_swing_speed, adjust.min_single_support, adjust.adapt_timing) == (0.9, 0.5, False)
-    assert step_limits(info) == adjust and step_limits(info, SteppingLimits()).max_length == 0.35
+    assert (adjust.max_swing_speed, adjust.min_single_support, adjust.adapt_timing) == (0.9, 0.5, True)
+    assert dataclasses.replace(step_limits(info), adapt_timing=True) == adjust and step_limits(info, SteppingLimits()).max_length == 0.35
     # A loaded robot carries its description's table, also through a sole given apart.
     assert RobotInfo.from_robot(talos).stepping == talos.description.stepping is not None
     other = SoleRect(0.1, 0.1, 0.06, 0.06)
