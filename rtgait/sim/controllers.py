@@ -66,6 +66,7 @@ from rtgait.sim.control_settings import (
     controller_step_adjustment,
     step_limits,
 )
+from rtgait.sim.external_force import ExternalForce, shifted_measurement
 from rtgait.sim.foot_control import FootForceControl, FootOffsets, split_zmp
 
 if TYPE_CHECKING:
@@ -115,6 +116,8 @@ class WalkingController:
         self._last_error_replan = -math.inf
         tau = options.measurement_filter
         self._smoothing = 1.0 if tau == 0.0 else -math.expm1(-dt / tau)
+        # A known external force (a person's pull on the hand): the robot leans against it (set_external_force).
+        self.external = ExternalForce(info.mass, planner.w, dt)
         self._polygon_key: tuple[float, ...] | None = None
         self._polygon: np.ndarray | None = None
         self.reset()
@@ -161,6 +164,13 @@ class WalkingController:
     # ----- the tick ------------------------------------------------------------------------------------------------
     def tick(self, t: float, measurement: Measurement) -> ControlTargets:
         """The IK targets at ``t`` (s) for this tick's measurement (:class:`~rtgait.sim.measure.Measurement`)."""
+        external = self.external
+        leaning = external.active
+        if leaning:  # plan and feed back in the frame of the unpulled pendulum (external_force.py)
+            rate = external.rate
+            measurement = shifted_measurement(
+                measurement, (-external.offset[0], -external.offset[1]), (-rate[0], -rate[1]), self.planner.w
+            )
         planner, m = self.planner, measurement
         adaptive = self.level == "adaptive"
         events: list[ControlEvent] = []
@@ -199,6 +209,8 @@ class WalkingController:
                 offsets = self.foot.update(split, left_state, right_state, support)
                 left = (left[0], left[1], left[2] + offsets.left_height, left[3])
                 right = (right[0], right[1], right[2] + offsets.right_height, right[3])
+        if leaning:
+            com = (com[0] + external.offset[0], com[1] + external.offset[1], com[2])
         return ControlTargets(
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
             planned_support, (values[21], values[22]),
@@ -433,6 +445,13 @@ class WalkingController:
                     events.append(ControlEvent(t, "replan", "", record.reason))
 
     # ----- switching level mid-walk --------------------------------------------------------------------------------
+    def set_external_force(self, force: tuple[float, float], height: float) -> None:
+        """A horizontal force (N, world frame) measured on the robot at ``height`` (m above the ground), e.g. a
+        wrist sensor's reading: the closed-loop levels lean against it so the ZMP stays planned
+        (:mod:`rtgait.sim.external_force`); ``"open-loop"`` ignores it (the paper's robot knows nothing)."""
+        if self.level != "open-loop":
+            self.external.set(force, height)
+
     def set_level(self, level: Controller) -> None:
         """Switch to controller level ``level`` (``"open-loop"``, ``"stabilized"``, ``"adaptive"``) mid-walk or
         before the start, without a jump in the IK's targets.

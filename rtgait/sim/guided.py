@@ -34,7 +34,7 @@ from rtgait.core.closed_loop import Controller
 from rtgait.core.guidance import HandGuide
 from rtgait.core.online import OnlinePlanner, VelocityCommand
 from rtgait.scenario import GuidePath, Scenario
-from rtgait.sim.controllers import ControllerOptions, make_controller
+from rtgait.sim.controllers import ControllerOptions, WalkingController, make_controller
 from rtgait.sim.loop import LoopOptions, run_closed_loop
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SimResult
@@ -148,12 +148,21 @@ class HandPull:
         path: the person's path, relative to the hand at the walk's start and the robot's heading.
         leash: the person's arm.
         max_steps: the planner is stopped once this many steps are committed, whatever the pull.
+        controller: the walking controller, told the pull each tick (the wrist sensor's force at the hand's height)
+            so that it leans against it (:meth:`~rtgait.sim.controllers.WalkingController.set_external_force`).
     """
 
     def __init__(
-        self, sim: SimModel, planner: OnlinePlanner, path: GuidePath, leash: Leash | None = None, max_steps: int = 100
+        self,
+        sim: SimModel,
+        planner: OnlinePlanner,
+        path: GuidePath,
+        leash: Leash | None = None,
+        max_steps: int = 100,
+        controller: WalkingController | None = None,
     ) -> None:
         self.sim = sim
+        self.controller = controller
         self.planner = planner
         self.path = path
         self.leash = leash or Leash.for_robot(sim.robot.mass, float(-sim.model.opt.gravity[2]))
@@ -237,6 +246,8 @@ class HandPull:
         xfrc[0:3] = force3
         # MuJoCo applies xfrc_applied at the body's centre of mass: add the moment of moving it from the hand.
         xfrc[3:6] = np.cross(hand - data.xipos[body], force3)
+        if self.controller is not None:  # the wrist sensor's force, at the hand's height: the robot leans against it
+            self.controller.set_external_force((float(force[0]), float(force[1])), float(hand[2]))
         heading = _yaw(data.qpos)
         lag = math.remainder(path_heading - heading, math.tau)
         twist = 0.0 if self.stop_time is not None else leash.twist_gain * lag
@@ -313,6 +324,6 @@ def simulate_guided(
     level = make_controller(
         controller, walk.planner_config(), None, walk.sole, sim.robot, dt=sim.control_dt, options=controller_options
     )
-    pull = HandPull(sim, level.planner, path, leash, max_steps=walk.steps)
+    pull = HandPull(sim, level.planner, path, leash, max_steps=walk.steps, controller=level)
     result = run_closed_loop(sim, level, guided_options(pull, options or LoopOptions()), progress=progress)
     return result, pull.outcome(result.base_position[-1])

@@ -55,7 +55,15 @@ from rtgait.sim.actuation import ReferenceInterpolator
 from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Push, Pushes, measure_contacts
 from rtgait.sim.controllers import ControlEvent, ControllerOptions, RobotInfo, WalkingController
 from rtgait.sim.foot_control import FootOffsets, add_ankle_offsets, find_ankle_joints
-from rtgait.sim.loop_options import LANDING_WINDOW, LoopOptions, minimum_jerk, run_length, start_pose
+from rtgait.sim.loop_options import (
+    LANDING_WINDOW,
+    LoopOptions,
+    end_tick,
+    minimum_jerk,
+    run_length,
+    start_pose,
+    timing_headroom,
+)  # fmt: skip
 from rtgait.sim.loop_push import LivePush
 from rtgait.sim.loop_record import TickRecord, TickValues
 from rtgait.sim.measure import SimMeasurer
@@ -153,13 +161,22 @@ class ClosedLoop:
         self.data = data
         self.k0 = k0 = math.ceil(options.lead / dt - 1e-9)  # the walk's first tick: the transition's come before it
         self._n_steps, self._walk_end, n_ticks = run_length(planner, options, stop_after, k0, dt)
+        self._n_ticks_planned = n_ticks
         self.n_ticks = n_ticks
-        """Ticks the run lasts (the start transition included), ``None`` for an open-ended walk by command."""
+        """Ticks the run lasts (the start transition included), ``None`` for an open-ended walk by command; a walk
+        whose steps step timing adaptation holds longer lasts longer (up to :attr:`_longest` ticks)."""
+        adjust = controller.options.step_adjustment or planner.config.step_adjustment
+        headroom = 0
+        if n_ticks is not None and options.duration is None:
+            headroom = timing_headroom(adjust, self._n_steps, planner.config.timing.single_support, dt)
+        self._longest = None if n_ticks is None else n_ticks + headroom
+        self._can_grow = headroom > 0
         if keep is None:
-            assert n_ticks is not None  # refused above
-            capacity = n_ticks
+            assert self._longest is not None  # refused above
+            capacity = self._longest
         else:  # a ring of `keep` seconds (at most the run)
-            capacity = max(1, round(keep / dt)) if n_ticks is None else min(max(1, round(keep / dt)), n_ticks)
+            ring = max(1, round(keep / dt))
+            capacity = ring if self._longest is None else min(ring, self._longest)
 
         # ----- the record, allocated once ------------------------------------------------------------------------
         # The replay's record: a whole qpos every few ticks only (a 1 kHz record of ~40 coordinates would be 30
@@ -284,6 +301,8 @@ class ClosedLoop:
             dcm, dcm_planned = measurement.dcm, out.dcm_planned
             if out.events:
                 self._log(out.events)
+                if self._can_grow and any(e.kind == "step-adjustment" for e in out.events):
+                    self._follow_walk_end()
 
         q, _ = solve(IKTargets(target_cog, left_foot, right_foot), self._q, max_iterations=1, tolerance=0.0)
         self._q = q
@@ -357,6 +376,16 @@ class ClosedLoop:
         if not self._stopped and planner.first_open_step() > self._stop_after:  # type: ignore[operator]
             planner.stop()
             self._stopped = True
+
+    def _follow_walk_end(self) -> None:
+        """A step's timing changed: the run lasts until the walk as it is now has come to rest (``after`` later), no
+        shorter than planned and at most the record's headroom (:func:`~rtgait.sim.loop_options.timing_headroom`)."""
+        planned = self._hot[-1]
+        wanted = end_tick(self.planner.end_time, self.options, self.k0, self.dt)
+        n_ticks = min(max(wanted, self._n_ticks_planned, self.k + 1), self._longest)  # type: ignore[type-var]
+        if n_ticks != planned:
+            self.n_ticks = n_ticks
+            self._hot = (*self._hot[:-1], n_ticks)
 
     def _log(self, events: Sequence[ControlEvent]) -> None:
         """Keep the controller's events: all of them, or those of the last ``keep`` seconds."""
@@ -514,11 +543,11 @@ def run_closed_loop(
     report_every = max(n_ticks // 50, 1)
     step = loop.step
     began = time.perf_counter()
-    for k in range(n_ticks):
-        if not step():
-            break
+    k = 0
+    while step() and not loop.done:  # the run may grow: step timing adaptation can hold a stance longer
         if progress is not None and k % report_every == 0:
-            progress(k / n_ticks)
+            progress(min(k / n_ticks, 1.0))
+        k += 1
     wall = time.perf_counter() - began
     if progress is not None:
         progress(1.0)

@@ -10,9 +10,13 @@ import mujoco
 
 from rtgait.core.online import OnlinePlanner
 from rtgait.core.rollout import ScheduledChange
+from rtgait.core.stepping import StepAdjustment
 from rtgait.sim.contact import FallLimits, Push
 
-__all__ = ["LANDING_WINDOW", "LoopOptions", "minimum_jerk", "run_length", "start_pose", "walk_length"]
+__all__ = [
+    "LANDING_WINDOW", "LoopOptions", "end_tick", "minimum_jerk", "run_length", "start_pose", "timing_headroom",
+    "walk_length",
+]  # fmt: skip
 
 LANDING_WINDOW = 0.5
 """Longest time after a step's planned touch-down (s) in which its foot must be found on the floor; the double
@@ -106,6 +110,21 @@ def walk_length(planner: OnlinePlanner, n_steps: int) -> float:
     )
 
 
+def timing_headroom(adjust: StepAdjustment | None, n_steps: int, single_support: float, dt: float) -> int:
+    """Ticks a walk of ``n_steps`` steps of ``single_support`` s may outgrow its planned length by when step timing
+    adaptation (``adjust``) holds stances longer: every step held to ``max_single_support``. 0 when no step can be
+    lengthened."""
+    if adjust is None or not adjust.adapt_timing or adjust.max_single_support is None:
+        return 0
+    return math.ceil(n_steps * max(0.0, adjust.max_single_support - single_support) / dt)
+
+
+def end_tick(end_time: float, options: LoopOptions, k0: int, dt: float) -> int:
+    """The tick after which a run whose walk comes to rest at ``end_time`` (s, walk clock) is over: ``options.after``
+    later (``k0``: the walk's first tick)."""
+    return k0 + math.floor((end_time + options.after) / dt + 1e-9) + 1
+
+
 def start_pose(planner: OnlinePlanner) -> tuple[list[float], list[float], list[float]]:
     """COG ``(x, y, z)`` and feet ``(x, y, z, yaw)`` at the start of the walk: standing, COG between the feet.
 
@@ -136,4 +155,4 @@ def run_length(
     n_steps = planner.n_steps if stop_after is None else stop_after + 1
     assert n_steps is not None
     walk_end = walk_length(planner, n_steps)
-    return n_steps, walk_end, k0 + math.floor((walk_end + options.after) / dt + 1e-9) + 1
+    return n_steps, walk_end, end_tick(walk_end, options, k0, dt)
