@@ -149,3 +149,6 @@ def test_an_outward_push_in_single_support_is_stood_on_the_stance_foot_held_long
     check_walk(result, (0.4, 0.0), f"{robot}, pushed outward {impulse} N s")
     held = [d for d in result.step_adjustments if d.single_support > d.nominal_single_support + 1e-6]
     assert held and held[0].step == 2, [d.reason for d in result.step_adjustments]
+    # The walk got longer, and so did the run: it goes on until the walk as it ended up has come to rest.
+    assert result.walk_end > scenario.duration + 0.05
+    assert result.times[-1] >= result.walk_end + QUICK.after - 2.0 * result.control_dt
