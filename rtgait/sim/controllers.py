@@ -93,6 +93,7 @@ __all__ = [
 
 _NO_EVENTS: tuple[ControlEvent, ...] = ()
 _SIDES: tuple[Side, Side] = ("left", "right")
+_Pose = tuple[float, float, float, float]  # a foot target (x, y, z, yaw) (m, rad)
 
 
 class WalkingController:
@@ -139,6 +140,12 @@ class WalkingController:
         # A late foot that landed: its target's height returns from where it landed to the measured ground's, over
         # its stance's single support: (height at the landing, ground height, from, until) (m, m, s, s).
         self._ground: list[tuple[float, float, float, float] | None] = [None, None]
+        # A re-anchored or held foot's IK target blends from its old course to its new one (_blended): when the
+        # blend began, the old course's pose and rate (x, y, yaw) and its height's offset from the new target
+        # (s; m, m, rad; m/s, m/s, rad/s; m).
+        self._shift: list[tuple[float, float, float, float, float, float, float, float] | None] = [None, None]
+        self._moved = [False, False]  # this tick re-anchored the foot or began its hold (set by _landing)
+        self._last_ik: tuple[_Pose, _Pose] | None = None  # the IK's feet targets of the last tick
 
     def start(self, t0: float, measurement: Measurement | None = None) -> None:
         """Start the walk at ``t0`` (s). ``"adaptive"`` with a measurement starts the planner from the measured feet
@@ -169,11 +176,20 @@ class WalkingController:
         if self._on_error and self._dcm_error_replan(t, m, values, support, q, events):
             values, support, q = planner.sample_values(t)
         if q != self._phase:
-            self._enter_phase(q, support, m)
+            held = (self._hold[0] is not None, self._hold[1] is not None)
+            before = self._targets(values) if held[0] or held[1] else None
+            self._enter_phase(q, support, m)  # ends the holds of early landings
+            if before is not None:
+                self._start_blends(t, before, self._targets(values), held)
         self._update_heights(t)
-        for landing in m.landings:
-            if self._landing(t, landing, values, support, q, events) and adaptive:
-                values, support, q = planner.sample_values(t)  # the touch-down replanned
+        if m.landings:
+            before = self._targets(values)
+            for landing in m.landings:
+                if self._landing(t, landing, values, support, q, events) and adaptive:
+                    values, support, q = planner.sample_values(t)  # the touch-down replanned
+            moved, self._moved = self._moved, [False, False]
+            if moved[0] or moved[1]:
+                self._start_blends(t, before, self._targets(values), moved)
         self._planner_events(t, events)
 
         left = self._foot_target(0, values[13:17])
@@ -198,6 +214,11 @@ class WalkingController:
                 offsets = self.foot.update(split, left_state, right_state, support)
                 left = (left[0], left[1], left[2] + offsets.left_height, left[3])
                 right = (right[0], right[1], right[2] + offsets.right_height, right[3])
+        if self._shift[0] is not None:  # the IK's targets only: the polygon and split have the feet where they are
+            left = self._blended(t, 0, left)
+        if self._shift[1] is not None:
+            right = self._blended(t, 1, right)
+        self._last_ik = (left, right)
         return ControlTargets(
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
             planned_support, (values[21], values[22]),
@@ -337,12 +358,14 @@ class WalkingController:
             self._blend[i] = None
             floor = values[15 + 4 * i] + self._z[i] - self.options.late_descent_limit
             self._hold[i] = (landing.x, landing.y, landing.yaw, floor)
+            self._moved[i] = True
         try:
             index = planner.touchdown(t, landing.side, landing.x, landing.y, landing.yaw)
         except (ValueError, RuntimeError) as error:
             events.append(ControlEvent(t, "touchdown-refused", landing.side, str(error), landing.x, landing.y))
             return False
         self._anchor[i] = (landing.x, landing.y, landing.yaw)
+        self._moved[i] = True
         events.append(ControlEvent(t, "touchdown", landing.side, f"footprint {index}", landing.x, landing.y))
         return True
 
@@ -376,6 +399,57 @@ class WalkingController:
         if hold is not None:  # early touch-down: where it landed, down with the plan to a floor
             return (hold[0], hold[1], max(planned[2] + self._z[i], hold[3]), hold[2])
         return (planned[0], planned[1], planned[2] + self._z[i], planned[3])
+
+    def _targets(self, values: list[float]) -> tuple[_Pose, _Pose]:
+        """Both feet's targets ``(x, y, z, yaw)`` before foot force control, for the sample ``values``."""
+        return self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21])
+
+    def _start_blends(
+        self, t: float, before: tuple[_Pose, _Pose], after: tuple[_Pose, _Pose], which: tuple[bool, bool] | list[bool]
+    ) -> None:
+        """Start the blends of the feet ``which`` re-anchored or held at ``t`` (s): ``before`` and ``after`` are the
+        tick's targets without and with that (:meth:`_blended`)."""
+        if self.options.anchor_blend <= 0.0:
+            return
+        last, rate = self._last_ik, 1.0 / self.dt
+        for i in (0, 1):
+            if not which[i]:
+                continue
+            old, new = before[i], after[i]
+            if self._shift[i] is not None:  # a blend under way: the old course is where it had the target
+                old = self._blended(t, i, old)
+            previous = old if last is None else last[i]
+            vx, vy = (old[0] - previous[0]) * rate, (old[1] - previous[1]) * rate
+            vyaw = math.remainder(old[3] - previous[3], math.tau) * rate
+            self._shift[i] = (t, old[0], old[1], old[3], vx, vy, vyaw, old[2] - new[2])
+
+    def _blended(self, t: float, i: int, target: _Pose) -> _Pose:
+        """Foot ``i``'s IK target at ``t`` (s) from its controller target ``target`` while it blends.
+
+        A foot re-anchored (or held) at ``t0`` had been on an *old course*; horizontally that course goes on at the
+        rate it had, ``o(t) = o0 + v0 (t - t0)`` (pose and rate of its IK target at ``t0``), its height a fixed
+        offset ``dz`` above the new target. The IK gets ``r = target + b(s) (o - target)`` (``dz b(s)`` in z), with
+        ``s = (t - t0) / anchor_blend`` and the minimum-jerk share ``b(s) = 1 - 10 s^3 + 15 s^4 - 6 s^5`` of the old
+        course: ``b`` has no slope or curvature at either end, so ``r`` keeps the pose, rate and acceleration the old
+        course had at ``t0`` and joins the new target with its own. The new target of a swing foot re-anchored
+        in the swing's last milliseconds runs to the measured landing in those milliseconds (the planner's
+        retargeted swing), and a stance foot's jumps to it at once: both are taken in at the blend's pace."""
+        shift = self._shift[i]
+        duration = self.options.anchor_blend
+        if shift is None or duration <= 0.0 or t - shift[0] >= duration:
+            self._shift[i] = None
+            return target
+        t0, x0, y0, yaw0, vx, vy, vyaw, dz = shift
+        elapsed = t - t0
+        s = max(elapsed / duration, 0.0)
+        b = 1.0 - s * s * s * (10.0 - s * (15.0 - 6.0 * s))
+        x, y, z, yaw = target
+        return (
+            x + b * (x0 + vx * elapsed - x),
+            y + b * (y0 + vy * elapsed - y),
+            z + b * dz,
+            yaw + b * math.remainder(yaw0 + vyaw * elapsed - yaw, math.tau),
+        )
 
     def _support(self, t: float, planned: str) -> str:
         """The feet the controller acts on: the plan's, both after an early touch-down, the other while late."""
