@@ -35,6 +35,12 @@ controller_config`), the pendulum-level loop:
   any other keeps the height it landed at; either is shed linearly over its next swing. A foot that lands again in
   the same stance (a bounce) is re-anchored only if it moved ``relanding_tolerance`` (10 mm).
 
+  *No step in a loaded foot's target.* A re-anchoring moves the landed foot's target onto its measured pose, a few
+  millimetres from where the servos had it, and an early landing's hold starts and ends with a jump of its own; the
+  IK gets the foot's target blended from its old course to the new one over ``anchor_blend`` (40 ms, minimum jerk:
+  :meth:`WalkingController._blended`), and so do swing feet re-anchored less than that before the plan's
+  touch-down. The planner, the support polygon and the ZMP split have the foot where it was measured at once.
+
   *When no step catches the error, the plan is kept* (:meth:`WalkingController._dcm_error_replan`): no replan for
   an outward DCM error in single support, and a later step's landing and timing are kept when no candidate for it
   catches the error (the core's ``on_failure="keep"``).
@@ -365,7 +371,10 @@ class WalkingController:
             events.append(ControlEvent(t, "touchdown-refused", landing.side, str(error), landing.x, landing.y))
             return False
         self._anchor[i] = (landing.x, landing.y, landing.yaw)
-        self._moved[i] = True
+        # A swinging foot's target goes on from where it is to where it landed over what is left of the swing (the
+        # planner's retargeted swing, smooth): blended only when that is shorter than anchor_blend.
+        remainder = planner.phase_start(q) + planner.timeline.duration(q) - t if swinging else 0.0
+        self._moved[i] = self._moved[i] or remainder < self.options.anchor_blend
         events.append(ControlEvent(t, "touchdown", landing.side, f"footprint {index}", landing.x, landing.y))
         return True
 
@@ -431,9 +440,10 @@ class WalkingController:
         offset ``dz`` above the new target. The IK gets ``r = target + b(s) (o - target)`` (``dz b(s)`` in z), with
         ``s = (t - t0) / anchor_blend`` and the minimum-jerk share ``b(s) = 1 - 10 s^3 + 15 s^4 - 6 s^5`` of the old
         course: ``b`` has no slope or curvature at either end, so ``r`` keeps the pose, rate and acceleration the old
-        course had at ``t0`` and joins the new target with its own. The new target of a swing foot re-anchored
-        in the swing's last milliseconds runs to the measured landing in those milliseconds (the planner's
-        retargeted swing), and a stance foot's jumps to it at once: both are taken in at the blend's pace."""
+        course had at ``t0`` and joins the new target with its own. A stance foot's new target is where it
+        landed, at once; a swing foot's runs there over what is left of the swing (the planner's retargeted
+        swing), which :meth:`_landing` blends only when that is shorter than ``anchor_blend``: both are taken in at
+        the blend's pace."""
         shift = self._shift[i]
         duration = self.options.anchor_blend
         if shift is None or duration <= 0.0 or t - shift[0] >= duration:
