@@ -60,6 +60,7 @@ from rtgait.core.feedback import DcmFeedback
 from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride
 from rtgait.core.online import OnlinePlanner
 from rtgait.core.support import support_polygon
+from rtgait.core.swing import blend, retargeted_swing
 from rtgait.sim.control_settings import (
     ERROR_REPLAN_INTERVAL,
     ERROR_REPLAN_MIN_REMAINDER,
@@ -435,31 +436,27 @@ class WalkingController:
     def _blended(self, t: float, i: int, target: _Pose) -> _Pose:
         """Foot ``i``'s IK target at ``t`` (s) from its controller target ``target`` while it blends.
 
-        A foot re-anchored (or held) at ``t0`` had been on an *old course*; horizontally that course goes on at the
-        rate it had, ``o(t) = o0 + v0 (t - t0)`` (pose and rate of its IK target at ``t0``), its height a fixed
-        offset ``dz`` above the new target. The IK gets ``r = target + b(s) (o - target)`` (``dz b(s)`` in z), with
-        ``s = (t - t0) / anchor_blend`` and the minimum-jerk share ``b(s) = 1 - 10 s^3 + 15 s^4 - 6 s^5`` of the old
-        course: ``b`` has no slope or curvature at either end, so ``r`` keeps the pose, rate and acceleration the old
-        course had at ``t0`` and joins the new target with its own. A stance foot's new target is where it
-        landed, at once; a swing foot's runs there over what is left of the swing (the planner's retargeted
-        swing), which :meth:`_landing` blends only when that is shorter than ``anchor_blend``: both are taken in at
-        the blend's pace."""
+        Re-anchored (or held) at ``t0``, the foot's IK target was at ``o0`` moving at ``v0`` (x, y, yaw); over
+        ``T = anchor_blend`` it goes to the new target ``p(t)`` along the planner's own retargeted swing
+        (:func:`~rtgait.core.swing.retargeted_swing`): ``r = o0 + b(s) (p(t) - o0) + T v0 h(s)`` with ``s = (t - t0)
+        / T``, ``b(s) = 10 s^3 - 15 s^4 + 6 s^5`` and ``h(s) = s - 6 s^3 + 8 s^4 - 3 s^5``, and the height's jump
+        ``dz`` shed as ``(1 - b) dz``. ``b`` and ``h`` have no slope or curvature where they must not (``b`` at both
+        ends, ``h`` at 1; ``h'(0) = 1``), so ``r`` starts with the old target's pose and rate and ends on the new
+        target with its pose, rate and acceleration. A stance foot's new target is where it landed from ``t0`` on:
+        ``r`` is then the minimum-jerk move there; a swing foot's runs there over what is left of the swing (the
+        planner's retargeted swing, which :meth:`_landing` blends only when that is shorter than ``T``), and ``b``,
+        10 s^3 at first, takes that in at the blend's pace."""
         shift = self._shift[i]
         duration = self.options.anchor_blend
         if shift is None or duration <= 0.0 or t - shift[0] >= duration:
             self._shift[i] = None
             return target
         t0, x0, y0, yaw0, vx, vy, vyaw, dz = shift
-        elapsed = t - t0
-        s = max(elapsed / duration, 0.0)
-        b = 1.0 - s * s * s * (10.0 - s * (15.0 - 6.0 * s))
-        x, y, z, yaw = target
-        return (
-            x + b * (x0 + vx * elapsed - x),
-            y + b * (y0 + vy * elapsed - y),
-            z + b * dz,
-            yaw + b * math.remainder(yaw0 + vyaw * elapsed - yaw, math.tau),
-        )
+        s = (t - t0) / duration
+        foot = Footstep(target[0], target[1], target[3], _SIDES[i])
+        x, y, yaw = retargeted_swing((x0, y0, yaw0), (vx, vy, vyaw), foot, s, duration)
+        yaw = target[3] + math.remainder(yaw - target[3], math.tau)  # the plan's yaw need not be within (-pi, pi]
+        return (x, y, target[2] + (1.0 - blend(max(s, 0.0))[0]) * dz, yaw)
 
     def _support(self, t: float, planned: str) -> str:
         """The feet the controller acts on: the plan's, both after an early touch-down, the other while late."""
