@@ -36,10 +36,11 @@ controller_config`), the pendulum-level loop:
   the same stance (a bounce) is re-anchored only if it moved ``relanding_tolerance`` (10 mm).
 
   *No step in a loaded foot's target.* A re-anchoring moves the landed foot's target onto its measured pose, a few
-  millimetres from where the servos had it, and an early landing's hold starts and ends with a jump of its own; the
-  IK gets the foot's target blended from its old course to the new one over ``anchor_blend`` (40 ms, minimum jerk:
-  :meth:`WalkingController._blended`), and so do swing feet re-anchored less than that before the plan's
-  touch-down. The planner, the support polygon and the ZMP split have the foot where it was measured at once.
+  millimetres from where the servos had it, and an early landing's hold starts and ends with a jump of its own; the IK
+  gets the foot's target moved from its old pose and rate to the new target over ``anchor_blend`` (40 ms) along the
+  planner's own retargeted-swing quintic (:meth:`WalkingController._blended`), and so do swing feet re-anchored less
+  than that before the plan's touch-down. The planner, the support polygon and the ZMP split have the foot where it was
+  measured at once.
 
   *When no step catches the error, the plan is kept* (:meth:`WalkingController._dcm_error_replan`): no replan for
   an outward DCM error in single support, and a later step's landing and timing are kept when no candidate for it
@@ -366,15 +367,15 @@ class WalkingController:
             floor = values[15 + 4 * i] + self._z[i] - self.options.late_descent_limit
             self._hold[i] = (landing.x, landing.y, landing.yaw, floor)
             self._moved[i] = True
+        # A swinging foot's target goes on from where it is to where it landed over what is left of the swing (the
+        # planner's retargeted swing, smooth): blended only when that is shorter than anchor_blend.
+        remainder = planner.phase_start(q) + planner.timeline.duration(q) - t if swinging else 0.0
         try:
             index = planner.touchdown(t, landing.side, landing.x, landing.y, landing.yaw)
         except (ValueError, RuntimeError) as error:
             events.append(ControlEvent(t, "touchdown-refused", landing.side, str(error), landing.x, landing.y))
             return False
         self._anchor[i] = (landing.x, landing.y, landing.yaw)
-        # A swinging foot's target goes on from where it is to where it landed over what is left of the swing (the
-        # planner's retargeted swing, smooth): blended only when that is shorter than anchor_blend.
-        remainder = planner.phase_start(q) + planner.timeline.duration(q) - t if swinging else 0.0
         self._moved[i] = self._moved[i] or remainder < self.options.anchor_blend
         events.append(ControlEvent(t, "touchdown", landing.side, f"footprint {index}", landing.x, landing.y))
         return True

@@ -16,7 +16,7 @@ the walk's start to its planned end, where the measured ZMP must be on the stanc
   ignores the legs' angular momentum, so even a perfect servo would miss ``vs_plan`` by that much (20-30 mm on
   Talos, ``docs/robots.md``); what is left of ``vs_commanded_motion`` is the servos' and the contacts' doing. Its
   accelerations are second differences of the commanded configurations, so a target that steps in one tick makes a
-  spike of ``step / dt^2`` (a 3.7 mm step of a loaded foot: a 20 m ZMP); the controller blends the targets it moves
+  spike of ``step / dt^2`` (a 3.7 mm step of a loaded foot: ZMPs 20-30 m away); the controller blends the targets it moves
   (``ControllerOptions.anchor_blend``), and what spikes is left is in ``max`` and ``p95`` but not in ``median``. On a
   run that fell it stops earlier than the other two (:attr:`SimResult.commanded_motion_mask`): at the first
   tip-over, which is where such a fall began.
@@ -340,10 +340,11 @@ class SimResult:
 
         A fall that starts with a tip-over starts there: a loaded foot rolls onto a sole edge, which the commanded
         motion (feet flat where the IK has them) does not have, and the IK's targets then chase a robot that turns
-        about that edge. Talos on fig8 pushed 60 N s forward at 4.5 s tipped at 4.59 s and fell at 5.88 s; in
-        between the controller replanned from the measured state every 50 ms, its COM offset grew to 22 mm and no
-        foot was loaded for 88 ticks, and the commanded motion's ZMP strayed metres from the measured one; the
-        :data:`FALL_MARGIN` cut left 0.8 s of that in (95th percentile 160 mm, against 31 mm up to the tip). A
+        about that edge. Talos on fig8 pushed 60 N s forward at 4.5 s tipped at 4.60 s and fell at 5.87 s; in
+        between the controller replanned from the measured state 18 times (mostly every 50 ms), its COM offset grew
+        to 18 mm, no foot was loaded for 90 ticks, and the commanded motion's ZMP was 156 mm from the measured one
+        at the median and up to 18 m; the :data:`FALL_MARGIN` cut left 0.8 s of that in (95th percentile 162 mm,
+        against 31 mm up to the tip). A
         fall without a tip-over keeps that cut; a run that tipped over and did not fall keeps every tick (it stood
         again); one that tipped, walked on and fell much later loses the walk after the tip, an under-count. What
         happened before the tip stays in, a replan's step of the COM target included.
