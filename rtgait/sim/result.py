@@ -10,16 +10,16 @@ the walk's start to its planned end, where the measured ZMP must be on the stanc
   linear inverted pendulum of the plan needs. This is what the paper's method promises.
 * ``vs_command``: against the ZMP the controller asked the feet for (the DCM law's ``p_cmd``; the plan's ZMP in
   ``open-loop``).
-* ``vs_commanded_motion``: against the multibody ZMP of the commanded motion, i.e. of the joint references the
-  servos were given (the IK's configuration with the ankle offsets of foot force control), from Pinocchio's
-  centroidal dynamics with finite differences (:func:`rtgait.robot.dynamics.multibody_check`). The pendulum plan
-  ignores the legs' angular momentum, so even a perfect servo would miss ``vs_plan`` by that much (20-30 mm on
-  Talos, ``docs/robots.md``); what is left of ``vs_commanded_motion`` is the servos' and the contacts' doing. Its
+* ``vs_commanded_motion``: against the multibody ZMP of the commanded motion, i.e. of the joint references the servos
+  were given (the IK's configuration with the ankle offsets of foot force control), from Pinocchio's centroidal
+  dynamics with finite differences (:func:`rtgait.robot.dynamics.multibody_check`). The pendulum plan ignores the
+  legs' angular momentum, so even a perfect servo would miss ``vs_plan`` by that much (20-30 mm on Talos,
+  ``docs/robots.md``); what is left of ``vs_commanded_motion`` is the servos' and the contacts' doing. Its
   accelerations are second differences of the commanded configurations, so a target that steps in one tick makes a
-  spike of ``step / dt^2`` (a 3.7 mm step of a loaded foot: ZMPs 20-30 m away); the controller blends the targets it moves
-  (``ControllerOptions.anchor_blend``), and what spikes is left is in ``max`` and ``p95`` but not in ``median``. On a
-  run that fell it stops earlier than the other two (:attr:`SimResult.commanded_motion_mask`): at the first
-  tip-over, which is where such a fall began.
+  spike of ``step / dt^2`` (a 3.7 mm step of a loaded foot: ZMPs 20-30 m away); the controller blends the feet targets
+  its landings move (``ControllerOptions.anchor_blend``); spikes that remain (a replan that moves the COM target, for
+  one) dominate ``rms`` and ``max``, not ``median``. On a run that fell it stops earlier than the other two
+  (:attr:`SimResult.commanded_motion_mask`): at the first tip-over, which is where such a fall began.
 
 **Slip** of a stance foot: a *stance* is a stretch of ticks over which the foot carries at least
 :data:`STANCE_FRACTION` of the weight; its slip is the largest horizontal distance of the sole point from where it
