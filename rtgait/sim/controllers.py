@@ -148,11 +148,12 @@ class WalkingController:
         # A late foot that landed: its target's height returns from where it landed to the measured ground's, over
         # its stance's single support: (height at the landing, ground height, from, until) (m, m, s, s).
         self._ground: list[tuple[float, float, float, float] | None] = [None, None]
-        # A re-anchored or held foot's IK target blends from its old course to its new one (_blended): when the
-        # blend began, the old course's pose and rate (x, y, yaw) and its height's offset from the new target
-        # (s; m, m, rad; m/s, m/s, rad/s; m).
-        self._shift: list[tuple[float, float, float, float, float, float, float, float] | None] = [None, None]
-        self._moved = [False, False]  # this tick re-anchored the foot or began its hold (set by _landing)
+        # A re-anchored or held foot's IK target blends from where it was to where it goes (_blended): when the
+        # blend began, the target's pose and rate then (x, y, yaw), the pose it goes to, and its height's offset
+        # from the new target (s; m, m, rad; m/s, m/s, rad/s; m, m, rad; m).
+        self._shift: list[tuple[float, ...] | None] = [None, None]
+        # The pose (x, y, yaw) a landing of this tick sends the foot to, when its target is to be blended there.
+        self._moved: list[tuple[float, float, float] | None] = [None, None]
         self._last_ik: tuple[_Pose, _Pose] | None = None  # the IK's feet targets of the last tick
 
     def start(self, t0: float, measurement: Measurement | None = None) -> None:
@@ -188,15 +189,17 @@ class WalkingController:
             before = self._targets(values) if held[0] or held[1] else None
             self._enter_phase(q, support, m)  # ends the holds of early landings
             if before is not None:
-                self._start_blends(t, before, self._targets(values), held)
+                after = self._targets(values)
+                goals = [(a[0], a[1], a[3]) if h else None for a, h in zip(after, held, strict=True)]
+                self._start_blends(t, before, after, goals)
         self._update_heights(t)
         if m.landings:
             before = self._targets(values)
             for landing in m.landings:
                 if self._landing(t, landing, values, support, q, events) and adaptive:
                     values, support, q = planner.sample_values(t)  # the touch-down replanned
-            moved, self._moved = self._moved, [False, False]
-            if moved[0] or moved[1]:
+            moved, self._moved = self._moved, [None, None]
+            if moved[0] is not None or moved[1] is not None:
                 self._start_blends(t, before, self._targets(values), moved)
         self._planner_events(t, events)
 
@@ -366,7 +369,7 @@ class WalkingController:
             self._blend[i] = None
             floor = values[15 + 4 * i] + self._z[i] - self.options.late_descent_limit
             self._hold[i] = (landing.x, landing.y, landing.yaw, floor)
-            self._moved[i] = True
+            self._moved[i] = (landing.x, landing.y, landing.yaw)
         # A swinging foot's target goes on from where it is to where it landed over what is left of the swing (the
         # planner's retargeted swing, smooth): blended only when that is shorter than anchor_blend.
         remainder = planner.phase_start(q) + planner.timeline.duration(q) - t if swinging else 0.0
@@ -376,7 +379,8 @@ class WalkingController:
             events.append(ControlEvent(t, "touchdown-refused", landing.side, str(error), landing.x, landing.y))
             return False
         self._anchor[i] = (landing.x, landing.y, landing.yaw)
-        self._moved[i] = self._moved[i] or remainder < self.options.anchor_blend
+        if remainder < self.options.anchor_blend:
+            self._moved[i] = (landing.x, landing.y, landing.yaw)
         events.append(ControlEvent(t, "touchdown", landing.side, f"footprint {index}", landing.x, landing.y))
         return True
 
@@ -416,48 +420,56 @@ class WalkingController:
         return self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21])
 
     def _start_blends(
-        self, t: float, before: tuple[_Pose, _Pose], after: tuple[_Pose, _Pose], which: tuple[bool, bool] | list[bool]
+        self,
+        t: float,
+        before: tuple[_Pose, _Pose],
+        after: tuple[_Pose, _Pose],
+        final: Sequence[tuple[float, float, float] | None],
     ) -> None:
-        """Start the blends of the feet ``which`` re-anchored or held at ``t`` (s): ``before`` and ``after`` are the
-        tick's targets without and with that (:meth:`_blended`)."""
+        """Start the blends of the feet re-anchored or held at ``t`` (s) toward their ``final`` poses ``(x, y,
+        yaw)`` (``None``: not this foot): ``before`` and ``after`` are the tick's targets without and with that
+        (:meth:`_blended`)."""
         if self.options.anchor_blend <= 0.0:
             return
         last, rate = self._last_ik, 1.0 / self.dt
         for i in (0, 1):
-            if not which[i]:
+            goal = final[i]
+            if goal is None:
                 continue
-            old, new = before[i], after[i]
-            if self._shift[i] is not None:  # a blend under way: the old course is where it had the target
+            old = before[i]
+            if self._shift[i] is not None:  # a blend under way: the target is where it had it
                 old = self._blended(t, i, old)
             previous = old if last is None else last[i]
             vx, vy = (old[0] - previous[0]) * rate, (old[1] - previous[1]) * rate
             vyaw = math.remainder(old[3] - previous[3], math.tau) * rate
-            self._shift[i] = (t, old[0], old[1], old[3], vx, vy, vyaw, old[2] - new[2])
+            self._shift[i] = (t, old[0], old[1], old[3], vx, vy, vyaw, *goal, old[2] - after[i][2])
 
     def _blended(self, t: float, i: int, target: _Pose) -> _Pose:
         """Foot ``i``'s IK target at ``t`` (s) from its controller target ``target`` while it blends.
 
-        Re-anchored (or held) at ``t0``, the foot's IK target was at ``o0`` moving at ``v0`` (x, y, yaw); over
-        ``T = anchor_blend`` it goes to the new target ``p(t)`` along the planner's own retargeted swing
-        (:func:`~rtgait.core.swing.retargeted_swing`): ``r = o0 + b(s) (p(t) - o0) + T v0 h(s)`` with ``s = (t - t0)
-        / T``, ``b(s) = 10 s^3 - 15 s^4 + 6 s^5`` and ``h(s) = s - 6 s^3 + 8 s^4 - 3 s^5``, and the height's jump
-        ``dz`` shed as ``(1 - b) dz``. ``b`` and ``h`` have no slope or curvature where they must not (``b`` at both
-        ends, ``h`` at 1; ``h'(0) = 1``), so ``r`` starts with the old target's pose and rate and ends on the new
-        target with its pose, rate and acceleration. A stance foot's new target is where it landed from ``t0`` on:
-        ``r`` is then the minimum-jerk move there; a swing foot's runs there over what is left of the swing (the
-        planner's retargeted swing, which :meth:`_landing` blends only when that is shorter than ``T``), and ``b``,
-        10 s^3 at first, takes that in at the blend's pace."""
+        Re-anchored (or held) at ``t0``, the foot's IK target was at ``o0`` moving at ``v0`` (x, y, yaw), and the
+        foot is to stand at ``g`` (where it landed; where the plan has it after a hold). Over ``T = anchor_blend``
+        it goes there along the quintic of the planner's retargeted swing (:func:`~rtgait.core.swing.
+        retargeted_swing`), ``q(s) = o0 + b(s) (g - o0) + T v0 h(s)`` with ``s = (t - t0) / T``, ``b(s) = 10 s^3 -
+        15 s^4 + 6 s^5`` and ``h(s) = s - 6 s^3 + 8 s^4 - 3 s^5``: it starts with the old target's pose and rate and
+        ends at ``g`` at rest, its acceleration continuous (``b``, and ``h`` at 1, have no slope or curvature at
+        the ends; ``h'(0) = 1``). The IK gets ``r = q(s) + b(s) (target - g)``, so that it ends on the target
+        whatever that does, and the height's jump ``dz`` shed as ``(1 - b) dz``. A stance foot's target is ``g``
+        from ``t0`` on, and ``r = q``; a swing foot's runs to ``g`` over what is left of the swing (the planner's
+        retargeted swing, blended only when that is shorter than ``T``: :meth:`_landing`), which ``b``, 10 s^3 at
+        first, takes in at the blend's pace."""
         shift = self._shift[i]
         duration = self.options.anchor_blend
         if shift is None or duration <= 0.0 or t - shift[0] >= duration:
             self._shift[i] = None
             return target
-        t0, x0, y0, yaw0, vx, vy, vyaw, dz = shift
-        s = (t - t0) / duration
-        foot = Footstep(target[0], target[1], target[3], _SIDES[i])
-        x, y, yaw = retargeted_swing((x0, y0, yaw0), (vx, vy, vyaw), foot, s, duration)
+        t0, x0, y0, yaw0, vx, vy, vyaw, gx, gy, gyaw, dz = shift
+        s = max((t - t0) / duration, 0.0)
+        x, y, yaw = retargeted_swing((x0, y0, yaw0), (vx, vy, vyaw), Footstep(gx, gy, gyaw, _SIDES[i]), s, duration)
+        k = blend(s)[0]
+        yaw += k * math.remainder(target[3] - gyaw, math.tau)
         yaw = target[3] + math.remainder(yaw - target[3], math.tau)  # the plan's yaw need not be within (-pi, pi]
-        return (x, y, target[2] + (1.0 - blend(max(s, 0.0))[0]) * dz, yaw)
+        return (x + k * (target[0] - gx), y + k * (target[1] - gy), target[2] + (1.0 - k) * dz, yaw)
 
     def _support(self, t: float, planned: str) -> str:
         """The feet the controller acts on: the plan's, both after an early touch-down, the other while late."""
