@@ -38,7 +38,7 @@ controller_config`), the pendulum-level loop:
   *No step in a loaded foot's target.* A re-anchoring moves the landed foot's target onto its measured pose, a few
   millimetres from where the servos had it, and an early landing's hold starts and ends with a jump of its own; the IK
   gets the foot's target moved from its old pose and rate to the new target over ``anchor_blend`` (40 ms) along the
-  planner's own retargeted-swing quintic (:meth:`WalkingController._blended`), and so do swing feet re-anchored less
+  planner's own retargeted-swing quintic (:mod:`rtgait.sim.target_blend`), and so do swing feet re-anchored less
   than that before the plan's touch-down. The planner, the support polygon and the ZMP split have the foot where it was
   measured at once.
 
@@ -61,7 +61,6 @@ from rtgait.core.feedback import DcmFeedback
 from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride
 from rtgait.core.online import OnlinePlanner
 from rtgait.core.support import support_polygon
-from rtgait.core.swing import blend, retargeted_swing
 from rtgait.sim.control_settings import (
     ERROR_REPLAN_INTERVAL,
     ERROR_REPLAN_MIN_REMAINDER,
@@ -75,6 +74,7 @@ from rtgait.sim.control_settings import (
     step_limits,
 )
 from rtgait.sim.foot_control import FootForceControl, FootOffsets, split_zmp
+from rtgait.sim.target_blend import FootBlend, Pose
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -101,7 +101,6 @@ __all__ = [
 
 _NO_EVENTS: tuple[ControlEvent, ...] = ()
 _SIDES: tuple[Side, Side] = ("left", "right")
-_Pose = tuple[float, float, float, float]  # a foot target (x, y, z, yaw) (m, rad)
 
 
 class WalkingController:
@@ -148,13 +147,11 @@ class WalkingController:
         # A late foot that landed: its target's height returns from where it landed to the measured ground's, over
         # its stance's single support: (height at the landing, ground height, from, until) (m, m, s, s).
         self._ground: list[tuple[float, float, float, float] | None] = [None, None]
-        # A re-anchored or held foot's IK target blends from where it was to where it goes (_blended): when the
-        # blend began, the target's pose and rate then (x, y, yaw), the pose it goes to, and its height's offset
-        # from the new target (s; m, m, rad; m/s, m/s, rad/s; m, m, rad; m).
-        self._shift: list[tuple[float, ...] | None] = [None, None]
+        # A re-anchored or held foot's IK target is blended to where the foot is to stand (rtgait.sim.target_blend).
+        self._blends = (FootBlend("left"), FootBlend("right"))
         # The pose (x, y, yaw) a landing of this tick sends the foot to, when its target is to be blended there.
         self._moved: list[tuple[float, float, float] | None] = [None, None]
-        self._last_ik: tuple[_Pose, _Pose] | None = None  # the IK's feet targets of the last tick
+        self._last_ik: tuple[Pose, Pose] | None = None  # the IK's feet targets of the last tick
 
     def start(self, t0: float, measurement: Measurement | None = None) -> None:
         """Start the walk at ``t0`` (s). ``"adaptive"`` with a measurement starts the planner from the measured feet
@@ -225,10 +222,10 @@ class WalkingController:
                 offsets = self.foot.update(split, left_state, right_state, support)
                 left = (left[0], left[1], left[2] + offsets.left_height, left[3])
                 right = (right[0], right[1], right[2] + offsets.right_height, right[3])
-        if self._shift[0] is not None:  # the IK's targets only: the polygon and split have the feet where they are
-            left = self._blended(t, 0, left)
-        if self._shift[1] is not None:
-            right = self._blended(t, 1, right)
+        if self._blends[0].active:  # the IK's targets only: the polygon and split have the feet where they are
+            left = self._blends[0].apply(t, left)
+        if self._blends[1].active:
+            right = self._blends[1].apply(t, right)
         self._last_ik = (left, right)
         return ControlTargets(
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
@@ -415,61 +412,33 @@ class WalkingController:
             return (hold[0], hold[1], max(planned[2] + self._z[i], hold[3]), hold[2])
         return (planned[0], planned[1], planned[2] + self._z[i], planned[3])
 
-    def _targets(self, values: list[float]) -> tuple[_Pose, _Pose]:
+    def _targets(self, values: list[float]) -> tuple[Pose, Pose]:
         """Both feet's targets ``(x, y, z, yaw)`` before foot force control, for the sample ``values``."""
         return self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21])
 
     def _start_blends(
         self,
         t: float,
-        before: tuple[_Pose, _Pose],
-        after: tuple[_Pose, _Pose],
-        final: Sequence[tuple[float, float, float] | None],
+        before: tuple[Pose, Pose],
+        after: tuple[Pose, Pose],
+        goals: Sequence[tuple[float, float, float] | None],
     ) -> None:
-        """Start the blends of the feet re-anchored or held at ``t`` (s) toward their ``final`` poses ``(x, y,
-        yaw)`` (``None``: not this foot): ``before`` and ``after`` are the tick's targets without and with that
-        (:meth:`_blended`)."""
-        if self.options.anchor_blend <= 0.0:
+        """Blend the IK's targets of the feet re-anchored or held at ``t`` (s) over ``anchor_blend`` to the poses
+        ``goals`` (x, y, yaw; ``None``: not this foot) they are to stand at (:mod:`rtgait.sim.target_blend`), from
+        where the IK had them: ``before`` and ``after`` are the tick's targets without and with the change."""
+        duration = self.options.anchor_blend
+        if duration <= 0.0:
             return
         last, rate = self._last_ik, 1.0 / self.dt
         for i in (0, 1):
-            goal = final[i]
+            goal = goals[i]
             if goal is None:
                 continue
-            old = before[i]
-            if self._shift[i] is not None:  # a blend under way: the target is where it had it
-                old = self._blended(t, i, old)
+            old = self._blends[i].apply(t, before[i])  # a blend under way goes on from where it has the target
             previous = old if last is None else last[i]
             vx, vy = (old[0] - previous[0]) * rate, (old[1] - previous[1]) * rate
             vyaw = math.remainder(old[3] - previous[3], math.tau) * rate
-            self._shift[i] = (t, old[0], old[1], old[3], vx, vy, vyaw, *goal, old[2] - after[i][2])
-
-    def _blended(self, t: float, i: int, target: _Pose) -> _Pose:
-        """Foot ``i``'s IK target at ``t`` (s) from its controller target ``target`` while it blends.
-
-        Re-anchored (or held) at ``t0``, the foot's IK target was at ``o0`` moving at ``v0`` (x, y, yaw), and the
-        foot is to stand at ``g`` (where it landed; where the plan has it after a hold). Over ``T = anchor_blend``
-        it goes there along the quintic of the planner's retargeted swing (:func:`~rtgait.core.swing.
-        retargeted_swing`), ``q(s) = o0 + b(s) (g - o0) + T v0 h(s)`` with ``s = (t - t0) / T``, ``b(s) = 10 s^3 -
-        15 s^4 + 6 s^5`` and ``h(s) = s - 6 s^3 + 8 s^4 - 3 s^5``: it starts with the old target's pose and rate and
-        ends at ``g`` at rest, its acceleration continuous (``b``, and ``h`` at 1, have no slope or curvature at
-        the ends; ``h'(0) = 1``). The IK gets ``r = q(s) + b(s) (target - g)``, so that it ends on the target
-        whatever that does, and the height's jump ``dz`` shed as ``(1 - b) dz``. A stance foot's target is ``g``
-        from ``t0`` on, and ``r = q``; a swing foot's runs to ``g`` over what is left of the swing (the planner's
-        retargeted swing, blended only when that is shorter than ``T``: :meth:`_landing`), which ``b``, 10 s^3 at
-        first, takes in at the blend's pace."""
-        shift = self._shift[i]
-        duration = self.options.anchor_blend
-        if shift is None or duration <= 0.0 or t - shift[0] >= duration:
-            self._shift[i] = None
-            return target
-        t0, x0, y0, yaw0, vx, vy, vyaw, gx, gy, gyaw, dz = shift
-        s = max((t - t0) / duration, 0.0)
-        x, y, yaw = retargeted_swing((x0, y0, yaw0), (vx, vy, vyaw), Footstep(gx, gy, gyaw, _SIDES[i]), s, duration)
-        k = blend(s)[0]
-        yaw += k * math.remainder(target[3] - gyaw, math.tau)
-        yaw = target[3] + math.remainder(yaw - target[3], math.tau)  # the plan's yaw need not be within (-pi, pi]
-        return (x + k * (target[0] - gx), y + k * (target[1] - gy), target[2] + (1.0 - k) * dz, yaw)
+            self._blends[i].start(t, old, (vx, vy, vyaw), goal, old[2] - after[i][2], duration)
 
     def _support(self, t: float, planned: str) -> str:
         """The feet the controller acts on: the plan's, both after an early touch-down, the other while late."""
