@@ -146,6 +146,21 @@ class ControllerOptions:
             (default): only when the measured DCM is more than ``replan_dcm_error`` off the plan's (a disturbance);
             every other plan (the regular double-support replans, the re-anchoring at landings, the start) continues
             the plan under way. ``"always"``: every plan, the core's ``feedback="measured"`` (module docstring).
+        anchor_blend: how long (s) a foot's IK target takes to go from where it was to where a re-anchoring (or the
+            start or end of an early landing's hold) puts it, from its pose and rate then, along the quintic of the
+            planner's retargeted swing (:func:`rtgait.core.swing.retargeted_swing`; the minimum-jerk ``10 s^3 - 15 s^4 +
+            6 s^5`` of ``s = (t - t_jump) / anchor_blend`` for a target at rest); 0: at once. A landed foot is
+            re-anchored on its measured pose, a few millimetres (and milliradians) from its target; moved in one tick, a
+            loaded foot's target steps and the commanded joint motion has the second difference of that step, an
+            acceleration of ``jump / dt^2`` (3.7 mm in 1 ms: 3700 m/s^2 of the leg). Blended, its peak is ``5.77 jump /
+            anchor_blend^2`` (13 m/s^2 for 3.7 mm in 40 ms) and it is continuous, so the commanded motion's ZMP is too.
+            A swing foot re-anchored on time goes to where it landed along the planner's retargeted swing, smooth, over
+            what is left of the swing; it is blended only when that is shorter than ``anchor_blend`` (on fig6-8 Talos
+            lands 10-40 ms before the plan's touch-down, G1 30-70 ms; the retargeted swing of a landing 1 ms before it
+            moved a loaded foot's target 2 mm in one tick). 40 ms: less than half of Talos's and G1's 0.1 s double
+            support, so the blend of a late landing (10-15 ms into it) is over before that foot carries the robot alone.
+            Only what the IK is asked is blended: the planner, the support polygon and the ZMP split have the foot where
+            it was measured.
     """
 
     gains: DcmFeedbackGains = field(default_factory=lambda: DcmFeedbackGains(com_admittance=SIM_COM_ADMITTANCE))
@@ -162,10 +177,11 @@ class ControllerOptions:
     relanding_tolerance: float = 0.01
     com_reference: str = "measured"
     adapt_timing: bool = True
+    anchor_blend: float = 0.04
 
     def __post_init__(self) -> None:
         names = ("measurement_filter", "late_descent_speed", "late_descent_limit", "late_grace", "on_time_window",
-                 "relanding_tolerance")  # fmt: skip
+                 "relanding_tolerance", "anchor_blend")  # fmt: skip
         for name in names:
             value = getattr(self, name)
             if not (math.isfinite(value) and 0.0 <= value <= 10.0):
@@ -199,7 +215,8 @@ class ControlTargets(NamedTuple):
     Attributes:
         t: time (s).
         com: COM target ``(x, y, z)`` for the IK (m): the plan's plus the COM correction.
-        left_foot, right_foot: sole targets ``(x, y, z, yaw)`` (m, rad), the foot-control heights included.
+        left_foot, right_foot: sole targets ``(x, y, z, yaw)`` (m, rad), the foot-control heights and the blend of
+            a re-anchored foot (``ControllerOptions.anchor_blend``) included.
         offsets: the foot force control's output (its tilts go to the ankles, :func:`~rtgait.sim.foot_control.
             add_ankle_offsets`; its heights are already in the feet's z).
         zmp_command: the commanded ZMP (m); the planned one in ``"open-loop"``.

@@ -35,6 +35,13 @@ controller_config`), the pendulum-level loop:
   any other keeps the height it landed at; either is shed linearly over its next swing. A foot that lands again in
   the same stance (a bounce) is re-anchored only if it moved ``relanding_tolerance`` (10 mm).
 
+  *No step in a loaded foot's target.* A re-anchoring moves the landed foot's target onto its measured pose, a few
+  millimetres from where the servos had it, and an early landing's hold starts and ends with a jump of its own; the IK
+  gets the foot's target moved from its old pose and rate to the new target over ``anchor_blend`` (40 ms) along the
+  planner's own retargeted-swing quintic (:mod:`rtgait.sim.target_blend`), and so do swing feet re-anchored less
+  than that before the plan's touch-down. The planner, the support polygon and the ZMP split have the foot where it was
+  measured at once.
+
   *When no step catches the error, the plan is kept* (:meth:`WalkingController._dcm_error_replan`): no replan for
   an outward DCM error in single support, and a later step's landing and timing are kept when no candidate for it
   catches the error (the core's ``on_failure="keep"``).
@@ -68,6 +75,7 @@ from rtgait.sim.control_settings import (
 )
 from rtgait.sim.external_force import ExternalForce, shifted_measurement
 from rtgait.sim.foot_control import FootForceControl, FootOffsets, split_zmp
+from rtgait.sim.target_blend import FootBlend, Pose
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -143,6 +151,11 @@ class WalkingController:
         # A late foot that landed: its target's height returns from where it landed to the measured ground's, over
         # its stance's single support: (height at the landing, ground height, from, until) (m, m, s, s).
         self._ground: list[tuple[float, float, float, float] | None] = [None, None]
+        # A re-anchored or held foot's IK target is blended to where the foot is to stand (rtgait.sim.target_blend).
+        self._blends = (FootBlend("left"), FootBlend("right"))
+        # The pose (x, y, yaw) a landing of this tick sends the foot to, when its target is to be blended there.
+        self._moved: list[tuple[float, float, float] | None] = [None, None]
+        self._last_ik: tuple[Pose, Pose] | None = None  # the IK's feet targets of the last tick
 
     def start(self, t0: float, measurement: Measurement | None = None) -> None:
         """Start the walk at ``t0`` (s). ``"adaptive"`` with a measurement starts the planner from the measured feet
@@ -180,11 +193,22 @@ class WalkingController:
         if self._on_error and self._dcm_error_replan(t, m, values, support, q, events):
             values, support, q = planner.sample_values(t)
         if q != self._phase:
-            self._enter_phase(q, support, m)
+            held = (self._hold[0] is not None, self._hold[1] is not None)
+            before = self._targets(values) if held[0] or held[1] else None
+            self._enter_phase(q, support, m)  # ends the holds of early landings
+            if before is not None:
+                after = self._targets(values)
+                goals = [(a[0], a[1], a[3]) if h else None for a, h in zip(after, held, strict=True)]
+                self._start_blends(t, before, after, goals)
         self._update_heights(t)
-        for landing in m.landings:
-            if self._landing(t, landing, values, support, q, events) and adaptive:
-                values, support, q = planner.sample_values(t)  # the touch-down replanned
+        if m.landings:
+            before = self._targets(values)
+            for landing in m.landings:
+                if self._landing(t, landing, values, support, q, events) and adaptive:
+                    values, support, q = planner.sample_values(t)  # the touch-down replanned
+            moved, self._moved = self._moved, [None, None]
+            if moved[0] is not None or moved[1] is not None:
+                self._start_blends(t, before, self._targets(values), moved)
         self._planner_events(t, events)
 
         left = self._foot_target(0, values[13:17])
@@ -211,6 +235,11 @@ class WalkingController:
                 right = (right[0], right[1], right[2] + offsets.right_height, right[3])
         if leaning:
             com = (com[0] + external.offset[0], com[1] + external.offset[1], com[2])
+        if self._blends[0].active:  # the IK's targets only: the polygon and split have the feet where they are
+            left = self._blends[0].apply(t, left)
+        if self._blends[1].active:
+            right = self._blends[1].apply(t, right)
+        self._last_ik = (left, right)
         return ControlTargets(
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
             planned_support, (values[21], values[22]),
@@ -351,12 +380,18 @@ class WalkingController:
             self._blend[i] = None
             floor = values[15 + 4 * i] + self._z[i] - self.options.late_descent_limit
             self._hold[i] = (landing.x, landing.y, landing.yaw, floor)
+            self._moved[i] = (landing.x, landing.y, landing.yaw)
+        # A swinging foot's target goes on from where it is to where it landed over what is left of the swing (the
+        # planner's retargeted swing, smooth): blended only when that is shorter than anchor_blend.
+        remainder = planner.phase_start(q) + planner.timeline.duration(q) - t if swinging else 0.0
         try:
             index = planner.touchdown(t, landing.side, landing.x, landing.y, landing.yaw)
         except (ValueError, RuntimeError) as error:
             events.append(ControlEvent(t, "touchdown-refused", landing.side, str(error), landing.x, landing.y))
             return False
         self._anchor[i] = (landing.x, landing.y, landing.yaw)
+        if remainder < self.options.anchor_blend:
+            self._moved[i] = (landing.x, landing.y, landing.yaw)
         events.append(ControlEvent(t, "touchdown", landing.side, f"footprint {index}", landing.x, landing.y))
         return True
 
@@ -390,6 +425,34 @@ class WalkingController:
         if hold is not None:  # early touch-down: where it landed, down with the plan to a floor
             return (hold[0], hold[1], max(planned[2] + self._z[i], hold[3]), hold[2])
         return (planned[0], planned[1], planned[2] + self._z[i], planned[3])
+
+    def _targets(self, values: list[float]) -> tuple[Pose, Pose]:
+        """Both feet's targets ``(x, y, z, yaw)`` before foot force control, for the sample ``values``."""
+        return self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21])
+
+    def _start_blends(
+        self,
+        t: float,
+        before: tuple[Pose, Pose],
+        after: tuple[Pose, Pose],
+        goals: Sequence[tuple[float, float, float] | None],
+    ) -> None:
+        """Blend the IK's targets of the feet re-anchored or held at ``t`` (s) over ``anchor_blend`` to the poses
+        ``goals`` (x, y, yaw; ``None``: not this foot) they are to stand at (:mod:`rtgait.sim.target_blend`), from
+        where the IK had them: ``before`` and ``after`` are the tick's targets without and with the change."""
+        duration = self.options.anchor_blend
+        if duration <= 0.0:
+            return
+        last, rate = self._last_ik, 1.0 / self.dt
+        for i in (0, 1):
+            goal = goals[i]
+            if goal is None:
+                continue
+            old = self._blends[i].apply(t, before[i])  # a blend under way goes on from where it has the target
+            previous = old if last is None else last[i]
+            vx, vy = (old[0] - previous[0]) * rate, (old[1] - previous[1]) * rate
+            vyaw = math.remainder(old[3] - previous[3], math.tau) * rate
+            self._blends[i].start(t, old, (vx, vy, vyaw), goal, old[2] - after[i][2], duration)
 
     def _support(self, t: float, planned: str) -> str:
         """The feet the controller acts on: the plan's, both after an early touch-down, the other while late."""

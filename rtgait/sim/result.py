@@ -10,11 +10,16 @@ the walk's start to its planned end, where the measured ZMP must be on the stanc
   linear inverted pendulum of the plan needs. This is what the paper's method promises.
 * ``vs_command``: against the ZMP the controller asked the feet for (the DCM law's ``p_cmd``; the plan's ZMP in
   ``open-loop``).
-* ``vs_commanded_motion``: against the multibody ZMP of the commanded motion, i.e. of the joint references the
-  servos were given (the IK's configuration with the ankle offsets of foot force control), from Pinocchio's
-  centroidal dynamics with finite differences (:func:`rtgait.robot.dynamics.multibody_check`). The pendulum plan
-  ignores the legs' angular momentum, so even a perfect servo would miss ``vs_plan`` by that much (20-30 mm on
-  Talos, ``docs/robots.md``); what is left of ``vs_commanded_motion`` is the servos' and the contacts' doing.
+* ``vs_commanded_motion``: against the multibody ZMP of the commanded motion, i.e. of the joint references the servos
+  were given (the IK's configuration with the ankle offsets of foot force control), from Pinocchio's centroidal
+  dynamics with finite differences (:func:`rtgait.robot.dynamics.multibody_check`). The pendulum plan ignores the
+  legs' angular momentum, so even a perfect servo would miss ``vs_plan`` by that much (20-30 mm on Talos,
+  ``docs/robots.md``); what is left of ``vs_commanded_motion`` is the servos' and the contacts' doing. Its
+  accelerations are second differences of the commanded configurations, so a target that steps in one tick makes a
+  spike of ``step / dt^2`` (a 3.7 mm step of a loaded foot: ZMPs 20-30 m away); the controller blends the feet targets
+  its landings move (``ControllerOptions.anchor_blend``); spikes that remain (a replan that moves the COM target, for
+  one) dominate ``rms`` and ``max``, not ``median``. On a run that fell it stops earlier than the other two
+  (:attr:`SimResult.commanded_motion_mask`): at the first tip-over, which is where such a fall began.
 
 **Slip** of a stance foot: a *stance* is a stretch of ticks over which the foot carries at least
 :data:`STANCE_FRACTION` of the weight; its slip is the largest horizontal distance of the sole point from where it
@@ -329,6 +334,27 @@ class SimResult:
         return (self.support != 0) & np.isfinite(self.zmp[:, 0]) & (self.times >= 0.0) & (self.times <= end)
 
     @property
+    def commanded_motion_mask(self) -> np.ndarray:
+        """The ticks of ``vs_commanded_motion``: :attr:`single_support_mask`, and on a run that fell and had tipped
+        over before, only the ticks before the first tip-over (:attr:`tip_time`).
+
+        A fall that starts with a tip-over starts there: a loaded foot rolls onto a sole edge, which the commanded
+        motion (feet flat where the IK has them) does not have, and the IK's targets then chase a robot that turns
+        about that edge. Talos on fig8 pushed 60 N s forward at 4.5 s tipped at 4.60 s and fell at 5.87 s; in
+        between the controller replanned from the measured state 18 times (mostly every 50 ms), its COM offset grew
+        to 18 mm, no foot was loaded for 90 ticks, and the commanded motion's ZMP was 156 mm from the measured one
+        at the median and up to 18 m; the :data:`FALL_MARGIN` cut left 0.8 s of that in (95th percentile 162 mm,
+        against 31 mm up to the tip). A
+        fall without a tip-over keeps that cut; a run that tipped over and did not fall keeps every tick (it stood
+        again); one that tipped, walked on and fell much later loses the walk after the tip, an under-count. What
+        happened before the tip stays in, a replan's step of the COM target included.
+        """
+        mask = self.single_support_mask
+        if self.fell and self.tip_time is not None:
+            mask = mask & (self.times < self.tip_time)
+        return mask
+
+    @property
     def zmp_tracking_error_rms(self) -> float:
         """RMS distance between the measured and the planned ZMP in single support (m); NaN without any."""
         value = _error_stats(self.zmp, self.zmp_planned, self.single_support_mask)["rms"]
@@ -359,12 +385,12 @@ class SimResult:
     def zmp_errors(self) -> dict[str, dict[str, float | None]]:
         """The three ZMP error measures of the module docstring: ``vs_plan``, ``vs_command`` and
         ``vs_commanded_motion``, each ``rms``, ``median``, ``p95``, ``max``, ``rms_x``, ``rms_y`` (m) over the planned
-        single supports."""
+        single supports (:attr:`single_support_mask`; ``vs_commanded_motion`` over :attr:`commanded_motion_mask`)."""
         mask = self.single_support_mask
         return {
             "vs_plan": _error_stats(self.zmp, self.zmp_planned, mask),
             "vs_command": _error_stats(self.zmp, self.zmp_command, mask),
-            "vs_commanded_motion": _error_stats(self.zmp, self.zmp_commanded_motion, mask),
+            "vs_commanded_motion": _error_stats(self.zmp, self.zmp_commanded_motion, self.commanded_motion_mask),
         }
 
     def summary(self) -> dict[str, Any]:

@@ -187,11 +187,13 @@ def test_adaptive_early_touchdown_reanchors_and_switches_support():
     moved = planner.footprints()[2]
     assert (moved.x, moved.y, moved.yaw) == pytest.approx((landing.x, landing.y, landing.yaw))
     assert out.support == "double", "support switches at once"
-    # Where it landed, going on down with the plan, no more than late_descent_limit below where it touched.
+    # Where it landed, going on down with the plan, no more than late_descent_limit below where it touched; the IK's
+    # target gets there over anchor_blend from where the plan had it (x, y, yaw), without a jump.
     floor = swing_z - ctl.options.late_descent_limit
     held = out.left_foot if swing == 0 else out.right_foot
-    assert held == pytest.approx((landing.x, landing.y, max(swing_z, floor), landing.yaw), abs=1e-9)
-    lowest = swing_z
+    planned = values[13 + 4 * swing : 17 + 4 * swing]
+    assert held == pytest.approx((planned[0], planned[1], max(swing_z, floor), planned[3]), abs=1e-9)
+    landed_at, lowest = t, swing_z
     while t < start + duration - DT:
         t += DT
         values, support, _ = planner.sample_values(t)
@@ -200,7 +202,10 @@ def test_adaptive_early_touchdown_reanchors_and_switches_support():
         z = values[15 + 4 * swing]
         lowest = min(lowest, z)
         foot = out.left_foot if swing == 0 else out.right_foot
-        assert foot == pytest.approx((landing.x, landing.y, max(z, floor), landing.yaw), abs=1e-9)
+        if t >= landed_at + ctl.options.anchor_blend:
+            assert foot == pytest.approx((landing.x, landing.y, max(z, floor), landing.yaw), abs=1e-9)
+        else:
+            assert foot[2] == pytest.approx(max(z, floor), abs=1e-9)
     assert lowest < floor, "the test reaches the floor"
     # The plan's double support then rests on the landed foot, at the floor's height: continuous.
     values, support, _ = planner.sample_values(t + DT)
@@ -382,3 +387,88 @@ def test_a_later_step_that_catches_nothing_is_kept_and_the_swinging_one_moves():
             assert "step-adjustment" in kinds and decision.step == 1
             moved = [a for a, b in zip(ctl.planner.footprints(), before, strict=True) if a != b]
             assert moved and moved[0].x > before[2].x  # the swinging foot lands ahead, toward the error
+
+
+# ----- the blend of a re-anchored foot's IK target (ControllerOptions.anchor_blend) ---------------------------------
+# The minimum-jerk share b(s) = 1 - 10 s^3 + 15 s^4 - 6 s^5 has its steepest slope, 15/8, at s = 1/2 and its largest
+# curvature, 10/sqrt(3), at s = 1/2 -+ sqrt(3)/6: a jump J blended over T moves the target at most 15/8 J dt/T per tick
+# and changes that by at most 10/sqrt(3) J (dt/T)^2.
+PEAK_SLOPE, PEAK_CURVATURE = 15.0 / 8.0, 10.0 / math.sqrt(3.0)
+
+
+def horizontal(out, swing):
+    foot = out.left_foot if swing == 0 else out.right_foot
+    return (foot[0], foot[1], foot[3])
+
+
+@pytest.mark.parametrize("blend", [0.0, 0.04])
+def test_a_late_foot_re_anchored_on_the_ground_moves_there_smoothly(blend):
+    options = ControllerOptions(measurement_filter=0.0, foot=None, late_grace=0.0, anchor_blend=blend)
+    ctl = controller("adaptive", options=options)
+    start, duration, swing = first_swing(ctl)
+    side = ("left", "right")[swing]
+    not_down = (True, False) if swing == 1 else (False, True)
+    _, t = walk_to(ctl, start + duration)  # the swing ends in the air: late
+    out, t = walk_to(ctl, t + 0.01, t, loaded=not_down)
+    planner = ctl.planner
+    target = planner.footprints()[2]
+    # It lands 10 mm behind and 4 mm inside its target, turned 10 mrad: the planner re-anchors it there.
+    landing = Landing(t, side, target.x - 0.01, target.y + 0.004, -0.003, target.yaw + 0.01, 0.0, 0.0, 40.0)
+    path = [horizontal(out, swing)]
+    values, support, _ = planner.sample_values(t)
+    out = ctl.tick(t, on_plan(t, values, support, landings=[landing], loaded=(True, True)))
+    assert any(e.kind == "touchdown" for e in out.events)
+    path.append(horizontal(out, swing))
+    for _ in range(round(0.06 / DT)):  # its target from the plan: where it landed
+        t += DT
+        values, support, _ = planner.sample_values(t)
+        path.append(horizontal(ctl.tick(t, on_plan(t, values, support, loaded=(True, True))), swing))
+    anchored = (landing.x, landing.y, landing.yaw)
+    assert path[-1] == pytest.approx(anchored, abs=1e-12), "there after anchor_blend"
+    if blend == 0.0:  # at once: the loaded foot's target steps by the whole re-anchoring in one tick
+        assert path[1] == pytest.approx(anchored, abs=1e-12)
+        return
+    assert path[1] == pytest.approx(path[0], abs=1e-12), "no jump at the touch-down"
+    assert path[1 + round(blend / DT)] == pytest.approx(anchored, abs=1e-12), "there after anchor_blend"
+    jump = math.hypot(0.01, 0.004)
+    steps = [math.dist(a[:2], b[:2]) for a, b in itertools.pairwise(path)]
+    assert max(steps) <= PEAK_SLOPE * jump * DT / blend * (1.0 + 1e-6)
+    assert max(steps) > 0.9 * PEAK_SLOPE * jump * DT / blend, "the bound is reached: the blend is the quintic's"
+    rates = [(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(path)]
+    curvature = [math.dist(a, b) for a, b in itertools.pairwise(rates)]
+    assert max(curvature) <= PEAK_CURVATURE * jump * (DT / blend) ** 2 * (1.0 + 1e-3)
+    yaw_steps = [abs(b[2] - a[2]) for a, b in itertools.pairwise(path)]
+    assert max(yaw_steps) <= PEAK_SLOPE * 0.01 * DT / blend * (1.0 + 1e-6)
+
+
+@pytest.mark.parametrize("blend", [0.0, 0.04])
+def test_a_swing_foot_re_anchored_in_its_last_milliseconds_is_not_rushed(blend):
+    # On time, 5 ms before the plan's touch-down, 8 mm from its target: the planner's retargeted swing runs to the
+    # measured landing in those 5 ms (1.6 mm per tick and more); the IK's target takes the blend's time.
+    ctl = controller("adaptive", options=ControllerOptions(measurement_filter=0.0, anchor_blend=blend))
+    start, duration, swing = first_swing(ctl)
+    side = ("left", "right")[swing]
+    out, t = walk_to(ctl, start + duration - 0.005)
+    planner = ctl.planner
+    target = planner.footprints()[2]
+    landing = Landing(t, side, target.x + 0.008, target.y, 0.001, target.yaw, 0.0, 0.0, 40.0)
+    path = [horizontal(out, swing)]
+    for k in range(round(0.06 / DT)):
+        values, support, _ = planner.sample_values(t)
+        out = ctl.tick(t, on_plan(t, values, support, landings=[landing] if k == 0 else [], loaded=(True, True)))
+        if k == 0:
+            assert [e.detail for e in out.events if e.kind == "landing"] == ["on time"]
+        path.append(horizontal(out, swing))
+        t += DT
+    assert path[-1] == pytest.approx((landing.x, landing.y, landing.yaw), abs=1e-12)
+    largest = max(math.dist(a[:2], b[:2]) for a, b in itertools.pairwise(path))
+    if blend == 0.0:
+        assert largest > 1.5e-3
+    else:
+        assert largest <= PEAK_SLOPE * 0.008 * DT / blend * 1.05
+
+
+def test_anchor_blend_is_validated():
+    for bad in (-0.01, math.nan, math.inf):
+        with pytest.raises(ValueError, match="anchor_blend"):
+            ControllerOptions(anchor_blend=bad)
