@@ -22,7 +22,9 @@ for the same instant and the step limits of the adaptive level's :class:`~rtgait
 ``bound_1`` is the one-step bound, ``bound_N`` the bound for any number of steps. With ``--adapt-timing`` (step
 timing adaptation, :class:`~rtgait.core.stepping.StepAdjustment` ``adapt_timing``), ``bound_1 early`` is the
 one-step bound with the earliest touch-down the adjustment may choose (the single support shortened to
-``min_single_support``, but never sooner than ``min_time_to_touchdown`` after the push's centre).
+``min_single_support``, but never sooner than ``min_time_to_touchdown`` after the push's centre). With
+``--max-single-support S`` steps may also be held longer, up to ``S`` s: the ankle's answer to an outward push,
+whose bound is the stance sole's own, ``bound_0 = m w (e - xi)`` with ``e`` the sole's edge along the push.
 
 The bounds treat the push as an impulse at its centre (for a 0.1 s push the DCM moves ``sinh(w T / 2) / (w T /
 2)`` = 1.005 times as far), the foot and the reach as discs, and the ZMP as jumping to the new foot at touch-down
@@ -33,7 +35,8 @@ A walk that the pendulum does not survive even unpushed gets 0 (the point mass i
 12.7 s long, falls at about 10 s from round-off amplified by ``e^{w t}``; see :mod:`rtgait.core.closed_loop`).
 
 Usage: ``python benchmarks/lipm_pushes.py [--json] [--controller C ...] [--scenario fig8] [--mass 57] [--dt 0.002]
-[--phase single|double ...] [--tolerance 0.25] [--adapt-timing] [--grid 32] [--durations 4]``
+[--phase single|double ...] [--tolerance 0.25] [--adapt-timing [--max-single-support S]] [--grid 32]
+[--durations 4]``
 """
 
 from __future__ import annotations
@@ -262,12 +265,19 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--adapt-timing", action="store_true", help="adaptive: step timing adaptation on")
     parser.add_argument("--grid", type=int, default=32, help="adaptive: landing candidates per axis (default 32)")
     parser.add_argument("--durations", type=int, default=4, help="with --adapt-timing: durations (default 4)")
+    parser.add_argument(
+        "--max-single-support", type=float, default=None, metavar="S",
+        help="with --adapt-timing: steps may also be held up to S s (default: only shortened)",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     scenario = load_scenario(args.scenario)
+    if args.max_single_support is not None and not args.adapt_timing:
+        parser.error("--max-single-support needs --adapt-timing")
     try:
         adjust = StepAdjustment(
-            sole=scenario.sole, grid=args.grid, adapt_timing=args.adapt_timing, durations=args.durations
-        )
+            sole=scenario.sole, grid=args.grid, adapt_timing=args.adapt_timing, durations=args.durations,
+            max_single_support=args.max_single_support,
+        )  # fmt: skip
     except ValueError as error:
         parser.error(str(error))
     controllers = args.controller or list(CONTROLLERS)
@@ -280,6 +290,7 @@ def main(argv: Sequence[str] | None = None) -> None:
             "scenario": scenario.name, "mass": args.mass, "dt": args.dt, "tolerance_Ns": args.tolerance,
             "push_duration": PUSH_DURATION, "seconds": elapsed, "adapt_timing": args.adapt_timing,
             "grid": args.grid, "durations": args.durations if args.adapt_timing else 1,
+            "max_single_support": args.max_single_support,
         }  # fmt: skip
         json.dump({"settings": settings, "cases": cases}, sys.stdout, indent=2)
         print()
