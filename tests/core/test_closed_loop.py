@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, ZC, W
 
 from rtgait.core.capturability import max_capturable_impulse
 from rtgait.core.closed_loop import (
@@ -17,26 +18,13 @@ from rtgait.core.closed_loop import (
     controller_config,
     run_closed_loop,
 )
-from rtgait.core.footsteps import SoleRect, Timing
-from rtgait.core.lipm import GRAVITY
-from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
+from rtgait.core.online import OnlinePlanner
 from rtgait.core.plant import DEFAULT_MAX_LEAN, Push
 from rtgait.core.rollout import rollout
 from rtgait.core.stepping import StepAdjustment
 from rtgait.core.support import signed_margin, support_polygon
 from rtgait.scenario import load_scenario
 
-SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.07)
-MASS = 57.0
-ZC = 0.8
-W = math.sqrt(GRAVITY / ZC)
-# A short walk (4 steps of 0.1 m and the closing one, 6.3 s) with fig8's timing: short enough that the open-loop
-# pendulum does not diverge from round-off alone before it ends (see test_open_loop_reproduces_the_plan...).
-CONFIG = PlannerConfig(
-    cog_height=ZC, timing=Timing(0.7, 0.1, start=0.8, end=0.8, settle=0.8), connection="quasi-real-time"
-)
-STRIDES = straight_walk(CONFIG, 4, 0.1)
-PUSHED_STEP = 3  # its single support is phase 5, on the stance footprint F[3]
 DT = 0.005
 
 

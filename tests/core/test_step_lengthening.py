@@ -12,23 +12,13 @@ import math
 
 import numpy as np
 import pytest
+from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, W
 
 from rtgait.core.closed_loop import run_closed_loop
-from rtgait.core.footsteps import SoleRect, Timing
-from rtgait.core.lipm import GRAVITY
-from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
+from rtgait.core.online import OnlinePlanner
 from rtgait.core.plant import Push
 from rtgait.core.stepping import StepAdjustment, SteppingLimits, remainder_options, single_support_options
 
-SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.07)
-MASS = 57.0
-ZC = 0.8
-W = math.sqrt(GRAVITY / ZC)
-CONFIG = PlannerConfig(
-    cog_height=ZC, timing=Timing(0.7, 0.1, start=0.8, end=0.8, settle=0.8), connection="quasi-real-time"
-)
-STRIDES = straight_walk(CONFIG, 4, 0.1)
-PUSHED_STEP = 3  # its single support is phase 5, on the left stance footprint F[3]; the right foot swings
 LANDING = StepAdjustment(sole=SOLE)
 SHORTER = StepAdjustment(sole=SOLE, adapt_timing=True)
 LONGER = StepAdjustment(sole=SOLE, adapt_timing=True, max_single_support=1.4)

@@ -13,26 +13,17 @@ import math
 
 import numpy as np
 import pytest
+from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, W
 
 from rtgait.core.batch import halfplane_margin, polygon_halfplanes
 from rtgait.core.capturability import max_capturable_impulse, reach_along
 from rtgait.core.closed_loop import run_closed_loop
-from rtgait.core.footsteps import SoleRect, Timing
-from rtgait.core.lipm import GRAVITY
+from rtgait.core.footsteps import Timing
 from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
 from rtgait.core.plant import Push
 from rtgait.core.stepping import StepAdjustment, choose_step, remainder_options, single_support_options
 from rtgait.core.support import signed_margin
 
-SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.07)
-MASS = 57.0
-ZC = 0.8
-W = math.sqrt(GRAVITY / ZC)
-CONFIG = PlannerConfig(
-    cog_height=ZC, timing=Timing(0.7, 0.1, start=0.8, end=0.8, settle=0.8), connection="quasi-real-time"
-)
-STRIDES = straight_walk(CONFIG, 4, 0.1)
-PUSHED_STEP = 3  # its single support is phase 5, on the left stance footprint F[3]; the right foot swings
 LANDING = StepAdjustment(sole=SOLE)
 TIMING = StepAdjustment(sole=SOLE, adapt_timing=True)
 DT = 0.001
