@@ -10,20 +10,20 @@ show what each costs.
 Wall times on a shared virtual machine vary from run to run: run it a few times.
 
 With ``--walks`` it reports outcomes instead: the paper's cases fig6, fig7 and fig8 at each controller level asked
-for (``--controller``, default all three) and, with ``--velocity-walks``, walks by velocity command of
-``--walk-time`` seconds (default 60): 0.3 m/s forward, 0.1 m/s backward, 0.1 m/s sideways, 0.3 rad/s turning, and
-one that changes between them every fifth of its time; per walk whether it walked (no fall, every step landed,
-ended at rest), whether the planner clamped the command to the robot's step limits, the speed the robot really
-walked (walks of one command: the measured COM's velocity in the heading of the base, and the base's yaw rate, over
-the steady part of the walk, from its third step to three steps before its end), the ZMP errors (measured vs
-planned, vs the multibody ZMP of the commanded motion, single support, RMS), the largest stance-foot slip, the share
-of ticks at which the legs' collision boxes touched and the real-time factor, over worker processes
-(``--workers``, default 2). ``--sim-option NAME=JSON`` sets a field of the MuJoCo model's
+for (``--controller``, default all three) and, with ``--velocity-walks`` (``--velocity-only``: these alone), walks
+by velocity command of ``--walk-time`` seconds (default 60): 0.3 m/s forward, 0.1 m/s backward, 0.1 m/s sideways,
+0.3 rad/s turning, and one that changes between them every fifth of its time. Per walk: whether it walked (no
+fall, every step landed, ended at rest), whether the planner clamped the command to the robot's step limits, the
+speed the robot really walked (walks of one command: the measured COM's velocity along and across the base's
+heading, and the base's yaw rate, from the walk's third step to three steps before its end), the ZMP errors
+(measured vs planned, vs the multibody ZMP of the commanded motion, single support, RMS), the largest stance-foot
+slip, the share of ticks at which the legs' collision boxes touched and the real-time factor, over worker
+processes (``--workers``, default 2). ``--sim-option NAME=JSON`` sets a field of the MuJoCo model's
 :class:`~rtgait.sim.model.SimConfig` (e.g. ``leg_collisions=false``, to see what the legs' collision boxes cost).
 
 Usage: ``python benchmarks/sim.py [--json] [--robot NAME] [--scenario NAME] [--repeat N] [--control-dt S]
 [--physics-dt S] [--controller C]`` or ``python benchmarks/sim.py --walks [--velocity-walks] [--robot NAME ...]
-[--controller C ...] [--walk-time S] [--workers N] [--physics-dt S] [--option NAME=JSON ...]
+[--velocity-only] [--controller C ...] [--walk-time S] [--workers N] [--physics-dt S] [--option NAME=JSON ...]
 [--sim-option NAME=JSON ...] [--json]``
 """
 
@@ -217,8 +217,9 @@ def walks(args: argparse.Namespace) -> list[dict[str, Any]]:
         for robot in args.robots or ["talos"]
         for case in ("fig6", "fig7", "fig8")
         for c in controllers
+        if not args.velocity_only
     ]
-    if args.velocity_walks:
+    if args.velocity_walks or args.velocity_only:
         jobs += [
             {"robot": robot, "scenario": "fig8", "controller": c, "velocity": name, "seconds": args.walk_time,
              **common}
@@ -269,6 +270,7 @@ def main() -> None:
                         help="controller level(s); the speed report takes the first (default adaptive)")  # fmt: skip
     parser.add_argument("--walks", action="store_true", help="report the outcomes of fig6/7/8 instead of speed")
     parser.add_argument("--velocity-walks", action="store_true", help="with --walks: the walks by command too")
+    parser.add_argument("--velocity-only", action="store_true", help="with --walks: the walks by command alone")
     parser.add_argument("--walk-time", type=float, default=60.0, help="length of a walk by command (s)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes of --walks (default 2)")
     parser.add_argument(

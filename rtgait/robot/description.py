@@ -62,7 +62,7 @@ loaded by name (``load_robot("talos")``); any other file is loaded by path. Ever
     max_step_length = 0.29               # the same names, rtgait.core.config.VelocityLimits); every key optional
     max_step_lateral = 0.16              # m of sideways displacement per pair of steps: |vy| <= it / 2T
     max_step_turn = 0.6                  # rad of heading change per pair of steps: |wz| <= it / 2T
-    min_step_width = 0.17                # m: the narrowest stance a sideways walk closes to, at most the stance
+    min_step_width = 0.15                # m: the narrowest stance a sideways walk closes to, at most the stance
 
 A joint's actuation is resolved key by key: the last matching ``[[actuation.joints]]`` group that sets the key,
 else ``[gains]`` (kp, kd), else a default derived from the URDF by :mod:`rtgait.sim.actuation`.
