@@ -10,15 +10,21 @@ show what each costs.
 Wall times on a shared virtual machine vary from run to run: run it a few times.
 
 With ``--walks`` it reports outcomes instead: the paper's cases fig6, fig7 and fig8 at each controller level asked
-for (``--controller``, default all three) and, with ``--velocity-walks``, walks by velocity command of
-``--walk-time`` seconds (default 60): 0.3 m/s forward, 0.1 m/s backward, 0.1 m/s sideways, 0.3 rad/s turning, and
-one that changes between them every fifth of its time; per walk whether it walked (no fall, every step landed,
-ended at rest), the ZMP errors (measured vs planned, vs the multibody ZMP of the commanded motion, single support,
-RMS), the largest stance-foot slip and the real-time factor, over worker processes (``--workers``, default 2).
+for (``--controller``, default all three) and, with ``--velocity-walks`` (``--velocity-only``: these alone), walks
+by velocity command of ``--walk-time`` seconds (default 60): 0.3 m/s forward, 0.1 m/s backward, 0.1 m/s sideways,
+0.3 rad/s turning, and one that changes between them every fifth of its time. Per walk: whether it walked (no
+fall, every step landed, ended at rest), whether the planner clamped the command to the robot's step limits, the
+speed the robot really walked (walks of one command: the measured COM's velocity along and across the base's
+heading, and the base's yaw rate, from the walk's third step to three steps before its end), the ZMP errors
+(measured vs planned, vs the multibody ZMP of the commanded motion, single support, RMS), the largest stance-foot
+slip, the share of ticks at which the legs' collision boxes touched and the real-time factor, over worker
+processes (``--workers``, default 2). ``--sim-option NAME=JSON`` sets a field of the MuJoCo model's
+:class:`~rtgait.sim.model.SimConfig` (e.g. ``leg_collisions=false``, to see what the legs' collision boxes cost).
 
 Usage: ``python benchmarks/sim.py [--json] [--robot NAME] [--scenario NAME] [--repeat N] [--control-dt S]
 [--physics-dt S] [--controller C]`` or ``python benchmarks/sim.py --walks [--velocity-walks] [--robot NAME ...]
-[--controller C ...] [--walk-time S] [--workers N] [--physics-dt S] [--option NAME=JSON ...] [--json]``
+[--velocity-only] [--controller C ...] [--walk-time S] [--workers N] [--physics-dt S] [--option NAME=JSON ...]
+[--sim-option NAME=JSON ...] [--json]``
 """
 
 from __future__ import annotations
@@ -30,6 +36,7 @@ import json
 import math
 import statistics
 import time
+import warnings
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
@@ -129,13 +136,35 @@ def velocity_schedule(name: str, seconds: float) -> list[tuple[float, float, flo
     return [(i * seconds / len(order), *command) for i, command in enumerate(order)]
 
 
+def walked_velocity(result: Any, start: float, period: float, steps: int) -> tuple[float, float, float]:
+    """The velocity the robot really walked: the measured COM's mean velocity along and across the base's heading
+    (m/s) and the base's mean yaw rate (rad/s), from the walk's third step to three steps before its last one (the
+    start and the stop left out); NaN when the walk is too short or the robot fell before the window's end."""
+    t0, t1 = start + 2.0 * period, start + (steps - 3) * period
+    times = result.times
+    if t1 <= t0 or times[-1] < t1:
+        return math.nan, math.nan, math.nan
+    qx, qy, qz, qw = result.base_quaternion.T
+    yaw = np.unwrap(np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz)))
+    window = (times >= t0) & (times <= t1)
+    velocity = np.gradient(result.cog[:, :2], times, axis=0)[window]
+    heading = yaw[window]
+    c, s = np.cos(heading), np.sin(heading)
+    along = float(np.mean(c * velocity[:, 0] + s * velocity[:, 1]))
+    across = float(np.mean(-s * velocity[:, 0] + c * velocity[:, 1]))
+    a, b = np.searchsorted(times, [t0, t1])
+    return along, across, float((yaw[b] - yaw[a]) / (times[b] - times[a]))
+
+
 def walk_case(job: dict[str, Any]) -> dict[str, Any]:
     """One walk of ``--walks`` (a worker's task): its outcome and measures."""
+    from rtgait.core.walk import CommandClampedWarning
     from rtgait.sim.controllers import ControllerOptions
     from rtgait.sim.run import mujoco_messages
 
     robot = RobotModel.load(job["robot"])
-    sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=job["physics_dt"]))
+    sim_options = job.get("sim_options") or {}
+    sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=job["physics_dt"], **sim_options))
     scenario = load_scenario(job["scenario"])
     velocity = None
     if job["velocity"] is not None:
@@ -143,11 +172,17 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
         steps = math.ceil((job["seconds"] - scenario.timing.start) / period)
         scenario = dataclasses.replace(scenario, steps=steps)
         velocity = velocity_schedule(job["velocity"], job["seconds"])
-    with mujoco_messages():
+    with mujoco_messages(), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", CommandClampedWarning)
         options = ControllerOptions(**job["options"]) if job["options"] else None
         result = simulate(
             scenario, robot, sim=sim, controller=job["controller"], velocity=velocity, controller_options=options
         )
+    clamped = any(issubclass(w.category, CommandClampedWarning) for w in caught)
+    asked = walked = None
+    if velocity is not None and len(velocity) == 1:
+        asked = list(velocity[0][1:])
+        walked = list(walked_velocity(result, scenario.timing.start, scenario.timing.step_period, scenario.steps))
     errors = result.zmp_errors()
     return {
         "robot": robot.name,
@@ -164,6 +199,10 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
         "zmp_vs_commanded_motion_rms": errors["vs_commanded_motion"]["rms"],
         "foot_slip_max": result.foot_slip_max,
         "step_adjustments": result.step_adjustment_count,
+        "clamped": clamped,
+        "velocity_asked": asked,
+        "velocity_walked": walked,
+        "legs_touch_share": float(np.mean(result.legs_touch)),
         "simulated_time": result.duration,
         "real_time_factor": result.real_time_factor,
     }
@@ -172,14 +211,15 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
 def walks(args: argparse.Namespace) -> list[dict[str, Any]]:
     """The outcome table of ``--walks`` (module docstring)."""
     controllers = args.controller or ["open-loop", "stabilized", "adaptive"]
-    common = {"physics_dt": args.physics_dt, "options": args.options}
+    common = {"physics_dt": args.physics_dt, "options": args.options, "sim_options": args.sim_options}
     jobs = [
         {"robot": robot, "scenario": case, "controller": c, "velocity": None, "seconds": 0.0, **common}
         for robot in args.robots or ["talos"]
         for case in ("fig6", "fig7", "fig8")
         for c in controllers
+        if not args.velocity_only
     ]
-    if args.velocity_walks:
+    if args.velocity_walks or args.velocity_only:
         jobs += [
             {"robot": robot, "scenario": "fig8", "controller": c, "velocity": name, "seconds": args.walk_time,
              **common}
@@ -195,18 +235,27 @@ def print_walks(rows: list[dict[str, Any]]) -> None:
     def mm(value: float | None) -> str:
         return "-" if value is None else f"{value * 1e3:.1f}"
 
-    print(f"{'robot':<7} {'walk':<18} {'controller':<11} {'outcome':<26} {'ZMP-plan':>8} {'ZMP-mb':>7} "
-          f"{'slip':>5} {'adj':>4} {'RTF':>5}")  # fmt: skip
-    print(f"{'':<7} {'':<18} {'':<11} {'':<26} {'mm RMS':>8} {'mm RMS':>7} {'mm':>5} {'':>4} {'':>5}")
+    def speed(r: dict[str, Any]) -> str:
+        walked = r.get("velocity_walked")
+        if not walked:
+            return "-"
+        return "nan" if math.isnan(walked[0]) else "{:.3f},{:.3f},{:.3f}".format(*walked)
+
+    print(f"{'robot':<7} {'walk':<18} {'controller':<11} {'outcome':<26} {'clamped':<7} {'walked vx,vy,wz':<19} "
+          f"{'ZMP-plan':>8} {'ZMP-mb':>7} {'slip':>5} {'legs':>5} {'adj':>4} {'RTF':>5}")  # fmt: skip
+    print(f"{'':<7} {'':<18} {'':<11} {'':<26} {'':<7} {'m/s,m/s,rad/s':<19} {'mm RMS':>8} {'mm RMS':>7} "
+          f"{'mm':>5} {'touch':>5} {'':>4} {'':>5}")  # fmt: skip
     for r in rows:
         if r["fell"]:
             outcome = f"FELL at {r['fall_time']:.1f} s ({r['steps_completed']}/{r['steps_planned']})"
         else:
             outcome = f"{'walked' if r['walked'] else 'stood'} {r['steps_completed']}/{r['steps_planned']}"
             outcome += ", tipped" if r["tipped"] else ""
-        print(f"{r['robot']:<7} {r['walk']:<18} {r['controller']:<11} {outcome:<26} {mm(r['zmp_vs_plan_rms']):>8} "
-              f"{mm(r['zmp_vs_commanded_motion_rms']):>7} {r['foot_slip_max'] * 1e3:>5.1f} "
-              f"{r['step_adjustments']:>4} {r['real_time_factor']:>5.1f}")  # fmt: skip
+        clamped = "yes" if r.get("clamped") else "no"
+        print(f"{r['robot']:<7} {r['walk']:<18} {r['controller']:<11} {outcome:<26} {clamped:<7} {speed(r):<19} "
+              f"{mm(r['zmp_vs_plan_rms']):>8} {mm(r['zmp_vs_commanded_motion_rms']):>7} "
+              f"{r['foot_slip_max'] * 1e3:>5.1f} {r.get('legs_touch_share', 0.0):>5.2f} {r['step_adjustments']:>4} "
+              f"{r['real_time_factor']:>5.1f}")  # fmt: skip
 
 
 def main() -> None:
@@ -221,17 +270,29 @@ def main() -> None:
                         help="controller level(s); the speed report takes the first (default adaptive)")  # fmt: skip
     parser.add_argument("--walks", action="store_true", help="report the outcomes of fig6/7/8 instead of speed")
     parser.add_argument("--velocity-walks", action="store_true", help="with --walks: the walks by command too")
+    parser.add_argument("--velocity-only", action="store_true", help="with --walks: the walks by command alone")
     parser.add_argument("--walk-time", type=float, default=60.0, help="length of a walk by command (s)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes of --walks (default 2)")
     parser.add_argument(
         "--option", action="append", default=[], metavar="NAME=JSON",
         help="with --walks: a ControllerOptions field of the closed-loop levels, e.g. adapt_timing=true",
     )  # fmt: skip
+    parser.add_argument(
+        "--sim-option", action="append", default=[], metavar="NAME=JSON",
+        help="with --walks: a SimConfig field of the MuJoCo model, e.g. leg_collisions=false",
+    )  # fmt: skip
     args = parser.parse_args()
-    try:
-        args.options = {name: json.loads(value) for name, value in (text.split("=", 1) for text in args.option)}
-    except ValueError:
-        parser.error("--option needs NAME=JSON, e.g. adapt_timing=true")
+    for flag, texts, example in (("option", args.option, "adapt_timing=true"),
+                                 ("sim_options", args.sim_option, "leg_collisions=false")):  # fmt: skip
+        try:
+            pairs = [text.split("=", 1) for text in texts]
+            setattr(args, "options" if flag == "option" else flag, {name: json.loads(value) for name, value in pairs})
+        except ValueError:
+            parser.error(f"--{flag.replace('_options', '-option')} needs NAME=JSON, e.g. {example}")
+    known = {f.name for f in dataclasses.fields(SimConfig)}
+    unknown = sorted(set(args.sim_options) - known)
+    if unknown:
+        parser.error(f"--sim-option: SimConfig has no field {unknown[0]!r}")
     if args.walks:
         began = time.perf_counter()
         rows = walks(args)

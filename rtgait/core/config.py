@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import InitVar, dataclass, field
 from typing import Literal
@@ -40,8 +41,14 @@ class PlannerConfig:
         first_degree: degree of the free ZMP polynomial of the first segment, 4 (default: ZMP position and
             velocity continuous across a replan) or 2 (the paper's minimal variant: ZMP position only).
         first_side: which foot swings first.
-        max_step_length, max_step_lateral, max_step_turn: bounds applied to strides made from velocity
-            commands (m, m, rad); a command beyond them is clamped, with a warning.
+        max_step_length: largest forward (or backward) stride a velocity command makes (m).
+        max_step_lateral: largest lateral displacement a velocity command makes per pair of steps (m): the step
+            toward the motion lands this much wider than the step after it, so ``|vy| <= max_step_lateral / 2T``
+            over a step period ``T`` (:meth:`~rtgait.core.walk.Walk.set_velocity`).
+        max_step_turn: largest heading change a velocity command makes per pair of steps (rad), half of it per
+            step, so ``|wz| <= max_step_turn / 2T``. A command beyond any of the three is clamped, with a warning.
+        min_step_width: narrowest stance a sideways walk by command may close to (m), within (0, step_width];
+            ``None`` (default): ``step_width``, i.e. the feet only ever open beyond the straight-walking stance.
         history_steps: footprints, strides, plan records and change records kept behind the current step, so an
             endless walk's memory stays flat; ``None`` keeps everything.
         feedback: where each new plan starts: ``"planned"`` (the paper's: from the plan being executed) or
@@ -68,6 +75,7 @@ class PlannerConfig:
     max_step_length: float = 0.3
     max_step_lateral: float = 0.1
     max_step_turn: float = 0.4
+    min_step_width: float | None = None
     history_steps: int | None = 1000
     feedback: FeedbackMode = "planned"
     replan_dcm_error: float | None = None
@@ -124,6 +132,11 @@ class PlannerConfig:
                 raise ValueError(f"{name} must be within (0, {MAX_STRIDE:g}] m, got {value}")
         if not (math.isfinite(self.max_step_turn) and 0.0 < self.max_step_turn < math.pi / 2):
             raise ValueError(f"max_step_turn must be within (0, pi/2) rad, got {self.max_step_turn}")
+        narrowest = self.min_step_width
+        if narrowest is not None and not (math.isfinite(narrowest) and 0.0 < narrowest <= self.step_width):
+            raise ValueError(
+                f"min_step_width must be None or within (0, step_width = {self.step_width:g}] m, got {narrowest}"
+            )
         check_range("step_height", self.step_height, 0.0, MAX_STRIDE, "m")
         if self.replan_dcm_error is not None:
             check_range("replan_dcm_error", self.replan_dcm_error, 1e-4, 1.0, "m")
@@ -137,3 +150,57 @@ class PlannerConfig:
     def w(self) -> float:
         """Pendulum frequency ``sqrt(g / zc)`` (1/s)."""
         return omega(self.cog_height, self.gravity)
+
+    @property
+    def narrowest_step_width(self) -> float:
+        """``min_step_width``, or ``step_width`` when it is ``None`` (m)."""
+        return self.step_width if self.min_step_width is None else self.min_step_width
+
+
+VELOCITY_KEYS = ("max_step_length", "max_step_lateral", "max_step_turn", "min_step_width")
+"""The :class:`PlannerConfig` fields that bound the strides of a walk by velocity command, as a robot description's
+``[velocity]`` table names them."""
+
+
+@dataclass(frozen=True)
+class VelocityLimits:
+    """A robot's bounds on the strides of walks by velocity command (a robot description's ``[velocity]`` table):
+    each field not ``None`` replaces the :class:`PlannerConfig` field of the same name (m, m, rad, m).
+
+    They are the robot's own: how far its legs reach sideways and how far its feet may turn against each other
+    without the soles or legs meeting, so a command within them asks nothing the robot cannot step; the
+    planner's defaults (0.3 m, 0.1 m, 0.4 rad, no narrowing) suit no robot in particular.
+    """
+
+    max_step_length: float | None = None
+    max_step_lateral: float | None = None
+    max_step_turn: float | None = None
+    min_step_width: float | None = None
+
+    @classmethod
+    def from_table(cls, table: dict, where: str = "velocity") -> VelocityLimits:
+        """From a ``[velocity]`` table (keys :data:`VELOCITY_KEYS`, all optional), each value checked as
+        :class:`PlannerConfig` checks it; an error names ``where.key``."""
+        for key, value in table.items():
+            if key not in VELOCITY_KEYS:
+                raise ValueError(f"{where}: unknown key {key!r} (known: {', '.join(VELOCITY_KEYS)})")
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ValueError(f"{where}.{key} must be a number, got {value!r}")
+            if key == "min_step_width":  # against the robot's own stance when applied (apply)
+                if not (math.isfinite(value) and 0.0 < value <= MAX_STRIDE):
+                    raise ValueError(f"{where}.min_step_width must be within (0, {MAX_STRIDE:g}] m, got {value!r}")
+                continue
+            try:
+                PlannerConfig(**{key: float(value)})
+            except ValueError as error:
+                raise ValueError(f"{where}.{error}") from None
+        return cls(**{key: float(value) for key, value in table.items()})
+
+    def apply(self, config: PlannerConfig, where: str = "velocity") -> PlannerConfig:
+        """``config`` with these limits; an error names ``where.key`` (e.g. ``min_step_width`` wider than the
+        config's ``step_width``)."""
+        changes = {key: getattr(self, key) for key in VELOCITY_KEYS if getattr(self, key) is not None}
+        try:
+            return dataclasses.replace(config, **changes)
+        except ValueError as error:
+            raise ValueError(f"{where}.{error}") from None

@@ -98,7 +98,7 @@ class OnlinePlanner(MeasuredPlanning, PlanShapes):
             config.timing,
             config.connection,
             config.step_width,
-            StepLimits(config.max_step_length, config.max_step_lateral, config.max_step_turn),
+            StepLimits(config.max_step_length, config.max_step_lateral, config.max_step_turn, config.min_step_width),
             strides,
             first_side=config.first_side,
             history_steps=config.history_steps,

@@ -69,11 +69,14 @@ class VelocityCommand:
 
 @dataclass(frozen=True)
 class StepLimits:
-    """Bounds on the strides made from velocity commands: forward (m), lateral opening (m), turn (rad)."""
+    """Bounds on the strides made from velocity commands (:meth:`Walk.set_velocity`): forward stride (m), lateral
+    displacement per pair of steps (m), heading change per pair of steps (rad), and the narrowest stance a sideways
+    walk may close to (m; ``None``: the walk's ``step_width``)."""
 
     length: float
     lateral: float
     turn: float
+    min_width: float | None = None
 
 
 class Walk:
@@ -385,8 +388,10 @@ class Walk:
     def set_velocity(self, command: VelocityCommand) -> int:
         """Walk by command from the first open step on (forward/lateral speed m/s, yaw rate rad/s).
 
-        A command beyond the step limits is clamped to them, with a :class:`CommandClampedWarning`; a command
-        after :meth:`stop` cancels the stop, with a :class:`StopCancelledWarning`.
+        The strides are made as :meth:`_stride_from_command` says: ``|vx| <= limits.length / T``,
+        ``|vy| <= limits.lateral / 2T`` and ``|wz| <= limits.turn / 2T`` over the step period ``T``. A command
+        beyond them is clamped to them, with a :class:`CommandClampedWarning`; a command after :meth:`stop`
+        cancels the stop, with a :class:`StopCancelledWarning`.
         """
         self._check_not_ending()
         self._warn_if_clamped(command)
@@ -485,23 +490,37 @@ class Walk:
         del self._prints[from_step + 1 - self.base :]
         self.ensure(known)
 
-    def _raw_stride(self, command: VelocityCommand, landing: Side) -> tuple[float, float, float]:
-        """Forward length (m), lateral opening (m) and turn magnitude (rad) a command asks of one step."""
-        period = self.timing.step_period
-        toward = 1.0 if landing == "left" else -1.0
-        # Only the foot on the side of motion opens the stance (or the turn); the other closes it again, so two
-        # steps move the body by twice the per-step displacement without crossing the feet.
-        return command.vx * period, 2.0 * command.vy * period * toward, 2.0 * command.wz * period * toward
-
     def _stride_from_command(self, stance: Footstep) -> Stride:
+        """The stride of the next step from ``stance`` under the velocity command, within :attr:`limits`.
+
+        Over a step period ``T`` a command ``(vx, vy, wz)`` asks per step a forward stride ``vx T`` and per pair of
+        steps (one by each foot) a lateral displacement ``D = 2 vy T`` and a heading change ``2 wz T``:
+
+        - Forward: every step ``vx T``, within ``+-limits.length``.
+        - Sideways: the feet cannot cross, so only the step toward the motion can carry the body sideways: it lands
+          ``D`` wider than the step after it, and the two widths are spread evenly around the straight-walking
+          stance ``w0``, ``w0 + D/2`` and ``w0 - D/2``, the narrow one never below ``limits.min_width`` (whatever it
+          cannot close goes to the wide one). Over a pair of steps the body moves ``D``; the stance opens at most
+          ``D/2`` beyond ``w0`` where the robot allows narrowing, instead of ``D`` (the leg's sideways lean and
+          the hip's abduction are what limit a sideways walk). ``D <= limits.lateral``.
+        - Turning: every step turns ``wz T`` (both feet alike), so the feet alternate between toeing out and in by
+          ``wz T`` rather than one foot turning ``2 wz T`` and the other closing: half the angle between the feet
+          (their heels or toes, and the hips' yaw, are what limit a turn). ``2 |wz| T <= limits.turn``.
+        """
         limits = self.limits
+        command = self.command or VelocityCommand()
+        period = self.timing.step_period
         landing: Side = other_side(stance.side)
-        length, lateral, turn = self._raw_stride(self.command or VelocityCommand(), landing)
-        length = min(max(length, -limits.length), limits.length)
-        lateral = min(max(lateral, 0.0), limits.lateral)
-        turn = min(max(turn, 0.0), limits.turn)
-        toward = 1.0 if landing == "left" else -1.0
-        return Stride(length=length, width=self.step_width + lateral, turn=turn * toward)
+        length = min(max(command.vx * period, -limits.length), limits.length)
+        shift = min(2.0 * abs(command.vy) * period, limits.lateral)
+        nominal = self.step_width
+        narrowest = nominal if limits.min_width is None else min(limits.min_width, nominal)
+        narrow = max(nominal - 0.5 * shift, narrowest)
+        toward = "left" if command.vy > 0.0 else "right"
+        width = narrow + shift if landing == toward else narrow
+        half_turn = 0.5 * limits.turn
+        turn = min(max(command.wz * period, -half_turn), half_turn)
+        return Stride(length=length, width=width, turn=turn)
 
     def _warn_if_clamped(self, command: VelocityCommand) -> None:
         limits, period = self.limits, self.timing.step_period
@@ -510,8 +529,8 @@ class Walk:
         if any(a > b * (1.0 + 1e-12) for a, b in zip(asked, allowed, strict=True)):
             warnings.warn(
                 f"velocity command ({command.vx:g} m/s, {command.vy:g} m/s, {command.wz:g} rad/s) exceeds the step "
-                f"limits (step length {limits.length:g} m, lateral {limits.lateral:g} m, turn {limits.turn:g} rad "
-                f"per {period:g} s step): clamped",
+                f"limits (step length {limits.length:g} m per {period:g} s step; lateral {limits.lateral:g} m and "
+                f"turn {limits.turn:g} rad per pair of steps): clamped",
                 CommandClampedWarning,
                 stacklevel=3,
             )

@@ -58,6 +58,12 @@ loaded by name (``load_robot("talos")``); any other file is loaded by path. Ever
     min_single_support = 0.5             # s: the shortest step timing adaptation may make
     max_single_support = 1.2             # s: the longest (omit it: steps are only shortened)
 
+    [velocity]                           # optional: bounds of walks by velocity command (PlannerConfig's fields of
+    max_step_length = 0.29               # the same names, rtgait.core.config.VelocityLimits); every key optional
+    max_step_lateral = 0.16              # m of sideways displacement per pair of steps: |vy| <= it / 2T
+    max_step_turn = 0.6                  # rad of heading change per pair of steps: |wz| <= it / 2T
+    min_step_width = 0.15                # m: the narrowest stance a sideways walk closes to, at most the stance
+
 A joint's actuation is resolved key by key: the last matching ``[[actuation.joints]]`` group that sets the key,
 else ``[gains]`` (kp, kd), else a default derived from the URDF by :mod:`rtgait.sim.actuation`.
 
@@ -77,6 +83,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from rtgait.core.config import VELOCITY_KEYS, VelocityLimits
 from rtgait.core.footsteps import SoleRect
 from rtgait.core.stepping import STEPPING_KEYS, SteppingLimits
 from rtgait.robot.actuation_table import (
@@ -118,6 +125,7 @@ class RobotError(ValueError):
 
 _FILES = TomlFiles(kind="robot", folder="robots", error=RobotError)
 
+
 @dataclass(frozen=True)
 class RobotDescription:
     """Everything rtgait needs to know about a humanoid besides its URDF.
@@ -141,6 +149,10 @@ class RobotDescription:
         stepping: the ``[stepping]`` table, step adjustment's limits (keys missing from it take
             :class:`~rtgait.core.stepping.SteppingLimits`'s defaults); ``None`` when the description has none (then
             each user picks its defaults: the pendulum loop the core's, the MuJoCo loop limits scaled by leg length).
+        velocity: the ``[velocity]`` table, the bounds of walks by velocity command
+            (:class:`~rtgait.core.config.VelocityLimits`, applied to the planner's config of every walk of this
+            robot by :func:`rtgait.robot.motion.robot_scenario`); ``None`` when the description has none (then the
+            :class:`~rtgait.core.config.PlannerConfig` defaults apply).
         source: where the description came from (``"builtin"`` or a file path); informative only.
     """
 
@@ -160,6 +172,7 @@ class RobotDescription:
     kd: float | Mapping[str, float] | None = None
     actuation: ActuationSpec = field(default_factory=ActuationSpec)
     stepping: SteppingLimits | None = None
+    velocity: VelocityLimits | None = None
     source: str = field(default="", compare=False)
 
     def posture_angle(self, joint: str) -> float:
@@ -349,7 +362,10 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         base: folder that relative paths are resolved against (the TOML file's folder); ``None`` for built-ins.
     """
     _FILES.check_keys(
-        data, "", ("name", "model", "feet", "walking", "posture"), ("description", "gains", "actuation", "stepping")
+        data,
+        "",
+        ("name", "model", "feet", "walking", "posture"),
+        ("description", "gains", "actuation", "stepping", "velocity"),
     )
     name = _FILES.string(data, "name", non_empty=True)
     if not _NAME_PATTERN.fullmatch(name):
@@ -433,6 +449,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         kd = _gain(gains["kd"], "gains.kd", names)
     actuation = _actuation(data["actuation"], names) if "actuation" in data else ActuationSpec()
     stepping = _stepping(data["stepping"], sole) if "stepping" in data else None
+    velocity = _velocity(data["velocity"], sole) if "velocity" in data else None
 
     return RobotDescription(
         name=name,
@@ -451,6 +468,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         kd=kd,
         actuation=actuation,
         stepping=stepping,
+        velocity=velocity,
         source=source,
     )
 
@@ -466,6 +484,24 @@ def _stepping(raw: Any, sole: SoleRect) -> SteppingLimits:
     if limits.min_width < 2.0 * sole.inner:
         raise RobotError(
             f"stepping.min_width ({limits.min_width:g} m) must be at least 2 x feet.sole.inner "
+            f"({2.0 * sole.inner:g} m): the soles would overlap"
+        )
+    return limits
+
+
+def _velocity(raw: Any, sole: SoleRect) -> VelocityLimits:
+    """The ``[velocity]`` table (:class:`~rtgait.core.config.VelocityLimits` checks the values the way
+    :class:`~rtgait.core.config.PlannerConfig` does; ``min_step_width`` against the robot's stance is checked when
+    it is applied, :func:`rtgait.robot.motion.robot_scenario`)."""
+    table = _FILES.table(raw, "velocity")
+    _FILES.check_keys(table, "velocity", (), VELOCITY_KEYS)
+    try:
+        limits = VelocityLimits.from_table(table)
+    except ValueError as error:
+        raise RobotError(str(error)) from None
+    if limits.min_step_width is not None and limits.min_step_width < 2.0 * sole.inner:
+        raise RobotError(
+            f"velocity.min_step_width ({limits.min_step_width:g} m) must be at least 2 x feet.sole.inner "
             f"({2.0 * sole.inner:g} m): the soles would overlap"
         )
     return limits

@@ -10,22 +10,22 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rtgait.core.config import PlannerConfig, VelocityLimits
 from rtgait.core.online import SAMPLE_FIELDS
 from rtgait.core.rollout import Rollout
+from rtgait.robot.description import RobotError
 from rtgait.robot.ik import IKTargets, WholeBodyIK
 from rtgait.robot.model import BASE_COLUMNS, RobotModel
-
-if TYPE_CHECKING:  # the robot layer needs the scenario type for annotations only
-    from rtgait.scenario import Scenario
+from rtgait.scenario import Scenario
 
 __all__ = [
     "ERROR_FIELDS",
     "ERROR_LIMITS",
     "JointTrajectory",
+    "RobotWalk",
     "UnreachableError",
     "robot_scenario",
     "whole_body_motion",
@@ -126,14 +126,40 @@ class JointTrajectory:
         return ("t", *BASE_COLUMNS, *names), np.column_stack([self.times, q])
 
 
-def robot_scenario(scenario: Scenario, robot: RobotModel) -> Scenario:
-    """``scenario`` walked by ``robot``: its nominal COG height, its step width at half-sitting and its sole."""
-    return dataclasses.replace(
-        scenario,
-        cog_height=robot.description.cog_height,
-        step_width=robot.step_width,
-        sole=robot.description.sole,
-    )
+@dataclass(frozen=True)
+class RobotWalk(Scenario):
+    """A scenario as walked by one robot, whose :meth:`planner_config` carries the robot's bounds on walks by
+    velocity command (the scenario format has no such fields: they belong to the robot, not to the walk).
+
+    Attributes:
+        velocity_limits: the robot description's ``[velocity]`` table; ``None``: the planner's defaults.
+    """
+
+    velocity_limits: VelocityLimits | None = None
+
+    def planner_config(self) -> PlannerConfig:
+        """The scenario's planner config with the robot's velocity-walk bounds."""
+        config = super().planner_config()
+        return config if self.velocity_limits is None else self.velocity_limits.apply(config)
+
+
+def robot_scenario(scenario: Scenario, robot: RobotModel) -> RobotWalk:
+    """``scenario`` walked by ``robot``: its nominal COG height, its step width at half-sitting, its sole and, when
+    its description has a ``[velocity]`` table, its bounds on walks by velocity command (:class:`RobotWalk`).
+
+    Raises:
+        RobotError: the description's ``velocity.min_step_width`` is wider than the robot's stance.
+    """
+    limits = robot.description.velocity
+    narrowest = None if limits is None else limits.min_step_width
+    if narrowest is not None and narrowest > robot.step_width:
+        raise RobotError(
+            f"velocity.min_step_width ({narrowest:g} m) must be at most the stance of {robot.name} at half-sitting "
+            f"({robot.step_width:.4f} m): it is the narrowest stance a sideways walk closes to"
+        )
+    values = {f.name: getattr(scenario, f.name) for f in dataclasses.fields(Scenario)}
+    values.update(cog_height=robot.description.cog_height, step_width=robot.step_width, sole=robot.description.sole)
+    return RobotWalk(**values, velocity_limits=limits)
 
 
 def _where(rollout: Rollout, k: int) -> str:
