@@ -3,12 +3,15 @@
 * **Soles.** One box per foot, the description's sole rectangle (``[feet.sole]``) with its bottom face on the sole
   point: the only geometry that touches the floor. A walking pattern's support polygon is that rectangle, so the
   physics supports the robot exactly where the plan assumes it can.
-* **Legs.** Each link of a leg (the chain from the root link to a sole) gets a box: the bounding box, in the link's
-  frame, of its URDF geometry (collision and visual, meshes read from their STL files; links fixed to it
-  included). The boxes of one leg collide with those of the other leg only, never with their own leg (parent and
-  child links overlap at every joint) nor with the floor; a pair of boxes that already overlap at half-sitting
-  (e.g. the two hip housings under the pelvis) is excluded, since nothing could ever separate them. A step that
-  crosses the feet, or a swing foot that hits the stance shin, then meets resistance in physics.
+* **Legs.** Each link of a leg (the chain from the root link to a sole) gets a convex shape: the convex hull of its
+  URDF geometry (collision and visual, meshes read from their STL files; links fixed to it included), a MuJoCo
+  mesh geom. The hull, not the link's bounding box: a box in the link's frame is much bigger than the link where
+  the link is slanted or tapered (Talos's thigh box reaches 79 mm inward of the hip axis), and Talos's thigh boxes
+  met once the thighs rolled 0.15 rad apart walking sideways, while the URDF's meshes stayed 9 mm apart. The shapes
+  of one leg collide with those of the other leg only, never with their own leg (parent and child links overlap at
+  every joint) nor with the floor; a pair that already touches at half-sitting (e.g. the two hip housings under the
+  pelvis) is excluded, since nothing could ever separate them. A step that crosses the feet, or a swing foot that
+  hits the stance shin, then meets resistance in physics.
 * **Contact softness.** MuJoCo's soft contact with time constant ``contact_timeconst`` (at least two physics steps,
   MuJoCo's own advice for a stable contact) and damping ratio ``contact_dampratio`` (1, critical, by default).
 * **Static friction.** MuJoCo's soft contacts let a loaded foot creep slowly even below the friction limit (the
@@ -16,8 +19,8 @@
   MuJoCo's no-slip solver project the friction forces back onto the cone after each step, which removes that
   drift: a foot pushed sideways below the friction limit then stays where it is.
 
-Collision bits: the floor (type 1) collides with the soles (affinity 1); left-leg boxes (type 2, affinity 4) with
-right-leg boxes (type 4, affinity 2); nothing else collides (visual meshes have 0 and 0).
+Collision bits: the floor (type 1) collides with the soles (affinity 1); left-leg shapes (type 2, affinity 4) with
+right-leg shapes (type 4, affinity 2); nothing else collides (visual meshes have 0 and 0).
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 import pinocchio as pin
+from scipy.spatial import ConvexHull, QhullError
 
 from rtgait.robot.model import RobotModel
 
@@ -242,17 +246,19 @@ def leg_links(robot: RobotModel, root: ElementTree.Element) -> dict[str, list[st
 
 
 class LegShape:
-    """A box around a leg link's geometry, in the link's frame.
+    """The convex hull of a leg link's geometry, in the link's frame.
 
     Attributes:
         link: the URDF link.
         side: ``"left"`` or ``"right"``.
-        centre: the box's centre in the link frame (m).
-        half: its half sizes (m).
+        vertices: the hull's vertices in the link frame (m), shape ``(n, 3)``.
+        centre, half: the centre and half sizes of their bounding box (m), for reports.
     """
 
-    def __init__(self, link: str, side: str, centre: np.ndarray, half: np.ndarray) -> None:
-        self.link, self.side, self.centre, self.half = link, side, centre, half
+    def __init__(self, link: str, side: str, vertices: np.ndarray) -> None:
+        self.link, self.side, self.vertices = link, side, vertices
+        low, high = vertices.min(axis=0), vertices.max(axis=0)
+        self.centre, self.half = 0.5 * (low + high), 0.5 * (high - low)
 
     @property
     def geom_name(self) -> str:
@@ -273,23 +279,39 @@ def leg_shapes(robot: RobotModel) -> list[LegShape]:
             points = _link_points(root, link, description.urdf, description.package_dirs)
             if len(points) == 0:
                 continue
-            low, high = points.min(axis=0), points.max(axis=0)
-            half = np.maximum(0.5 * (high - low), 1e-3)  # a flat shape still gets a box a few millimetres thick
-            shapes.append(LegShape(link, side, 0.5 * (low + high), half))
+            shapes.append(LegShape(link, side, _hull_vertices(points)))
     return shapes
 
 
+def _hull_vertices(points: np.ndarray) -> np.ndarray:
+    """The vertices of the convex hull of ``points`` ``(n, 3)`` (m), a few hundred out of a mesh's thousands (MuJoCo
+    takes the hull of a mesh geom's vertices itself; fewer make the model compile faster). A flat or degenerate set
+    is thickened to 2 mm first, so that it still has a volume."""
+    low, high = points.min(axis=0), points.max(axis=0)
+    thin = (high - low) < 2e-3
+    if thin.any():
+        centre = 0.5 * (low + high)
+        offsets = np.array([[dx, dy, dz] for dx in (-1, 1) for dy in (-1, 1) for dz in (-1, 1)], dtype=float) * 1e-3
+        points = np.vstack([points, centre + offsets * thin])
+    try:
+        hull = ConvexHull(points)
+    except QhullError:  # pragma: no cover - only for points on a line or a plane, thickened above
+        return np.vstack([low - 1e-3, high + 1e-3])
+    return points[hull.vertices]
+
+
 def add_leg_shapes(spec: mujoco.MjSpec, robot: RobotModel) -> list[LegShape]:
-    """Add the leg boxes (massless, in group 3 for viewers); returns them. The pairs that touch at half-sitting are
-    found on the compiled model (:func:`touching_pairs`) and excluded (:func:`exclude_pairs`)."""
+    """Add the leg shapes (convex meshes, massless, in group 3 for viewers); returns them. The pairs that touch at
+    half-sitting are found on the compiled model (:func:`touching_pairs`) and excluded (:func:`exclude_pairs`)."""
     shapes = leg_shapes(robot)
     for shape in shapes:
         contype, conaffinity = LEG_BITS[shape.side]
+        mesh = f"{shape.geom_name}_hull"
+        spec.add_mesh(name=mesh, uservert=shape.vertices.ravel().tolist())
         spec.body(shape.link).add_geom(
             name=shape.geom_name,
-            type=mujoco.mjtGeom.mjGEOM_BOX,
-            size=shape.half,
-            pos=shape.centre,
+            type=mujoco.mjtGeom.mjGEOM_MESH,
+            meshname=mesh,
             contype=contype,
             conaffinity=conaffinity,
             condim=1,  # frictionless: the legs only need to meet each other, not to grip

@@ -78,3 +78,32 @@ def test_the_outcome_does_not_flip_when_the_physics_step_is_halved(talos, talos_
     lost = [r.fell or r.tipped for r in results]
     assert walked[0] == walked[1] and lost[0] == lost[1]
     assert walked[0] == (name == "fig8")
+
+
+def test_the_leg_shapes_are_the_links_convex_hulls(talos, talos_sim):
+    """Each leg shape is the convex hull of its link's geometry (the same volume as the hull of all its points), and
+    the hulls leave the thighs apart where their bounding boxes met: each of Talos's hips rolled 0.15 rad outward (the
+    feet 0.39 m apart, wider than a 0.1 m/s sideways walk's widest stance), its thighs are still 5 mm apart; their
+    boxes, reaching 79 mm inward of the hip axis, met once the thighs rolled 0.15 rad apart in all."""
+    import xml.etree.ElementTree as ElementTree
+
+    import mujoco
+    from scipy.spatial import ConvexHull
+
+    from rtgait.sim.contact_model import _link_points, leg_shapes
+
+    description = talos.description
+    root = ElementTree.parse(description.urdf).getroot()
+    shapes = leg_shapes(talos)
+    assert len(shapes) == 12
+    for shape in shapes:
+        points = _link_points(root, shape.link, description.urdf, description.package_dirs)
+        assert ConvexHull(shape.vertices).volume == pytest.approx(ConvexHull(points).volume, rel=1e-9)
+        assert len(shape.vertices) < len(points)
+    model, data = talos_sim.model, talos_sim.new_data()
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, f"leg_{side}_2_joint")  # hip roll
+        data.qpos[model.jnt_qposadr[joint]] += sign * 0.15
+    mujoco.mj_kinematics(model, data)
+    thighs = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"leg_{s}_3_link_shape") for s in ("left", "right")]
+    assert mujoco.mj_geomDistance(model, data, thighs[0], thighs[1], 0.5, None) > 0.005

@@ -50,7 +50,7 @@ def test_only_the_soles_touch_the_floor_and_the_legs_each_other(talos, talos_sim
                 colliding.append({a, b})
     floor = talos_sim.floor_geom
     legs = talos_sim.leg_geoms
-    # One box per leg link (6 per leg), on the link's body; the left leg's boxes against the right leg's only.
+    # One convex hull per leg link (6 per leg), on the link's body; the left leg's against the right leg's only.
     assert len(legs) == 12
     bodies = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.geom_bodyid[g]) for g in legs]
     assert bodies == [f"leg_{side}_{i}_link" for side in ("left", "right") for i in range(1, 7)]
@@ -58,7 +58,8 @@ def test_only_the_soles_touch_the_floor_and_the_legs_each_other(talos, talos_sim
     expected = [sorted({floor, talos_sim.left_sole_geom}), sorted({floor, talos_sim.right_sole_geom})]
     expected += [sorted({a, b}) for a in left for b in right]
     assert sorted(sorted(pair) for pair in colliding) == sorted(expected)
-    # At half-sitting no pair of leg boxes touches (none had to be excluded), nor the soles anything but the floor.
+    # At half-sitting no pair of leg shapes touches (none had to be excluded), nor the soles anything but the floor.
+    assert all(model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH for g in legs)
     assert talos_sim.excluded_leg_pairs == ()
     data = talos_sim.new_data()
     assert data.ncon > 0 and all(talos_sim.floor_geom in data.contact.geom[i] for i in range(data.ncon))
@@ -117,7 +118,8 @@ def test_kinematics_match_pinocchio(talos, talos_sim):
 def test_meshes_are_visual_only(talos):
     sim = build_sim_model(talos)  # with the visual meshes
     model = sim.model
-    meshes = [g for g in range(model.ngeom) if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH]
+    legs = set(sim.leg_geoms)  # the legs' collision shapes are convex meshes too: the hulls of their links
+    meshes = [g for g in range(model.ngeom) if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH and g not in legs]
     assert len(meshes) > 20
     assert all(model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0 for g in meshes)
 
