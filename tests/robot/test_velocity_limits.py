@@ -9,7 +9,6 @@ in one line naming the key.
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import warnings
 from importlib import resources
@@ -31,8 +30,7 @@ from rtgait.scenario import load_scenario  # noqa: E402
 LEG_CLEARANCE = 0.005  # m: the legs' meshes at least this far apart along the walk
 STEPS = 6
 TALOS_LEGS = VelocityLimits(max_step_length=0.29, max_step_lateral=0.25, max_step_turn=0.6, min_step_width=0.15)
-"""What Talos's legs allow (its description's comment on ``[velocity]``): not in its table yet, because the MuJoCo
-model's leg boxes meet well before the legs' meshes do."""
+"""What Talos's legs allow: its description's ``[velocity]`` table."""
 
 
 _GEOMETRY: dict[str, tuple] = {}
@@ -93,8 +91,7 @@ def walk_at(robot: RobotModel, vx: float, vy: float, wz: float):
 def test_a_walk_at_the_limit_is_reachable_without_the_legs_meeting(name, motion, request):
     robot = request.getfixturevalue(name)  # the session's loaded robot
     if name == "talos":
-        assert robot.description.velocity is None
-        robot = dataclasses.replace(robot, description=dataclasses.replace(robot.description, velocity=TALOS_LEGS))
+        assert robot.description.velocity == TALOS_LEGS
     limits = robot.description.velocity
     period = load_scenario("fig8").timing.step_period
     if motion == "sideways":
