@@ -376,12 +376,17 @@ class ClosedLoop:
         if not self._stopped and planner.first_open_step() > self._stop_after:  # type: ignore[operator]
             planner.stop()
             self._stopped = True
+            if self._can_grow:  # its steps may have been held longer before it had an end
+                self._follow_walk_end()
 
     def _follow_walk_end(self) -> None:
         """A step's timing changed: the run lasts until the walk as it is now has come to rest (``after`` later), no
         shorter than planned and at most the record's headroom (:func:`~rtgait.sim.loop_options.timing_headroom`)."""
+        end = self.planner.end_time
+        if not math.isfinite(end):  # a walk by command not stopped yet: followed when it is (_walk_inputs)
+            return
         planned = self._hot[-1]
-        wanted = end_tick(self.planner.end_time, self.options, self.k0, self.dt)
+        wanted = end_tick(end, self.options, self.k0, self.dt)
         n_ticks = min(max(wanted, self._n_ticks_planned, self.k + 1), self._longest)  # type: ignore[type-var]
         if n_ticks != planned:
             self.n_ticks = n_ticks
