@@ -115,6 +115,7 @@ class WalkingController:
         self._polygon: np.ndarray | None = None
         # The feet's landings: classification, re-anchoring, holds, heights and the IK targets' blends.
         self.foot_landings = FootLandings(planner, options, self.dt, adaptive=level == "adaptive")
+        self._landings_update, self._landings_ik = self.foot_landings.update, self.foot_landings.ik_targets  # per tick
         self.reset()
 
     def reset(self) -> None:
@@ -162,11 +163,10 @@ class WalkingController:
         values, support, q = planner.sample_values(t)
         if self._on_error and self._dcm_error_replan(t, m, values, support, q, events):
             values, support, q = planner.sample_values(t)
-        landings = self.foot_landings
-        values, planned_support, q = landings.update(t, m, values, support, q, events)  # may replan (touch-down)
+        # The landings (may replan: a touch-down), the feet's targets and the support acted on (foot_landings.py).
+        values, planned_support, q, left, right, support = self._landings_update(t, m, values, support, q, events)
         self._planner_events(t, events)
 
-        left, right, support = landings.feet(t, values, planned_support)
         planned_zmp = (values[9], values[10])
         com = (values[0], values[1], values[2])
         offsets = FootOffsets()
@@ -188,7 +188,7 @@ class WalkingController:
         if leaning:
             com = (com[0] + external.offset[0], com[1] + external.offset[1], com[2])
         # The blends act on the IK's targets only: the polygon and split have the feet where they are.
-        left, right = landings.ik_targets(t, left, right)
+        left, right = self._landings_ik(t, left, right)
         return ControlTargets(
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
             planned_support, (values[21], values[22]),

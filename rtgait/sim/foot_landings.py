@@ -28,7 +28,7 @@ from where the foot was last anchored. A refused touch-down is logged (``"touchd
   target goes on down with the plan, ``max(z_plan + z, z_floor)``, to a floor ``z_floor = z_plan(t_l) + z -
   late_descent_limit`` (2 cm below where it touched: on a higher ground the foot must not push the robot up); at the
   hold's end ``z`` keeps the height it reached, ``max(z, z_floor)``, and polygon and ZMP split take both feet
-  meanwhile (:meth:`FootLandings.feet`);
+  meanwhile (the support :meth:`FootLandings.update` gives);
 * a *late* foot's target descends at ``late_descent_speed`` (0.3 m/s) to ``-late_descent_limit``,
   ``z <- max(z - v dt, -late_descent_limit)`` per tick, while the other foot carries the robot (auto_stabilizer
   ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset`` -0.02 m; unlike auto_stabilizer the plan is not
@@ -73,8 +73,8 @@ class FootLandings:
     """The landing states of both feet and the targets they give (module docstring).
 
     Values in, values out: :meth:`update` takes a tick's planner sample and measurement and returns the sample
-    (taken again when a touch-down replanned), :meth:`feet` the feet's targets before foot force control and the
-    support the controller acts on, :meth:`ik_targets` the IK's feet targets with the blends.
+    (taken again when a touch-down replanned), the feet's targets before foot force control and the support the
+    controller acts on; :meth:`ik_targets` gives the IK's feet targets with the blends.
 
     Args:
         planner: the controller's online planner (re-anchored on landings in ``"adaptive"``).
@@ -121,13 +121,16 @@ class FootLandings:
     # ----- the tick ------------------------------------------------------------------------------------------------
     def update(
         self, t: float, m: Measurement, values: list[float], support: str, q: int, events: list[ControlEvent]
-    ) -> tuple[list[float], str, int]:
+    ) -> tuple[list[float], str, int, Pose, Pose, str]:
         """This tick's landing bookkeeping at ``t`` (s) for the planner's sample ``values`` in phase ``q`` of
         support ``support``: a new phase (holds end, swings start, late feet), the height offsets, and the landings
         of ``m`` (logged to ``events``; re-anchored in ``"adaptive"``).
 
         Returns:
-            The sample ``(values, support, q)``, taken again after a touch-down that replanned.
+            ``(values, support, q, left, right, acting)``: the sample, taken again after a touch-down that
+            replanned; both feet's targets ``(x, y, z, yaw)`` (m, rad) before foot force control; and the support
+            the controller acts on: the plan's, both feet while a foot that landed early is held, the other foot
+            while one is late.
         """
         if q != self._phase:
             held = (self._hold[0] is not None, self._hold[1] is not None)
@@ -146,13 +149,19 @@ class FootLandings:
             moved, self._moved = self._moved, [None, None]
             if moved[0] is not None or moved[1] is not None:
                 self._start_blends(t, before, self.targets(values), moved)
-        return values, support, q
-
-    def feet(self, t: float, values: list[float], planned: str) -> tuple[Pose, Pose, str]:
-        """Both feet's targets ``(x, y, z, yaw)`` (m, rad) before foot force control for the sample ``values``, and
-        the support the controller acts on at ``t`` (s): the plan's ``planned``, both feet while a foot that landed
-        early is held, the other foot while one is late."""
-        return self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21]), self._support(t, planned)
+        left, right = self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21])
+        # The feet the controller acts on (inline: every tick): the plan's, both after an early touch-down, the
+        # other while one is late.
+        acting = support
+        if support in _SIDES:
+            if self._hold[1 if support == "left" else 0] is not None:
+                acting = "double"
+        else:
+            late_left = self._late[0] and t >= self._late_from[0]
+            late_right = self._late[1] and t >= self._late_from[1]
+            if late_left != late_right:
+                acting = "right" if late_left else "left"
+        return values, support, q, left, right, acting
 
     def ik_targets(self, t: float, left: Pose, right: Pose) -> tuple[Pose, Pose]:
         """The IK's feet targets at ``t`` (s) for the controller's final ``left`` and ``right`` (force control
@@ -315,14 +324,3 @@ class FootLandings:
             vx, vy = (old[0] - previous[0]) * rate, (old[1] - previous[1]) * rate
             vyaw = math.remainder(old[3] - previous[3], math.tau) * rate
             self._blends[i].start(t, old, (vx, vy, vyaw), goal, old[2] - after[i][2], duration)
-
-    def _support(self, t: float, planned: str) -> str:
-        """The feet the controller acts on: the plan's, both after an early touch-down, the other while late."""
-        if planned in _SIDES:
-            swing = 1 if planned == "left" else 0
-            return "double" if self._hold[swing] is not None else planned
-        late_left = self._late[0] and t >= self._late_from[0]
-        late_right = self._late[1] and t >= self._late_from[1]
-        if late_left != late_right:
-            return "right" if late_left else "left"
-        return planned
