@@ -16,10 +16,10 @@ logged. Settings (s, m, m/s) are those of :class:`~rtgait.sim.control_settings.C
 * the swing is over: *late* when the foot was in the air at the swing's end and ``late_grace`` (10 ms, the landing's
   detection lag) has passed since, else on time.
 
-**Re-anchoring.** Every landing but an ignored one is reported with its measured pose
+**Re-anchoring.** In ``"adaptive"`` every landing but an ignored one is reported with its measured pose
 (:meth:`~rtgait.core.online.OnlinePlanner.touchdown`: re-anchoring and an immediate replan, after which the tick's
 sample is taken again); a re-landing only when it moved ``relanding_tolerance`` (10 mm, heading ``2 x`` that in rad)
-from where the foot was last anchored. A refused touch-down is logged (``"touchdown-refused"``) and changes nothing.
+from where the foot was last anchored. A refused touch-down is logged (``"touchdown-refused"``); the plan stays.
 
 **Heights.** Each foot's target is the plan's ``(x, y, z_plan, yaw)`` with a height offset ``z`` (m) on top:
 
@@ -27,8 +27,9 @@ from where the foot was last anchored. A refused touch-down is logged (``"touchd
 * an *early* landing holds the foot where it landed, ``(x_l, y_l, yaw_l)``, until the plan's double support: its
   target goes on down with the plan, ``max(z_plan + z, z_floor)``, to a floor ``z_floor = z_plan(t_l) + z -
   late_descent_limit`` (2 cm below where it touched: on a higher ground the foot must not push the robot up); at the
-  hold's end ``z`` keeps the height it reached, ``max(z, z_floor)``, and polygon and ZMP split take both feet
-  meanwhile (the support :meth:`FootLandings.update` gives);
+  hold's end (the plan's double support, where ``z_plan = 0``) the offset keeps the height the target reached,
+  ``z <- max(z, z_floor)``; meanwhile polygon and ZMP split take both feet (the support :meth:`FootLandings.update`
+  gives);
 * a *late* foot's target descends at ``late_descent_speed`` (0.3 m/s) to ``-late_descent_limit``,
   ``z <- max(z - v dt, -late_descent_limit)`` per tick, while the other foot carries the robot (auto_stabilizer
   ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset`` -0.02 m; unlike auto_stabilizer the plan is not
