@@ -20,27 +20,12 @@ controller_config`), the pendulum-level loop:
   measured state. On a stiff position-controlled robot ``"always"`` turns each tick's servo lag into a new plan: the
   IK's COM target follows the robot instead of holding it, and G1 fell on fig6 (Talos walked either way).
 
-  *Landings.* Every landing is reported with its measured pose (:meth:`~rtgait.core.online.OnlinePlanner.touchdown`:
-  re-anchoring and an immediate replan). One within ``on_time_window`` (80 ms) of the plan's touch-down is on time:
-  the foot follows the plan down (the swing's height profile ends flat, so a robot whose stance side gives 2 mm lands
-  that early at every step). An *early* one (before that, in the swing's second half, ``early_touchdown_fraction``)
-  switches support at once: polygon and ZMP split take both feet until the plan's double support, and the foot stays
-  where it landed while its target goes on down with the plan, at most ``late_descent_limit`` below where it touched
-  (on a higher ground the foot must not push the robot up). A *late* one (the swing is over, the foot carries
-  nothing ``late_grace`` after it, the landing's detection lag): the other foot carries the robot and the foot's
-  target descends at ``late_descent_speed`` to ``late_descent_limit`` below the plan (auto_stabilizer
-  ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset`` -0.02 m); unlike auto_stabilizer the plan is not
-  delayed. A late foot stands at the ground's measured height (its target brought there over the single support it
-  carries next: kept as deep as the target went, it would lift the body and make the next landing later still);
-  any other keeps the height it landed at; either is shed linearly over its next swing. A foot that lands again in
-  the same stance (a bounce) is re-anchored only if it moved ``relanding_tolerance`` (10 mm).
-
-  *No step in a loaded foot's target.* A re-anchoring moves the landed foot's target onto its measured pose, a few
-  millimetres from where the servos had it, and an early landing's hold starts and ends with a jump of its own; the IK
-  gets the foot's target moved from its old pose and rate to the new target over ``anchor_blend`` (40 ms) along the
-  planner's own retargeted-swing quintic (:mod:`rtgait.sim.target_blend`), and so do swing feet re-anchored less
-  than that before the plan's touch-down. The planner, the support polygon and the ZMP split have the foot where it was
-  measured at once.
+  *Landings* (:mod:`rtgait.sim.foot_landings`, :class:`~rtgait.sim.foot_landings.FootLandings`, which the
+  controller owns and calls every tick): every landing is classified (early, on time, late, re-landing, ignored) and
+  re-anchors the plan on its measured pose (:meth:`~rtgait.core.online.OnlinePlanner.touchdown`, an immediate
+  replan); an early one holds its foot where it landed and switches support at once, a late one lowers its foot's
+  target until it finds the ground, and a re-anchored or held foot's IK target is blended to its new pose over
+  ``anchor_blend`` (40 ms). The other levels only log landings.
 
   *When no step catches the error, the plan is kept* (:meth:`WalkingController._dcm_error_replan`): no replan for
   an outward DCM error in single support, and a later step's landing and timing are kept when no candidate for it
@@ -75,7 +60,7 @@ from rtgait.sim.control_settings import (
 )
 from rtgait.sim.external_force import ExternalForce, shifted_measurement
 from rtgait.sim.foot_control import FootForceControl, FootOffsets, split_zmp
-from rtgait.sim.target_blend import FootBlend, Pose
+from rtgait.sim.foot_landings import FootLandings
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -84,7 +69,7 @@ if TYPE_CHECKING:
 
     from rtgait.core.stepping import StepAdjustment
     from rtgait.robot.model import RobotModel
-    from rtgait.sim.measure import FootState, Landing, Measurement
+    from rtgait.sim.measure import FootState, Measurement
 
 __all__ = [
     "CONTROLLERS",
@@ -128,6 +113,9 @@ class WalkingController:
         self.external = ExternalForce(info.mass, planner.w, dt)
         self._polygon_key: tuple[float, ...] | None = None
         self._polygon: np.ndarray | None = None
+        # The feet's landings: classification, re-anchoring, holds, heights and the IK targets' blends.
+        self.foot_landings = FootLandings(planner, options, self.dt, adaptive=level == "adaptive")
+        self._landings_update, self._landings_ik = self.foot_landings.update, self.foot_landings.ik_targets  # per tick
         self.reset()
 
     def reset(self) -> None:
@@ -137,25 +125,8 @@ class WalkingController:
         if self.foot is not None:
             self.foot.reset()
         self._filtered: list[float] | None = None  # zmp x, y; per foot: normal force, cop x, cop y
-        self._phase = -1
         self._replans = self._adjustments = 0
-        # Early touch-down: (x, y, yaw) where it landed, and the least height of its target (m).
-        self._hold: list[tuple[float, float, float, float] | None] = [None, None]
-        self._late = [False, False]  # the swing ended in the air ...
-        self._late_from = [math.inf, math.inf]  # ... and from when (s) it counts as late
-        self._landed = [True, True]  # whether the foot's last swing ended on the ground
-        self._anchor: list[tuple[float, float, float] | None] = [None, None]  # the last re-anchored pose per foot
-        self._swing_phase = [-2, -2]  # phase of each foot's last swing
-        self._z = [0.0, 0.0]  # height of each foot's target above the plan (m): landing heights, late descent
-        self._blend: list[tuple[float, float, float] | None] = [None, None]  # (height, swing start, duration)
-        # A late foot that landed: its target's height returns from where it landed to the measured ground's, over
-        # its stance's single support: (height at the landing, ground height, from, until) (m, m, s, s).
-        self._ground: list[tuple[float, float, float, float] | None] = [None, None]
-        # A re-anchored or held foot's IK target is blended to where the foot is to stand (rtgait.sim.target_blend).
-        self._blends = (FootBlend("left"), FootBlend("right"))
-        # The pose (x, y, yaw) a landing of this tick sends the foot to, when its target is to be blended there.
-        self._moved: list[tuple[float, float, float] | None] = [None, None]
-        self._last_ik: tuple[Pose, Pose] | None = None  # the IK's feet targets of the last tick
+        self.foot_landings.reset()
 
     def start(self, t0: float, measurement: Measurement | None = None) -> None:
         """Start the walk at ``t0`` (s). ``"adaptive"`` with a measurement starts the planner from the measured feet
@@ -192,29 +163,10 @@ class WalkingController:
         values, support, q = planner.sample_values(t)
         if self._on_error and self._dcm_error_replan(t, m, values, support, q, events):
             values, support, q = planner.sample_values(t)
-        if q != self._phase:
-            held = (self._hold[0] is not None, self._hold[1] is not None)
-            before = self._targets(values) if held[0] or held[1] else None
-            self._enter_phase(q, support, m)  # ends the holds of early landings
-            if before is not None:
-                after = self._targets(values)
-                goals = [(a[0], a[1], a[3]) if h else None for a, h in zip(after, held, strict=True)]
-                self._start_blends(t, before, after, goals)
-        self._update_heights(t)
-        if m.landings:
-            before = self._targets(values)
-            for landing in m.landings:
-                if self._landing(t, landing, values, support, q, events) and adaptive:
-                    values, support, q = planner.sample_values(t)  # the touch-down replanned
-            moved, self._moved = self._moved, [None, None]
-            if moved[0] is not None or moved[1] is not None:
-                self._start_blends(t, before, self._targets(values), moved)
+        # The landings (may replan: a touch-down), the feet's targets and the support acted on (foot_landings.py).
+        values, planned_support, q, left, right, support = self._landings_update(t, m, values, support, q, events)
         self._planner_events(t, events)
 
-        left = self._foot_target(0, values[13:17])
-        right = self._foot_target(1, values[17:21])
-        planned_support = support
-        support = self._support(t, support)
         planned_zmp = (values[9], values[10])
         com = (values[0], values[1], values[2])
         offsets = FootOffsets()
@@ -235,11 +187,8 @@ class WalkingController:
                 right = (right[0], right[1], right[2] + offsets.right_height, right[3])
         if leaning:
             com = (com[0] + external.offset[0], com[1] + external.offset[1], com[2])
-        if self._blends[0].active:  # the IK's targets only: the polygon and split have the feet where they are
-            left = self._blends[0].apply(t, left)
-        if self._blends[1].active:
-            right = self._blends[1].apply(t, right)
-        self._last_ik = (left, right)
+        # The blends act on the IK's targets only: the polygon and split have the feet where they are.
+        left, right = self._landings_ik(t, left, right)
         return ControlTargets(
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
             planned_support, (values[21], values[22]),
@@ -305,166 +254,7 @@ class WalkingController:
         outward = lateral if support == "left" else -lateral
         return outward > abs(along)
 
-    # ----- landings and the feet's targets ---------------------------------------------------------------------------
-    def _enter_phase(self, q: int, support: str, m: Measurement) -> None:
-        """Bookkeeping when the plan enters phase ``q``: a swing that ended in the air is late; a new swing blends
-        its foot's landing height out and forgets the last landing."""
-        previous = self._phase
-        self._phase = q
-        for i in (0, 1):
-            hold = self._hold[i]
-            if hold is not None:  # an early touch-down holds until the swing's end (the plan's z = 0 there)
-                self._z[i], self._hold[i] = max(self._z[i], hold[3]), None
-            if self._swing_phase[i] != previous or previous < 0:
-                continue
-            if self._blend[i] is not None:  # the swing is over: so is the blend of its foot's height
-                self._blend[i], self._z[i] = None, 0.0
-            if not self._landed[i]:
-                loaded = (m.left, m.right)[i].loaded
-                self._late[i] = self.level == "adaptive" and not loaded
-                self._late_from[i] = self.planner.phase_start(q) + self.options.late_grace
-                self._landed[i] = loaded
-        if support in _SIDES:  # a single support: the other foot lifts off
-            i = 1 if support == "left" else 0
-            self._swing_phase[i] = q
-            self._landed[i] = self._late[i] = False
-            self._ground[i] = None
-            planner = self.planner
-            self._blend[i] = (self._z[i], planner.phase_start(q), planner.timeline.duration(q))
-
-    def _landing(
-        self, t: float, landing: Landing, values: list[float], support: str, q: int, events: list[ControlEvent]
-    ) -> bool:
-        """Classify a landing and, in ``"adaptive"``, act on it; returns whether the planner replanned."""
-        i = 0 if landing.side == "left" else 1
-        planner = self.planner
-        swinging = support in _SIDES and _SIDES[i] != support  # the plan has this foot swinging
-        if self._landed[i] or not (swinging or q == self._swing_phase[i] + 1):
-            kind = "re-landing"  # it bounced, or a standing foot was unloaded and loaded again
-        elif swinging:
-            start, duration = planner.phase_start(q), planner.timeline.duration(q)
-            if start + duration - t <= self.options.on_time_window:
-                kind = "on time"  # the foot follows the plan down: nothing to switch
-            elif t - start >= self.options.early_touchdown_fraction * duration:
-                kind = "early"
-            else:
-                kind = "ignored"
-        else:
-            kind = "late" if self._late[i] and t >= self._late_from[i] else "on time"
-        events.append(ControlEvent(t, "landing", landing.side, kind, landing.x, landing.y))
-        if kind == "ignored" or self.level != "adaptive":
-            return False
-        anchor = self._anchor[i]
-        if kind == "re-landing" and anchor is not None:
-            tolerance = self.options.relanding_tolerance
-            moved = math.hypot(landing.x - anchor[0], landing.y - anchor[1])
-            if moved < tolerance and abs(math.remainder(landing.yaw - anchor[2], math.tau)) < 2.0 * tolerance:
-                return False  # where it was anchored: nothing to re-anchor
-        self._landed[i] = True
-        if self._late[i] and t >= self._late_from[i]:
-            # Lowered to find the ground: stand where the sole met it. The target went below the plan because the
-            # foot was higher than planned when the swing ended (a body that rose or rolled, or a lower ground);
-            # the measured sole height is the ground's, and keeping the target's own depth instead would extend
-            # the stance leg, lift the body and make the next landing later still. The target returns to it over
-            # the single support this foot carries next (a loaded foot's target moved at the descent's speed made
-            # the ankle damping chatter).
-            limit = self.options.late_descent_limit
-            ground = min(0.0, max(-limit, landing.z))
-            stance = q + 1 if support == "double" else q
-            until = planner.phase_start(stance) + planner.timeline.duration(stance)
-            self._ground[i] = (self._z[i], ground, t, max(until, t + self.dt))
-        self._late[i] = False
-        if kind == "early":
-            # Stand on it from now on where it landed; it goes on down with the plan (a stiff robot sags: most early
-            # landings are that), but no further than late_descent_limit below where it touched (a higher ground).
-            self._blend[i] = None
-            floor = values[15 + 4 * i] + self._z[i] - self.options.late_descent_limit
-            self._hold[i] = (landing.x, landing.y, landing.yaw, floor)
-            self._moved[i] = (landing.x, landing.y, landing.yaw)
-        # A swinging foot's target goes on from where it is to where it landed over what is left of the swing (the
-        # planner's retargeted swing, smooth): blended only when that is shorter than anchor_blend.
-        remainder = planner.phase_start(q) + planner.timeline.duration(q) - t if swinging else 0.0
-        try:
-            index = planner.touchdown(t, landing.side, landing.x, landing.y, landing.yaw)
-        except (ValueError, RuntimeError) as error:
-            events.append(ControlEvent(t, "touchdown-refused", landing.side, str(error), landing.x, landing.y))
-            return False
-        self._anchor[i] = (landing.x, landing.y, landing.yaw)
-        if remainder < self.options.anchor_blend:
-            self._moved[i] = (landing.x, landing.y, landing.yaw)
-        events.append(ControlEvent(t, "touchdown", landing.side, f"footprint {index}", landing.x, landing.y))
-        return True
-
-    def _update_heights(self, t: float) -> None:
-        """This tick's height offsets of the feet's targets (m): a landing height blended out over the swing that
-        follows it, or the descent of a late foot."""
-        for i in (0, 1):
-            blend = self._blend[i]
-            if blend is not None:
-                height, start, duration = blend
-                s = (t - start) / duration
-                if s >= 1.0:
-                    self._blend[i] = None
-                    self._z[i] = 0.0
-                else:
-                    self._z[i] = height * (1.0 - max(s, 0.0))
-            elif self._late[i] and t >= self._late_from[i]:
-                limit = self.options.late_descent_limit
-                self._z[i] = max(self._z[i] - self.options.late_descent_speed * self.dt, -limit)
-            elif (ground := self._ground[i]) is not None:  # landed late: back to the ground's height
-                landed, level, start, until = ground
-                s = (t - start) / (until - start)
-                if s >= 1.0:
-                    self._z[i], self._ground[i] = level, None
-                else:
-                    self._z[i] = landed + (level - landed) * max(s, 0.0)
-
-    def _foot_target(self, i: int, planned: list[float]) -> tuple[float, float, float, float]:
-        """Foot ``i``'s target ``(x, y, z, yaw)`` before foot force control."""
-        hold = self._hold[i]
-        if hold is not None:  # early touch-down: where it landed, down with the plan to a floor
-            return (hold[0], hold[1], max(planned[2] + self._z[i], hold[3]), hold[2])
-        return (planned[0], planned[1], planned[2] + self._z[i], planned[3])
-
-    def _targets(self, values: list[float]) -> tuple[Pose, Pose]:
-        """Both feet's targets ``(x, y, z, yaw)`` before foot force control, for the sample ``values``."""
-        return self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21])
-
-    def _start_blends(
-        self,
-        t: float,
-        before: tuple[Pose, Pose],
-        after: tuple[Pose, Pose],
-        goals: Sequence[tuple[float, float, float] | None],
-    ) -> None:
-        """Blend the IK's targets of the feet re-anchored or held at ``t`` (s) over ``anchor_blend`` to the poses
-        ``goals`` (x, y, yaw; ``None``: not this foot) they are to stand at (:mod:`rtgait.sim.target_blend`), from
-        where the IK had them: ``before`` and ``after`` are the tick's targets without and with the change."""
-        duration = self.options.anchor_blend
-        if duration <= 0.0:
-            return
-        last, rate = self._last_ik, 1.0 / self.dt
-        for i in (0, 1):
-            goal = goals[i]
-            if goal is None:
-                continue
-            old = self._blends[i].apply(t, before[i])  # a blend under way goes on from where it has the target
-            previous = old if last is None else last[i]
-            vx, vy = (old[0] - previous[0]) * rate, (old[1] - previous[1]) * rate
-            vyaw = math.remainder(old[3] - previous[3], math.tau) * rate
-            self._blends[i].start(t, old, (vx, vy, vyaw), goal, old[2] - after[i][2], duration)
-
-    def _support(self, t: float, planned: str) -> str:
-        """The feet the controller acts on: the plan's, both after an early touch-down, the other while late."""
-        if planned in _SIDES:
-            swing = 1 if planned == "left" else 0
-            return "double" if self._hold[swing] is not None else planned
-        late_left = self._late[0] and t >= self._late_from[0]
-        late_right = self._late[1] and t >= self._late_from[1]
-        if late_left != late_right:
-            return "right" if late_left else "left"
-        return planned
-
+    # ----- the support polygon -------------------------------------------------------------------------------------
     def _support_polygon(self, support: str, left: tuple[float, ...], right: tuple[float, ...]) -> np.ndarray:
         """The support polygon of the feet in contact (cached until they move)."""
         chosen = [(pose, side) for pose, side in ((left, "left"), (right, "right")) if support in ("double", side)]
@@ -556,6 +346,7 @@ class WalkingController:
         if level == "adaptive" and options.measured_replanning == "on-error":
             self.options = options = dataclasses.replace(options, step_adjustment=adjust)
             config = dataclasses.replace(config, feedback="planned", step_adjustment=None)
+            self.foot_landings.options = options
         planner.config = config
         if self.level == "open-loop":  # up: new laws from zero state (a fade under way goes on around them)
             feedback = DcmFeedback(planner.w, options.gains, self.dt)
@@ -578,8 +369,7 @@ class WalkingController:
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         if level == "adaptive":
             self._last_error_replan = -math.inf
-        else:
-            self._late = [False, False]
+        self.foot_landings.set_adaptive(level == "adaptive")
         self.level = level
 
 

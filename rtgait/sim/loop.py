@@ -6,11 +6,12 @@ Every control tick (``sim.control_dt``: 1 ms for Talos, 2 ms for G1) of the walk
    ZMP, the COM and its velocity, the DCM, and the landings since the last tick. They are read from the kinematics
    and contact forces the last physics step computed, i.e. of the state one physics step before ``t``: a real
    robot's sensors lag by a sample too, and reading them costs no extra ``mj_forward``;
-2. footstep changes due at ``t`` go to the planner (at their connection mode's deadline, as
-   :func:`rtgait.core.rollout.rollout` does); a walk by command is stopped after its steps;
+2. the walk's scheduled inputs (:mod:`rtgait.sim.loop_inputs`): the ``on_tick`` hook, the footstep changes due at
+   ``t`` (at their connection mode's deadline, as :func:`rtgait.core.rollout.rollout` does) and the velocity
+   commands due go to the planner; a walk by command is stopped after its steps;
 3. **control** (:class:`~rtgait.sim.controllers.WalkingController`, the level asked for): the planner's sample, with
-   the level's feedback, re-anchoring, step adjustment and landing handling, gives the IK's COM and feet targets and
-   the foot force control's ankle tilts;
+   the level's feedback, re-anchoring, step adjustment and landing handling (:mod:`rtgait.sim.foot_landings`), gives
+   the IK's COM and feet targets and the foot force control's ankle tilts;
 4. **IK**: the whole-body IK, warm-started from the previous tick, turns them into joint angles (always one
    Gauss-Newton iteration, so the solution varies smoothly and its finite difference is a clean joint velocity);
    the ankle tilts are added to the ankle joints (:func:`~rtgait.sim.foot_control.add_ankle_offsets`);
@@ -36,7 +37,8 @@ start before the planner's clock begins; it runs at negative times on the walk's
 :class:`ClosedLoop` is the loop one tick per :meth:`~ClosedLoop.step`, for callers that act between ticks (a live
 viewer sets the velocity command, pushes, switches the controller level); :func:`run_closed_loop` steps one to the
 walk's end. The record (:mod:`rtgait.sim.loop_record`) is the whole run, or for an open-ended run a ring of its last
-seconds, so that its memory stays bounded however long it lasts.
+seconds, so that its memory stays bounded however long it lasts; :meth:`ClosedLoop.result` makes it a
+:class:`SimResult` with the walk's outcome (:mod:`rtgait.sim.loop_result`).
 """
 
 from __future__ import annotations
@@ -49,12 +51,12 @@ import mujoco
 
 from rtgait.core.footsteps import Footstep
 from rtgait.core.online import OnlinePlanner
-from rtgait.core.rollout import ScheduledChange
 from rtgait.robot.ik import IKTargets, WholeBodyIK
 from rtgait.sim.actuation import ReferenceInterpolator
 from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Push, Pushes, measure_contacts
 from rtgait.sim.controllers import ControlEvent, ControllerOptions, RobotInfo, WalkingController
 from rtgait.sim.foot_control import FootOffsets, add_ankle_offsets, find_ankle_joints
+from rtgait.sim.loop_inputs import WalkInputs
 from rtgait.sim.loop_options import (
     LANDING_WINDOW,
     LoopOptions,
@@ -66,6 +68,7 @@ from rtgait.sim.loop_options import (
 )  # fmt: skip
 from rtgait.sim.loop_push import LivePush
 from rtgait.sim.loop_record import TickRecord, TickValues
+from rtgait.sim.loop_result import loop_result
 from rtgait.sim.measure import SimMeasurer
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SUPPORT_CODES, SimResult
@@ -205,10 +208,10 @@ class ClosedLoop:
         self._servo = ReferenceInterpolator(sim.actuation, q[7:])
         # The complete per-tick record (sim.parquet) of a whole run; a ring run (a live session) keeps none.
         self.log = TickLog(sim, data, self._servo, capacity, planner.w) if keep is None else None
-        self._pending: list[ScheduledChange] = []
-        self._commands = list(options.velocity_changes)
-        self._stop_after = stop_after
-        self._stopped = stop_after is None
+        # The hook, footstep changes, velocity commands and stop of the walk, at their times (loop_inputs.py).
+        on_stop = self._follow_walk_end if self._can_grow else None  # steps held longer before the walk had an end
+        self._inputs = WalkInputs(planner, options, stop_after, on_stop)
+        self._walk_inputs = self._inputs.update
         self.events: list[ControlEvent] = []
         self._events_kept = math.inf if keep is None else keep  # an open-ended run keeps the last `keep` seconds
         # What every tick uses, bound once: a tuple unpacked into locals costs less than a dozen attribute lookups
@@ -290,7 +293,7 @@ class ClosedLoop:
             measurement = measure(data, t)
             if k == k0:
                 self.controller.start(0.0, measurement)
-                self._pending = sorted(self.options.changes, key=lambda c: self.planner.change_deadline(c.step))
+                self._inputs.start()
             self._walk_inputs(t, data)
             out = tick(t, measurement)
             target_cog = out.com
@@ -357,33 +360,11 @@ class ClosedLoop:
             self._finish()
         return True
 
-    def _walk_inputs(self, t: float, data: mujoco.MjData) -> None:
-        """What reaches the planner at ``t`` before the controller runs: the ``on_tick`` hook, the footstep changes
-        due, the velocity commands due, and ``stop()`` after ``stop_after_steps``."""
-        planner = self.planner
-        if self.options.on_tick is not None:
-            self.options.on_tick(t, data)
-        pending = self._pending
-        while pending and t >= planner.change_deadline(pending[0].step):
-            change = pending.pop(0)
-            planner.change_step(
-                change.step, length=change.length, width=change.width, turn=change.turn, through=change.through
-            )
-        commands = self._commands
-        while commands and t >= commands[0][0] - 1e-9 and not self._stopped:
-            _, vx, vy, wz = commands.pop(0)
-            planner.set_velocity(vx, vy, wz)
-        if not self._stopped and planner.first_open_step() > self._stop_after:  # type: ignore[operator]
-            planner.stop()
-            self._stopped = True
-            if self._can_grow:  # its steps may have been held longer before it had an end
-                self._follow_walk_end()
-
     def _follow_walk_end(self) -> None:
         """A step's timing changed: the run lasts until the walk as it is now has come to rest (``after`` later), no
         shorter than planned and at most the record's headroom (:func:`~rtgait.sim.loop_options.timing_headroom`)."""
         end = self.planner.end_time
-        if not math.isfinite(end):  # a walk by command not stopped yet: followed when it is (_walk_inputs)
+        if not math.isfinite(end):  # a walk by command not stopped yet: followed when it is (WalkInputs' on_stop)
             return
         planned = self._hot[-1]
         wanted = end_tick(end, self.options, self.k0, self.dt)
@@ -463,54 +444,10 @@ class ClosedLoop:
         """
         if self.k == 0:
             raise RuntimeError("no tick has run yet")
-        planner, sim, robot, options = self.planner, self.sim, self.sim.robot, self.options
-        ticks = self.k
         if wall_time is None:
             assert self._began is not None
             wall_time = (self._ended if self._ended is not None else time.perf_counter()) - self._began
-        n_steps, walk_end = self._n_steps, self._walk_end
-        if planner.started and planner.n_steps is not None:  # as the walk ended up (step adjustment may shorten it)
-            n_steps = planner.n_steps
-            walk_end = min(planner.end_time, walk_end) if options.duration is not None else planner.end_time
-        elif n_steps == 0:  # ended by on_tick or open-ended, never stopped: the steps that landed
-            n_steps = self.landings.count
-        if not math.isfinite(walk_end):
-            walk_end = self.t
-        arrays = self.record.arrays(ticks, self.contacts, self.threshold, self.k0, self.dt)
-        replay_index, replay_qpos, replay_soles = self.record.replay(ticks)
-        first = float(arrays["times"][0])
-        events = [e for e in self.events if e.t >= first]
-        return SimResult(
-            **arrays,
-            joint_names=sim.joint_names,
-            control_dt=self.dt,
-            physics_dt=sim.timestep,
-            run_start=first,
-            walk_end=float(walk_end),
-            steps_planned=n_steps,
-            steps_completed=self.landings.count,
-            missed_landings=self.landings.missed,
-            fell=self.fell,
-            fall_time=self.fall_time,
-            fall_cause=self.fall_cause,
-            tipped=self.contacts.tip_time is not None,
-            tip_time=self.contacts.tip_time,
-            wall_time=wall_time,
-            robot=robot.name,
-            mass=robot.mass,
-            controller=self.controller.level,
-            replay_index=replay_index,
-            replay_q=sim.full_configurations(replay_qpos),
-            replay_soles=replay_soles,
-            footprints=tuple(planner.footprints()) if planner.started else (),
-            pushes=tuple(self.pushes),
-            events=tuple(events),
-            step_adjustments=tuple(planner.step_adjustments) if planner.started else (),
-            replans=planner.replan_count if planner.started else 0,
-            model=robot.model,
-            gravity=self.gravity,
-            log=self.log.finish(ticks) if self.log is not None else None,
-        )
+        return loop_result(self, wall_time, self._n_steps, self._walk_end)
 
 
 def run_closed_loop(

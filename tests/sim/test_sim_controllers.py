@@ -170,8 +170,9 @@ def first_swing(ctl):
     return planner.phase_start(1), planner.timeline.duration(1), swing
 
 
-def test_adaptive_early_touchdown_reanchors_and_switches_support():
-    ctl = controller("adaptive")
+@pytest.mark.parametrize("blend", [0.0, 0.04])
+def test_adaptive_early_touchdown_reanchors_and_switches_support(blend):
+    ctl = controller("adaptive", options=ControllerOptions(measurement_filter=0.0, anchor_blend=blend))
     start, duration, swing = first_swing(ctl)
     side = ("left", "right")[swing]
     out, t = walk_to(ctl, start + 0.75 * duration)
@@ -188,11 +189,12 @@ def test_adaptive_early_touchdown_reanchors_and_switches_support():
     assert (moved.x, moved.y, moved.yaw) == pytest.approx((landing.x, landing.y, landing.yaw))
     assert out.support == "double", "support switches at once"
     # Where it landed, going on down with the plan, no more than late_descent_limit below where it touched; the IK's
-    # target gets there over anchor_blend from where the plan had it (x, y, yaw), without a jump.
+    # target gets there at once, or with a blend over anchor_blend from where the plan had it (x, y, yaw).
     floor = swing_z - ctl.options.late_descent_limit
     held = out.left_foot if swing == 0 else out.right_foot
     planned = values[13 + 4 * swing : 17 + 4 * swing]
-    assert held == pytest.approx((planned[0], planned[1], max(swing_z, floor), planned[3]), abs=1e-9)
+    start_pose = (landing.x, landing.y, landing.yaw) if blend == 0.0 else (planned[0], planned[1], planned[3])
+    assert held == pytest.approx((*start_pose[:2], max(swing_z, floor), start_pose[2]), abs=1e-9)
     landed_at, lowest = t, swing_z
     while t < start + duration - DT:
         t += DT
