@@ -151,11 +151,6 @@ class PlannerConfig:
         """Pendulum frequency ``sqrt(g / zc)`` (1/s)."""
         return omega(self.cog_height, self.gravity)
 
-    @property
-    def narrowest_step_width(self) -> float:
-        """``min_step_width``, or ``step_width`` when it is ``None`` (m)."""
-        return self.step_width if self.min_step_width is None else self.min_step_width
-
 
 VELOCITY_KEYS = ("max_step_length", "max_step_lateral", "max_step_turn", "min_step_width")
 """The :class:`PlannerConfig` fields that bound the strides of a walk by velocity command, as a robot description's

@@ -343,29 +343,22 @@ def remainder_options(adjust: StepAdjustment, elapsed: float, remainder: float) 
 
 def _both_sides(adjust: StepAdjustment, low: float, nominal: float, high: float | None) -> tuple[float, ...] | None:
     """The shorter candidates from ``low`` and the longer ones up to ``high`` (``None``: none), nominal left out."""
-    shorter = _evenly(low, nominal, adjust.durations)
-    longer = None if high is None else _evenly_above(nominal, high, adjust.durations)
+    shorter = _evenly(low, nominal, adjust.durations, keep_low=True)
+    longer = None if high is None else _evenly(nominal, high, adjust.durations, keep_low=False)
     if longer is None:
         return shorter
     return longer if shorter is None else shorter + longer
 
 
-def _evenly(low: float, nominal: float, count: int) -> tuple[float, ...] | None:
-    """``count`` values evenly from ``low`` to ``nominal`` without the last, rounded to 1 ns; ``None`` if ``low``
-    is not at least 1 ms below ``nominal`` (plain floats: this runs at every decision and replan)."""
-    if low > nominal - 1e-3:
+def _evenly(low: float, high: float, count: int, keep_low: bool) -> tuple[float, ...] | None:
+    """``count - 1`` values of the ``count`` evenly spaced from ``low`` to ``high``: all but ``high``
+    (``keep_low``), else all but ``low``; rounded to 1 ns. ``None`` if ``low`` is not at least 1 ms below ``high``
+    (plain floats: this runs at every decision and replan)."""
+    if low > high - 1e-3:
         return None
-    step = (nominal - low) / (count - 1)
-    return tuple(round(low + i * step, 9) for i in range(count - 1))
-
-
-def _evenly_above(nominal: float, high: float, count: int) -> tuple[float, ...] | None:
-    """``count`` values evenly from ``nominal`` to ``high`` without the first, rounded to 1 ns; ``None`` if ``high``
-    is not at least 1 ms above ``nominal``."""
-    if high < nominal + 1e-3:
-        return None
-    step = (high - nominal) / (count - 1)
-    return tuple(round(nominal + i * step, 9) for i in range(1, count))
+    step = (high - low) / (count - 1)
+    first = 0 if keep_low else 1
+    return tuple(round(low + i * step, 9) for i in range(first, first + count - 1))
 
 
 class TimingOptions(NamedTuple):

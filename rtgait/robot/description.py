@@ -475,17 +475,8 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
 
 def _stepping(raw: Any, sole: SoleRect) -> SteppingLimits:
     """The ``[stepping]`` table (:class:`~rtgait.core.stepping.SteppingLimits` checks the values)."""
-    table = _FILES.table(raw, "stepping")
-    _FILES.check_keys(table, "stepping", (), STEPPING_KEYS)
-    try:
-        limits = SteppingLimits.from_table(table)
-    except ValueError as error:
-        raise RobotError(str(error)) from None
-    if limits.min_width < 2.0 * sole.inner:
-        raise RobotError(
-            f"stepping.min_width ({limits.min_width:g} m) must be at least 2 x feet.sole.inner "
-            f"({2.0 * sole.inner:g} m): the soles would overlap"
-        )
+    limits = _limits_table(raw, "stepping", STEPPING_KEYS, SteppingLimits.from_table)
+    _soles_apart("stepping.min_width", limits.min_width, sole)
     return limits
 
 
@@ -493,18 +484,29 @@ def _velocity(raw: Any, sole: SoleRect) -> VelocityLimits:
     """The ``[velocity]`` table (:class:`~rtgait.core.config.VelocityLimits` checks the values the way
     :class:`~rtgait.core.config.PlannerConfig` does; ``min_step_width`` against the robot's stance is checked when
     it is applied, :func:`rtgait.robot.motion.robot_scenario`)."""
-    table = _FILES.table(raw, "velocity")
-    _FILES.check_keys(table, "velocity", (), VELOCITY_KEYS)
+    limits = _limits_table(raw, "velocity", VELOCITY_KEYS, VelocityLimits.from_table)
+    _soles_apart("velocity.min_step_width", limits.min_step_width, sole)
+    return limits
+
+
+def _limits_table(raw: Any, name: str, keys: tuple[str, ...], parse: Any) -> Any:
+    """The table ``name`` of limits, its keys among ``keys``, parsed by ``parse`` (whose errors name the key)."""
+    table = _FILES.table(raw, name)
+    _FILES.check_keys(table, name, (), keys)
     try:
-        limits = VelocityLimits.from_table(table)
+        return parse(table)
     except ValueError as error:
         raise RobotError(str(error)) from None
-    if limits.min_step_width is not None and limits.min_step_width < 2.0 * sole.inner:
+
+
+def _soles_apart(key: str, width: float | None, sole: SoleRect) -> None:
+    """A least distance ``width`` (m) between the foot frames keeps the soles from overlapping: at least twice the
+    sole's inner half-width (``None``: no such limit)."""
+    if width is not None and width < 2.0 * sole.inner:
         raise RobotError(
-            f"velocity.min_step_width ({limits.min_step_width:g} m) must be at least 2 x feet.sole.inner "
-            f"({2.0 * sole.inner:g} m): the soles would overlap"
+            f"{key} ({width:g} m) must be at least 2 x feet.sole.inner ({2.0 * sole.inner:g} m): the soles would "
+            "overlap"
         )
-    return limits
 
 
 # ----- finding descriptions -------------------------------------------------------------------------------------
