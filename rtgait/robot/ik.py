@@ -9,6 +9,9 @@ half-sitting posture. Tasks, all in the world frame:
 * torso orientation: upright, heading along the mean yaw of the feet (3);
 * pelvis (floating base) orientation: likewise, with a small weight (3).
 
+Both upright orientations may be tilted together by a lean (``IKTargets.lean``, the hip strategy): the upper body
+then turns about the hips while the COM and the soles stay on their targets.
+
 The pelvis task is compatible with the others (the torso joints connect an upright pelvis to an upright torso);
 without it the solution that bends the joints least from half-sitting leans the pelvis back by about 8 degrees
 and pitches the torso joint forward to compensate, a posture no walking robot uses. That makes 21 equations for
@@ -57,11 +60,14 @@ class IKTargets(NamedTuple):
         cog: COG position ``(x, y, z)`` (m).
         left_foot: left sole point ``(x, y, z, yaw)`` (m, rad); the sole is level.
         right_foot: right sole point ``(x, y, z, yaw)`` (m, rad).
+        lean: the upper body's lean, a rotation vector (rad, world frame) applied to the upright torso and pelvis
+            targets (the hip strategy, :mod:`rtgait.core.hip_strategy`); ``None``: upright.
     """
 
     cog: np.ndarray | Sequence[float]
     left_foot: np.ndarray | Sequence[float]
     right_foot: np.ndarray | Sequence[float]
+    lean: Sequence[float] | None = None
 
 
 class IKErrors(NamedTuple):
@@ -235,8 +241,8 @@ class WholeBodyIK:
             *_yaw_error(hl, left[3]),
             right[0] - hr[0][3], right[1] - hr[1][3], right[2] - hr[2][3],
             *_yaw_error(hr, right[3]),
-            *_yaw_error(self._torso, yaw),
-            *_yaw_error(self._pelvis, yaw),
+            *_leaned_yaw_error(self._torso, yaw, targets.lean),
+            *_leaned_yaw_error(self._pelvis, yaw, targets.lean),
         ]  # fmt: skip
         self._e = e
         hypot = math.hypot
@@ -343,6 +349,36 @@ class WholeBodyIK:
 def _floats(values: np.ndarray | Sequence[float]) -> Sequence[float]:
     """A short vector as Python numbers: scalar arithmetic on numpy scalars is several times slower."""
     return values.tolist() if isinstance(values, np.ndarray) else values
+
+
+def _leaned_yaw_error(
+    h: list[list[float]], yaw: float, lean: Sequence[float] | None
+) -> tuple[float, float, float]:
+    """World-frame rotation vector from rotation ``h`` to ``Exp(lean) Rz(yaw)`` (rad): :func:`_yaw_error` when
+    upright. With ``L = Exp(lean)``, ``L Rz R^T`` is ``Rz (L^T R)^T`` conjugated by ``L``, so its log is ``L`` times
+    the yaw error of ``L^T R``."""
+    if lean is None:
+        return _yaw_error(h, yaw)
+    lx, ly, lz = _floats(lean)
+    angle = math.sqrt(lx * lx + ly * ly + lz * lz)
+    if angle < 1e-12:
+        return _yaw_error(h, yaw)
+    L = _rotation(lx / angle, ly / angle, lz / angle, angle)
+    rows = [row[:3] for row in h[:3]]
+    # L^T R: entry (i, j) = sum_k L[k][i] R[k][j].
+    tilted = [[L[0][i] * rows[0][j] + L[1][i] * rows[1][j] + L[2][i] * rows[2][j] for j in range(3)] for i in range(3)]
+    ex, ey, ez = _yaw_error(tilted, yaw)
+    return (L[0][0] * ex + L[0][1] * ey + L[0][2] * ez, L[1][0] * ex + L[1][1] * ey + L[1][2] * ez,
+            L[2][0] * ex + L[2][1] * ey + L[2][2] * ez)  # fmt: skip
+
+
+def _rotation(ux: float, uy: float, uz: float, angle: float) -> list[list[float]]:
+    """Rotation matrix of ``angle`` (rad) about the unit axis ``u`` (Rodrigues' formula)."""
+    c, s = math.cos(angle), math.sin(angle)
+    k = 1.0 - c
+    return [[c + k * ux * ux, k * ux * uy - s * uz, k * ux * uz + s * uy],
+            [k * uy * ux + s * uz, c + k * uy * uy, k * uy * uz - s * ux],
+            [k * uz * ux - s * uy, k * uz * uy + s * ux, c + k * uz * uz]]  # fmt: skip
 
 
 def _yaw_error(h: list[list[float]], yaw: float) -> tuple[float, float, float]:

@@ -44,6 +44,7 @@ from rtgait.core.closed_loop import CONTROLLERS, Controller, controller_config
 from rtgait.core.config import PlannerConfig
 from rtgait.core.feedback import DcmFeedback
 from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride
+from rtgait.core.hip_strategy import HipStrategy
 from rtgait.core.online import OnlinePlanner
 from rtgait.core.support import support_polygon
 from rtgait.sim.control_settings import (
@@ -111,6 +112,11 @@ class WalkingController:
         self._smoothing = 1.0 if tau == 0.0 else -math.expm1(-dt / tau)
         # A known external force (a person's pull on the hand): the robot leans against it (set_external_force).
         self.external = ExternalForce(info.mass, planner.w, dt)
+        # The hip strategy: the upper body leans when the DCM law asks the feet for more than the sole gives.
+        lean = info.lean if options.hip_strategy else None
+        if lean is not None and options.max_lean != lean.max_lean:
+            lean = dataclasses.replace(lean, max_lean=options.max_lean)
+        self.hip = HipStrategy(lean, info.mass, dt) if lean is not None else None
         self._polygon_key: tuple[float, ...] | None = None
         self._polygon: np.ndarray | None = None
         # The feet's landings: classification, re-anchoring, holds, heights and the IK targets' blends.
@@ -124,6 +130,8 @@ class WalkingController:
             self.feedback.reset()
         if self.foot is not None:
             self.foot.reset()
+        if self.hip is not None:
+            self.hip.reset()
         self._filtered: list[float] | None = None  # zmp x, y; per foot: normal force, cop x, cop y
         self._replans = self._adjustments = 0
         self.foot_landings.reset()
@@ -171,6 +179,7 @@ class WalkingController:
         com = (values[0], values[1], values[2])
         offsets = FootOffsets()
         zmp, com_offset = planned_zmp, (0.0, 0.0)
+        shortfall = (0.0, 0.0)
         if self.feedback is not None:
             zmp_measured, left_state, right_state = self._filter(m)
             polygon = self._support_polygon(support, left, right)
@@ -179,6 +188,10 @@ class WalkingController:
             dcm = (m.com[0] + m.com_vel[0] / w, m.com[1] + m.com_vel[1] / w)
             out = self.feedback.update(planned_zmp, (values[21], values[22]), dcm, polygon, None, zmp_measured)
             zmp, com_offset = out.zmp, out.com_offset
+            if out.saturated and self.hip is not None:
+                # The law asks more than the sole gives: the rest is asked of the upper body's lean. (Asked only
+                # while the DCM is within 20 mm of the polygon's edge or past it, the lean came too late.)
+                shortfall = (out.zmp_unsaturated[0] - zmp[0], out.zmp_unsaturated[1] - zmp[1])
             com = (com[0] + com_offset[0], com[1] + com_offset[1], com[2])
             if self.foot is not None:
                 split = split_zmp(zmp, left, right, self.sole, support)
@@ -187,11 +200,17 @@ class WalkingController:
                 right = (right[0], right[1], right[2] + offsets.right_height, right[3])
         if leaning:
             com = (com[0] + external.offset[0], com[1] + external.offset[1], com[2])
+        lean = None
+        if self.hip is not None:  # also without feedback (open-loop after a switch): a lean under way returns
+            yaw = left[3] + 0.5 * math.remainder(right[3] - left[3], 2.0 * math.pi)
+            leaned = self.hip.update(shortfall, yaw)
+            if leaned.lean != (0.0, 0.0, 0.0):
+                lean = leaned.lean
         # The blends act on the IK's targets only: the polygon and split have the feet where they are.
         left, right = self._landings_ik(t, left, right)
         return ControlTargets(
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
-            planned_support, (values[21], values[22]),
+            planned_support, (values[21], values[22]), lean,
         )  # fmt: skip
 
     def _dcm_error_replan(

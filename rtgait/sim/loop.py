@@ -286,7 +286,7 @@ class ClosedLoop:
             left_foot, right_foot = self._left_start, self._right_start
             planned_x = command_x = target_cog[0]
             planned_y = command_y = target_cog[1]
-            code, phase, offsets = 0, -1, _NO_OFFSETS
+            code, phase, offsets, lean = 0, -1, _NO_OFFSETS, None
             dcm = dcm_planned = (math.nan, math.nan)
             out = measurement = None  # no controller during the transition
         else:
@@ -301,13 +301,13 @@ class ClosedLoop:
             planned_x, planned_y = out.zmp_planned
             command_x, command_y = out.zmp_command
             code, phase, offsets = SUPPORT_CODES[out.planned_support], out.phase, out.offsets
-            dcm, dcm_planned = measurement.dcm, out.dcm_planned
+            dcm, dcm_planned, lean = measurement.dcm, out.dcm_planned, out.lean
             if out.events:
                 self._log(out.events)
                 if self._can_grow and any(e.kind == "step-adjustment" for e in out.events):
                     self._follow_walk_end()
 
-        q, _ = solve(IKTargets(target_cog, left_foot, right_foot), self._q, max_iterations=1, tolerance=0.0)
+        q, _ = solve(IKTargets(target_cog, left_foot, right_foot, lean), self._q, max_iterations=1, tolerance=0.0)
         self._q = q
         joints = q[7:]
         if offsets != _NO_OFFSETS:
