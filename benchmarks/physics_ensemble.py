@@ -19,8 +19,11 @@ Runs are spread over worker processes (2 by default: this project's CI machine h
 stderr. ``--controller`` names the controller level (:mod:`rtgait.sim.controllers`): ``open-loop`` (the default
 here: the plan alone, the paper's assumption, whose outcomes the paper reports), ``stabilized`` or ``adaptive``.
 
-Usage: ``python benchmarks/physics_ensemble.py [--json] [--robot R] [--controller C] [--quick] [--settings N]
-[--seed S] [--workers W] [--cases fig4,fig6,...]``
+``--per-setting`` prints, after the summary, one row per setting: its values and each case's outcome, with the
+time of the first tip-over (``t``) or of the fall (``f``) on the walk's clock (s).
+
+Usage: ``python benchmarks/physics_ensemble.py [--json] [--per-setting] [--robot R] [--controller C] [--quick]
+[--settings N] [--seed S] [--workers W] [--cases fig4,fig6,...]``
 """
 
 from __future__ import annotations
@@ -113,6 +116,9 @@ def run_one(robot_name: str, controller: str, scenario_name: str, index: int, se
         "setting": index,
         "outcome": classify(result),
         "steps": f"{result.steps_completed}/{result.steps_planned}",
+        "tip_time": result.tip_time,
+        "fall_time": result.fall_time,
+        "fall_cause": result.fall_cause,
         "zmp_error_rms": None if not math.isfinite(rms) else rms,
         "legs_touched": result.legs_touched,
         "mujoco_warnings": len(warnings),
@@ -174,6 +180,7 @@ def summarize(robot: str, controller: str, cases: tuple[str, ...], runs: list[di
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--per-setting", action="store_true", help="also print every setting's outcomes")
     parser.add_argument("--robot", default="talos")
     parser.add_argument(
         "--controller", default="open-loop", choices=("open-loop", "stabilized", "adaptive"),
@@ -221,6 +228,40 @@ def main() -> None:
         for run in disagreeing:
             setting = dataclasses.asdict(_Setting(**settings[run["setting"]]))
             print(f"  {run['scenario']} setting {run['setting']}: {run['outcome']} ({run['steps']} steps) {setting}")
+    if args.per_setting:
+        print()
+        print(per_setting_table(cases, settings, runs))
+
+
+def _outcome_cell(run: dict) -> str:
+    """One run as ``outcome steps`` plus ``t <tip time>`` and ``f <fall time>`` where they happened (s)."""
+    cell = f"{run['outcome']} {run['steps']}"
+    if run.get("tip_time") is not None:
+        cell += f" t {run['tip_time']:.2f}"
+    if run.get("fall_time") is not None:
+        cell += f" f {run['fall_time']:.2f}"
+    return cell
+
+
+def per_setting_table(cases: tuple[str, ...], settings: list[dict[str, float]], runs: list[dict]) -> str:
+    """A markdown table, one row per setting in order of contact time constant: the setting's values (physics step
+    and contact time constant in ms, the rest as given) and each case's outcome (:func:`_outcome_cell`)."""
+    by_setting: dict[int, dict[str, dict]] = {}
+    for run in runs:
+        by_setting.setdefault(run["setting"], {})[run["scenario"]] = run
+    columns = ("setting", "dt (ms)", "timeconst (ms)", "dampratio", "friction", "armature", "gains", *cases)
+    header = "| " + " | ".join(columns) + " |"
+    lines = [header, "|" + "---|" * (7 + len(cases))]
+    for index in sorted(by_setting, key=lambda i: settings[i]["contact_timeconst"]):
+        s = settings[index]
+        values = (
+            f"| {index} | {s['physics_dt'] * 1000:g} | {s['contact_timeconst'] * 1000:.2f} "
+            f"| {s['contact_dampratio']:.2f} | {s['friction']:.2f} | {s['armature_scale']:.2f} "
+            f"| {s['gain_scale']:.2f} |"
+        )
+        cells = [_outcome_cell(by_setting[index][case]) if case in by_setting[index] else "-" for case in cases]
+        lines.append(values + " " + " | ".join(cells) + " |")
+    return "\n".join(lines)
 
 
 @dataclasses.dataclass(frozen=True)
