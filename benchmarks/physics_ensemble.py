@@ -19,11 +19,13 @@ Runs are spread over worker processes (2 by default: this project's CI machine h
 stderr. ``--controller`` names the controller level (:mod:`rtgait.sim.controllers`): ``open-loop`` (the default
 here: the plan alone, the paper's assumption, whose outcomes the paper reports), ``stabilized`` or ``adaptive``.
 
+``--refine N`` divides every setting's physics step by ``N`` (the rest of the setting unchanged): a convergence check,
+since an outcome that changes when only the step is refined belongs to the discretisation, not to the setting.
 ``--per-setting`` prints, after the summary, one row per setting: its values and each case's outcome, with the
 time of the first tip-over (``t``) or of the fall (``f``) on the walk's clock (s).
 
 Usage: ``python benchmarks/physics_ensemble.py [--json] [--per-setting] [--robot R] [--controller C] [--quick]
-[--settings N] [--seed S] [--workers W] [--cases fig4,fig6,...]``
+[--settings N] [--seed S] [--refine N] [--workers W] [--cases fig4,fig6,...]``
 """
 
 from __future__ import annotations
@@ -189,6 +191,7 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="8 settings instead of the default 48")
     parser.add_argument("--settings", type=int, default=None, help="number of settings (default 48, 8 with --quick)")
     parser.add_argument("--seed", type=int, default=2024, help="seed of the sample of settings")
+    parser.add_argument("--refine", type=int, default=1, help="divide every setting's physics step by this (default 1)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--cases", default=",".join(CASES), help="comma-separated cases (default: the paper's four)")
     args = parser.parse_args()
@@ -197,21 +200,30 @@ def main() -> None:
     if unknown:
         parser.error(f"--cases: {', '.join(unknown)} has no paper outcome to compare with (known: {', '.join(CASES)})")
     n = args.settings if args.settings is not None else (8 if args.quick else 48)
-    if n < 1 or args.workers < 1:
-        parser.error("--settings and --workers must be >= 1")
+    if n < 1 or args.workers < 1 or args.refine < 1:
+        parser.error("--settings, --refine and --workers must be >= 1")
     settings = ensemble(n, args.seed)
+    for setting in settings:
+        setting["physics_dt"] /= args.refine
     began = time.perf_counter()
     runs = run_ensemble(args.robot, args.controller, cases, settings, args.workers, quiet=False)
     wall = time.perf_counter() - began
     table = summarize(args.robot, args.controller, cases, runs)
     if args.json:
-        report = {"cases": table, "seed": args.seed, "ensemble": settings, "runs": runs, "wall_time": wall}
+        report = {
+            "cases": table,
+            "seed": args.seed,
+            "refine": args.refine,
+            "ensemble": settings,
+            "runs": runs,
+            "wall_time": wall,
+        }
         print(json.dumps(report))
         return
     print(f"{args.robot}, {args.controller}: {n} physics settings (seed {args.seed}), {len(runs)} runs in {wall:.0f} s")
     for name, (low, high) in RANGES.items():
         print(f"  {name}: {low:g} to {high:g}")
-    print(f"  physics_dt: {', '.join(f'{dt:g}' for dt in PHYSICS_DTS)} s")
+    print(f"  physics_dt: {', '.join(f'{dt / args.refine:g}' for dt in PHYSICS_DTS)} s")
     print()
     print("| case | paper | walked | tipped | fell | incomplete | agrees with the paper | ZMP error RMS (median) |")
     print("|---|---|---|---|---|---|---|---|")
