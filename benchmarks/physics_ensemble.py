@@ -19,8 +19,13 @@ Runs are spread over worker processes (2 by default: this project's CI machine h
 stderr. ``--controller`` names the controller level (:mod:`rtgait.sim.controllers`): ``open-loop`` (the default
 here: the plan alone, the paper's assumption, whose outcomes the paper reports), ``stabilized`` or ``adaptive``.
 
-Usage: ``python benchmarks/physics_ensemble.py [--json] [--robot R] [--controller C] [--quick] [--settings N]
-[--seed S] [--workers W] [--cases fig4,fig6,...]``
+``--refine N`` divides every setting's physics step by ``N`` (the rest of the setting unchanged): a convergence check,
+since an outcome that changes when only the step is refined belongs to the discretisation, not to the setting.
+``--per-setting`` prints, after the summary, one row per setting: its values and each case's outcome, with the
+time of the first tip-over (``t``) or of the fall (``f``) on the walk's clock (s).
+
+Usage: ``python benchmarks/physics_ensemble.py [--json] [--per-setting] [--robot R] [--controller C] [--quick]
+[--settings N] [--seed S] [--refine N] [--workers W] [--cases fig4,fig6,...]``
 """
 
 from __future__ import annotations
@@ -113,6 +118,9 @@ def run_one(robot_name: str, controller: str, scenario_name: str, index: int, se
         "setting": index,
         "outcome": classify(result),
         "steps": f"{result.steps_completed}/{result.steps_planned}",
+        "tip_time": result.tip_time,
+        "fall_time": result.fall_time,
+        "fall_cause": result.fall_cause,
         "zmp_error_rms": None if not math.isfinite(rms) else rms,
         "legs_touched": result.legs_touched,
         "mujoco_warnings": len(warnings),
@@ -174,6 +182,7 @@ def summarize(robot: str, controller: str, cases: tuple[str, ...], runs: list[di
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--per-setting", action="store_true", help="also print every setting's outcomes")
     parser.add_argument("--robot", default="talos")
     parser.add_argument(
         "--controller", default="open-loop", choices=("open-loop", "stabilized", "adaptive"),
@@ -182,6 +191,7 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="8 settings instead of the default 48")
     parser.add_argument("--settings", type=int, default=None, help="number of settings (default 48, 8 with --quick)")
     parser.add_argument("--seed", type=int, default=2024, help="seed of the sample of settings")
+    parser.add_argument("--refine", type=int, default=1, help="divide every setting's physics step by this (default 1)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--cases", default=",".join(CASES), help="comma-separated cases (default: the paper's four)")
     args = parser.parse_args()
@@ -190,21 +200,30 @@ def main() -> None:
     if unknown:
         parser.error(f"--cases: {', '.join(unknown)} has no paper outcome to compare with (known: {', '.join(CASES)})")
     n = args.settings if args.settings is not None else (8 if args.quick else 48)
-    if n < 1 or args.workers < 1:
-        parser.error("--settings and --workers must be >= 1")
+    if n < 1 or args.workers < 1 or args.refine < 1:
+        parser.error("--settings, --refine and --workers must be >= 1")
     settings = ensemble(n, args.seed)
+    for setting in settings:
+        setting["physics_dt"] /= args.refine
     began = time.perf_counter()
     runs = run_ensemble(args.robot, args.controller, cases, settings, args.workers, quiet=False)
     wall = time.perf_counter() - began
     table = summarize(args.robot, args.controller, cases, runs)
     if args.json:
-        report = {"cases": table, "seed": args.seed, "ensemble": settings, "runs": runs, "wall_time": wall}
+        report = {
+            "cases": table,
+            "seed": args.seed,
+            "refine": args.refine,
+            "ensemble": settings,
+            "runs": runs,
+            "wall_time": wall,
+        }
         print(json.dumps(report))
         return
     print(f"{args.robot}, {args.controller}: {n} physics settings (seed {args.seed}), {len(runs)} runs in {wall:.0f} s")
     for name, (low, high) in RANGES.items():
         print(f"  {name}: {low:g} to {high:g}")
-    print(f"  physics_dt: {', '.join(f'{dt:g}' for dt in PHYSICS_DTS)} s")
+    print(f"  physics_dt: {', '.join(f'{dt / args.refine:g}' for dt in PHYSICS_DTS)} s")
     print()
     print("| case | paper | walked | tipped | fell | incomplete | agrees with the paper | ZMP error RMS (median) |")
     print("|---|---|---|---|---|---|---|---|")
@@ -221,6 +240,40 @@ def main() -> None:
         for run in disagreeing:
             setting = dataclasses.asdict(_Setting(**settings[run["setting"]]))
             print(f"  {run['scenario']} setting {run['setting']}: {run['outcome']} ({run['steps']} steps) {setting}")
+    if args.per_setting:
+        print()
+        print(per_setting_table(cases, settings, runs))
+
+
+def _outcome_cell(run: dict) -> str:
+    """One run as ``outcome steps`` plus ``t <tip time>`` and ``f <fall time>`` where they happened (s)."""
+    cell = f"{run['outcome']} {run['steps']}"
+    if run.get("tip_time") is not None:
+        cell += f" t {run['tip_time']:.2f}"
+    if run.get("fall_time") is not None:
+        cell += f" f {run['fall_time']:.2f}"
+    return cell
+
+
+def per_setting_table(cases: tuple[str, ...], settings: list[dict[str, float]], runs: list[dict]) -> str:
+    """A markdown table, one row per setting in order of contact time constant: the setting's values (physics step
+    and contact time constant in ms, the rest as given) and each case's outcome (:func:`_outcome_cell`)."""
+    by_setting: dict[int, dict[str, dict]] = {}
+    for run in runs:
+        by_setting.setdefault(run["setting"], {})[run["scenario"]] = run
+    columns = ("setting", "dt (ms)", "timeconst (ms)", "dampratio", "friction", "armature", "gains", *cases)
+    header = "| " + " | ".join(columns) + " |"
+    lines = [header, "|" + "---|" * (7 + len(cases))]
+    for index in sorted(by_setting, key=lambda i: settings[i]["contact_timeconst"]):
+        s = settings[index]
+        values = (
+            f"| {index} | {s['physics_dt'] * 1000:g} | {s['contact_timeconst'] * 1000:.2f} "
+            f"| {s['contact_dampratio']:.2f} | {s['friction']:.2f} | {s['armature_scale']:.2f} "
+            f"| {s['gain_scale']:.2f} |"
+        )
+        cells = [_outcome_cell(by_setting[index][case]) if case in by_setting[index] else "-" for case in cases]
+        lines.append(values + " " + " | ".join(cells) + " |")
+    return "\n".join(lines)
 
 
 @dataclasses.dataclass(frozen=True)
