@@ -89,6 +89,7 @@ __all__ = [
 ]
 
 _NO_OFFSETS = FootOffsets()
+_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 _SUPPORTS = {code: name for name, code in SUPPORT_CODES.items()}
 
 
@@ -307,7 +308,7 @@ class ClosedLoop:
                 if self._can_grow and any(e.kind == "step-adjustment" for e in out.events):
                     self._follow_walk_end()
 
-        q, _ = solve(IKTargets(target_cog, left_foot, right_foot), self._q, max_iterations=1, tolerance=0.0)
+        q, _ = solve(_new_tuple(IKTargets, (target_cog, left_foot, right_foot)), self._q, 1, 0.0)
         self._q = q
         joints = q[7:]
         if offsets != _NO_OFFSETS:
