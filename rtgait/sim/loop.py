@@ -308,7 +308,8 @@ class ClosedLoop:
                 if self._can_grow and any(e.kind == "step-adjustment" for e in out.events):
                     self._follow_walk_end()
 
-        q, _ = solve(_new_tuple(IKTargets, (target_cog, left_foot, right_foot)), self._q, 1, 0.0)
+        targets = _new_tuple(IKTargets, (target_cog, left_foot, right_foot))
+        q, _ = solve(targets, self._q, max_iterations=1, tolerance=0.0)
         self._q = q
         joints = q[7:]
         if offsets != _NO_OFFSETS:
