@@ -311,15 +311,18 @@ class ClosedLoop:
         targets = _new_tuple(IKTargets, (target_cog, left_foot, right_foot))
         q, _ = solve(targets, self._q, max_iterations=1, tolerance=0.0)
         self._q = q
-        joints = q[7:]
+        # The commanded configuration: the IK's, the ankle tilts added in the record's row itself; the servos keep
+        # the joints' array, so they get a copy of it (the row is overwritten when a ring wraps).
+        row = commanded[i]
+        row[:] = q
         if offsets != _NO_OFFSETS:
-            joints = joints.copy()
+            joints = row[7:]
             add_ankle_offsets(joints, ankles, offsets)
+            joints = joints.copy()
+        else:
+            joints = q[7:]
         servo.command(joints, (joints - self._joints_previous) / dt)
         self._joints_previous = joints
-        row = commanded[i]
-        row[0:7] = q[0:7]
-        row[7:] = joints
 
         # ----- physics: the control period's substeps -----------------------------------------------------------
         base = bases[i]
