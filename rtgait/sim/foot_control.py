@@ -270,7 +270,6 @@ class FootForceControl:
         ) * g.force_difference_admittance
         self._swing_leak = math.exp(-dt / g.swing_time_constant)
         self._max_step = g.max_tilt_rate * dt
-        self._max_tilt = g.max_tilt
         self._tick_dt = dt
 
     def update(
@@ -343,7 +342,7 @@ class FootForceControl:
             new_roll = self._swing_leak * roll
             new_pitch = self._swing_leak * pitch
         step = self._max_step
-        limit = self._max_tilt
+        limit = self.gains.max_tilt
         # max(low, min(high, v)) as conditionals with the builtins' exact choices (a NaN gives `high`, a tie the
         # first argument): two builtin calls per clamp cost more than the rest of the line.
         d = new_roll - roll

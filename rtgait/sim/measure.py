@@ -13,7 +13,10 @@ pointing from ``geom1`` to ``geom2``; rotated to the world by the contact frame 
     F = sum f_i,        tau_o = sum (p_i - o) x f_i + t_i                                (N, N m)
 
 with ``t_i`` a contact's torsional and rolling torque, rotated likewise (zero for the condim 3 soles). This is what a
-6-axis force sensor in the ankle would report, moved to the sole point.
+6-axis force sensor in the ankle would report, moved to the sole point. With MuJoCo's default pyramidal cones, a
+condim 3 contact's force is decoded here as ``mj_contactForce`` does, with the same operations in the same order
+(so to the bit): its four edge forces ``e_0..e_3`` in ``efc_force`` give the normal ``e_0 + e_1 + e_2 + e_3`` and
+the tangential components ``(e_0 - e_1) mu_0`` and ``(e_2 - e_3) mu_1``; other contacts are left to MuJoCo.
 
 **Centre of pressure.** In the sole frame (rotation ``R``, axes x forward, y left, z out of the sole), with
 ``f = R^T F`` and ``t = R^T tau_o``, the point of the sole plane about which the moment has no tangential part is
@@ -363,6 +366,7 @@ class SimMeasurer:
         h = self.ground_height
         min_force = self.min_force
         landings = _NO_LANDINGS
+        self._landed.clear()  # _foot appends this tick's landings
         left_foot = self._foot(
             0, t, lx, ly, lz, lmx, lmy, lmz, left_count, sites_position[self.left_site],
             sites_rotation[self.left_site],
@@ -373,7 +377,6 @@ class SimMeasurer:
         )  # fmt: skip
         if self._landed:
             landings = tuple(self._landed)
-            self._landed.clear()
         self._primed = True
         # ZMP moments about (0, 0, h): (o - O) x F + tau_o per foot, in the order the feet are summed.
         zmp_mx = zmp_my = total = 0.0
