@@ -423,9 +423,13 @@ class SimMeasurer:
             cop_local = cop = _NAN2
         # R = Rz(yaw) Ry(pitch) Rx(roll); the tilt is the angle between the sole normal and the vertical.
         yaw = math.atan2(m3, m0)
-        pitch = math.asin(max(-1.0, min(1.0, -m6)))
+        # max(-1, min(1, v)) written as the builtins decide it (`b if b < a else a` for min(a, b), `b if b > a
+        # else a` for max: the same result, NaN included), a call each costing more than the trigonometry.
+        sine = -m6 if -m6 < 1.0 else 1.0
+        pitch = math.asin(sine if sine > -1.0 else -1.0)
         roll = math.atan2(m7, m8)
-        tilt = math.acos(max(-1.0, min(1.0, m8)))
+        cosine = m8 if m8 < 1.0 else 1.0
+        tilt = math.acos(cosine if cosine > -1.0 else -1.0)
         loaded = self._update_load(index, fz, t)
         if loaded is None:
             loaded = True
