@@ -5,7 +5,11 @@ times and reports the real-time factor (simulated seconds per wall-clock second)
 tick; then times the parts of one tick separately on the same walk: the planner's sample, the IK solve, one
 ``mj_step`` (with the IK's joint references replayed; a tick takes ``control_dt / physics_dt`` of them), the
 contact measurement, and ``mj_step`` again without the no-slip solver and without the leg collision boxes, to
-show what each costs.
+show what each costs; then, inside one more run of the walk, the mean time per tick of each part of the real
+loop (``in_loop_*_us``: IK, physics, controller, measurement, contact record, complete log, servos, walk inputs
+and the loop's own ``rest``), which is what the real-time factor pays: each part there runs with the caches the
+others leave, about twice as slow as alone. ``machine_reference_us`` is the best time of ``sum(range(1000))``
+before and after (about 9 us on the usual machine): quote it with any timing.
 
 Wall times on a shared virtual machine vary from run to run: run it a few times.
 
@@ -36,6 +40,7 @@ import json
 import math
 import statistics
 import time
+import timeit
 import warnings
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
@@ -116,6 +121,82 @@ def parts(robot: RobotModel, scenario_name: str, config: SimConfig) -> dict[str,
         "measure_contacts_us": float(np.median(contacts) * 1e6),
         "controller_measurement_us": float(np.median(measures) * 1e6),
     }
+
+
+# The in-loop breakdown's parts: what each timed callable of ClosedLoop.step is (the rest is the loop's own code).
+IN_LOOP_PARTS = ("ik", "mj_step", "controller", "measurement", "contact_monitor", "tick_log", "servo", "inputs")
+
+
+def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: Any) -> dict[str, float]:
+    """Mean wall time per tick (us) of each part of :meth:`~rtgait.sim.loop.ClosedLoop.step` inside one real run:
+    each callable the tick calls is wrapped in a timer (a tenth of a microsecond each, counted in ``rest``), so the
+    parts add up to the tick and ``rest`` is the loop's own bookkeeping (the record, references, fall checks)."""
+    from rtgait.sim.loop import ClosedLoop
+
+    clock = time.perf_counter
+    spent = dict.fromkeys((*IN_LOOP_PARTS, "tick"), 0.0)
+    ticks = [0]
+
+    def timed(part: str, call: Any) -> Any:
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            began = clock()
+            out = call(*args, **kwargs)
+            spent[part] += clock() - began
+            return out
+
+        return wrapper
+
+    original_init, original_step = ClosedLoop.__init__, ClosedLoop.step
+
+    def init(loop: ClosedLoop, *args: Any, **kwargs: Any) -> None:
+        original_init(loop, *args, **kwargs)
+        # The hot tuple binds the callables once: those timed are found by what they are bound to.
+        hot = list(loop._hot)
+        for index, item in enumerate(hot):
+            owner, name = getattr(item, "__self__", None), getattr(item, "__name__", "")
+            part = None
+            if item is mujoco.mj_step:
+                part = "mj_step"
+            elif owner is loop.controller and name == "tick":
+                part = "controller"
+            elif owner is loop.measurer and name == "measure":
+                part = "measurement"
+            elif isinstance(owner, WholeBodyIK) and name == "solve":
+                part = "ik"
+            if part is not None:
+                hot[index] = timed(part, item)
+        loop._hot = tuple(hot)
+        loop.contacts.measure = timed("contact_monitor", loop.contacts.measure)  # type: ignore[method-assign]
+        if loop.log is not None:
+            loop.log.record = timed("tick_log", loop.log.record)  # type: ignore[method-assign]
+        loop._servo.command = timed("servo", loop._servo.command)  # type: ignore[method-assign]
+        loop._servo.apply = timed("servo", loop._servo.apply)  # type: ignore[method-assign]
+        loop._walk_inputs = timed("inputs", loop._walk_inputs)
+
+    def step(loop: ClosedLoop) -> bool:
+        began = clock()
+        out = original_step(loop)
+        spent["tick"] += clock() - began
+        ticks[0] += 1
+        return out
+
+    ClosedLoop.__init__, ClosedLoop.step = init, step  # type: ignore[method-assign]
+    try:
+        gc.collect()
+        simulate(load_scenario(scenario_name), robot, sim=sim, controller=controller)
+    finally:
+        ClosedLoop.__init__, ClosedLoop.step = original_init, original_step  # type: ignore[method-assign]
+    n = max(ticks[0], 1)
+    report = {f"in_loop_{part}_us": spent[part] / n * 1e6 for part in IN_LOOP_PARTS}
+    report["in_loop_tick_us"] = spent["tick"] / n * 1e6
+    report["in_loop_rest_us"] = (spent["tick"] - sum(spent[part] for part in IN_LOOP_PARTS)) / n * 1e6
+    return report
+
+
+def machine_reference_us() -> float:
+    """The machine's speed: the best of five times ``sum(range(1000))`` in us (about 9 on this project's usual
+    machine; quote it next to any timing)."""
+    return min(timeit.repeat("sum(range(1000))", number=10000, repeat=5)) / 10000 * 1e6
 
 
 VELOCITY_WALKS = {
@@ -308,6 +389,7 @@ def main() -> None:
     sim = build_sim_model(robot, config)
     scenario = load_scenario(args.scenario)
     factors, per_tick = [], []
+    reference_before = machine_reference_us()
     for _ in range(args.repeat):
         gc.collect()
         result = simulate(scenario, robot, sim=sim, controller=controller)
@@ -322,7 +404,9 @@ def main() -> None:
         "tick_us_median_of_runs": statistics.median(per_tick),
         "fell": result.fell,
         **parts(robot, args.scenario, dataclasses.replace(config, meshes=False)),
+        **in_loop_parts(robot, args.scenario, controller, sim),
     }
+    report["machine_reference_us"] = [reference_before, machine_reference_us()]
     if args.json:
         print(json.dumps(report))
         return
@@ -341,6 +425,11 @@ def main() -> None:
         "controller_measurement_us",
     ):
         print(f"  {key[:-3].replace('_', ' ')}: {report[key]:.1f} us (median)")
+    print(f"inside one run, per tick (mean): {report['in_loop_tick_us']:.0f} us")
+    for part in (*IN_LOOP_PARTS, "rest"):
+        print(f"  {part.replace('_', ' ')}: {report[f'in_loop_{part}_us']:.1f} us")
+    before, after = report["machine_reference_us"]
+    print(f"machine reference, sum(range(1000)): {before:.1f} us before, {after:.1f} us after (~9 usually)")
 
 
 if __name__ == "__main__":

@@ -69,7 +69,11 @@ class MeasuredPlanning:
         pendulum (the planned ZMP drives both, so the deviation from the plan evolves as the free pendulum).
         """
         values = (float(t), float(cog[0]), float(cog[1]), float(cog_vel[0]), float(cog_vel[1]))
-        if not all(math.isfinite(v) for v in values):
+        # One finiteness test of the sum first (every tick): a NaN or an infinity makes it non-finite, and only
+        # then (or on an overflow of huge finite values) are the values tested one by one.
+        if not math.isfinite(values[0] + values[1] + values[2] + values[3] + values[4]) and not all(
+            math.isfinite(v) for v in values
+        ):
             raise ValueError(f"observe needs a finite time, COG and COG velocity, got {values}")
         self._observed = values
         threshold = self.config.replan_dcm_error

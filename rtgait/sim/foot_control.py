@@ -91,6 +91,8 @@ __all__ = [
     "split_zmp",
 ]
 
+_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
+
 Pose = tuple[float, float, float]
 """A sole frame on the ground ``(x, y, yaw)`` (m, rad); a longer tuple (e.g. ``(x, y, z, yaw)``) is read as its
 first two and last values."""
@@ -174,8 +176,13 @@ def _clamp_to_sole(px: float, py: float, pose: Pose, sole: SoleRect, left: bool)
     lx, ly = c * dx + s * dy, -s * dx + c * dy
     # `inner` is toward the other foot: -y for the left foot, +y for the right one.
     y_low, y_high = (-sole.inner, sole.outer) if left else (-sole.outer, sole.inner)
-    qx = min(max(lx, -sole.back), sole.front)
-    qy = min(max(ly, y_low), y_high)
+    # min(max(v, low), high) as conditionals with the builtins' exact choices (cheaper than two calls each).
+    # (max(a, b) is `b if b > a else a`, min(a, b) `b if b < a else a`: a NaN stays, a tie gives the first.)
+    low, high = -sole.back, sole.front
+    qx = low if low > lx else lx
+    qx = high if high < qx else qx
+    qy = y_low if y_low > ly else ly
+    qy = y_high if y_high < qy else qy
     if qx == lx and qy == ly:
         return px, py, False
     return x + c * qx - s * qy, y + s * qx + c * qy, True
@@ -193,10 +200,10 @@ def split_zmp(zmp: tuple[float, float], left: Pose, right: Pose, sole: SoleRect,
     px, py = zmp
     if support == "left":
         cx, cy, clamped = _clamp_to_sole(px, py, left, sole, True)
-        return ZmpSplit(1.0, (cx, cy), (right[0], right[1]), clamped)
+        return _new_tuple(ZmpSplit, (1.0, (cx, cy), (right[0], right[1]), clamped))
     if support == "right":
         cx, cy, clamped = _clamp_to_sole(px, py, right, sole, False)
-        return ZmpSplit(0.0, (left[0], left[1]), (cx, cy), clamped)
+        return _new_tuple(ZmpSplit, (0.0, (left[0], left[1]), (cx, cy), clamped))
     if support != "double":
         raise ValueError(f"support must be 'double', 'left' or 'right', got {support!r}")
     lx, ly, rx, ry = left[0], left[1], right[0], right[1]
@@ -216,7 +223,7 @@ def split_zmp(zmp: tuple[float, float], left: Pose, right: Pose, sole: SoleRect,
         saturated = saturated or clamped
     else:
         rcx, rcy = rx, ry
-    return ZmpSplit(ratio, (lcx, lcy), (rcx, rcy), saturated)
+    return _new_tuple(ZmpSplit, (ratio, (lcx, lcy), (rcx, rcy), saturated))
 
 
 class FootForceControl:
@@ -248,7 +255,7 @@ class FootForceControl:
     def offsets(self) -> FootOffsets:
         """The offsets after the last :meth:`update`."""
         lr, lp, rr, rp = self._tilt
-        return FootOffsets(lr, lp, self._height[0], rr, rp, self._height[1])
+        return _new_tuple(FootOffsets, (lr, lp, self._height[0], rr, rp, self._height[1]))
 
     def _set_dt(self, dt: float) -> None:
         """Exact discretisation of ``y' = u - y / T`` with ``u`` held over the tick: ``y+ = a y + T (1 - a) u``."""
@@ -336,10 +343,18 @@ class FootForceControl:
             new_pitch = self._swing_leak * pitch
         step = self._max_step
         limit = self.gains.max_tilt
-        new_roll = roll + max(-step, min(step, new_roll - roll))
-        new_pitch = pitch + max(-step, min(step, new_pitch - pitch))
-        tilt[index] = max(-limit, min(limit, new_roll))
-        tilt[index + 1] = max(-limit, min(limit, new_pitch))
+        # max(low, min(high, v)) as conditionals with the builtins' exact choices (a NaN gives `high`, a tie the
+        # first argument): two builtin calls per clamp cost more than the rest of the line.
+        d = new_roll - roll
+        d = d if d < step else step
+        new_roll = roll + (d if d > -step else -step)
+        d = new_pitch - pitch
+        d = d if d < step else step
+        new_pitch = pitch + (d if d > -step else -step)
+        new_roll = new_roll if new_roll < limit else limit
+        tilt[index] = new_roll if new_roll > -limit else -limit
+        new_pitch = new_pitch if new_pitch < limit else limit
+        tilt[index + 1] = new_pitch if new_pitch > -limit else -limit
 
 
 class AnkleJoints(NamedTuple):

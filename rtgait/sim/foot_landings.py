@@ -279,23 +279,25 @@ class FootLandings:
                     self._blend[i] = None
                     self._z[i] = 0.0
                 else:
-                    self._z[i] = height * (1.0 - max(s, 0.0))
+                    self._z[i] = height * (1.0 - (0.0 if s < 0.0 else s))  # max(s, 0.0), without the call
             elif self._late[i] and t >= self._late_from[i]:
                 limit = self.options.late_descent_limit
-                self._z[i] = max(self._z[i] - self.options.late_descent_speed * self.dt, -limit)
+                z = self._z[i] - self.options.late_descent_speed * self.dt
+                self._z[i] = -limit if -limit > z else z  # max(z, -limit), without the call
             elif (ground := self._ground[i]) is not None:  # landed late: back to the ground's height
                 landed, level, start, until = ground
                 s = (t - start) / (until - start)
                 if s >= 1.0:
                     self._z[i], self._ground[i] = level, None
                 else:
-                    self._z[i] = landed + (level - landed) * max(s, 0.0)
+                    self._z[i] = landed + (level - landed) * (0.0 if s < 0.0 else s)  # max(s, 0.0)
 
     def _foot_target(self, i: int, planned: list[float]) -> Pose:
         """Foot ``i``'s target ``(x, y, z, yaw)`` before foot force control."""
         hold = self._hold[i]
         if hold is not None:  # early touch-down: where it landed, down with the plan to a floor
-            return (hold[0], hold[1], max(planned[2] + self._z[i], hold[3]), hold[2])
+            z = planned[2] + self._z[i]
+            return (hold[0], hold[1], hold[3] if hold[3] > z else z, hold[2])  # max(z, floor), without the call
         return (planned[0], planned[1], planned[2] + self._z[i], planned[3])
 
     def targets(self, values: list[float]) -> tuple[Pose, Pose]:

@@ -89,6 +89,7 @@ __all__ = [
 ]
 
 _NO_OFFSETS = FootOffsets()
+_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 _SUPPORTS = {code: name for name, code in SUPPORT_CODES.items()}
 
 
@@ -307,17 +308,21 @@ class ClosedLoop:
                 if self._can_grow and any(e.kind == "step-adjustment" for e in out.events):
                     self._follow_walk_end()
 
-        q, _ = solve(IKTargets(target_cog, left_foot, right_foot, lean), self._q, max_iterations=1, tolerance=0.0)
+        targets = _new_tuple(IKTargets, (target_cog, left_foot, right_foot, lean))  # every field: no defaults here
+        q, _ = solve(targets, self._q, max_iterations=1, tolerance=0.0)
         self._q = q
-        joints = q[7:]
+        # The commanded configuration: the IK's, the ankle tilts added in the record's row itself; the servos keep
+        # the joints' array, so they get a copy of it (the row is overwritten when a ring wraps).
+        row = commanded[i]
+        row[:] = q
         if offsets != _NO_OFFSETS:
-            joints = joints.copy()
+            joints = row[7:]
             add_ankle_offsets(joints, ankles, offsets)
+            joints = joints.copy()
+        else:
+            joints = q[7:]
         servo.command(joints, (joints - self._joints_previous) / dt)
         self._joints_previous = joints
-        row = commanded[i]
-        row[0:7] = q[0:7]
-        row[7:] = joints
 
         # ----- physics: the control period's substeps -----------------------------------------------------------
         base = bases[i]

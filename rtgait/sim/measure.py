@@ -13,7 +13,10 @@ pointing from ``geom1`` to ``geom2``; rotated to the world by the contact frame 
     F = sum f_i,        tau_o = sum (p_i - o) x f_i + t_i                                (N, N m)
 
 with ``t_i`` a contact's torsional and rolling torque, rotated likewise (zero for the condim 3 soles). This is what a
-6-axis force sensor in the ankle would report, moved to the sole point.
+6-axis force sensor in the ankle would report, moved to the sole point. With MuJoCo's default pyramidal cones, a
+condim 3 contact's force is decoded here as ``mj_contactForce`` does, with the same operations in the same order
+(so to the bit): its four edge forces ``e_0..e_3`` in ``efc_force`` give the normal ``e_0 + e_1 + e_2 + e_3`` and
+the tangential components ``(e_0 - e_1) mu_0`` and ``(e_2 - e_3) mu_1``; other contacts are left to MuJoCo.
 
 **Centre of pressure.** In the sole frame (rotation ``R``, axes x forward, y left, z out of the sole), with
 ``f = R^T F`` and ``t = R^T tau_o``, the point of the sole plane about which the moment has no tangential part is
@@ -79,6 +82,7 @@ DEFAULT_MIN_UNLOADED_TIME = 0.05
 """Least time in the air (s) before a load counts as a landing; shorter unloading is a scuff at lift-off."""
 
 _NAN2 = (math.nan, math.nan)
+_new_tuple = tuple.__new__  # a NamedTuple made from a tuple at once, without its generated __new__'s argument parsing
 _NO_LANDINGS: tuple[Landing, ...] = ()
 
 
@@ -178,15 +182,6 @@ class Measurement(NamedTuple):
         return "left" if left else ("right" if right else "none")
 
 
-def _rotation_angles(m: list[float]) -> tuple[float, float, float, float]:
-    """``(yaw, pitch, roll, tilt)`` (rad) of a row-major rotation matrix, ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
-    yaw = math.atan2(m[3], m[0])
-    pitch = math.asin(max(-1.0, min(1.0, -m[6])))
-    roll = math.atan2(m[7], m[8])
-    tilt = math.acos(max(-1.0, min(1.0, m[8])))
-    return yaw, pitch, roll, tilt
-
-
 class SimMeasurer:
     """Per-tick measurement of a simulated humanoid (module docstring).
 
@@ -259,7 +254,9 @@ class SimMeasurer:
             for g in geoms:
                 owner[int(g)] = code
         self._owner = owner
-        self._force = np.zeros(6)  # the one buffer mj_contactForce writes into
+        self._force = np.zeros(6)  # the one buffer mj_contactForce writes into (contacts not decoded here)
+        self._pyramidal = model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL
+        self._landed: list[Landing] = []
         self.reset()
 
     @classmethod
@@ -290,11 +287,10 @@ class SimMeasurer:
         model = self.model
         t = float(data.time) if t is None else float(t)
         owner = self._owner
-        buffer = self._force
         # Per foot: force (3) and moment about the world origin (3), summed over its contacts.
-        sums = [[0.0] * 6, [0.0] * 6]
-        counts = [0, 0]
-        other = 0
+        lx = ly = lz = lmx = lmy = lmz = 0.0
+        rx = ry = rz = rmx = rmy = rmz = 0.0
+        left_count = right_count = other = 0
         ncon = data.ncon
         if ncon:
             contacts = data.contact
@@ -302,82 +298,146 @@ class SimMeasurer:
             positions = contacts.pos.tolist()
             geoms = contacts.geom.tolist()
             addresses = contacts.efc_address.tolist()
+            dims = contacts.dim.tolist()
+            frictions = contacts.friction.tolist()
+            efc = data.efc_force.tolist()
             for i in range(ncon):
-                if addresses[i] < 0:  # within the margin but not active: no force
+                address = addresses[i]
+                if address < 0:  # within the margin but not active: no force
                     continue
                 g1, g2 = geoms[i]
                 o1, o2 = owner[g1], owner[g2]
                 if o1 > 0 and o2 == 0:
-                    foot, sign = o1 - 1, -1.0  # the force on geom1 is minus the contact force
+                    left, sign = o1 == 1, -1.0  # the force on geom1 is minus the contact force
                 elif o2 > 0 and o1 == 0:
-                    foot, sign = o2 - 1, 1.0
+                    left, sign = o2 == 1, 1.0
                 else:
                     if (o1 != 0) != (o2 != 0):  # the robot, not through a sole, against the environment
                         other += 1
                     continue
-                mujoco.mj_contactForce(model, data, i, buffer)
-                a, b, c, ta, tb, tc = buffer.tolist()
-                f = frames[i]
-                fx = sign * (f[0] * a + f[3] * b + f[6] * c)
-                fy = sign * (f[1] * a + f[4] * b + f[7] * c)
-                fz = sign * (f[2] * a + f[5] * b + f[8] * c)
+                dim = dims[i]
+                if self._pyramidal and dim == 3:
+                    # mj_contactForce's decoding of a pyramidal cone's four edge forces, in its order of
+                    # operations (its result is bit-identical): normal = their sum, tangent_j = (e_2j - e_2j+1) mu_j;
+                    # no torsional or rolling torque.
+                    mu = frictions[i]
+                    a = 0.0 + efc[address] + efc[address + 1] + efc[address + 2] + efc[address + 3]
+                    b = (efc[address] - efc[address + 1]) * mu[0]
+                    c = (efc[address + 2] - efc[address + 3]) * mu[1]
+                    ta = tb = tc = 0.0
+                elif self._pyramidal and dim == 1:
+                    a, b, c, ta, tb, tc = efc[address], 0.0, 0.0, 0.0, 0.0, 0.0
+                else:  # torsional or rolling friction, or an elliptic cone: MuJoCo decodes it
+                    buffer = self._force
+                    mujoco.mj_contactForce(model, data, i, buffer)
+                    a, b, c, ta, tb, tc = buffer.tolist()
+                f0, f1, f2, f3, f4, f5, f6, f7, f8 = frames[i]
+                fx = sign * (f0 * a + f3 * b + f6 * c)
+                fy = sign * (f1 * a + f4 * b + f7 * c)
+                fz = sign * (f2 * a + f5 * b + f8 * c)
                 px, py, pz = positions[i]
-                s = sums[foot]
-                s[0] += fx
-                s[1] += fy
-                s[2] += fz
-                s[3] += py * fz - pz * fy + sign * (f[0] * ta + f[3] * tb + f[6] * tc)
-                s[4] += pz * fx - px * fz + sign * (f[1] * ta + f[4] * tb + f[7] * tc)
-                s[5] += px * fy - py * fx + sign * (f[2] * ta + f[5] * tb + f[8] * tc)
-                counts[foot] += 1
+                # The contact's moment about the world origin p x f, plus its own torque (exactly zero without
+                # torsional or rolling friction: adding it then changes no bit of the sums, which start at +0.0).
+                mx = py * fz - pz * fy
+                my = pz * fx - px * fz
+                mz = px * fy - py * fx
+                if ta != 0.0 or tb != 0.0 or tc != 0.0:
+                    mx = mx + sign * (f0 * ta + f3 * tb + f6 * tc)
+                    my = my + sign * (f1 * ta + f4 * tb + f7 * tc)
+                    mz = mz + sign * (f2 * ta + f5 * tb + f8 * tc)
+                if left:
+                    lx += fx
+                    ly += fy
+                    lz += fz
+                    lmx += mx
+                    lmy += my
+                    lmz += mz
+                    left_count += 1
+                else:
+                    rx += fx
+                    ry += fy
+                    rz += fz
+                    rmx += mx
+                    rmy += my
+                    rmz += mz
+                    right_count += 1
 
-        site_xpos, site_xmat = data.site_xpos, data.site_xmat
-        feet = []
-        landings = _NO_LANDINGS
-        zmp_mx = zmp_my = total = 0.0
+        sites_position, sites_rotation = data.site_xpos.tolist(), data.site_xmat.tolist()
         h = self.ground_height
-        for index, site in enumerate((self.left_site, self.right_site)):
-            ox, oy, oz = site_xpos[site].tolist()
-            m = site_xmat[site].tolist()
-            fx, fy, fz, mx, my, mz = sums[index]
-            # Moment about the sole origin: tau_o = M - o x F.
-            tx = mx - (oy * fz - oz * fy)
-            ty = my - (oz * fx - ox * fz)
-            tz = mz - (ox * fy - oy * fx)
-            # ZMP moments about (0, 0, h): (o - O) x F + tau_o.
+        min_force = self.min_force
+        landings = _NO_LANDINGS
+        self._landed.clear()  # _foot appends this tick's landings
+        left_foot = self._foot(
+            0, t, lx, ly, lz, lmx, lmy, lmz, left_count, sites_position[self.left_site],
+            sites_rotation[self.left_site],
+        )  # fmt: skip
+        right_foot = self._foot(
+            1, t, rx, ry, rz, rmx, rmy, rmz, right_count, sites_position[self.right_site],
+            sites_rotation[self.right_site],
+        )  # fmt: skip
+        if self._landed:
+            landings = tuple(self._landed)
+        self._primed = True
+        # ZMP moments about (0, 0, h): (o - O) x F + tau_o per foot, in the order the feet are summed.
+        zmp_mx = zmp_my = total = 0.0
+        for foot in (left_foot, right_foot):
+            ox, oy, oz, _ = foot.pose
+            fx, fy, fz = foot.force
+            tx, ty, _ = foot.torque
             zmp_mx += (oy * fz - (oz - h) * fy) + tx
             zmp_my += ((oz - h) * fx - ox * fz) + ty
             total += fz
-            # The sole frame's components: R^T v, R row-major (m[3 r + c] = R[r][c]).
-            lfz = m[2] * fx + m[5] * fy + m[8] * fz
-            if lfz > self.min_force:
-                ltx = m[0] * tx + m[3] * ty + m[6] * tz
-                lty = m[1] * tx + m[4] * ty + m[7] * tz
-                cx, cy = -lty / lfz, ltx / lfz
-                cop_local = (cx, cy)
-                cop = (ox + m[0] * cx + m[1] * cy, oy + m[3] * cx + m[4] * cy)
-            else:
-                cop_local = cop = _NAN2
-            yaw, pitch, roll, tilt = _rotation_angles(m)
-            loaded = self._update_load(index, fz, t)
-            if loaded is None:
-                loaded = True
-                side: Side = "left" if index == 0 else "right"
-                landing = Landing(t, side, ox, oy, oz, yaw, roll, pitch, fz)
-                landings = (*landings, landing)
-            feet.append(
-                FootState((fx, fy, fz), (tx, ty, tz), fz, cop, cop_local, (ox, oy, oz, yaw), roll, pitch, tilt,
-                          loaded, counts[index])
-            )  # fmt: skip
-        self._primed = True
-
-        zmp = (-zmp_my / total, zmp_mx / total) if total > self.min_force else _NAN2
+        zmp = (-zmp_my / total, zmp_mx / total) if total > min_force else _NAN2
         mujoco.mj_subtreeVel(model, data)
-        cx, cy, cz = data.subtree_com[self.base_body].tolist()
-        vx, vy, vz = data.subtree_linvel[self.base_body].tolist()
+        base = self.base_body
+        cx, cy, cz = data.subtree_com[base].tolist()
+        vx, vy, vz = data.subtree_linvel[base].tolist()
         w = self.omega
-        return Measurement(
-            t, (cx, cy, cz), (vx, vy, vz), (cx + vx / w, cy + vy / w), zmp, total, feet[0], feet[1], landings, other
+        return _new_tuple(
+            Measurement,
+            (t, (cx, cy, cz), (vx, vy, vz), (cx + vx / w, cy + vy / w), zmp, total, left_foot, right_foot, landings,
+             other),
+        )  # fmt: skip
+
+    def _foot(
+        self, index: int, t: float, fx: float, fy: float, fz: float, mx: float, my: float, mz: float, count: int,
+        position: list[float], m: list[float],
+    ) -> FootState:
+        """One foot's state from its summed force ``(fx, fy, fz)`` (N) and moment about the world origin (N m), and
+        its sole frame's position and row-major rotation; a landing is kept in ``_landed``."""
+        ox, oy, oz = position
+        # Moment about the sole origin: tau_o = M - o x F.
+        tx = mx - (oy * fz - oz * fy)
+        ty = my - (oz * fx - ox * fz)
+        tz = mz - (ox * fy - oy * fx)
+        # The sole frame's components: R^T v, R row-major (m[3 r + c] = R[r][c]).
+        m0, m1, _, m3, m4, _, m6, m7, m8 = m
+        lfz = m[2] * fx + m[5] * fy + m8 * fz
+        if lfz > self.min_force:
+            ltx = m0 * tx + m3 * ty + m6 * tz
+            lty = m1 * tx + m4 * ty + m7 * tz
+            cx, cy = -lty / lfz, ltx / lfz
+            cop_local = (cx, cy)
+            cop = (ox + m0 * cx + m1 * cy, oy + m3 * cx + m4 * cy)
+        else:
+            cop_local = cop = _NAN2
+        # R = Rz(yaw) Ry(pitch) Rx(roll); the tilt is the angle between the sole normal and the vertical.
+        yaw = math.atan2(m3, m0)
+        # max(-1, min(1, v)) written as the builtins decide it (`b if b < a else a` for min(a, b), `b if b > a
+        # else a` for max: the same result, NaN included), a call each costing more than the trigonometry.
+        sine = -m6 if -m6 < 1.0 else 1.0
+        pitch = math.asin(sine if sine > -1.0 else -1.0)
+        roll = math.atan2(m7, m8)
+        cosine = m8 if m8 < 1.0 else 1.0
+        tilt = math.acos(cosine if cosine > -1.0 else -1.0)
+        loaded = self._update_load(index, fz, t)
+        if loaded is None:
+            loaded = True
+            side: Side = "left" if index == 0 else "right"
+            self._landed.append(_new_tuple(Landing, (t, side, ox, oy, oz, yaw, roll, pitch, fz)))
+        return _new_tuple(
+            FootState,
+            ((fx, fy, fz), (tx, ty, tz), fz, cop, cop_local, (ox, oy, oz, yaw), roll, pitch, tilt, loaded, count),
         )
 
     def _update_load(self, index: int, fz: float, t: float) -> bool | None:
