@@ -186,6 +186,7 @@ class WholeBodyIK:
         self._pull_matrix = np.zeros((nv, model.nq))
         self._pull_matrix[6:, 7:] = w.posture * np.eye(nv - 6)
         self._pull_offset = self._pull_matrix @ robot.q_half_sitting
+        self._posture = w.posture
         self._max_step2 = max_step * max_step
         self._J = np.zeros((_N_TASKS, nv))
         self._e: list[float] = [0.0] * _N_TASKS
@@ -258,9 +259,9 @@ class WholeBodyIK:
         JtW = J.T * self._w
         H = JtW @ J
         H += self._damping
-        # The posture pull weight * (q_posture - q) on the joint rows, as one affine map of q.
+        # The posture pull weight * (q_posture - q) on the joint rows (the free flyer's have none).
         g = JtW @ np.array(self._e)
-        g += self._pull_offset - self._pull_matrix @ q
+        g[6:] += self._pull_offset[6:] - self._posture * q[7:]
         _, dq, info = dposv(H, g)
         if info != 0:  # pragma: no cover - H is symmetric positive definite by construction (damping > 0)
             raise np.linalg.LinAlgError(f"the IK normal equations are not positive definite (LAPACK info {info})")
@@ -303,7 +304,8 @@ class WholeBodyIK:
         q_previous: np.ndarray,
         max_iterations: int | None = None,
         tolerance: float | None = None,
-    ) -> tuple[np.ndarray, IKErrors]:
+        errors: bool = True,
+    ) -> tuple[np.ndarray, IKErrors | None]:
         """Configuration of the reduced model reaching ``targets``, starting from ``q_previous``.
 
         Args:
@@ -312,9 +314,11 @@ class WholeBodyIK:
                 Not modified.
             max_iterations: overrides the solver's setting for this call (e.g. many on the first tick).
             tolerance: overrides the solver's tolerance for this call (m); 0 makes every iteration.
+            errors: whether to return the task errors; ``False`` skips measuring them after the last iteration,
+                which nothing else needs (the next call measures its own first), and returns ``None`` for them.
 
         Returns:
-            The new configuration (a new array) and its task errors measured by forward kinematics.
+            The new configuration (a new array) and its task errors measured by forward kinematics (or ``None``).
         """
         iterations = self.max_iterations if max_iterations is None else max_iterations
         tol = self.tolerance if tolerance is None else tolerance
@@ -334,11 +338,13 @@ class WholeBodyIK:
         ):
             q = self._step(q)
             self._evaluate(q)
-            norms = self._errors(targets)
             done += 1
+            if done == iterations and not errors:
+                break  # the last iteration's errors decide nothing and the caller does not want them
+            norms = self._errors(targets)
         # The caller owns the returned array; the cache keeps its own copy so that in-place edits are detected.
         self._cached_q = q.copy()
-        return q, IKErrors(*norms, done)
+        return q, (IKErrors(*norms, done) if errors else None)
 
     def errors(self, targets: IKTargets, q: np.ndarray) -> IKErrors:
         """Task errors of configuration ``q`` for ``targets``, without solving (m, rad)."""

@@ -88,6 +88,8 @@ __all__ = [
 ]
 
 _NO_EVENTS: tuple[ControlEvent, ...] = ()
+_NO_OFFSETS = FootOffsets()
+_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 _SIDES: tuple[Side, Side] = ("left", "right")
 
 
@@ -177,7 +179,7 @@ class WalkingController:
 
         planned_zmp = (values[9], values[10])
         com = (values[0], values[1], values[2])
-        offsets = FootOffsets()
+        offsets = _NO_OFFSETS
         zmp, com_offset = planned_zmp, (0.0, 0.0)
         shortfall = (0.0, 0.0)
         if self.feedback is not None:
@@ -208,10 +210,10 @@ class WalkingController:
                 lean = leaned.lean
         # The blends act on the IK's targets only: the polygon and split have the feet where they are.
         left, right = self._landings_ik(t, left, right)
-        return ControlTargets(
+        return _new_tuple(ControlTargets, (
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
             planned_support, (values[21], values[22]), lean,
-        )  # fmt: skip
+        ))  # fmt: skip
 
     def _dcm_error_replan(
         self, t: float, m: Measurement, values: list[float], support: str, q: int, events: list[ControlEvent]
@@ -276,9 +278,17 @@ class WalkingController:
     # ----- the support polygon -------------------------------------------------------------------------------------
     def _support_polygon(self, support: str, left: tuple[float, ...], right: tuple[float, ...]) -> np.ndarray:
         """The support polygon of the feet in contact (cached until they move)."""
-        chosen = [(pose, side) for pose, side in ((left, "left"), (right, "right")) if support in ("double", side)]
-        key = tuple(v for pose, _ in chosen for v in (pose[0], pose[1], pose[3]))
+        # The key without building lists (every tick): the ground poses of the feet in contact.
+        if support == "double":
+            key: tuple[float, ...] = (left[0], left[1], left[3], right[0], right[1], right[3])
+        elif support == "left":
+            key = (left[0], left[1], left[3])
+        elif support == "right":
+            key = (right[0], right[1], right[3])
+        else:
+            key = ()
         if key != self._polygon_key or self._polygon is None:
+            chosen = [(pose, side) for pose, side in ((left, "left"), (right, "right")) if support in ("double", side)]
             feet = [Footstep(pose[0], pose[1], pose[3], side) for pose, side in chosen]  # type: ignore[arg-type]
             self._polygon, self._polygon_key = support_polygon(feet, self.sole), key
         return self._polygon
@@ -295,8 +305,11 @@ class WalkingController:
             state = [r if (s != s or r != r) else s + a * (r - s) for s, r in zip(state, raw, strict=True)]
         self._filtered = state
         zx, zy, fl, lx, ly, fr, rx, ry = state
-        left = m.left._replace(normal_force=fl, cop_local=(lx, ly))
-        right = m.right._replace(normal_force=fr, cop_local=(rx, ry))
+        # FootState._replace(normal_force=..., cop_local=...) written out: _replace costs a microsecond a foot.
+        f = m.left
+        left = _new_tuple(type(f), (f[0], f[1], fl, f[3], (lx, ly), *f[5:]))
+        f = m.right
+        right = _new_tuple(type(f), (f[0], f[1], fr, f[3], (rx, ry), *f[5:]))
         return (None if zx != zx else (zx, zy)), left, right
 
     def _planner_events(self, t: float, events: list[ControlEvent]) -> None:

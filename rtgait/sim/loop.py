@@ -309,7 +309,7 @@ class ClosedLoop:
                     self._follow_walk_end()
 
         targets = _new_tuple(IKTargets, (target_cog, left_foot, right_foot, lean))  # every field: no defaults here
-        q, _ = solve(targets, self._q, max_iterations=1, tolerance=0.0)
+        q, _ = solve(targets, self._q, max_iterations=1, tolerance=0.0, errors=False)
         self._q = q
         # The commanded configuration: the IK's, the ankle tilts added in the record's row itself; the servos keep
         # the joints' array, so they get a copy of it (the row is overwritten when a ring wraps).

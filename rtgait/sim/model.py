@@ -72,8 +72,10 @@ class SimConfig:
       A shorter step costs wall time in proportion.
     * A contact time constant of 10 ms (10 physics steps at the default step) with critical damping (ratio 1,
       MuJoCo's default): Talos's soles sink 0.16 mm under its weight, like a thin rubber sole on a hard floor,
-      and settle without ringing. Stiffer contacts (2-5 ms) make the stiff robot rock harder on its sole edges
-      after landings.
+      and settle without ringing. MuJoCo's contact stiffness goes as 1 / (time constant x damping ratio)^2: with
+      that product under about 7 ms the soles sink only tens of micrometres, a foot rolls onto one edge at a time
+      and the body's sideways rocking on its soles is barely damped (open loop, it grows from step to step;
+      README, "Robust, not tuned").
     * 10 no-slip iterations: they remove the creep of a loaded foot (see :mod:`rtgait.sim.contact_model`; with 2
       iterations a pushed foot still creeps 0.5 mm in 3 s); the no-slip pass costs about 3 us per step in all
       (``python benchmarks/sim.py``), most of it independent of the iteration count.
