@@ -159,32 +159,7 @@ class ContactMonitor:
         """
         data = self._data
         left_geom, right_geom = self._geoms
-        # measure_contacts (_measure) written out: it runs every tick, and a call and its tuple cost a tenth of it.
-        fl = fr = sx = sy = 0.0
-        cl = cr = other = 0
-        if data.ncon:
-            efc_force = data.efc_force.tolist()
-            contacts = data.contact
-            rows = zip(contacts.efc_address.tolist(), contacts.pos.tolist(), contacts.geom.tolist(), strict=True)
-            for a, p, g in rows:
-                if a < 0:
-                    continue
-                if left_geom in g:
-                    left = True
-                elif right_geom in g:
-                    left = False
-                else:
-                    other += 1
-                    continue
-                fz = efc_force[a] + efc_force[a + 1] + efc_force[a + 2] + efc_force[a + 3]
-                sx += p[0] * fz
-                sy += p[1] * fz
-                if left:
-                    fl += fz
-                    cl += 1
-                else:
-                    fr += fz
-                    cr += 1
+        sx, sy, fl, fr, cl, cr, other = _measure(data, left_geom, right_geom)
         total = fl + fr
         if total > self.threshold:
             x, y = sx / total, sy / total
