@@ -114,6 +114,10 @@ def log_columns(joint_names: Sequence[str]) -> list[LogColumn]:
         *_vector("dcm_control", "m", f"the DCM the controller acted on ({_WRENCH_TIME}); NaN in the transition", "xy"),
         *_vector("base", "m", "floating-base position, at t"),
         *_vector("base_q", "", "floating-base orientation, unit quaternion", ("x", "y", "z", "w"), sep=""),
+        *_vector(
+            "base_q_command", "", "the IK's floating-base orientation (leaned by the hip strategy), unit quaternion",
+            ("x", "y", "z", "w"), sep="",
+        ),
         *_vector("base_v", "m/s", "floating-base velocity at its origin, world frame, at t", sep=""),
         *_vector("base_w", "rad/s", "floating-base angular velocity, world frame, at t", sep=""),
         LogColumn("legs_touch", "", "the legs' collision boxes touch each other, at t"),
@@ -264,6 +268,7 @@ def _columns(result: SimResult, events: list[dict[str, Any]]) -> dict[str, np.nd
     put("dcm_control", result.dcm, "xy")
     put("base", result.base_position)
     put("base_q", result.base_quaternion, ("x", "y", "z", "w"), sep="")
+    put("base_q_command", result.commanded_q[:, 3:7], ("x", "y", "z", "w"), sep="")  # Pinocchio's order: x, y, z, w
     put("base_v", linear, sep="")
     put("base_w", angular, sep="")
     values["legs_touch"] = result.legs_touch
