@@ -27,6 +27,11 @@ controller_config`), the pendulum-level loop:
   target until it finds the ground, and a re-anchored or held foot's IK target is blended to its new pose over
   ``anchor_blend`` (40 ms). The other levels only log landings.
 
+  *The hip strategy* (both closed levels, :mod:`rtgait.core.hip_strategy`, ``ControllerOptions.hip_strategy``): when
+  the DCM law's ZMP is limited by the support polygon, the shortfall is asked of the upper body's lean (the IK's
+  ``lean`` target), whose rate of angular momentum moves the CMP past the sole; the lean returns upright once nothing
+  is asked, also after a switch to ``"open-loop"``.
+
   *When no step catches the error, the plan is kept* (:meth:`WalkingController._dcm_error_replan`): no replan for
   an outward DCM error in single support, and a later step's landing and timing are kept when no candidate for it
   catches the error (the core's ``on_failure="keep"``).
