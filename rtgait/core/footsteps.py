@@ -138,6 +138,11 @@ def midpoint(a: Footstep, b: Footstep) -> tuple[float, float]:
     return 0.5 * (a.x + b.x), 0.5 * (a.y + b.y)
 
 
+def mean_heading(yaw_a: float, yaw_b: float) -> float:
+    """The heading halfway between two (rad), the short way round: safe across the +-pi wrap."""
+    return yaw_a + 0.5 * math.remainder(yaw_b - yaw_a, 2.0 * math.pi)
+
+
 @dataclass(frozen=True)
 class SoleRect:
     """Sole rectangle around the foot frame (m): ``front``/``back`` along the foot, ``inner`` toward the other

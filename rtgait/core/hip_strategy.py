@@ -130,7 +130,8 @@ class HipStrategy:
     @property
     def at_rest(self) -> bool:
         """Upright and still (within 1e-6 rad and rad/s)."""
-        return max(abs(v) for v in (*self._lean, *self._rate)) < 1e-6
+        (l0, l1), (r0, r1) = self._lean, self._rate  # every tick of a walk: no generator
+        return abs(l0) < 1e-6 and abs(l1) < 1e-6 and abs(r0) < 1e-6 and abs(r1) < 1e-6
 
     def update(self, shortfall: tuple[float, float], yaw: float) -> LeanOutput:
         """One tick: the lean for the DCM law's shortfall ``p_law - p_cmd`` (m, world frame) at heading ``yaw``

@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from rtgait.core.footsteps import Footstep, SoleRect
+from rtgait.core.footsteps import Footstep, SoleRect, mean_heading
 
 if TYPE_CHECKING:
     from rtgait.core.walk import Walk
@@ -237,7 +237,7 @@ def candidate_landings(adjust: StepAdjustment, stance: Footstep, nominal: Footst
     heading of the stance and the nominal landing (as :func:`~rtgait.core.footsteps.place_step` measures a
     stride)."""
     local = _stride_box_grid(adjust.max_length, adjust.min_width, adjust.max_width, adjust.grid, nominal.side)
-    heading = stance.yaw + 0.5 * math.remainder(nominal.yaw - stance.yaw, 2.0 * math.pi)
+    heading = mean_heading(stance.yaw, nominal.yaw)
     c, s = math.cos(heading), math.sin(heading)
     return local @ np.array([[c, s], [-s, c]]) + np.array([stance.x, stance.y])
 

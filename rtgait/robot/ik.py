@@ -43,6 +43,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
+from rtgait.core.footsteps import mean_heading
 from rtgait.robot.model import RobotModel
 
 __all__ = ["IKErrors", "IKTargets", "IKWeights", "WholeBodyIK"]
@@ -234,8 +235,7 @@ class WholeBodyIK:
         """Fill the stacked task error (target minus current) and return the norms of its 7 groups."""
         cog, left, right = _floats(targets.cog), _floats(targets.left_foot), _floats(targets.right_foot)
         com, hl, hr = self._com, self._left, self._right
-        # The mean heading of the feet, safe across the +-pi wrap.
-        yaw = left[3] + 0.5 * math.remainder(right[3] - left[3], 2.0 * math.pi)
+        yaw = mean_heading(left[3], right[3])  # the torso's and pelvis's heading
         e = [
             cog[0] - com[0], cog[1] - com[1], cog[2] - com[2],
             left[0] - hl[0][3], left[1] - hl[1][3], left[2] - hl[2][3],
@@ -345,6 +345,12 @@ class WholeBodyIK:
         # The caller owns the returned array; the cache keeps its own copy so that in-place edits are detected.
         self._cached_q = q.copy()
         return q, (IKErrors(*norms, done) if errors else None)
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """The stacked task Jacobian at ``q`` (a copy), ``(21, nv)``: rows COG 0:3, left sole 3:9 (position, then
+        orientation), right sole 9:15, torso orientation 15:18, pelvis orientation 18:21, all world-aligned."""
+        self._evaluate(np.array(q, dtype=float))
+        return self._J.copy()
 
     def errors(self, targets: IKTargets, q: np.ndarray) -> IKErrors:
         """Task errors of configuration ``q`` for ``targets``, without solving (m, rad)."""

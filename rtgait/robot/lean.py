@@ -37,26 +37,26 @@ _AXES = ((0.0, 1.0, 0.0), (1.0, 0.0, 0.0))
 _ALIGNED = math.cos(math.radians(40.0))
 
 
-def _lean_motion(robot: RobotModel, axis: tuple[float, float, float]) -> np.ndarray:
-    """The velocity ``dq`` (nv,) of a unit lean rate about ``axis`` with the COM and the soles held (docstring)."""
-    ik = WholeBodyIK(robot)
-    ik._evaluate(robot.q_half_sitting.copy())  # the task Jacobians at half-sitting
-    J = ik._J  # rows: COM 0:3, left sole 3:9, right sole 9:15, torso 15:18, pelvis 18:21
-    wanted = np.zeros(21)
-    wanted[15:18] = axis
-    wanted[18:21] = axis
-    dq, *_ = np.linalg.lstsq(J, wanted, rcond=None)
-    return dq
+def _lean_motions(robot: RobotModel) -> list[np.ndarray]:
+    """The velocity ``dq`` (nv,) of a unit lean rate about each of :data:`_AXES` with the COM and the soles held
+    (module docstring), from the IK's task Jacobian at half-sitting."""
+    J = WholeBodyIK(robot).jacobian(robot.q_half_sitting)
+    motions = []
+    for axis in _AXES:
+        wanted = np.zeros(len(J))
+        wanted[15:18] = axis  # the torso's angular velocity
+        wanted[18:21] = axis  # the pelvis's
+        motions.append(np.linalg.lstsq(J, wanted, rcond=None)[0])
+    return motions
 
 
 def lean_inertia(robot: RobotModel) -> tuple[float, float]:
     """The lean's effective inertia ``(forward, sideways)`` (kg m^2) at half-sitting (module docstring)."""
     model, data = robot.model, robot.model.createData()
     centroidal = pin.computeCentroidalMap(model, data, robot.q_half_sitting)[3:6]
-    values = []
-    for axis in _AXES:
-        momentum = centroidal @ _lean_motion(robot, axis)
-        values.append(float(np.dot(momentum, axis)))
+    values = [
+        float(np.dot(centroidal @ motion, axis)) for axis, motion in zip(_AXES, _lean_motions(robot), strict=True)
+    ]
     if min(values) <= 0.0:
         raise ValueError(f"{robot.name}: the upper body's lean has no angular momentum ({values}); no hip strategy")
     return values[0], values[1]

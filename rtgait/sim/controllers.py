@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING
 from rtgait.core.closed_loop import CONTROLLERS, Controller, controller_config
 from rtgait.core.config import PlannerConfig
 from rtgait.core.feedback import DcmFeedback
-from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride
+from rtgait.core.footsteps import Footstep, Side, SoleRect, Stride, mean_heading
 from rtgait.core.hip_strategy import HipStrategy
 from rtgait.core.online import OnlinePlanner
 from rtgait.core.support import support_polygon
@@ -209,8 +209,7 @@ class WalkingController:
             com = (com[0] + external.offset[0], com[1] + external.offset[1], com[2])
         lean = None
         if self.hip is not None:  # also without feedback (open-loop after a switch): a lean under way returns
-            yaw = left[3] + 0.5 * math.remainder(right[3] - left[3], 2.0 * math.pi)
-            leaned = self.hip.update(shortfall, yaw)
+            leaned = self.hip.update(shortfall, mean_heading(left[3], right[3]))
             if leaned.lean != (0.0, 0.0, 0.0):
                 lean = leaned.lean
         # The blends act on the IK's targets only: the polygon and split have the feet where they are.
