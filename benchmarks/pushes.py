@@ -19,12 +19,30 @@ until the robot falls, then halves the bracket down to ``--tolerance`` (N s). A 
 unpushed walk gets 0 everywhere. The runs are spread over worker processes (``--workers``, default 2: this
 project's machine has 2 cores), with a progress bar on stderr.
 
-Writes ``pushes.csv``, ``pushes.json`` and ``pushes.png`` (a polar plot per phase, one curve per level) into
-``--out`` (default ``out/pushes-<robot>``), and prints the table (or, with ``--json``, the JSON document).
+For comparison, each direction also gets the *in-place bound*: the largest impulse any strategy that keeps the
+feet where they are could withstand, from the planned DCM ``xi`` at the push's centre (:func:`in_place_bounds`):
+
+* ``sole_bound_Ns = m w d``, with ``d = max_v (v . u) - xi . u`` how far ``xi`` may move along the push ``u``
+  before it passes the support polygon's farthest point ``v`` along ``u`` (the stance sole in single support; both
+  soles' convex hull in double support): the DCM's part along ``u`` obeys ``xi_u' = w (xi_u - p_u)`` with the ZMP's
+  ``p_u`` at most that far, so past it the DCM diverges along ``u`` whatever the ankles do, until a step puts a
+  foot farther along ``u``;
+* ``lean_bound_Ns``: what the hip strategy's lean adds at most, ``m w`` times
+  :meth:`rtgait.core.hip_strategy.HipStrategyLimits.recoverable_offset` along the push (each heading axis leaning at
+  its limit), with the robot's lean limits (:func:`rtgait.robot.lean.hip_strategy_limits`).
+
+A push beyond their sum needs a step. Outward in single support there is none to take: the swing foot would have
+to cross the stance leg, which the legs' collision shapes stop, as on the robot. The bounds treat the push as an
+impulse at its centre (a 0.1 s push moves the DCM 1.005 times as far) and are upper bounds (the lean starts at once
+and returns for free). ``--bounds-only`` prints them without running the physics.
+
+Writes ``pushes.csv``, ``pushes.json`` and ``pushes.png`` (a polar plot per phase, one curve per level and the
+in-place bound dashed) into ``--out`` (default ``out/pushes-<robot>``), and prints the table (or, with ``--json``,
+the JSON document).
 
 Usage: ``python benchmarks/pushes.py [--robot R] [--controller C ...] [--json] [--scenario fig8]
 [--phase single|double ...] [--directions 8] [--tolerance 1.0] [--workers 2] [--out DIR] [--physics-dt S]
-[--option NAME=JSON ...]``
+[--option NAME=JSON ...] [--bounds-only]``
 """
 
 from __future__ import annotations
@@ -96,6 +114,46 @@ def direction_name(site: Site, angle_deg: float) -> str:
     a, b = names[(nearest - 45) % 360], names[(nearest + 45) % 360]
     first, second = (a, b) if a in ("forward", "backward") else (b, a)
     return f"{first}-{second}"
+
+
+def in_place_bounds(
+    scenario: Any, robot: Any, site: Site, angles: Sequence[float], max_lean: float | None = None
+) -> dict[float, tuple[float, float]]:
+    """The in-place bound of the module docstring at ``site``, per direction (deg): ``(sole, lean)`` (N s).
+
+    ``max_lean`` (rad): the lean's limit (default: :class:`~rtgait.sim.controllers.ControllerOptions`'s).
+    """
+    import numpy as np
+    from scipy.spatial import ConvexHull
+
+    from rtgait.core.footsteps import mean_heading
+    from rtgait.core.online import OnlinePlanner
+    from rtgait.core.rollout import rollout
+    from rtgait.robot.lean import hip_strategy_limits
+    from rtgait.robot.motion import robot_scenario
+    from rtgait.sim.controllers import ControllerOptions
+
+    walk = robot_scenario(scenario, robot)
+    centre = site.start + 0.5 * PUSH_DURATION
+    planner = OnlinePlanner(walk.planner_config(), walk.strides())
+    walked = rollout(planner, walk.dt, walk.sole, walk.changes, duration=centre)  # the walk unpushed, to the push
+    dcm = np.array([walked.column("dcm_x")[-1], walked.column("dcm_y")[-1]])
+    feet = [walked.footprints[site.step]] if site.phase == "single" else walked.footprints[site.step : site.step + 2]
+    corners = np.vstack([walk.sole.corners(foot) for foot in feet])
+    polygon = corners[ConvexHull(corners).vertices]
+    heading = feet[0].yaw if len(feet) == 1 else mean_heading(feet[0].yaw, feet[1].yaw)
+    w = math.sqrt(scenario.gravity / robot.description.cog_height)
+    limits = hip_strategy_limits(robot, ControllerOptions().max_lean if max_lean is None else max_lean)
+    forward, lateral = limits.recoverable_offset(robot.mass, w, scenario.gravity)
+    bounds = {}
+    for angle in angles:
+        a = math.radians(angle)
+        u = np.array([math.cos(a), math.sin(a)])
+        sole = robot.mass * w * max(float(np.max(polygon @ u) - dcm @ u), 0.0)
+        # Each heading axis leans at its own limit: the CMP's reach along u is the box's support function.
+        lean = robot.mass * w * (abs(math.cos(a - heading)) * forward + abs(math.sin(a - heading)) * lateral)
+        bounds[angle] = (sole, lean)
+    return bounds
 
 
 # ----- the worker side ----------------------------------------------------------------------------------------------
@@ -215,6 +273,8 @@ def run(
     first = START_DCM_SHIFT * robot.mass * w
     sites = {phase: push_site(scenario, robot, phase) for phase in phases}
     angles = [360.0 * i / directions for i in range(directions)]
+    max_lean = (options or {}).get("max_lean")
+    bounds = {phase: in_place_bounds(scenario, robot, site, angles, max_lean) for phase, site in sites.items()}
     with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(physics_dt,)) as pool:
         options = options or {}
         levels = {c: (options if c != "open-loop" else {}) for c in controllers}
@@ -232,7 +292,9 @@ def run(
         futures = [pool.submit(largest_impulse, job) for job in jobs]
         bar = tqdm(total=len(futures), desc=f"pushes on {robot.name}", unit=" directions", disable=not progress)
         for future in as_completed(futures):
-            cases.append(future.result())
+            case = future.result()
+            case["sole_bound_Ns"], case["lean_bound_Ns"] = bounds[case["phase"]][case["direction_deg"]]
+            cases.append(case)
             bar.update(1)
         bar.close()
     order = {(j["controller"], j["phase"], j["direction_deg"]): i for i, j in enumerate(jobs)}
@@ -262,6 +324,11 @@ def table(cases: list[dict[str, Any]]) -> str:
             text = "".join(f"{values[a]['max_impulse_Ns']:>8.1f}" for a in angles)
             falls = "" if values[angles[0]]["unpushed_survives"] else "  (falls unpushed)"
             lines.append(f"{controller:<11}{text}{falls}")
+        if "sole_bound_Ns" in rows[0]:
+            bound = {c["direction_deg"]: c for c in rows}
+            lines.append(f"{'sole bound':<11}" + "".join(f"{bound[a]['sole_bound_Ns']:>8.1f}" for a in angles))
+            both = (bound[a]["sole_bound_Ns"] + bound[a]["lean_bound_Ns"] for a in angles)
+            lines.append(f"{'+ lean':<11}" + "".join(f"{value:>8.1f}" for value in both) + "   (in place)")
         lines.append("")
     return "\n".join(lines)
 
@@ -287,7 +354,8 @@ def plot(cases: list[dict[str, Any]], settings: dict[str, Any], path: Path) -> P
     phases = [p for p in PHASES if any(c["phase"] == p for c in cases)]
     figure = new_figure(5.4 * len(phases), 5.6)
     colours = {"open-loop": "tab:gray", "stabilized": "tab:orange", "adaptive": "tab:blue"}
-    top = max([c["max_impulse_Ns"] for c in cases] + [1.0])
+    top = max([c["max_impulse_Ns"] for c in cases] + [c.get("sole_bound_Ns", 0.0) + c.get("lean_bound_Ns", 0.0)
+                                                        for c in cases] + [1.0])  # fmt: skip
     for i, phase in enumerate(phases):
         ax = figure.add_subplot(1, len(phases), i + 1, projection="polar")
         site = settings["sites"][phase]
@@ -299,15 +367,54 @@ def plot(cases: list[dict[str, Any]], settings: dict[str, Any], path: Path) -> P
             theta = [math.radians(c["direction_deg"]) for c in rows] + [math.radians(rows[0]["direction_deg"])]
             radius = [c["max_impulse_Ns"] for c in rows] + [rows[0]["max_impulse_Ns"]]
             ax.plot(theta, radius, marker="o", ms=3, lw=1.4, color=colours.get(controller), label=controller)
+        rows = sorted((c for c in cases if c["phase"] == phase), key=lambda c: c["direction_deg"])
+        if rows and "sole_bound_Ns" in rows[0]:
+            bound = {c["direction_deg"]: c["sole_bound_Ns"] + c["lean_bound_Ns"] for c in rows}
+            angles = [*sorted(bound), min(bound)]
+            ax.plot([math.radians(a) for a in angles], [bound[a] for a in angles], ls="--", lw=1.0, color="k",
+                    label="in-place bound (sole + lean)")  # fmt: skip
         ax.set_ylim(0.0, 1.1 * top)
         ax.set_title(f"{phase} support (step {site['step']}, {site['stance_side']} foot stance)\n"
                      "largest impulse survived [N s]", fontsize=9)  # fmt: skip
         ax.set_xticks([math.radians(a) for a in range(0, 360, 45)])
-        ax.set_xticklabels(["fwd", "45", "left", "135", "back", "225", "right", "315"], fontsize=8)
+        # The world's directions, named relative to the stance foot as in the table (fwd-out: forward and outward).
+        named = Site(**site)
+        short = {"forward": "fwd", "backward": "back", "outward": "out", "inward": "in"}
+        labels = []
+        for a in range(0, 360, 45):
+            name = direction_name(named, a)
+            labels.append("-".join(short.get(part, part) for part in name.split("-")))
+        ax.set_xticklabels(labels, fontsize=8)
     handles, labels = figure.axes[0].get_legend_handles_labels()
-    figure.legend(handles, labels, loc="upper right", fontsize=8)
+    figure.legend(handles, labels, loc="outside lower center", ncol=len(labels), fontsize=8, frameon=False)
     figure.suptitle(f"{settings['robot']} in MuJoCo, {settings['scenario']}: 0.1 s pushes on the base", fontsize=10)
     return save(figure, path)
+
+
+def print_bounds(
+    robot_name: str, scenario_name: str, phases: Sequence[str], directions: int, max_lean: float | None, as_json: bool
+) -> None:
+    """``--bounds-only``: the in-place bounds (N s) per phase and direction, as a table or a JSON document."""
+    robot, _, scenario = _setup(robot_name, scenario_name)
+    angles = [360.0 * i / directions for i in range(directions)]
+    rows = []
+    for phase in phases:
+        site = push_site(scenario, robot, phase)
+        for angle, (sole, lean) in in_place_bounds(scenario, robot, site, angles, max_lean).items():
+            rows.append({"phase": phase, "direction_deg": angle, "direction": direction_name(site, angle),
+                         "sole_bound_Ns": sole, "lean_bound_Ns": lean})  # fmt: skip
+    if as_json:
+        json.dump({"robot": robot.name, "mass": robot.mass, "scenario": scenario.name, "bounds": rows}, sys.stdout,
+                  indent=2)  # fmt: skip
+        print()
+        return
+    print(f"{robot.name} ({robot.mass:.1f} kg), {scenario.name}: in-place bounds (N s), from the planned DCM")
+    for phase in phases:
+        mine = [r for r in rows if r["phase"] == phase]
+        print(f"{phase} support: " + ", ".join(f"{r['direction_deg']:g} deg = {r['direction']}" for r in mine))
+        print(f"{'sole':<11}" + "".join(f"{r['sole_bound_Ns']:>8.1f}" for r in mine))
+        print(f"{'lean':<11}" + "".join(f"{r['lean_bound_Ns']:>8.1f}" for r in mine))
+        print(f"{'sole + lean':<11}" + "".join(f"{r['sole_bound_Ns'] + r['lean_bound_Ns']:>8.1f}" for r in mine))
 
 
 def main(argv: Sequence[str] | None = None) -> None:
@@ -326,6 +433,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         "--option", action="append", default=[], metavar="NAME=JSON",
         help="a ControllerOptions field of the closed-loop levels, e.g. com_reference='\"planned\"' (for experiments)",
     )  # fmt: skip
+    parser.add_argument("--bounds-only", action="store_true", help="print the in-place bounds only (no physics)")
     args = parser.parse_args(argv)
     if not 1 <= args.directions <= 72 or not args.tolerance > 0.0 or not 1 <= args.workers <= (os.cpu_count() or 1) * 4:
         parser.error("--directions must be 1-72, --tolerance > 0 N s, --workers 1 to 4 per core")
@@ -336,6 +444,9 @@ def main(argv: Sequence[str] | None = None) -> None:
         options = {name: json.loads(value) for name, value in (text.split("=", 1) for text in args.option)}
     except ValueError:
         parser.error("--option needs NAME=JSON, e.g. replan_dcm_error=0.04")
+    if args.bounds_only:
+        print_bounds(args.robot, args.scenario, phases, args.directions, options.get("max_lean"), args.json)
+        return
     cases, settings = run(args.robot, args.scenario, controllers, phases, args.directions, args.tolerance,
                           args.workers, progress=sys.stderr.isatty(), options=options,
                           physics_dt=args.physics_dt)  # fmt: skip

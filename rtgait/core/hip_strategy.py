@@ -86,6 +86,25 @@ class HipStrategyLimits:
             if not (math.isfinite(value) and 0.0 < value <= high) and not (name == "deadband" and value == 0.0):
                 raise ValueError(f"HipStrategyLimits.{name} must be within (0, {high}], got {value}")
 
+    def recoverable_offset(self, mass: float, omega: float, gravity: float = 9.81) -> tuple[float, float]:
+        """How far past the sole's edge (m) the DCM may be and still be brought back by the lean alone, per heading
+        axis ``(forward, lateral)``: the bang-bang lean of the module docstring to ``max_lean`` at
+        ``max_acceleration`` ``a``, ``(I a / (m g)) (1 - e^{-w t_1})^2`` with ``t_1 = sqrt(max_lean / a)``.
+
+        An upper bound: the lean starts at once and the return is free. Times ``m w`` it is the impulse (N s) the
+        lean adds to what the sole alone withstands. ``mass`` in kg, ``omega`` the pendulum's ``w`` (1/s),
+        ``gravity`` in m/s^2.
+        """
+        if not (math.isfinite(omega) and omega > 0.0):
+            raise ValueError(f"omega must be > 0 1/s, got {omega}")
+        if not (math.isfinite(mass) and mass > 0.0):
+            raise ValueError(f"mass must be > 0 kg, got {mass}")
+        offsets = []
+        for inertia, acceleration in zip(self.inertia, self.max_acceleration, strict=True):
+            t1 = math.sqrt(self.max_lean / acceleration)
+            offsets.append(inertia * acceleration / (mass * gravity) * (1.0 - math.exp(-omega * t1)) ** 2)
+        return offsets[0], offsets[1]
+
 
 class LeanOutput(NamedTuple):
     """One tick of :class:`HipStrategy` (world frame).

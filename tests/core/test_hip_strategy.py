@@ -140,3 +140,14 @@ def test_bad_mass_and_dt() -> None:
         HipStrategy(limits(), 0.0, DT)
     with pytest.raises(ValueError, match="dt"):
         HipStrategy(limits(), MASS, -1.0)
+
+
+def test_the_limits_give_the_hand_derived_bound() -> None:
+    forward, lateral = limits(inertia=(5.0, INERTIA), max_acceleration=(16.0, ACCELERATION)).recoverable_offset(
+        MASS, W, G
+    )
+    assert lateral == pytest.approx(capture_bound(), rel=1e-12)
+    t1 = math.sqrt(MAX_LEAN / 16.0)
+    assert forward == pytest.approx(5.0 * 16.0 / (MASS * G) * (1.0 - math.exp(-W * t1)) ** 2, rel=1e-12)
+    with pytest.raises(ValueError, match="omega"):
+        limits().recoverable_offset(MASS, 0.0)
