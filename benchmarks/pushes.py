@@ -444,6 +444,10 @@ def main(argv: Sequence[str] | None = None) -> None:
         options = {name: json.loads(value) for name, value in (text.split("=", 1) for text in args.option)}
     except ValueError:
         parser.error("--option needs NAME=JSON, e.g. replan_dcm_error=0.04")
+    try:  # an unknown robot or scenario: one line, before any run
+        _setup(args.robot, args.scenario)
+    except (ValueError, LookupError) as error:  # RobotError, RobotDataError, ScenarioError
+        parser.error(str(error))
     if args.bounds_only:
         print_bounds(args.robot, args.scenario, phases, args.directions, options.get("max_lean"), args.json)
         return
