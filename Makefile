@@ -52,8 +52,8 @@ images: $(STAMP)
 	$(BIN)/rtgait plan fig11 --robot talos --compensate-angular-momentum --out $(IMAGES)/fig11-talos
 	$(BIN)/rtgait simulate fig8 --robot talos --controller adaptive --out $(IMAGES)/fig8-sim
 	$(BIN)/rtgait sweep sweeps/map.toml --quiet --out $(IMAGES)/map
-	$(BIN)/python benchmarks/pushes.py --robot talos --controller adaptive --directions 8 \
-		--out $(IMAGES)/pushes
+	$(BIN)/python benchmarks/pushes.py --robot talos --controller open-loop --controller stabilized \
+		--controller adaptive --directions 8 --out $(IMAGES)/pushes
 	cp $(IMAGES)/fig4/zmp_cog.png docs/images/fig4_zmp_cog.png
 	cp $(IMAGES)/fig8/top_view.png docs/images/fig8_top_view.png
 	cp $(IMAGES)/fig11-talos/multibody_zmp.png docs/images/fig11_multibody_zmp.png
