@@ -19,8 +19,8 @@ until the robot falls, then halves the bracket down to ``--tolerance`` (N s). A 
 unpushed walk gets 0 everywhere. The runs are spread over worker processes (``--workers``, default 2: this
 project's machine has 2 cores), with a progress bar on stderr.
 
-For comparison, each direction also gets the *in-place bound*: the largest impulse any strategy that keeps the
-feet where they are could withstand, from the planned DCM ``xi`` at the push's centre (:func:`in_place_bounds`):
+For comparison, each direction also gets the *in-place bound*: the largest impulse a strategy that keeps the feet
+where they are can withstand, from the planned DCM ``xi`` at the push's centre (:func:`in_place_bounds`):
 
 * ``sole_bound_Ns = m w d``, with ``d = max_v (v . u) - xi . u`` how far ``xi`` may move along the push ``u``
   before it passes the support polygon's farthest point ``v`` along ``u`` (the stance sole in single support; both
@@ -33,8 +33,9 @@ feet where they are could withstand, from the planned DCM ``xi`` at the push's c
 
 A push beyond their sum needs a step. Outward in single support there is none to take: the swing foot would have
 to cross the stance leg, which the legs' collision shapes stop, as on the robot. The bounds treat the push as an
-impulse at its centre (a 0.1 s push moves the DCM 1.005 times as far) and are upper bounds (the lean starts at once
-and returns for free). ``--bounds-only`` prints them without running the physics.
+impulse at its centre (a 0.1 s push moves the DCM 1.005 times as far). They are upper bounds for the pendulum (the
+lean starts at once and returns for free); the robot's DCM at the push is not exactly the plan's, so it may beat
+them by a few per cent. ``--bounds-only`` prints them without running the physics.
 
 Writes ``pushes.csv``, ``pushes.json`` and ``pushes.png`` (a polar plot per phase, one curve per level and the
 in-place bound dashed) into ``--out`` (default ``out/pushes-<robot>``), and prints the table (or, with ``--json``,
