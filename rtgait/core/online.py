@@ -18,7 +18,11 @@ Connection modes (method.md section 5), for a change of step ``k``:
   while its deadline has not passed, else the change moves to a later step (:mod:`rtgait.core.auto`). Every
   decision, with the predictions and the reason, is in :attr:`OnlinePlanner.change_log`.
 
-The walk's footprints, strides, velocity command and deadlines live in :class:`~rtgait.core.walk.Walk`.
+The walk's footprints, strides, velocity command and deadlines live in :class:`~rtgait.core.walk.Walk`. The
+planner's methods are in four modules: this one makes plans and samples them (the per-tick path,
+:meth:`OnlinePlanner.sample_values`, and the replans it triggers); :mod:`rtgait.core.planner_walk` tells of the walk
+and takes the changes; :mod:`rtgait.core.measured` plans from the measured state; :mod:`rtgait.core.layouts` builds
+the plan shapes ahead.
 """
 
 from __future__ import annotations
@@ -40,28 +44,24 @@ from rtgait.core.config import (
     FeedbackMode,
     PlannerConfig,
 )
-from rtgait.core.footsteps import Footstep, SoleRect, Stride, Timeline, check_step_timings, midpoint
+from rtgait.core.footsteps import Footstep, SoleRect, Stride, check_step_timings, midpoint
 from rtgait.core.layouts import PlanShapes
 from rtgait.core.limits import MAX_REPLANS_PER_SAMPLE, MAX_STEPS
 from rtgait.core.lipm import CogTrajectory, omega
 from rtgait.core.measured import MeasuredPlanning
 from rtgait.core.pattern import DEGREE, MOVING_KINDS, PatternKey
 from rtgait.core.phases import PhaseInfo, SwingRetarget, phase_info
+from rtgait.core.planner_walk import PlannerWalk
 from rtgait.core.sample import SAMPLE_FIELDS, GaitSample, PlanRecord
 from rtgait.core.spline import PiecewisePolynomial
 from rtgait.core.stepping import StepDecision
 from rtgait.core.support import signed_margin, support_polygon
-from rtgait.core.walk import (
-    CommandClampedWarning,
-    StepChangeTooLateError,
-    StepLimits,
-    StopCancelledWarning,
-    VelocityCommand,
-    Walk,
-)
+from rtgait.core.velocity_command import CommandClampedWarning, StepLimits, VelocityCommand
+from rtgait.core.walk import Walk
+from rtgait.core.walk_changes import StepChangeTooLateError, StopCancelledWarning
 
 
-class OnlinePlanner(MeasuredPlanning, PlanShapes):
+class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
     """Walking pattern generator that replans at every double-support start and can change steps on the fly.
 
     Args:
@@ -134,132 +134,6 @@ class OnlinePlanner(MeasuredPlanning, PlanShapes):
         self._swing_retarget: tuple[int, SwingRetarget] | None = None  # the last swing whose landing moved
         self._last_auto_replan = -math.inf
 
-    # ----- the walk ---------------------------------------------------------------------------------------
-    @property
-    def walk(self) -> Walk:
-        """Footprints, strides, command and deadlines (changed through the planner's methods)."""
-        return self._walk
-
-    @property
-    def timeline(self) -> Timeline:
-        """Phase boundaries of the walk as planned now (times relative to :attr:`t0`)."""
-        return self._walk.timeline
-
-    @property
-    def n_steps(self) -> int | None:
-        """Number of steps of the walk, ``None`` while walking by command without a planned end."""
-        return self._walk.n_steps
-
-    @property
-    def started(self) -> bool:
-        return math.isfinite(self._t0)
-
-    @property
-    def t0(self) -> float:
-        """Absolute time of the start of the walk (s)."""
-        return self._t0
-
-    @property
-    def end_time(self) -> float:
-        """Absolute time at which the walk has come to rest (s); ``inf`` while walking by command."""
-        return self._t0 + self.timeline.end_time
-
-    @property
-    def latest_time(self) -> float:
-        """The latest time sampled (s); ``-inf`` before the first sample."""
-        return self._latest
-
-    def footprints(self, upto: int | None = None) -> list[Footstep]:
-        """Footprints ``F[0..]`` (see :mod:`rtgait.core.footsteps`), as planned now.
-
-        On a walk longer than ``history_steps`` the oldest are no longer kept: the list then starts at
-        ``F[planner.walk.base]``.
-        """
-        return self._walk.footprints(upto)
-
-    def phase_start(self, q: int) -> float:
-        """Absolute start time of phase ``q`` (s)."""
-        return self._t0 + self.timeline.start_time(q)
-
-    def change_deadline(self, step: int) -> float:
-        """Last absolute time (exclusive) at which a change of ``step`` (1-based) is accepted (s); in auto mode, at
-        which both connections are still open (the change itself is accepted until the step lifts off)."""
-        return self.phase_start(self._walk.deadline_phase(step))
-
-    def first_open_step(self) -> int:
-        """The first step that may still be changed, given the latest time sampled."""
-        return self._walk.first_open_step()
-
-    def contact_feet(self, q: int) -> list[Footstep]:
-        """Footprints on the ground during phase ``q``."""
-        return self._walk.contact_feet(q)
-
-    # ----- changes ----------------------------------------------------------------------------------------
-    def _changed(self, step: int | None, record: ChangeRecord | None = None) -> None:
-        """After any change of the walk: refresh what depends on it and log it."""
-        self._phase = None  # the swing target of the phase being sampled may have moved
-        if step is None:
-            return
-        if self.started and self._next_replan_phase is not None:
-            self._prepare_layouts(self._next_replan_phase)  # no-op unless the walk's length changed
-        if record is None:
-            record = ChangeRecord(self._latest, step, self.config.connection, step, step, self._latest, (), "")
-        self.change_log.append(record)
-
-    def _replaced(self) -> None:
-        """The walk is replaced (set_strides, set_footsteps, set_velocity, stop): pending changes are dropped."""
-        self._auto.clear()
-        self._commit_time = math.inf
-
-    def change_step(
-        self,
-        step: int,
-        *,
-        length: float | None = None,
-        width: float | None = None,
-        turn: float | None = None,
-        through: int | None = None,
-    ) -> None:
-        """Change the stride of ``step`` (and of every step up to ``through``, inclusive) while walking.
-
-        Values not given are kept; of two changes of one step the later wins. Later footprints move with it (each
-        lands relative to its predecessor). Raises :class:`StepChangeTooLateError` past the connection mode's
-        deadline; a refused change changes nothing. In auto mode the change is decided here
-        (:mod:`rtgait.core.auto`): applied now, deferred to a later step, or held until step ``step`` lifts off.
-        """
-        if self.config.connection == "auto":
-            self._auto.change(step, {"length": length, "width": width, "turn": turn}, through)
-            return
-        self._changed(self._walk.change_step(step, length=length, width=width, turn=turn, through=through))
-
-    def set_strides(self, strides: Sequence[Stride], from_step: int | None = None) -> None:
-        """Replace the walk from ``from_step`` (default: the first open step) on; the walk ends after them."""
-        self._replaced()
-        self._changed(self._walk.set_strides(strides, from_step))
-
-    def set_footsteps(self, footsteps: Sequence[Footstep]) -> None:
-        """Replace the walk by absolute landing footprints for steps 1..N (the first ones may already be walked:
-        those must match what was walked, within 1 mm). Raises :class:`StepChangeTooLateError` when every one
-        of them is committed."""
-        self._replaced()
-        self._changed(self._walk.set_footsteps(footsteps))
-
-    def set_velocity(self, vx: float = 0.0, vy: float = 0.0, wz: float = 0.0) -> None:
-        """Walk by command: forward and lateral speed (m/s), yaw rate (rad/s); open steps follow it.
-
-        Commands beyond ``max_step_*`` per step are clamped with a :class:`CommandClampedWarning`; a command after
-        :meth:`stop` cancels the stop with a :class:`StopCancelledWarning`."""
-        self._replaced()
-        self._changed(self._walk.set_velocity(VelocityCommand(vx, vy, wz)))
-
-    def stop(self) -> None:
-        """End the walk: the first open step brings the feet side by side, then the COG comes to rest.
-
-        Calling it again once the closing step is committed changes nothing, so a control loop may keep
-        sending "stop"."""
-        self._replaced()
-        self._changed(self._walk.stop())
-
     # ----- planning ---------------------------------------------------------------------------------------
     def start(
         self,
@@ -322,7 +196,6 @@ class OnlinePlanner(MeasuredPlanning, PlanShapes):
         plan = self._plan
         return plan.end_state(q - 1 - plan.phase0, self.w)
 
-
     def _connect(self, t_start: float, q: int, layout: PlanLayout, state: list[float], elapsed: float) -> None:
         """Make the plan of ``layout`` from ``state`` at ``t_start`` (``elapsed`` s into phase ``q``)."""
         sources = layout.anchor_sources
@@ -377,10 +250,6 @@ class OnlinePlanner(MeasuredPlanning, PlanShapes):
         end = t_start + layout.durations[0]
         self.plans.append(PlanRecord(t_start, q, end, len(layout.durations), elapsed, reason))
         self.replan_count += 1
-
-
-
-
 
     def _advance(self, t: float) -> None:
         """Replan at every double-support start up to ``t``, each from the state of the plan before it."""

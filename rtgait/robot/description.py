@@ -70,30 +70,47 @@ else ``[gains]`` (kp, kd), else a default derived from the URDF by :mod:`rtgait.
 Every problem with a description raises :class:`RobotError` with one line naming the field. The URDF is read
 with the standard library's XML parser (not Pinocchio) to check frame and joint names, so a description can be
 validated without building the model.
+
+This module holds the description (:class:`RobotDescription`), the document-level parse (:func:`parse_robot`: the
+``[model]``, ``[feet]``, ``[walking]`` and ``[posture]`` tables) and the loaders; the readers and checks of the
+other parts (paths, the URDF's names, ``[gains]``, ``[actuation]``, ``[stepping]``, ``[velocity]``) and
+:class:`RobotError` are in :mod:`rtgait.robot.description_checks`.
 """
 
 from __future__ import annotations
 
-import fnmatch
 import re
-import xml.etree.ElementTree as ElementTree
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from rtgait.core.config import VELOCITY_KEYS, VelocityLimits
+from rtgait.core.config import VelocityLimits
 from rtgait.core.footsteps import SoleRect
-from rtgait.core.stepping import STEPPING_KEYS, SteppingLimits
+from rtgait.core.stepping import SteppingLimits
 from rtgait.robot.actuation_table import (
     DEFAULT_NATURAL_FREQUENCY,
     ActuationSpec,
     ActuatorGroup,
     JointActuationSpec,
 )
-from rtgait.robot.data import RobotDataError, robots_dir, share_dir
-from rtgait.tomlfile import TomlFiles, is_finite_number
+from rtgait.robot.description_checks import (
+    ERD_PREFIX,
+    FILES,
+    LIMITED_TYPES,
+    RobotError,
+    default_package_dirs,
+    joint_values,
+    parse_actuation,
+    parse_gain,
+    parse_stepping,
+    parse_velocity,
+    read_urdf_names,
+    resolve_path,
+    resolve_urdf,
+)
+from rtgait.tomlfile import is_finite_number
 
 __all__ = [
     "DEFAULT_NATURAL_FREQUENCY",
@@ -108,22 +125,9 @@ __all__ = [
     "parse_robot",
 ]
 
-ERD_PREFIX = "example-robot-data:"
-"""Prefix of ``model.urdf`` values that name a file below example-robot-data's ``robots/`` folder."""
-
 DEFAULT_ROBOT = "talos"
 
 _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
-# URDF joint types with one coordinate and position limits: the whole-body IK moves these only.
-_LIMITED_TYPES = ("revolute", "prismatic")
-_MOVABLE_TYPES = (*_LIMITED_TYPES, "continuous")
-
-
-class RobotError(ValueError):
-    """A robot description is unknown, unreadable or invalid. The message is one line naming the field."""
-
-
-_FILES = TomlFiles(kind="robot", folder="robots", error=RobotError)
 
 
 @dataclass(frozen=True)
@@ -202,157 +206,6 @@ class RobotDescription:
         return JointActuationSpec(armature_per_torque=spec.armature_per_torque, **values)  # type: ignore[arg-type]
 
 
-# ----- the URDF's names -----------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class _UrdfNames:
-    links: frozenset[str]
-    joints: dict[str, str]  # every joint name -> its URDF type
-    limits: dict[str, tuple[float, float]]  # limited joints -> (lower, upper)
-
-    @property
-    def frames(self) -> frozenset[str]:
-        # Pinocchio makes a frame of every link and every joint, so either name can serve as a frame.
-        return self.links | frozenset(self.joints)
-
-
-def _read_urdf_names(path: Path) -> _UrdfNames:
-    try:
-        root = ElementTree.parse(path).getroot()
-    except (OSError, ElementTree.ParseError) as error:
-        raise RobotError(f"model.urdf {path} is not a readable URDF: {error}") from None
-    if root.tag != "robot":
-        raise RobotError(f"model.urdf {path} is not a URDF: its root element is <{root.tag}>, not <robot>")
-    links = frozenset(link.get("name", "") for link in root.findall("link"))
-    joints: dict[str, str] = {}
-    limits: dict[str, tuple[float, float]] = {}
-    # <joint> elements also occur inside <transmission>; only direct children of <robot> are joints.
-    for joint in root.findall("joint"):
-        name, kind = joint.get("name", ""), joint.get("type", "")
-        joints[name] = kind
-        limit = joint.find("limit")
-        if kind in _LIMITED_TYPES and limit is not None:
-            try:
-                limits[name] = (float(limit.get("lower", "0")), float(limit.get("upper", "0")))
-            except ValueError:
-                raise RobotError(f"model.urdf {path}: joint {name} has a non-numeric limit") from None
-    return _UrdfNames(links, joints, limits)
-
-
-# ----- TOML parsing ---------------------------------------------------------------------------------------------
-
-
-def _resolve_path(value: str, base: Path | None, path: str) -> Path:
-    candidate = Path(value).expanduser()
-    if not candidate.is_absolute():
-        if base is None:
-            # Built-in descriptions have no folder of their own; they must name example-robot-data files.
-            raise RobotError(f"{path} {value!r} is relative, but the description has no folder to resolve it in")
-        candidate = base / candidate
-    return candidate
-
-
-def _resolve_urdf(value: str, base: Path | None) -> Path:
-    if value.startswith(ERD_PREFIX):
-        relative = value[len(ERD_PREFIX) :].lstrip("/")
-        try:
-            folder = robots_dir()
-        except RobotDataError as error:
-            raise RobotError(f"model.urdf {value!r}: {error}") from None
-        path = folder / relative
-        if not path.is_file():
-            raise RobotError(f"model.urdf {value!r}: example-robot-data has no file robots/{relative}")
-        return path
-    path = _resolve_path(value, base, "model.urdf")
-    if not path.is_file():
-        raise RobotError(f"model.urdf {value!r}: no such file {path}")
-    return path.resolve()
-
-
-def _default_package_dirs() -> tuple[Path, ...]:
-    try:
-        return (share_dir(),)
-    except RobotDataError:
-        return ()  # a URDF of one's own needs no example-robot-data; meshes are then only looked up by path
-
-
-def _joint_values(raw: Any, where: str, names: _UrdfNames, *, unit: str) -> dict[str, float]:
-    table = _FILES.table(raw, where)
-    values = {}
-    for joint, value in table.items():
-        if joint not in names.joints or names.joints[joint] not in _MOVABLE_TYPES:
-            raise RobotError(f"{where}.{joint}: the URDF has no movable joint named {joint!r}")
-        values[joint] = _FILES.number(value, f"{where}.{joint}", unit=unit)
-    return values
-
-
-def _gain(raw: Any, where: str, names: _UrdfNames) -> float | Mapping[str, float]:
-    if isinstance(raw, dict):
-        values = _joint_values(raw, where, names, unit="")
-        for joint, value in values.items():
-            if value < 0.0:
-                raise RobotError(f"{where}.{joint} must be a number >= 0, got {value!r}")
-        return MappingProxyType(values)
-    return _FILES.number(raw, where, rule=">= 0")
-
-
-_GROUP_KEYS = ("kp", "kd", "armature", "rotor_inertia", "gear_ratio", "effort_limit", "natural_frequency",
-               "damping_ratio")  # fmt: skip
-_TABLE_KEYS = ("control_dt", "physics_dt", "natural_frequency", "damping_ratio", "armature_per_torque")
-_UNITS = {"kp": "N m/rad", "kd": "N m s/rad", "armature": "kg m^2", "rotor_inertia": "kg m^2", "effort_limit": "N m",
-          "natural_frequency": "Hz", "control_dt": "s", "physics_dt": "s", "armature_per_torque": "s^2"}  # fmt: skip
-_MAY_BE_ZERO = ("kd", "armature", "rotor_inertia", "armature_per_torque")
-
-
-def _numbers(table: dict[str, Any], where: str, keys: tuple[str, ...]) -> dict[str, float]:
-    return {
-        key: _FILES.number(
-            table[key], f"{where}.{key}", rule=">= 0" if key in _MAY_BE_ZERO else "> 0", unit=_UNITS.get(key, "")
-        )
-        for key in keys
-        if key in table
-    }
-
-
-def _actuator_group(raw: Any, where: str, names: _UrdfNames) -> ActuatorGroup:
-    table = _FILES.table(raw, where)
-    _FILES.check_keys(table, where, ("match",), _GROUP_KEYS)
-    patterns = [table["match"]] if isinstance(table["match"], str) else table["match"]
-    if not (isinstance(patterns, list) and patterns and all(isinstance(p, str) and p for p in patterns)):
-        raise RobotError(f"{where}.match must be a joint name pattern or a non-empty list of them, got {patterns!r}")
-    movable = [j for j, kind in names.joints.items() if kind in _MOVABLE_TYPES]
-    for pattern in patterns:
-        # A pattern that matches nothing is a typo: the group would silently not apply.
-        if not any(fnmatch.fnmatchcase(joint, pattern) for joint in movable):
-            raise RobotError(f"{where}.match: {pattern!r} matches no movable joint of the URDF")
-    values = _numbers(table, where, _GROUP_KEYS)
-    rotor = "rotor_inertia" in values, "gear_ratio" in values
-    if any(rotor) and not all(rotor):
-        raise RobotError(f"{where}: rotor_inertia and gear_ratio go together (armature = rotor_inertia * gear_ratio^2)")
-    if all(rotor):
-        if "armature" in values:
-            raise RobotError(f"{where}: give armature or rotor_inertia and gear_ratio, not both")
-        values["armature"] = values.pop("rotor_inertia") * values.pop("gear_ratio") ** 2
-    return ActuatorGroup(match=tuple(patterns), **values)
-
-
-def _actuation(raw: Any, names: _UrdfNames) -> ActuationSpec:
-    table = _FILES.table(raw, "actuation")
-    _FILES.check_keys(table, "actuation", (), (*_TABLE_KEYS, "joints"))
-    raw_groups = table.get("joints", [])
-    if not isinstance(raw_groups, list):
-        raise RobotError("actuation.joints must be an array of tables ([[actuation.joints]])")
-    groups = tuple(_actuator_group(g, f"actuation.joints[{i}]", names) for i, g in enumerate(raw_groups))
-    spec = ActuationSpec(groups=groups, **_numbers(table, "actuation", _TABLE_KEYS))
-    ratio = spec.control_dt / spec.physics_dt
-    if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-6 * ratio:
-        raise RobotError(
-            f"actuation.physics_dt = {spec.physics_dt:g} s must divide actuation.control_dt = {spec.control_dt:g} s"
-        )
-    return spec
-
-
 def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None) -> RobotDescription:
     """Build a :class:`RobotDescription` from a parsed TOML document (see the module docstring).
 
@@ -361,37 +214,37 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         source: where it came from, for messages.
         base: folder that relative paths are resolved against (the TOML file's folder); ``None`` for built-ins.
     """
-    _FILES.check_keys(
+    FILES.check_keys(
         data,
         "",
         ("name", "model", "feet", "walking", "posture"),
         ("description", "gains", "actuation", "stepping", "velocity"),
     )
-    name = _FILES.string(data, "name", non_empty=True)
+    name = FILES.string(data, "name", non_empty=True)
     if not _NAME_PATTERN.fullmatch(name):
         raise RobotError(f"name must be letters, digits, '.', '_' or '-', got {name!r}")
-    description = _FILES.string(data, "description", non_empty=True) if "description" in data else ""
+    description = FILES.string(data, "description", non_empty=True) if "description" in data else ""
     if "\n" in description:
         raise RobotError("description must be a single line")
 
-    model = _FILES.table(data["model"], "model")
-    _FILES.check_keys(model, "model", ("urdf",), ("package_dirs",))
-    urdf = _resolve_urdf(_FILES.string(model, "urdf", "model", non_empty=True), base)
+    model = FILES.table(data["model"], "model")
+    FILES.check_keys(model, "model", ("urdf",), ("package_dirs",))
+    urdf = resolve_urdf(FILES.string(model, "urdf", "model", non_empty=True), base)
     if "package_dirs" in model:
         raw_dirs = model["package_dirs"]
         if not isinstance(raw_dirs, list) or not all(isinstance(d, str) and d for d in raw_dirs):
             raise RobotError(f"model.package_dirs must be a list of folder names, got {raw_dirs!r}")
-        package_dirs = tuple(_resolve_path(d, base, "model.package_dirs") for d in raw_dirs)
+        package_dirs = tuple(resolve_path(d, base, "model.package_dirs") for d in raw_dirs)
         for folder in package_dirs:
             if not folder.is_dir():
                 raise RobotError(f"model.package_dirs: no such folder {folder}")
     else:
-        package_dirs = _default_package_dirs()
-    names = _read_urdf_names(urdf)
+        package_dirs = default_package_dirs()
+    names = read_urdf_names(urdf)
 
-    feet = _FILES.table(data["feet"], "feet")
-    _FILES.check_keys(feet, "feet", ("left_sole_frame", "right_sole_frame", "sole"), ("sole_offset",))
-    frames = {key: _FILES.string(feet, key, "feet", non_empty=True) for key in ("left_sole_frame", "right_sole_frame")}
+    feet = FILES.table(data["feet"], "feet")
+    FILES.check_keys(feet, "feet", ("left_sole_frame", "right_sole_frame", "sole"), ("sole_offset",))
+    frames = {key: FILES.string(feet, key, "feet", non_empty=True) for key in ("left_sole_frame", "right_sole_frame")}
     for key, frame in frames.items():
         if frame not in names.frames:
             raise RobotError(f"feet.{key}: the URDF {urdf.name} has no link or joint named {frame!r}")
@@ -403,17 +256,17 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         if not (isinstance(raw, list) and len(raw) == 3 and all(is_finite_number(v) for v in raw)):
             raise RobotError(f"feet.sole_offset must be three finite numbers [x, y, z] in m, got {raw!r}")
         sole_offset = (float(raw[0]), float(raw[1]), float(raw[2]))
-    sole_table = _FILES.table(feet["sole"], "feet.sole")
+    sole_table = FILES.table(feet["sole"], "feet.sole")
     sides = ("front", "back", "inner", "outer")
-    _FILES.check_keys(sole_table, "feet.sole", sides, ())
-    sole_values = {key: _FILES.number(sole_table[key], f"feet.sole.{key}", rule=">= 0", unit="m") for key in sides}
+    FILES.check_keys(sole_table, "feet.sole", sides, ())
+    sole_values = {key: FILES.number(sole_table[key], f"feet.sole.{key}", rule=">= 0", unit="m") for key in sides}
     if sole_values["front"] + sole_values["back"] <= 0.0 or sole_values["inner"] + sole_values["outer"] <= 0.0:
         raise RobotError("feet.sole must have a positive length (front + back) and width (inner + outer)")
     sole = SoleRect(**sole_values)
 
-    walking = _FILES.table(data["walking"], "walking")
-    _FILES.check_keys(walking, "walking", ("cog_height", "moving_joints", "torso_frame"), ())
-    cog_height = _FILES.number(walking["cog_height"], "walking.cog_height", rule="> 0", unit="m")
+    walking = FILES.table(data["walking"], "walking")
+    FILES.check_keys(walking, "walking", ("cog_height", "moving_joints", "torso_frame"), ())
+    cog_height = FILES.number(walking["cog_height"], "walking.cog_height", rule="> 0", unit="m")
     raw_joints = walking["moving_joints"]
     if not isinstance(raw_joints, list) or not raw_joints or not all(isinstance(j, str) for j in raw_joints):
         raise RobotError(f"walking.moving_joints must be a non-empty list of joint names, got {raw_joints!r}")
@@ -424,17 +277,17 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
     if duplicates:
         raise RobotError(f"walking.moving_joints lists {', '.join(duplicates)} more than once")
     for joint in raw_joints:
-        if names.joints[joint] not in _LIMITED_TYPES:
+        if names.joints[joint] not in LIMITED_TYPES:
             # The IK clamps every moving joint to its limits and treats its coordinate as one number.
             raise RobotError(
                 f"walking.moving_joints: {joint} is a {names.joints[joint]} joint; "
-                f"only {' and '.join(_LIMITED_TYPES)} joints (one coordinate, with limits) can move"
+                f"only {' and '.join(LIMITED_TYPES)} joints (one coordinate, with limits) can move"
             )
-    torso_frame = _FILES.string(walking, "torso_frame", "walking", non_empty=True)
+    torso_frame = FILES.string(walking, "torso_frame", "walking", non_empty=True)
     if torso_frame not in names.frames:
         raise RobotError(f"walking.torso_frame: the URDF {urdf.name} has no link or joint named {torso_frame!r}")
 
-    posture = _joint_values(data["posture"], "posture", names, unit="rad")
+    posture = joint_values(data["posture"], "posture", names, unit="rad")
     for joint, angle in posture.items():
         if joint in names.limits:
             lower, upper = names.limits[joint]
@@ -443,13 +296,13 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
 
     kp = kd = None
     if "gains" in data:
-        gains = _FILES.table(data["gains"], "gains")
-        _FILES.check_keys(gains, "gains", ("kp", "kd"), ())
-        kp = _gain(gains["kp"], "gains.kp", names)
-        kd = _gain(gains["kd"], "gains.kd", names)
-    actuation = _actuation(data["actuation"], names) if "actuation" in data else ActuationSpec()
-    stepping = _stepping(data["stepping"], sole) if "stepping" in data else None
-    velocity = _velocity(data["velocity"], sole) if "velocity" in data else None
+        gains = FILES.table(data["gains"], "gains")
+        FILES.check_keys(gains, "gains", ("kp", "kd"), ())
+        kp = parse_gain(gains["kp"], "gains.kp", names)
+        kd = parse_gain(gains["kd"], "gains.kd", names)
+    actuation = parse_actuation(data["actuation"], names) if "actuation" in data else ActuationSpec()
+    stepping = parse_stepping(data["stepping"], sole) if "stepping" in data else None
+    velocity = parse_velocity(data["velocity"], sole) if "velocity" in data else None
 
     return RobotDescription(
         name=name,
@@ -473,49 +326,13 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
     )
 
 
-def _stepping(raw: Any, sole: SoleRect) -> SteppingLimits:
-    """The ``[stepping]`` table (:class:`~rtgait.core.stepping.SteppingLimits` checks the values)."""
-    limits = _limits_table(raw, "stepping", STEPPING_KEYS, SteppingLimits.from_table)
-    _soles_apart("stepping.min_width", limits.min_width, sole)
-    return limits
-
-
-def _velocity(raw: Any, sole: SoleRect) -> VelocityLimits:
-    """The ``[velocity]`` table (:class:`~rtgait.core.config.VelocityLimits` checks the values the way
-    :class:`~rtgait.core.config.PlannerConfig` does; ``min_step_width`` against the robot's stance is checked when
-    it is applied, :func:`rtgait.robot.motion.robot_scenario`)."""
-    limits = _limits_table(raw, "velocity", VELOCITY_KEYS, VelocityLimits.from_table)
-    _soles_apart("velocity.min_step_width", limits.min_step_width, sole)
-    return limits
-
-
-def _limits_table(raw: Any, name: str, keys: tuple[str, ...], parse: Any) -> Any:
-    """The table ``name`` of limits, its keys among ``keys``, parsed by ``parse`` (whose errors name the key)."""
-    table = _FILES.table(raw, name)
-    _FILES.check_keys(table, name, (), keys)
-    try:
-        return parse(table)
-    except ValueError as error:
-        raise RobotError(str(error)) from None
-
-
-def _soles_apart(key: str, width: float | None, sole: SoleRect) -> None:
-    """A least distance ``width`` (m) between the foot frames keeps the soles from overlapping: at least twice the
-    sole's inner half-width (``None``: no such limit)."""
-    if width is not None and width < 2.0 * sole.inner:
-        raise RobotError(
-            f"{key} ({width:g} m) must be at least 2 x feet.sole.inner ({2.0 * sole.inner:g} m): the soles would "
-            "overlap"
-        )
-
-
 # ----- finding descriptions -------------------------------------------------------------------------------------
 
 
 def builtin_robots() -> dict[str, str]:
     """Built-in robot names mapped to their one-line descriptions (without loading their URDFs)."""
     # Only the raw document is read: parse_robot would resolve and parse every URDF just for a listing.
-    return {name: str(_FILES.load(name).data.get("description", "")) for name in _FILES.builtin_names()}
+    return {name: str(FILES.load(name).data.get("description", "")) for name in FILES.builtin_names()}
 
 
 def load_robot(name_or_path: str | Path = DEFAULT_ROBOT) -> RobotDescription:
@@ -527,6 +344,6 @@ def load_robot(name_or_path: str | Path = DEFAULT_ROBOT) -> RobotDescription:
     Raises:
         RobotError: unknown robot, unreadable file, invalid TOML or any invalid field (one line naming it).
     """
-    document = _FILES.load(name_or_path)
+    document = FILES.load(name_or_path)
     # Relative paths in a description (model.urdf, model.package_dirs) are relative to its own folder.
     return parse_robot(document.data, document.source, document.folder)
