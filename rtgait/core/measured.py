@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 import numpy as np
 
@@ -34,9 +34,6 @@ from rtgait.core.stepping import (
     single_support_options,
 )
 from rtgait.core.support import support_polygon
-
-if TYPE_CHECKING:
-    pass
 
 MIN_REMAINDER = 0.05
 """Shortest remainder of a phase (s) that :meth:`MeasuredPlanning.replan_now` plans over: closer to the phase's end
