@@ -191,3 +191,42 @@ def test_the_hip_strategy_stands_a_forward_push_the_feet_alone_do_not(robots):
     assert math.dist(leaning.base_position[-1, :2] - leaning.base_position[0, :2], (0.4, 0.0)) < POSITION_TOLERANCE
     assert tilt(leaning).max() < 0.2 and tilt(leaning)[-1] < 0.01
     assert 0.1 < commanded_tilt(leaning).max() < LEAN_LIMIT  # it did lean, within its limit
+
+
+def outward_bounds(model: Any, scenario: Any, centre: float) -> tuple[float, float]:
+    """The in-place bound of an outward push (-y, the right foot standing) centred at ``centre`` (s): the stance
+    sole's, ``m w (xi_y - e_y)`` with ``e_y`` the sole's outer edge and ``xi`` the plan's DCM there, and the lean's
+    share, ``m w`` times its recoverable offset sideways (N s)."""
+    from rtgait.core.online import OnlinePlanner
+    from rtgait.core.rollout import rollout
+    from rtgait.robot.lean import hip_strategy_limits
+    from rtgait.robot.motion import robot_scenario
+
+    walk = robot_scenario(scenario, model)
+    planned = rollout(OnlinePlanner(walk.planner_config(), walk.strides()), walk.dt, walk.sole, duration=centre)
+    stance = planned.footprints[2]
+    assert stance.side == "right" and abs(stance.yaw) < 1e-9
+    w = math.sqrt(scenario.gravity / model.description.cog_height)
+    sole = model.mass * w * (planned.column("dcm_y")[-1] - (stance.y - walk.sole.outer))
+    lean = model.mass * w * hip_strategy_limits(model).recoverable_offset(model.mass, w, scenario.gravity)[1]
+    return sole, lean
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_an_outward_push_past_the_in_place_bound_falls_and_one_within_the_sole_s_is_walked(robots, robot):
+    # Outward in single support no step can help (it would cross the stance foot): past the sole's bound plus what
+    # the upper body's lean adds at most, the DCM leaves the sole whatever the controller does. Here Talos walks
+    # 33 N s and falls at 35 (bound 32.7 + 4.7), G1 walks 9 N s and falls at 11 (10.1 + 1.6; at 10 N s with a 0.25 ms
+    # physics step), at both physics steps; so 80 % of the sole's bound walks and 110 % of the whole falls.
+    model, sim = robots[robot]
+    scenario = short(4, 0.1)
+    single = scenario.timing.start + scenario.timing.single_support + scenario.timing.double_support  # step 2
+    sole, lean = outward_bounds(model, scenario, single + 0.35)
+    w = math.sqrt(scenario.gravity / model.description.cog_height)
+    assert 0.05 < sole / (model.mass * w) < 0.15  # m w d: the DCM some 0.1 m inside the sole's outer edge
+    assert 0.05 < lean / sole < 0.25  # the lean's share is a fraction of the sole's
+    for impulse, survives in ((0.8 * sole, True), (1.1 * (sole + lean), False)):
+        push = Push(single + 0.3, 0.1, (0.0, -impulse / 0.1, 0.0))
+        result = simulate(scenario, model, sim=sim, options=QUICK, push=push)
+        walked = not result.fell and result.ended_at_rest and result.steps_completed == result.steps_planned
+        assert walked == survives, f"{robot}: {impulse:.1f} N s (bound {sole:.1f} + {lean:.1f}), walked {walked}"
