@@ -227,8 +227,12 @@ class ContactMonitor:
 
 
 class Landings:
-    """Touch-downs completed: when a single support (an odd phase of the planner) ends, its swing foot must be found
-    on the floor within ``window`` seconds.
+    """Touch-downs completed: the swing foot of each single support (an odd phase of the planner) must come down on
+    the floor, before the single support's planned end (an early landing) or within ``window`` seconds after it.
+
+    A foot that came down early counts even if it bounces off again around the planned end: it landed (G1's feet
+    do bounce, for a few ticks, after an early touch-down). Down means a vertical force above ``threshold`` after
+    the foot had been off the floor in that single support.
 
     Args:
         window: how long after the planned touch-down the foot may land (s).
@@ -241,16 +245,28 @@ class Landings:
         self.missed = 0
         """Single supports whose swing foot was not on the floor by the end of its window."""
         self._pending: tuple[int, float] | None = None  # (foot index, end of its window)
-        self._phase, self._code = -1, 0
+        self._phase = -1
+        self._swing = -1  # the swinging foot in the single support under way (0 left, 1 right), -1 not known yet
+        self._lifted = self._down = False  # in that single support: the swing foot left the floor; came back down
 
     def update(self, t: float, phase: int, code: int, f_left: float, f_right: float) -> None:
-        """One tick at time ``t`` (s): the planner's phase and support code, the vertical force on each foot (N)."""
+        """One tick at time ``t`` (s): the planner's phase and planned support code (1 left, 2 right, 0 double),
+        the vertical force on each foot (N)."""
         if phase != self._phase:
-            if self._phase >= 1 and self._phase & 1:
-                swing = 1 if self._code == 1 else 0  # left support (code 1): the right foot (index 1) was swinging
-                self._pending = (swing, t + self.window)
-            self._phase = phase
-        self._code = code
+            if self._phase >= 1 and self._phase & 1 and self._swing >= 0:  # a single support ended
+                if self._down:
+                    self.count += 1
+                else:
+                    self._pending = (self._swing, t + self.window)
+            self._phase, self._swing, self._lifted, self._down = phase, -1, False, False
+        if phase >= 1 and phase & 1 and not self._down:
+            if self._swing < 0 and code:
+                self._swing = 1 if code == 1 else 0  # left support (code 1): the right foot (index 1) swings
+            if self._swing >= 0:
+                if (f_right if self._swing else f_left) <= self.threshold:
+                    self._lifted = True
+                elif self._lifted:
+                    self._down = True
         if self._pending is not None:
             if (f_right if self._pending[0] else f_left) > self.threshold:
                 self.count += 1
