@@ -181,15 +181,26 @@ class WholeBodyIK:
             [w.cog] * 3 + ([w.foot_position] * 3 + [w.foot_orientation] * 3) * 2 + [w.torso] * 3 + [w.pelvis] * 3
         )
         self._w = np.array(task_weights)
+        # Per-tick buffers. W J is formed as one same-shape product (a broadcast product on the transposed J costs
+        # three times more) and read transposed: J^T W is the same numbers in the same memory layout as J.T * w.
+        self._w_rows = np.repeat(self._w[:, None], nv, axis=1)
+        self._wj = np.empty((_N_TASKS, nv))
+        self._jtw = self._wj.T
+        self._pull_tail = np.empty(0)
         diagonal = np.full(nv, w.damping)
         diagonal[6:] += w.posture
         self._damping = np.diag(diagonal)
         self._pull_matrix = np.zeros((nv, model.nq))
         self._pull_matrix[6:, 7:] = w.posture * np.eye(nv - 6)
         self._pull_offset = self._pull_matrix @ robot.q_half_sitting
+        self._pull_tail = self._pull_offset[6:]
         self._posture = w.posture
         self._max_step2 = max_step * max_step
-        self._J = np.zeros((_N_TASKS, nv))
+        self._lower_list, self._upper_list = self._lower.tolist(), self._upper.tolist()
+        J = self._J = np.zeros((_N_TASKS, nv))
+        # Views of J's task blocks, written in place at each evaluation.
+        self._j_blocks = (J[0:3], J[3:9], J[9:15], J[15:18], J[18:21, 3:6])
+        self._frames = (robot.left_sole_id, robot.right_sole_id, robot.torso_id)
         self._e: list[float] = [0.0] * _N_TASKS
 
         data = self.data
@@ -209,25 +220,27 @@ class WholeBodyIK:
 
     def _evaluate(self, q: np.ndarray) -> None:
         """Kinematics, task Jacobians and frame placements at ``q``, kept until the next evaluation."""
-        model, data, J, robot = self.model, self.data, self._J, self.robot
+        model, data = self.model, self.data
+        j_com, j_left, j_right, j_torso, j_pelvis = self._j_blocks
+        left_id, right_id, torso_id = self._frames
         pin.computeJointJacobians(model, data, q)
         # After computeJointJacobians, the COG Jacobian and the frame Jacobians reuse the joint Jacobians; each
         # frame Jacobian call also updates that frame's placement in data.oMf.
-        J[0:3] = pin.jacobianCenterOfMass(model, data, False)
-        J[3:9] = pin.getFrameJacobian(model, data, robot.left_sole_id, _LWA)
-        J[9:15] = pin.getFrameJacobian(model, data, robot.right_sole_id, _LWA)
-        J[15:18] = pin.getFrameJacobian(model, data, robot.torso_id, _LWA)[3:6]
+        j_com[...] = pin.jacobianCenterOfMass(model, data, False)
+        j_left[...] = pin.getFrameJacobian(model, data, left_id, _LWA)
+        j_right[...] = pin.getFrameJacobian(model, data, right_id, _LWA)
+        j_torso[...] = pin.getFrameJacobian(model, data, torso_id, _LWA)[3:6]
         # The free flyer's angular velocity is in the pelvis frame: world-aligned, its Jacobian is [0, R, 0].
         pelvis = data.oMi[1].rotation
-        J[18:21, 3:6] = pelvis
+        j_pelvis[...] = pelvis
         placements = data.oMf
         # Plain Python floats from here on: the error arithmetic is a few dozen scalar operations, which costs
         # less in Python than the per-call overhead of numpy on 3x3 arrays.
         self._com = data.com[0].tolist()
-        self._left = placements[robot.left_sole_id].homogeneous.tolist()
-        self._right = placements[robot.right_sole_id].homogeneous.tolist()
+        self._left = placements[left_id].homogeneous.tolist()
+        self._right = placements[right_id].homogeneous.tolist()
         # The torso relative to its upright rest orientation: the torso task becomes "this rotation is a yaw".
-        self._torso = (placements[robot.torso_id].rotation @ self._torso_rest_t).tolist()
+        self._torso = (placements[torso_id].rotation @ self._torso_rest_t).tolist()
         self._pelvis = (pelvis @ self._pelvis_rest_t).tolist()
         self._cached_q = q
 
@@ -255,28 +268,35 @@ class WholeBodyIK:
 
     def _step(self, q: np.ndarray) -> np.ndarray:
         """One damped Gauss-Newton step from ``q`` (whose kinematics are evaluated) within the joint limits."""
-        J = self._J
-        JtW = J.T * self._w
+        J, JtW = self._J, self._jtw
+        np.multiply(J, self._w_rows, out=self._wj)  # J^T W, through its view self._jtw
         H = JtW @ J
         H += self._damping
         # The posture pull weight * (q_posture - q) on the joint rows (the free flyer's have none).
         g = JtW @ np.array(self._e)
-        g[6:] += self._pull_offset[6:] - self._posture * q[7:]
+        q_joints = q[7:]
+        g[6:] += self._pull_tail - self._posture * q_joints
         _, dq, info = dposv(H, g)
         if info != 0:  # pragma: no cover - H is symmetric positive definite by construction (damping > 0)
             raise np.linalg.LinAlgError(f"the IK normal equations are not positive definite (LAPACK info {info})")
-        joints = q[7:] + dq[6:]
+        size2 = float(dq @ dq)
+        if size2 <= self._max_step2:
+            # Joint coordinates add exactly (q[7:] + dq[6:], one-coordinate joints): the integrated configuration's
+            # joints are the step's, and a step inside the limits (the usual case) is taken as it is.
+            q_new = pin.integrate(self.model, q, dq)
+            if not _outside(q_new.tolist()[7:], self._lower_list, self._upper_list):
+                return q_new
+        joints = q_joints + dq[6:]
         pinned = np.maximum(self._lower - joints, joints - self._upper).max() > 0.0
         if pinned:
             dq = self._pinned_step(q, joints, H, g)
-        size2 = float(dq @ dq)
+            size2 = float(dq @ dq)
         if size2 > self._max_step2:
             dq *= math.sqrt(self._max_step2 / size2)
         q_new = pin.integrate(self.model, q, dq)
         if pinned:
-            # Joint coordinates add exactly (q[7:] + dq[6:]), so a step that passed the check above stays inside
-            # the limits; a pinned solve holds its joints at the limit to about 1e-6 of the step, and clipping
-            # removes that residue.
+            # A step that passed the check above stays inside the limits; a pinned solve holds its joints at the
+            # limit to about 1e-6 of the step, and clipping removes that residue.
             np.clip(q_new[7:], self._lower, self._upper, out=q_new[7:])
         return q_new
 
@@ -356,6 +376,15 @@ class WholeBodyIK:
         """Task errors of configuration ``q`` for ``targets``, without solving (m, rad)."""
         self._evaluate(np.array(q, dtype=float))
         return IKErrors(*self._errors(targets), 0)
+
+
+def _outside(joints: list[float], lower: list[float], upper: list[float]) -> bool:
+    """Whether any joint coordinate is below its lower or above its upper limit (scalar comparisons: cheaper than
+    numpy's calls on a few dozen numbers)."""
+    for value, low, high in zip(joints, lower, upper, strict=True):  # noqa: SIM110 - a loop costs less than any()
+        if value < low or value > high:
+            return True
+    return False
 
 
 def _floats(values: np.ndarray | Sequence[float]) -> Sequence[float]:
