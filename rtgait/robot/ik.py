@@ -246,17 +246,26 @@ class WholeBodyIK:
 
     def _errors(self, targets: IKTargets) -> list[float]:
         """Fill the stacked task error (target minus current) and return the norms of its 7 groups."""
-        cog, left, right = _floats(targets.cog), _floats(targets.left_foot), _floats(targets.right_foot)
+        cog, left, right, lean = targets
+        if isinstance(cog, np.ndarray):  # plain Python numbers: scalar arithmetic on numpy scalars is slower
+            cog = cog.tolist()
+        if isinstance(left, np.ndarray):
+            left = left.tolist()
+        if isinstance(right, np.ndarray):
+            right = right.tolist()
         com, hl, hr = self._com, self._left, self._right
-        yaw = mean_heading(left[3], right[3])  # the torso's and pelvis's heading
+        cos, sin = math.cos, math.sin
+        left_yaw, right_yaw = left[3], right[3]
+        yaw = mean_heading(left_yaw, right_yaw)  # the torso's and pelvis's heading
+        c, s = cos(yaw), sin(yaw)
         e = [
             cog[0] - com[0], cog[1] - com[1], cog[2] - com[2],
             left[0] - hl[0][3], left[1] - hl[1][3], left[2] - hl[2][3],
-            *_yaw_error(hl, left[3]),
+            *_yaw_error(hl, cos(left_yaw), sin(left_yaw)),
             right[0] - hr[0][3], right[1] - hr[1][3], right[2] - hr[2][3],
-            *_yaw_error(hr, right[3]),
-            *_leaned_yaw_error(self._torso, yaw, targets.lean),
-            *_leaned_yaw_error(self._pelvis, yaw, targets.lean),
+            *_yaw_error(hr, cos(right_yaw), sin(right_yaw)),
+            *_leaned_yaw_error(self._torso, c, s, lean),
+            *_leaned_yaw_error(self._pelvis, c, s, lean),
         ]  # fmt: skip
         self._e = e
         hypot = math.hypot
@@ -393,22 +402,22 @@ def _floats(values: np.ndarray | Sequence[float]) -> Sequence[float]:
 
 
 def _leaned_yaw_error(
-    h: list[list[float]], yaw: float, lean: Sequence[float] | None
+    h: list[list[float]], c: float, s: float, lean: Sequence[float] | None
 ) -> tuple[float, float, float]:
-    """World-frame rotation vector from rotation ``h`` to ``Exp(lean) Rz(yaw)`` (rad): :func:`_yaw_error` when
-    upright. With ``L = Exp(lean)``, ``L Rz R^T`` is ``Rz (L^T R)^T`` conjugated by ``L``, so its log is ``L`` times
-    the yaw error of ``L^T R``."""
+    """World-frame rotation vector from rotation ``h`` to ``Exp(lean) Rz(yaw)`` (rad), ``c, s = cos(yaw), sin(yaw)``:
+    :func:`_yaw_error` when upright. With ``L = Exp(lean)``, ``L Rz R^T`` is ``Rz (L^T R)^T`` conjugated by ``L``, so
+    its log is ``L`` times the yaw error of ``L^T R``."""
     if lean is None:
-        return _yaw_error(h, yaw)
+        return _yaw_error(h, c, s)
     lx, ly, lz = _floats(lean)
     angle = math.sqrt(lx * lx + ly * ly + lz * lz)
     if angle < 1e-12:
-        return _yaw_error(h, yaw)
+        return _yaw_error(h, c, s)
     L = _rotation(lx / angle, ly / angle, lz / angle, angle)
     rows = [row[:3] for row in h[:3]]
     # L^T R: entry (i, j) = sum_k L[k][i] R[k][j].
     tilted = [[L[0][i] * rows[0][j] + L[1][i] * rows[1][j] + L[2][i] * rows[2][j] for j in range(3)] for i in range(3)]
-    ex, ey, ez = _yaw_error(tilted, yaw)
+    ex, ey, ez = _yaw_error(tilted, c, s)
     return (L[0][0] * ex + L[0][1] * ey + L[0][2] * ez, L[1][0] * ex + L[1][1] * ey + L[1][2] * ez,
             L[2][0] * ex + L[2][1] * ey + L[2][2] * ez)  # fmt: skip
 
@@ -422,13 +431,16 @@ def _rotation(ux: float, uy: float, uz: float, angle: float) -> list[list[float]
             [k * uz * ux - s * uy, k * uz * uy + s * ux, c + k * uz * uz]]  # fmt: skip
 
 
-def _yaw_error(h: list[list[float]], yaw: float) -> tuple[float, float, float]:
-    """World-frame rotation vector from rotation ``h[:3][:3]`` to the level rotation of heading ``yaw`` (rad).
+def _yaw_error(h: list[list[float]], c: float, s: float) -> tuple[float, float, float]:
+    """World-frame rotation vector from rotation ``h[:3][:3]`` to the level rotation of heading ``yaw`` (rad), given
+    as ``c, s = cos(yaw), sin(yaw)``.
 
     That is log(Rz(yaw) R^T), from the skew part and the trace of ``E = Rz(yaw) R^T`` written out in scalars.
     """
-    c, s = math.cos(yaw), math.sin(yaw)
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = h[0][:3], h[1][:3], h[2][:3]
+    h0, h1, h2 = h[0], h[1], h[2]
+    r00, r01, r02 = h0[0], h0[1], h0[2]
+    r10, r11, r12 = h1[0], h1[1], h1[2]
+    r20, r21, r22 = h2[0], h2[1], h2[2]
     vx = 0.5 * (r12 - (s * r20 + c * r21))
     vy = 0.5 * ((c * r20 - s * r21) - r02)
     vz = 0.5 * ((s * r00 + c * r01) - (c * r10 - s * r11))
