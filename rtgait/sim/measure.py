@@ -257,6 +257,8 @@ class SimMeasurer:
         self._force = np.zeros(6)  # the one buffer mj_contactForce writes into (contacts not decoded here)
         self._pyramidal = model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL
         self._landed: list[Landing] = []
+        self._rows_of: mujoco.MjData | None = None
+        self._base_rows: tuple[np.ndarray, np.ndarray] = (self._force, self._force)
         self.reset()
 
     @classmethod
@@ -389,9 +391,12 @@ class SimMeasurer:
             total += fz
         zmp = (-zmp_my / total, zmp_mx / total) if total > min_force else _NAN2
         mujoco.mj_subtreeVel(model, data)
-        base = self.base_body
-        cx, cy, cz = data.subtree_com[base].tolist()
-        vx, vy, vz = data.subtree_linvel[base].tolist()
+        if data is not self._rows_of:  # the base's rows of this data's fixed-size arrays, as views kept
+            base = self.base_body
+            self._rows_of, self._base_rows = data, (data.subtree_com[base], data.subtree_linvel[base])
+        com_row, linvel_row = self._base_rows
+        cx, cy, cz = com_row.tolist()
+        vx, vy, vz = linvel_row.tolist()
         w = self.omega
         return _new_tuple(
             Measurement,
