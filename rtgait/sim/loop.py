@@ -5,7 +5,8 @@ Every control tick (``sim.control_dt``: 1 ms for Talos, 2 ms for G1) of the walk
 1. **measure** (:class:`~rtgait.sim.measure.SimMeasurer`): per-foot contact wrench, centre of pressure and pose, the
    ZMP, the COM and its velocity, the DCM, and the landings since the last tick. They are read from the kinematics
    and contact forces the last physics step computed, i.e. of the state one physics step before ``t``: a real
-   robot's sensors lag by a sample too, and reading them costs no extra ``mj_forward``;
+   robot's sensors lag by a sample too, and reading them costs no extra ``mj_forward`` (with one physics step a
+   period, its contacts and sites as the last tick's record read them, :mod:`rtgait.sim.step_snapshot`);
 2. the walk's scheduled inputs (:mod:`rtgait.sim.loop_inputs`): the ``on_tick`` hook, the footstep changes due at
    ``t`` (at their connection mode's deadline, as :func:`rtgait.core.rollout.rollout` does) and the velocity
    commands due go to the planner; a walk by command is stopped after its steps;
@@ -72,6 +73,7 @@ from rtgait.sim.loop_result import loop_result
 from rtgait.sim.measure import SimMeasurer
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SUPPORT_CODES, SimResult
+from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 from rtgait.sim.tick_log import TickLog
 
 __all__ = [
@@ -231,6 +233,7 @@ class ClosedLoop:
             r.replay_qpos, r.replay_soles, r.capacity, r.replay_every, r.replay_capacity,
         )  # fmt: skip
         self._over = False
+        self._snapshot: StepSnapshot | None = None  # the last tick's first step's contacts and sites
         self.k = 0
         """Ticks run so far."""
         self.fell, self.fall_time, self.fall_cause = False, None, None
@@ -293,7 +296,8 @@ class ClosedLoop:
             dcm = dcm_planned = (math.nan, math.nan)
             out = measurement = None  # no controller during the transition
         else:
-            measurement = measure(data, t)
+            # One physics step a period: the last tick read the contacts and sites of the state measured now.
+            measurement = measure(data, t, self._snapshot if n_sub == 1 else None)
             if k == k0:
                 self.controller.start(0.0, measurement)
                 self._inputs.start()
@@ -341,7 +345,8 @@ class ClosedLoop:
             replay_soles[replay_row, 0] = site_xpos[left_site]
             replay_soles[replay_row, 1] = site_xpos[right_site]
         cog[i] = base_com
-        zx, zy, fl, fr = contacts.measure(i, t)
+        snapshot = self._snapshot = read_snapshot(data)
+        zx, zy, fl, fr = contacts.measure(i, t, snapshot)
         if self.log is not None:
             self.log.record(i, left_foot, right_foot, out, measurement, self.controller.level)
         for j in range(1, n_sub):

@@ -62,6 +62,7 @@ import mujoco
 import numpy as np
 
 from rtgait.core.footsteps import Footstep, Side
+from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
 if TYPE_CHECKING:  # the model module is being rewritten: only its attribute names are relied on
     from rtgait.sim.model import SimModel
@@ -283,9 +284,10 @@ class SimMeasurer:
         self._unloaded_since = [-math.inf, -math.inf]
         self._primed = False
 
-    def measure(self, data: mujoco.MjData, t: float | None = None) -> Measurement:
+    def measure(self, data: mujoco.MjData, t: float | None = None, snapshot: StepSnapshot | None = None) -> Measurement:
         """The measurement of ``data`` (see the module docstring for which state that is), stamped ``t`` (s;
-        default ``data.time``)."""
+        default ``data.time``); ``snapshot``: its contact and site arrays already read
+        (:func:`~rtgait.sim.step_snapshot.read_snapshot`, of this same state)."""
         model = self.model
         t = float(data.time) if t is None else float(t)
         owner = self._owner
@@ -293,17 +295,11 @@ class SimMeasurer:
         lx = ly = lz = lmx = lmy = lmz = 0.0
         rx = ry = rz = rmx = rmy = rmz = 0.0
         left_count = right_count = other = 0
-        ncon = data.ncon
-        if ncon:
-            contacts = data.contact
-            frames = contacts.frame.tolist()
-            positions = contacts.pos.tolist()
-            geoms = contacts.geom.tolist()
-            addresses = contacts.efc_address.tolist()
-            dims = contacts.dim.tolist()
-            frictions = contacts.friction.tolist()
-            efc = data.efc_force.tolist()
-            for i in range(ncon):
+        if snapshot is None:
+            snapshot = read_snapshot(data)
+        efc, addresses, positions, geoms, frames, dims, frictions, sites_position, sites_rotation = snapshot
+        if addresses:
+            for i in range(len(addresses)):
                 address = addresses[i]
                 if address < 0:  # within the margin but not active: no force
                     continue
@@ -364,7 +360,6 @@ class SimMeasurer:
                     rmz += mz
                     right_count += 1
 
-        sites_position, sites_rotation = data.site_xpos.tolist(), data.site_xmat.tolist()
         h = self.ground_height
         min_force = self.min_force
         landings = _NO_LANDINGS
