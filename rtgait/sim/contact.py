@@ -58,7 +58,11 @@ class FallLimits:
 
 
 def _measure(
-    efc_force: list[float], addresses: list[int], positions: list[list[float]], geoms: list[list[int]], left_geom: int,
+    efc_force: list[float],
+    addresses: list[int],
+    positions: list[list[float]],
+    geoms: list[list[int]],
+    left_geom: int,
     right_geom: int,
 ) -> tuple[float, float, float, float, int, int, int]:
     """:func:`measure_contacts` from the contact list's arrays as Python numbers (the contacts' first rows in

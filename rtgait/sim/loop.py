@@ -296,8 +296,10 @@ class ClosedLoop:
             dcm = dcm_planned = (math.nan, math.nan)
             out = measurement = None  # no controller during the transition
         else:
-            # One physics step a period: the last tick read the contacts and sites of the state measured now.
-            measurement = measure(data, t, self._snapshot if n_sub == 1 else None)
+            # One physics step a period: the last tick read the contacts and sites of the state measured now, and
+            # its complete log's record ran mj_subtreeVel on it.
+            last = self._snapshot if n_sub == 1 else None
+            measurement = measure(data, t, last, last is not None and self.log is not None)
             if k == k0:
                 self.controller.start(0.0, measurement)
                 self._inputs.start()

@@ -284,10 +284,17 @@ class SimMeasurer:
         self._unloaded_since = [-math.inf, -math.inf]
         self._primed = False
 
-    def measure(self, data: mujoco.MjData, t: float | None = None, snapshot: StepSnapshot | None = None) -> Measurement:
+    def measure(
+        self,
+        data: mujoco.MjData,
+        t: float | None = None,
+        snapshot: StepSnapshot | None = None,
+        velocities: bool = False,
+    ) -> Measurement:
         """The measurement of ``data`` (see the module docstring for which state that is), stamped ``t`` (s;
         default ``data.time``); ``snapshot``: its contact and site arrays already read
-        (:func:`~rtgait.sim.step_snapshot.read_snapshot`, of this same state)."""
+        (:func:`~rtgait.sim.step_snapshot.read_snapshot`, of this same state); ``velocities``: whether
+        ``mj_subtreeVel`` has already been run on this state (it is not run again)."""
         model = self.model
         t = float(data.time) if t is None else float(t)
         owner = self._owner
@@ -385,7 +392,8 @@ class SimMeasurer:
             zmp_my += ((oz - h) * fx - ox * fz) + ty
             total += fz
         zmp = (-zmp_my / total, zmp_mx / total) if total > min_force else _NAN2
-        mujoco.mj_subtreeVel(model, data)
+        if not velocities:
+            mujoco.mj_subtreeVel(model, data)
         if data is not self._rows_of:  # the base's rows of this data's fixed-size arrays, as views kept
             base = self.base_body
             self._rows_of, self._base_rows = data, (data.subtree_com[base], data.subtree_linvel[base])

@@ -151,7 +151,10 @@ def test_a_live_push_acts_for_its_duration_even_if_the_forces_are_cleared(talos,
 
 def test_the_measurement_reads_the_contacts_the_last_tick_read_of_the_same_state(talos, talos_sim, shorten):
     """With one physics step a control period, the controller's measurement reuses the contacts and sites the last
-    tick's record read after its step: nothing between the two may change them (a push acting included)."""
+    tick's record read after its step, and the subtree velocities its complete log computed: nothing between the two
+    may change them (a push acting included)."""
+    import mujoco
+
     from rtgait.sim.step_snapshot import read_snapshot
 
     assert talos_sim.substeps == 1
@@ -164,5 +167,8 @@ def test_the_measurement_reads_the_contacts_the_last_tick_read_of_the_same_state
             break
         kept = loop._snapshot
         assert kept is not None and read_snapshot(loop.data) == kept
+        velocities = loop.data.subtree_linvel.copy()
+        mujoco.mj_subtreeVel(talos_sim.model, loop.data)
+        assert np.array_equal(loop.data.subtree_linvel, velocities)
         checked += 1
     assert checked == loop.k - 1 and kept.addresses, "ticks checked, with contacts"
