@@ -52,6 +52,7 @@ _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 # Rows of the stacked task vector: COG 0:3, left foot 3:9 (position 3:6, orientation 6:9), right foot 9:15,
 # torso orientation 15:18, pelvis orientation 18:21.
 _N_TASKS = 21
+_dot, _fromiter = np.dot, np.fromiter
 
 
 class IKTargets(NamedTuple):
@@ -181,15 +182,26 @@ class WholeBodyIK:
             [w.cog] * 3 + ([w.foot_position] * 3 + [w.foot_orientation] * 3) * 2 + [w.torso] * 3 + [w.pelvis] * 3
         )
         self._w = np.array(task_weights)
+        # Per-tick buffers. W J is formed as one same-shape product (a broadcast product on the transposed J costs
+        # three times more) and read transposed: J^T W is the same numbers in the same memory layout as J.T * w.
+        self._w_rows = np.repeat(self._w[:, None], nv, axis=1)
+        self._wj = np.empty((_N_TASKS, nv))
+        self._jtw = self._wj.T
+        self._pull_tail = np.empty(0)
         diagonal = np.full(nv, w.damping)
         diagonal[6:] += w.posture
         self._damping = np.diag(diagonal)
         self._pull_matrix = np.zeros((nv, model.nq))
         self._pull_matrix[6:, 7:] = w.posture * np.eye(nv - 6)
         self._pull_offset = self._pull_matrix @ robot.q_half_sitting
+        self._pull_tail = self._pull_offset[6:]
         self._posture = w.posture
         self._max_step2 = max_step * max_step
-        self._J = np.zeros((_N_TASKS, nv))
+        self._lower_list, self._upper_list = self._lower.tolist(), self._upper.tolist()
+        J = self._J = np.zeros((_N_TASKS, nv))
+        # Views of J's task blocks, written in place at each evaluation.
+        self._j_blocks = (J[0:3], J[3:9], J[9:15], J[15:18], J[18:21, 3:6])
+        self._frames = (robot.left_sole_id, robot.right_sole_id, robot.torso_id)
         self._e: list[float] = [0.0] * _N_TASKS
 
         data = self.data
@@ -209,41 +221,53 @@ class WholeBodyIK:
 
     def _evaluate(self, q: np.ndarray) -> None:
         """Kinematics, task Jacobians and frame placements at ``q``, kept until the next evaluation."""
-        model, data, J, robot = self.model, self.data, self._J, self.robot
+        model, data = self.model, self.data
+        j_com, j_left, j_right, j_torso, j_pelvis = self._j_blocks
+        left_id, right_id, torso_id = self._frames
         pin.computeJointJacobians(model, data, q)
         # After computeJointJacobians, the COG Jacobian and the frame Jacobians reuse the joint Jacobians; each
         # frame Jacobian call also updates that frame's placement in data.oMf.
-        J[0:3] = pin.jacobianCenterOfMass(model, data, False)
-        J[3:9] = pin.getFrameJacobian(model, data, robot.left_sole_id, _LWA)
-        J[9:15] = pin.getFrameJacobian(model, data, robot.right_sole_id, _LWA)
-        J[15:18] = pin.getFrameJacobian(model, data, robot.torso_id, _LWA)[3:6]
+        j_com[...] = pin.jacobianCenterOfMass(model, data, False)
+        j_left[...] = pin.getFrameJacobian(model, data, left_id, _LWA)
+        j_right[...] = pin.getFrameJacobian(model, data, right_id, _LWA)
+        j_torso[...] = pin.getFrameJacobian(model, data, torso_id, _LWA)[3:6]
         # The free flyer's angular velocity is in the pelvis frame: world-aligned, its Jacobian is [0, R, 0].
         pelvis = data.oMi[1].rotation
-        J[18:21, 3:6] = pelvis
+        j_pelvis[...] = pelvis
         placements = data.oMf
         # Plain Python floats from here on: the error arithmetic is a few dozen scalar operations, which costs
         # less in Python than the per-call overhead of numpy on 3x3 arrays.
         self._com = data.com[0].tolist()
-        self._left = placements[robot.left_sole_id].homogeneous.tolist()
-        self._right = placements[robot.right_sole_id].homogeneous.tolist()
+        self._left = placements[left_id].homogeneous.tolist()
+        self._right = placements[right_id].homogeneous.tolist()
         # The torso relative to its upright rest orientation: the torso task becomes "this rotation is a yaw".
-        self._torso = (placements[robot.torso_id].rotation @ self._torso_rest_t).tolist()
-        self._pelvis = (pelvis @ self._pelvis_rest_t).tolist()
+        # np.dot: the same BLAS product as @ for these small operands, with less of numpy's dispatch around it.
+        self._torso = _dot(placements[torso_id].rotation, self._torso_rest_t).tolist()
+        self._pelvis = _dot(pelvis, self._pelvis_rest_t).tolist()
         self._cached_q = q
 
     def _errors(self, targets: IKTargets) -> list[float]:
         """Fill the stacked task error (target minus current) and return the norms of its 7 groups."""
-        cog, left, right = _floats(targets.cog), _floats(targets.left_foot), _floats(targets.right_foot)
+        cog, left, right, lean = targets
+        if isinstance(cog, np.ndarray):  # plain Python numbers: scalar arithmetic on numpy scalars is slower
+            cog = cog.tolist()
+        if isinstance(left, np.ndarray):
+            left = left.tolist()
+        if isinstance(right, np.ndarray):
+            right = right.tolist()
         com, hl, hr = self._com, self._left, self._right
-        yaw = mean_heading(left[3], right[3])  # the torso's and pelvis's heading
+        cos, sin = math.cos, math.sin
+        left_yaw, right_yaw = left[3], right[3]
+        yaw = mean_heading(left_yaw, right_yaw)  # the torso's and pelvis's heading
+        c, s = cos(yaw), sin(yaw)
         e = [
             cog[0] - com[0], cog[1] - com[1], cog[2] - com[2],
             left[0] - hl[0][3], left[1] - hl[1][3], left[2] - hl[2][3],
-            *_yaw_error(hl, left[3]),
+            *_yaw_error(hl, cos(left_yaw), sin(left_yaw)),
             right[0] - hr[0][3], right[1] - hr[1][3], right[2] - hr[2][3],
-            *_yaw_error(hr, right[3]),
-            *_leaned_yaw_error(self._torso, yaw, targets.lean),
-            *_leaned_yaw_error(self._pelvis, yaw, targets.lean),
+            *_yaw_error(hr, cos(right_yaw), sin(right_yaw)),
+            *_leaned_yaw_error(self._torso, c, s, lean),
+            *_leaned_yaw_error(self._pelvis, c, s, lean),
         ]  # fmt: skip
         self._e = e
         hypot = math.hypot
@@ -255,28 +279,35 @@ class WholeBodyIK:
 
     def _step(self, q: np.ndarray) -> np.ndarray:
         """One damped Gauss-Newton step from ``q`` (whose kinematics are evaluated) within the joint limits."""
-        J = self._J
-        JtW = J.T * self._w
+        J, JtW = self._J, self._jtw
+        np.multiply(J, self._w_rows, out=self._wj)  # J^T W, through its view self._jtw
         H = JtW @ J
         H += self._damping
         # The posture pull weight * (q_posture - q) on the joint rows (the free flyer's have none).
-        g = JtW @ np.array(self._e)
-        g[6:] += self._pull_offset[6:] - self._posture * q[7:]
+        g = _dot(JtW, _fromiter(self._e, np.float64, _N_TASKS))
+        q_joints = q[7:]
+        g[6:] += self._pull_tail - self._posture * q_joints
         _, dq, info = dposv(H, g)
         if info != 0:  # pragma: no cover - H is symmetric positive definite by construction (damping > 0)
             raise np.linalg.LinAlgError(f"the IK normal equations are not positive definite (LAPACK info {info})")
-        joints = q[7:] + dq[6:]
+        size2 = float(_dot(dq, dq))
+        if size2 <= self._max_step2:
+            # Joint coordinates add exactly (q[7:] + dq[6:], one-coordinate joints): the integrated configuration's
+            # joints are the step's, and a step inside the limits (the usual case) is taken as it is.
+            q_new = pin.integrate(self.model, q, dq)
+            if not _outside(q_new.tolist()[7:], self._lower_list, self._upper_list):
+                return q_new
+        joints = q_joints + dq[6:]
         pinned = np.maximum(self._lower - joints, joints - self._upper).max() > 0.0
         if pinned:
             dq = self._pinned_step(q, joints, H, g)
-        size2 = float(dq @ dq)
+            size2 = float(_dot(dq, dq))
         if size2 > self._max_step2:
             dq *= math.sqrt(self._max_step2 / size2)
         q_new = pin.integrate(self.model, q, dq)
         if pinned:
-            # Joint coordinates add exactly (q[7:] + dq[6:]), so a step that passed the check above stays inside
-            # the limits; a pinned solve holds its joints at the limit to about 1e-6 of the step, and clipping
-            # removes that residue.
+            # A step that passed the check above stays inside the limits; a pinned solve holds its joints at the
+            # limit to about 1e-6 of the step, and clipping removes that residue.
             np.clip(q_new[7:], self._lower, self._upper, out=q_new[7:])
         return q_new
 
@@ -358,28 +389,37 @@ class WholeBodyIK:
         return IKErrors(*self._errors(targets), 0)
 
 
+def _outside(joints: list[float], lower: list[float], upper: list[float]) -> bool:
+    """Whether any joint coordinate is below its lower or above its upper limit (scalar comparisons: cheaper than
+    numpy's calls on a few dozen numbers)."""
+    for value, low, high in zip(joints, lower, upper, strict=True):  # noqa: SIM110 - a loop costs less than any()
+        if value < low or value > high:
+            return True
+    return False
+
+
 def _floats(values: np.ndarray | Sequence[float]) -> Sequence[float]:
     """A short vector as Python numbers: scalar arithmetic on numpy scalars is several times slower."""
     return values.tolist() if isinstance(values, np.ndarray) else values
 
 
 def _leaned_yaw_error(
-    h: list[list[float]], yaw: float, lean: Sequence[float] | None
+    h: list[list[float]], c: float, s: float, lean: Sequence[float] | None
 ) -> tuple[float, float, float]:
-    """World-frame rotation vector from rotation ``h`` to ``Exp(lean) Rz(yaw)`` (rad): :func:`_yaw_error` when
-    upright. With ``L = Exp(lean)``, ``L Rz R^T`` is ``Rz (L^T R)^T`` conjugated by ``L``, so its log is ``L`` times
-    the yaw error of ``L^T R``."""
+    """World-frame rotation vector from rotation ``h`` to ``Exp(lean) Rz(yaw)`` (rad), ``c, s = cos(yaw), sin(yaw)``:
+    :func:`_yaw_error` when upright. With ``L = Exp(lean)``, ``L Rz R^T`` is ``Rz (L^T R)^T`` conjugated by ``L``, so
+    its log is ``L`` times the yaw error of ``L^T R``."""
     if lean is None:
-        return _yaw_error(h, yaw)
+        return _yaw_error(h, c, s)
     lx, ly, lz = _floats(lean)
     angle = math.sqrt(lx * lx + ly * ly + lz * lz)
     if angle < 1e-12:
-        return _yaw_error(h, yaw)
+        return _yaw_error(h, c, s)
     L = _rotation(lx / angle, ly / angle, lz / angle, angle)
     rows = [row[:3] for row in h[:3]]
     # L^T R: entry (i, j) = sum_k L[k][i] R[k][j].
     tilted = [[L[0][i] * rows[0][j] + L[1][i] * rows[1][j] + L[2][i] * rows[2][j] for j in range(3)] for i in range(3)]
-    ex, ey, ez = _yaw_error(tilted, yaw)
+    ex, ey, ez = _yaw_error(tilted, c, s)
     return (L[0][0] * ex + L[0][1] * ey + L[0][2] * ez, L[1][0] * ex + L[1][1] * ey + L[1][2] * ez,
             L[2][0] * ex + L[2][1] * ey + L[2][2] * ez)  # fmt: skip
 
@@ -393,13 +433,16 @@ def _rotation(ux: float, uy: float, uz: float, angle: float) -> list[list[float]
             [k * uz * ux - s * uy, k * uz * uy + s * ux, c + k * uz * uz]]  # fmt: skip
 
 
-def _yaw_error(h: list[list[float]], yaw: float) -> tuple[float, float, float]:
-    """World-frame rotation vector from rotation ``h[:3][:3]`` to the level rotation of heading ``yaw`` (rad).
+def _yaw_error(h: list[list[float]], c: float, s: float) -> tuple[float, float, float]:
+    """World-frame rotation vector from rotation ``h[:3][:3]`` to the level rotation of heading ``yaw`` (rad), given
+    as ``c, s = cos(yaw), sin(yaw)``.
 
     That is log(Rz(yaw) R^T), from the skew part and the trace of ``E = Rz(yaw) R^T`` written out in scalars.
     """
-    c, s = math.cos(yaw), math.sin(yaw)
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = h[0][:3], h[1][:3], h[2][:3]
+    h0, h1, h2 = h[0], h[1], h[2]
+    r00, r01, r02 = h0[0], h0[1], h0[2]
+    r10, r11, r12 = h1[0], h1[1], h1[2]
+    r20, r21, r22 = h2[0], h2[1], h2[2]
     vx = 0.5 * (r12 - (s * r20 + c * r21))
     vy = 0.5 * ((c * r20 - s * r21) - r02)
     vz = 0.5 * ((s * r00 + c * r01) - (c * r10 - s * r11))

@@ -19,6 +19,8 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
+
 if TYPE_CHECKING:
     from rtgait.sim.model import SimModel
 
@@ -55,35 +57,38 @@ class FallLimits:
                 raise ValueError(f"fall limit {name} must be finite and > 0, got {value}")
 
 
-def _measure(data: mujoco.MjData, left_geom: int, right_geom: int) -> tuple[float, float, float, float, int, int, int]:
-    """:func:`measure_contacts` plus the number of active contacts that involve neither sole (leg on leg)."""
+def _measure(
+    efc_force: list[float],
+    addresses: list[int],
+    positions: list[list[float]],
+    geoms: list[list[int]],
+    left_geom: int,
+    right_geom: int,
+) -> tuple[float, float, float, float, int, int, int]:
+    """:func:`measure_contacts` from the contact list's arrays as Python numbers (the contacts' first rows in
+    ``efc_force``, their points and geom pairs), plus the number of active contacts that involve neither sole (leg on
+    leg). Python floats: a handful of contacts costs less as scalar arithmetic than as numpy calls."""
     fl = fr = sx = sy = 0.0
     cl = cr = other = 0
-    if data.ncon:
-        # Both arrays are reallocated by every step: they are fetched at each call. Python floats: a handful of
-        # contacts costs less as scalar arithmetic than as numpy calls.
-        efc_force = data.efc_force.tolist()
-        contacts = data.contact
-        # The contact list holds the ncon active contacts (its arrays have ncon rows).
-        for a, p, g in zip(contacts.efc_address.tolist(), contacts.pos.tolist(), contacts.geom.tolist(), strict=True):
-            if a < 0:  # inside the collision margin but not active: no force
-                continue
-            if left_geom in g:
-                left = True
-            elif right_geom in g:
-                left = False
-            else:  # the legs' boxes touching each other (frictionless, one row): not a support
-                other += 1
-                continue
-            fz = efc_force[a] + efc_force[a + 1] + efc_force[a + 2] + efc_force[a + 3]
-            sx += p[0] * fz
-            sy += p[1] * fz
-            if left:
-                fl += fz
-                cl += 1
-            else:
-                fr += fz
-                cr += 1
+    for a, p, g in zip(addresses, positions, geoms, strict=True):
+        if a < 0:  # inside the collision margin but not active: no force
+            continue
+        if left_geom in g:
+            left = True
+        elif right_geom in g:
+            left = False
+        else:  # the legs' boxes touching each other (frictionless, one row): not a support
+            other += 1
+            continue
+        fz = efc_force[a] + efc_force[a + 1] + efc_force[a + 2] + efc_force[a + 3]
+        sx += p[0] * fz
+        sy += p[1] * fz
+        if left:
+            fl += fz
+            cl += 1
+        else:
+            fr += fz
+            cr += 1
     return sx, sy, fl, fr, cl, cr, other
 
 
@@ -102,7 +107,13 @@ def measure_contacts(
     ``efc_force``, each with a unit normal component, and the normal force is their sum; this equals the first
     component of ``mujoco.mj_contactForce`` without a call per contact. Contacts between the legs are skipped.
     """
-    return _measure(data, left_geom, right_geom)[:6]
+    if not data.ncon:
+        return 0.0, 0.0, 0.0, 0.0, 0, 0
+    contacts = data.contact
+    return _measure(
+        data.efc_force.tolist(), contacts.efc_address.tolist(), contacts.pos.tolist(), contacts.geom.tolist(),
+        left_geom, right_geom,
+    )[:6]  # fmt: skip
 
 
 class ContactMonitor:
@@ -150,16 +161,19 @@ class ContactMonitor:
         self._airborne_ticks = max(1, round(falls.airborne / dt))
         self._airborne = 0
 
-    def measure(self, k: int, t: float) -> tuple[float, float, float, float]:
-        """Record tick ``k`` at time ``t`` (s) from the contacts of the last step, which describe the state at ``t``.
+    def measure(self, k: int, t: float, snapshot: StepSnapshot | None = None) -> tuple[float, float, float, float]:
+        """Record tick ``k`` at time ``t`` (s) from the contacts of the last step, which describe the state at ``t``
+        (``snapshot``: those arrays already read, :func:`~rtgait.sim.step_snapshot.read_snapshot`).
 
         Returns:
             ``(zmp_x, zmp_y, f_left, f_right)``: the measured ZMP (m; NaN while no foot touches the floor) and the
             vertical force on each foot (N).
         """
-        data = self._data
+        if snapshot is None:
+            snapshot = read_snapshot(self._data)
+        efc_force, addresses, positions, geoms, _, _, _, positions_of_sites, rotations = snapshot
         left_geom, right_geom = self._geoms
-        sx, sy, fl, fr, cl, cr, other = _measure(data, left_geom, right_geom)
+        sx, sy, fl, fr, cl, cr, other = _measure(efc_force, addresses, positions, geoms, left_geom, right_geom)
         total = fl + fr
         if total > self.threshold:
             x, y = sx / total, sy / total
@@ -170,8 +184,7 @@ class ContactMonitor:
         # The z-z entry of a sole's orientation is the cosine of its tilt from level (the model's few sites are
         # read at once).
         left, right = self._sites
-        rotations, positions = data.site_xmat.tolist(), data.site_xpos.tolist()
-        ml, mr, pl, pr = rotations[left], rotations[right], positions[left], positions[right]
+        ml, mr, pl, pr = rotations[left], rotations[right], positions_of_sites[left], positions_of_sites[right]
         cos_left, cos_right = ml[8], mr[8]
         self._pack(
             self._buffer, k * self._row_bytes,

@@ -300,20 +300,27 @@ class WalkingController:
     # ----- measurements and the planner's log ----------------------------------------------------------------------
     def _filter(self, m: Measurement) -> tuple[tuple[float, float] | None, FootState, FootState]:
         """The measured ZMP and feet with their loads and CoPs low-passed (NaN restarts a filter)."""
-        raw = [*m.zmp, m.left.normal_force, *m.left.cop_local, m.right.normal_force, *m.right.cop_local]
+        (zx, zy), fl, fr = m.zmp, m.left, m.right
+        (lx, ly), (rx, ry) = fl.cop_local, fr.cop_local
+        lz, rz = fl.normal_force, fr.normal_force
         state = self._filtered
-        if state is None or self._smoothing == 1.0:
-            state = raw
-        else:
+        if state is not None and self._smoothing != 1.0:
+            # Each of the eight filters written out (a comprehension over them costs twice as much):
+            # s + a (r - s), or the raw value r where either is NaN.
             a = self._smoothing
-            state = [r if (s != s or r != r) else s + a * (r - s) for s, r in zip(state, raw, strict=True)]
-        self._filtered = state
-        zx, zy, fl, lx, ly, fr, rx, ry = state
+            s0, s1, s2, s3, s4, s5, s6, s7 = state
+            zx = zx if (s0 != s0 or zx != zx) else s0 + a * (zx - s0)
+            zy = zy if (s1 != s1 or zy != zy) else s1 + a * (zy - s1)
+            lz = lz if (s2 != s2 or lz != lz) else s2 + a * (lz - s2)
+            lx = lx if (s3 != s3 or lx != lx) else s3 + a * (lx - s3)
+            ly = ly if (s4 != s4 or ly != ly) else s4 + a * (ly - s4)
+            rz = rz if (s5 != s5 or rz != rz) else s5 + a * (rz - s5)
+            rx = rx if (s6 != s6 or rx != rx) else s6 + a * (rx - s6)
+            ry = ry if (s7 != s7 or ry != ry) else s7 + a * (ry - s7)
+        self._filtered = [zx, zy, lz, lx, ly, rz, rx, ry]
         # FootState._replace(normal_force=..., cop_local=...) written out: _replace costs a microsecond a foot.
-        f = m.left
-        left = _new_tuple(type(f), (f[0], f[1], fl, f[3], (lx, ly), *f[5:]))
-        f = m.right
-        right = _new_tuple(type(f), (f[0], f[1], fr, f[3], (rx, ry), *f[5:]))
+        left = _new_tuple(type(fl), (fl[0], fl[1], lz, fl[3], (lx, ly), fl[5], fl[6], fl[7], fl[8], fl[9], fl[10]))
+        right = _new_tuple(type(fr), (fr[0], fr[1], rz, fr[3], (rx, ry), fr[5], fr[6], fr[7], fr[8], fr[9], fr[10]))
         return (None if zx != zx else (zx, zy)), left, right
 
     def _planner_events(self, t: float, events: list[ControlEvent]) -> None:

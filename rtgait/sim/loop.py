@@ -5,7 +5,8 @@ Every control tick (``sim.control_dt``: 1 ms for Talos, 2 ms for G1) of the walk
 1. **measure** (:class:`~rtgait.sim.measure.SimMeasurer`): per-foot contact wrench, centre of pressure and pose, the
    ZMP, the COM and its velocity, the DCM, and the landings since the last tick. They are read from the kinematics
    and contact forces the last physics step computed, i.e. of the state one physics step before ``t``: a real
-   robot's sensors lag by a sample too, and reading them costs no extra ``mj_forward``;
+   robot's sensors lag by a sample too, and reading them costs no extra ``mj_forward`` (with one physics step a
+   period, its contacts and sites as the last tick's record read them, :mod:`rtgait.sim.step_snapshot`);
 2. the walk's scheduled inputs (:mod:`rtgait.sim.loop_inputs`): the ``on_tick`` hook, the footstep changes due at
    ``t`` (at their connection mode's deadline, as :func:`rtgait.core.rollout.rollout` does) and the velocity
    commands due go to the planner; a walk by command is stopped after its steps;
@@ -67,11 +68,12 @@ from rtgait.sim.loop_options import (
     timing_headroom,
 )  # fmt: skip
 from rtgait.sim.loop_push import LivePush
-from rtgait.sim.loop_record import TickRecord, TickValues
+from rtgait.sim.loop_record import TickRecord, TickValues, row_packer
 from rtgait.sim.loop_result import loop_result
 from rtgait.sim.measure import SimMeasurer
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SUPPORT_CODES, SimResult
+from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 from rtgait.sim.tick_log import TickLog
 
 __all__ = [
@@ -220,15 +222,18 @@ class ClosedLoop:
         self._hot = (
             controller.tick, self.measurer.measure, ik.solve, self._servo, self.contacts, self.landings,
             self._pushes.update, self._live.update, mujoco.mj_step, model, data, data.ctrl, data.qpos,
-            data.subtree_com, data.site_xpos, data.actuator_force, sim.left_sole_site, sim.right_sole_site,
-            sim.base_body, sim.substeps, ankles, dt, k0, -1 if n_ticks is None else n_ticks,
+            data.subtree_com[sim.base_body], data.site_xpos, data.actuator_force, sim.left_sole_site,
+            sim.right_sole_site, sim.substeps, ankles, dt, k0, -1 if n_ticks is None else n_ticks,
         )  # fmt: skip
         r = self.record
+        # The rows of Python numbers are written by struct packing into the arrays' bytes (the same float64s for
+        # half the cost of a numpy assignment from a tuple).
         self._rows = (
-            r.planned, r.cog, r.cog_planned, r.base, r.support, r.torque, r.commanded, r.replay_qpos, r.replay_soles,
-            r.capacity, r.replay_every, r.replay_capacity,
+            row_packer(r.planned), row_packer(r.cog_planned), r.cog, r.base, r.support, r.torque, r.commanded,
+            r.replay_qpos, r.replay_soles, r.capacity, r.replay_every, r.replay_capacity,
         )  # fmt: skip
         self._over = False
+        self._snapshot: StepSnapshot | None = None  # the last tick's first step's contacts and sites
         self.k = 0
         """Ticks run so far."""
         self.fell, self.fall_time, self.fall_cause = False, None, None
@@ -267,10 +272,10 @@ class ClosedLoop:
         if self._over:
             raise RuntimeError("the closed loop is over (fallen or at its last tick): make its result()")
         (tick, measure, solve, servo, contacts, landings, pushes, live_push, mj_step, model, data, ctrl, qpos,
-         subtree_com, site_xpos, actuator_force, left_site, right_site, base_body, n_sub, ankles, dt, k0,
+         base_com, site_xpos, actuator_force, left_site, right_site, n_sub, ankles, dt, k0,
          n_ticks) = self._hot  # fmt: skip
-        (planned, cog, cog_planned, bases, support, torque, commanded, replay_qpos, replay_soles, capacity,
-         replay_every, replay_capacity) = self._rows  # fmt: skip
+        ((pack_planned, planned_bytes, planned_row), (pack_cog, cog_bytes, cog_row), cog, bases, support, torque,
+         commanded, replay_qpos, replay_soles, capacity, replay_every, replay_capacity) = self._rows  # fmt: skip
         if self._began is None:
             self._began = time.perf_counter()
         k = self.k
@@ -291,7 +296,10 @@ class ClosedLoop:
             dcm = dcm_planned = (math.nan, math.nan)
             out = measurement = None  # no controller during the transition
         else:
-            measurement = measure(data, t)
+            # One physics step a period: the last tick read the contacts and sites of the state measured now, and
+            # its complete log's record ran mj_subtreeVel on it.
+            last = self._snapshot if n_sub == 1 else None
+            measurement = measure(data, t, last, last is not None and self.log is not None)
             if k == k0:
                 self.controller.start(0.0, measurement)
                 self._inputs.start()
@@ -338,8 +346,9 @@ class ClosedLoop:
         if replay_row >= 0:
             replay_soles[replay_row, 0] = site_xpos[left_site]
             replay_soles[replay_row, 1] = site_xpos[right_site]
-        cog[i] = subtree_com[base_body]
-        zx, zy, fl, fr = contacts.measure(i, t)
+        cog[i] = base_com
+        snapshot = self._snapshot = read_snapshot(data)
+        zx, zy, fl, fr = contacts.measure(i, t, snapshot)
         if self.log is not None:
             self.log.record(i, left_foot, right_foot, out, measurement, self.controller.level)
         for j in range(1, n_sub):
@@ -348,8 +357,8 @@ class ClosedLoop:
             tau += actuator_force
         if n_sub > 1:
             tau *= 1.0 / n_sub
-        planned[i] = planned_x, planned_y, command_x, command_y, *dcm, *dcm_planned
-        cog_planned[i] = target_cog
+        pack_planned(planned_bytes, i * planned_row, planned_x, planned_y, command_x, command_y, *dcm, *dcm_planned)
+        pack_cog(cog_bytes, i * cog_row, *target_cog)
         support[i] = code
         landings.update(t, phase, code, fl, fr)
 

@@ -62,6 +62,7 @@ import mujoco
 import numpy as np
 
 from rtgait.core.footsteps import Footstep, Side
+from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
 if TYPE_CHECKING:  # the model module is being rewritten: only its attribute names are relied on
     from rtgait.sim.model import SimModel
@@ -257,6 +258,8 @@ class SimMeasurer:
         self._force = np.zeros(6)  # the one buffer mj_contactForce writes into (contacts not decoded here)
         self._pyramidal = model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL
         self._landed: list[Landing] = []
+        self._rows_of: mujoco.MjData | None = None
+        self._base_rows: tuple[np.ndarray, np.ndarray] = (self._force, self._force)
         self.reset()
 
     @classmethod
@@ -281,9 +284,17 @@ class SimMeasurer:
         self._unloaded_since = [-math.inf, -math.inf]
         self._primed = False
 
-    def measure(self, data: mujoco.MjData, t: float | None = None) -> Measurement:
+    def measure(
+        self,
+        data: mujoco.MjData,
+        t: float | None = None,
+        snapshot: StepSnapshot | None = None,
+        velocities: bool = False,
+    ) -> Measurement:
         """The measurement of ``data`` (see the module docstring for which state that is), stamped ``t`` (s;
-        default ``data.time``)."""
+        default ``data.time``); ``snapshot``: its contact and site arrays already read
+        (:func:`~rtgait.sim.step_snapshot.read_snapshot`, of this same state); ``velocities``: whether
+        ``mj_subtreeVel`` has already been run on this state (it is not run again)."""
         model = self.model
         t = float(data.time) if t is None else float(t)
         owner = self._owner
@@ -291,17 +302,11 @@ class SimMeasurer:
         lx = ly = lz = lmx = lmy = lmz = 0.0
         rx = ry = rz = rmx = rmy = rmz = 0.0
         left_count = right_count = other = 0
-        ncon = data.ncon
-        if ncon:
-            contacts = data.contact
-            frames = contacts.frame.tolist()
-            positions = contacts.pos.tolist()
-            geoms = contacts.geom.tolist()
-            addresses = contacts.efc_address.tolist()
-            dims = contacts.dim.tolist()
-            frictions = contacts.friction.tolist()
-            efc = data.efc_force.tolist()
-            for i in range(ncon):
+        if snapshot is None:
+            snapshot = read_snapshot(data)
+        efc, addresses, positions, geoms, frames, dims, frictions, sites_position, sites_rotation = snapshot
+        if addresses:
+            for i in range(len(addresses)):
                 address = addresses[i]
                 if address < 0:  # within the margin but not active: no force
                     continue
@@ -362,7 +367,6 @@ class SimMeasurer:
                     rmz += mz
                     right_count += 1
 
-        sites_position, sites_rotation = data.site_xpos.tolist(), data.site_xmat.tolist()
         h = self.ground_height
         min_force = self.min_force
         landings = _NO_LANDINGS
@@ -388,10 +392,14 @@ class SimMeasurer:
             zmp_my += ((oz - h) * fx - ox * fz) + ty
             total += fz
         zmp = (-zmp_my / total, zmp_mx / total) if total > min_force else _NAN2
-        mujoco.mj_subtreeVel(model, data)
-        base = self.base_body
-        cx, cy, cz = data.subtree_com[base].tolist()
-        vx, vy, vz = data.subtree_linvel[base].tolist()
+        if not velocities:
+            mujoco.mj_subtreeVel(model, data)
+        if data is not self._rows_of:  # the base's rows of this data's fixed-size arrays, as views kept
+            base = self.base_body
+            self._rows_of, self._base_rows = data, (data.subtree_com[base], data.subtree_linvel[base])
+        com_row, linvel_row = self._base_rows
+        cx, cy, cz = com_row.tolist()
+        vx, vy, vz = linvel_row.tolist()
         w = self.omega
         return _new_tuple(
             Measurement,

@@ -157,7 +157,6 @@ class TickLog:
         model = sim.model
         nu = model.nu
         self._model, self._data, self._servo = model, data, servo
-        self._base = sim.base_body
         self._sites = (sim.left_sole_site, sim.right_sole_site)
         self._gear = model.actuator_gear[:, 0].copy()
         self.omega = float(omega)
@@ -173,8 +172,9 @@ class TickLog:
         self._pack = struct.Struct(f"={_SCALARS}d").pack_into
         # Views of MuJoCo's fixed-size arrays stay valid for the life of ``data``.
         self._length, self._actuator_velocity = data.actuator_length, data.actuator_velocity
-        self._site_xpos, self._site_xmat, self._subtree_linvel = data.site_xpos, data.site_xmat, data.subtree_linvel
-        self._cvel = data.cvel
+        self._site_xpos, self._site_xmat = data.site_xpos, data.site_xmat
+        # The base's rows, kept as views too (indexing costs as much as reading them).
+        self._base_linvel, self._base_cvel = data.subtree_linvel[sim.base_body], data.cvel[sim.base_body]
 
     def record(
         self,
@@ -193,7 +193,6 @@ class TickLog:
         rows[2] = self._servo.qd
         self._sites_position[k] = self._site_xpos
         self._sites_rotation[k] = self._site_xmat
-        base = self._base
         mujoco.mj_subtreeVel(self._model, self._data)
         if measurement is None:
             feet = _NAN_FEET
@@ -210,7 +209,7 @@ class TickLog:
             plan = (dx, dy, w * (xi_x - (cx - dx)), w * (xi_y - (cy - dy)))
             phase, support = targets.phase, SUPPORT_CODES[targets.support]
         self._pack(
-            self._buffer, k * self._row_bytes, *self._subtree_linvel[base].tolist(), *self._cvel[base].tolist(),
+            self._buffer, k * self._row_bytes, *self._base_linvel.tolist(), *self._base_cvel.tolist(),
             *left_foot, *right_foot, *feet, *plan, phase, support, LEVEL_CODES[level],
         )  # fmt: skip
 

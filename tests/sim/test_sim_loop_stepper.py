@@ -147,3 +147,28 @@ def test_a_live_push_acts_for_its_duration_even_if_the_forces_are_cleared(talos,
     with pytest.raises(ValueError, match="exceeds"):
         loop.push((1e7, 0.0, 0.0))
     assert math.isfinite(loop.result().wall_time)
+
+
+def test_the_measurement_reads_the_contacts_the_last_tick_read_of_the_same_state(talos, talos_sim, shorten):
+    """With one physics step a control period, the controller's measurement reuses the contacts and sites the last
+    tick's record read after its step, and the subtree velocities its complete log computed: nothing between the two
+    may change them (a push acting included)."""
+    import mujoco
+
+    from rtgait.sim.step_snapshot import read_snapshot
+
+    assert talos_sim.substeps == 1
+    level, walk = controller(talos, talos_sim, shorten, steps=2)
+    options = dataclasses.replace(QUICK, changes=walk.changes, pushes=(Push(0.9, 0.1, (0.0, 40.0, 0.0)),))
+    loop = ClosedLoop(talos_sim, level, options)
+    checked = 0
+    while loop.step():
+        if loop.done:
+            break
+        kept = loop._snapshot
+        assert kept is not None and read_snapshot(loop.data) == kept
+        velocities = loop.data.subtree_linvel.copy()
+        mujoco.mj_subtreeVel(talos_sim.model, loop.data)
+        assert np.array_equal(loop.data.subtree_linvel, velocities)
+        checked += 1
+    assert checked == loop.k - 1 and kept.addresses, "ticks checked, with contacts"
