@@ -5,7 +5,8 @@ Modules (import them directly; this package imports nothing, so importing it nee
 
 * :mod:`rtgait.sim.model`: ``build_sim_model(robot)``, the MuJoCo model built at run time from the robot
   description's URDF (free-floating base, sole contact boxes, floor, PD servos, half-sitting start);
-  :mod:`rtgait.sim.actuation` and :mod:`rtgait.sim.contact_model` its servos and contacts.
+  :mod:`rtgait.sim.urdf_import` the URDF as MuJoCo reads it, :mod:`rtgait.sim.actuation` and
+  :mod:`rtgait.sim.contact_model` its servos and contacts.
 * :mod:`rtgait.sim.measure`: what a controller measures each tick (per-foot wrench, CoP, foot poses, COM, DCM,
   landings); :mod:`rtgait.sim.foot_control`: ankle damping and foot force-difference control.
 * :mod:`rtgait.sim.controllers` (settings in :mod:`rtgait.sim.control_settings`): the levels ``open-loop``,

@@ -37,6 +37,7 @@ import pinocchio as pin
 from scipy.spatial import ConvexHull, QhullError
 
 from rtgait.robot.model import RobotModel
+from rtgait.sim.urdf_import import resolve_mesh
 
 if TYPE_CHECKING:
     from rtgait.sim.model import SimConfig
@@ -61,7 +62,6 @@ SOLE_BITS = (0, 1)
 """``(contype, conaffinity)`` of the sole boxes: they touch the floor only."""
 LEG_BITS = {"left": (2, 4), "right": (4, 2)}
 """``(contype, conaffinity)`` of each leg's boxes: a left box and a right box collide, two boxes of one leg do not."""
-_PACKAGE = "package://"
 _CLEARANCE = 0.002  # m: boxes closer than this at half-sitting are taken as touching (their pair is excluded)
 
 
@@ -168,19 +168,10 @@ def _origin(element: ElementTree.Element) -> tuple[np.ndarray, np.ndarray]:
     return _rotation_rpy(origin.get("rpy", "0 0 0")), np.array([float(v) for v in origin.get("xyz", "0 0 0").split()])
 
 
-def _resolve(uri: str, urdf: Path, package_dirs: tuple[Path, ...]) -> Path | None:
-    if uri.startswith(_PACKAGE):
-        relative = uri[len(_PACKAGE) :]
-        return next((folder / relative for folder in package_dirs if (folder / relative).is_file()), None)
-    path = Path(uri.removeprefix("file://"))
-    path = path if path.is_absolute() else urdf.parent / path
-    return path if path.is_file() else None
-
-
 def _shape_points(geometry: ElementTree.Element, urdf: Path, package_dirs: tuple[Path, ...]) -> np.ndarray | None:
     """Points whose bounding box is the shape's, in the shape's own frame (m); ``None`` if unreadable."""
     if geometry.tag == "mesh":
-        path = _resolve(geometry.get("filename", ""), urdf, package_dirs)
+        path = resolve_mesh(geometry.get("filename", ""), urdf, package_dirs)
         if path is None:
             return None
         scale = np.array([float(v) for v in geometry.get("scale", "1 1 1").split()])

@@ -31,33 +31,22 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
-import xml.etree.ElementTree as ElementTree
 from dataclasses import dataclass
-from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from rtgait.robot.description import RobotDescription, RobotError
+from rtgait.robot.description import RobotError
 from rtgait.robot.model import RobotModel
 from rtgait.sim.actuation import Actuation, add_actuators, resolve_actuation, substeps
 from rtgait.sim.contact_model import add_floor, add_leg_shapes, add_sole, exclude_pairs, touching_pairs
+from rtgait.sim.urdf_import import MESH_FORMATS, MeshSkippedWarning, compile_spec, lock_joint, urdf_for_mujoco
 
 __all__ = ["MESH_FORMATS", "SETTLE_TIME", "MeshSkippedWarning", "SimConfig", "SimModel", "build_sim_model"]
-
-MESH_FORMATS = (".stl", ".obj", ".msh")
-"""Mesh file formats MuJoCo decodes; other visual meshes (Romeo's COLLADA ``.dae``) are left out of the model."""
-
-
-class MeshSkippedWarning(UserWarning):
-    """Visual meshes of the robot were left out of its MuJoCo model (a format MuJoCo cannot decode)."""
-
 
 SETTLE_TIME = 0.2
 """Physics time (s) a fresh state stands still before its clock starts (see :meth:`SimModel.reset`)."""
 
-_PACKAGE = "package://"
 
 
 @dataclass(frozen=True)
@@ -311,126 +300,6 @@ class SimModel:
         mujoco.mj_forward(model, data)
 
 
-# ----- URDF text -------------------------------------------------------------------------------------------------
-
-
-def _resolve_mesh(uri: str, description: RobotDescription) -> str | None:
-    """Absolute path of a URDF mesh URI, or ``None`` when no file is found."""
-    if uri.startswith(_PACKAGE):
-        relative = uri[len(_PACKAGE) :]
-        for folder in description.package_dirs:
-            candidate = folder / relative
-            if candidate.is_file():
-                return str(candidate)
-        return None
-    path = Path(uri.removeprefix("file://"))
-    if not path.is_absolute():
-        path = description.urdf.parent / path
-    return str(path) if path.is_file() else None
-
-
-def _urdf_for_mujoco(description: RobotDescription, meshes: bool) -> str:
-    """The URDF's text, ready for MuJoCo's importer (see the module docstring)."""
-    try:
-        root = ElementTree.parse(description.urdf).getroot()
-    except (OSError, ElementTree.ParseError) as error:
-        raise RobotError(f"model.urdf {description.urdf} is not a readable URDF: {error}") from None
-    for old in root.findall("mujoco"):
-        root.remove(old)
-    for joint in root.findall("joint"):
-        # A <mimic> becomes an equality constraint in MuJoCo, which fails once the joints it names are locked
-        # (Romeo's fingers); every joint is either locked or driven by its own servo here.
-        for mimic in joint.findall("mimic"):
-            joint.remove(mimic)
-    undecodable: dict[str, int] = {}
-    for link in root.findall("link"):
-        for collision in link.findall("collision"):
-            link.remove(collision)
-        for visual in link.findall("visual"):
-            mesh = visual.find("geometry/mesh")
-            if mesh is None:
-                continue
-            path = _resolve_mesh(mesh.get("filename", ""), description) if meshes else None
-            suffix = Path(path).suffix.lower() if path is not None else ""
-            if path is not None and suffix not in MESH_FORMATS:
-                undecodable[suffix] = undecodable.get(suffix, 0) + 1
-                path = None
-            if path is None:
-                # A missing or undecodable mesh file is only a missing picture; the physics does not depend on it.
-                link.remove(visual)
-            else:
-                mesh.set("filename", path)
-    if undecodable:
-        kinds = ", ".join(f"{count} {suffix}" for suffix, count in sorted(undecodable.items()))
-        warnings.warn(
-            f"{description.name}: visual meshes MuJoCo cannot decode ({kinds}) are left out of its MuJoCo model "
-            "(they are only its picture; the 3D replay draws them)",
-            MeshSkippedWarning,
-            stacklevel=3,
-        )
-    extension = ElementTree.Element("mujoco")
-    ElementTree.SubElement(
-        extension,
-        "compiler",
-        {
-            "strippath": "false",  # keep the absolute mesh paths written above
-            "discardvisual": "false",  # the visual meshes are the only picture of the robot left
-            "inertiafromgeom": "false",  # the URDF's <inertial> only, as Pinocchio reads it
-            "balanceinertia": "true",  # a few URDF inertias violate the triangle inequality slightly
-            "fusestatic": "true",  # links on fixed joints (and locked ones) become part of their parent
-            "angle": "radian",
-        },
-    )
-    root.insert(0, extension)
-    return ElementTree.tostring(root, encoding="unicode")
-
-
-# ----- spec edits ------------------------------------------------------------------------------------------------
-
-
-def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    out = np.empty(4)
-    mujoco.mju_mulQuat(out, a, b)
-    return out
-
-
-def _rotate(quat: np.ndarray, vector: np.ndarray) -> np.ndarray:
-    out = np.empty(3)
-    mujoco.mju_rotVecQuat(out, vector, quat)
-    return out
-
-
-def _lock_joint(spec: mujoco.MjSpec, joint: mujoco.MjsJoint, angle: float) -> None:
-    """Turn (or slide) the joint's body by ``angle`` about the joint axis and remove the joint."""
-    body = joint.parent
-    axis = np.array(joint.axis, dtype=float)
-    axis /= np.linalg.norm(axis)
-    anchor = np.array(joint.pos, dtype=float)
-    quat = np.array(body.quat, dtype=float)
-    quat /= np.linalg.norm(quat)
-    if joint.type == mujoco.mjtJoint.mjJNT_HINGE:
-        turn = np.empty(4)
-        mujoco.mju_axisAngle2Quat(turn, axis, angle)
-        # A rotation about an axis through `anchor` (body coordinates): the body origin moves unless anchor = 0.
-        body.pos = np.array(body.pos) + _rotate(quat, anchor - _rotate(turn, anchor))
-        body.quat = _quat_mul(quat, turn)
-    elif joint.type == mujoco.mjtJoint.mjJNT_SLIDE:
-        body.pos = np.array(body.pos) + _rotate(quat, angle * axis)
-    else:  # pragma: no cover - descriptions only name one-coordinate joints, and URDFs have no others
-        raise RobotError(f"cannot lock joint {joint.name!r} of type {joint.type}")
-    if hasattr(spec, "delete"):
-        spec.delete(joint)
-    else:  # MuJoCo before 3.4 removes an element through the element itself
-        joint.delete()
-
-
-def _compile(spec: mujoco.MjSpec, description: RobotDescription) -> mujoco.MjModel:
-    try:
-        return spec.compile()
-    except ValueError as error:
-        raise RobotError(f"model.urdf {description.urdf}: MuJoCo cannot compile the robot: {error}") from None
-
-
 def _half_sitting_qpos(model: mujoco.MjModel, robot: RobotModel) -> np.ndarray:
     """MuJoCo ``qpos`` of the half-sitting configuration, joints by name (before a :class:`SimModel` exists)."""
     qpos = np.zeros(model.nq)
@@ -454,7 +323,7 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
     config = (config or SimConfig()).resolved(robot)
     description = robot.description
     try:
-        spec = mujoco.MjSpec.from_string(_urdf_for_mujoco(description, config.meshes))
+        spec = mujoco.MjSpec.from_string(urdf_for_mujoco(description, config.meshes))
     except ValueError as error:
         raise RobotError(f"model.urdf {description.urdf}: MuJoCo cannot read it: {error}") from None
     spec.modelname = description.name
@@ -462,7 +331,7 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
     moving = set(robot.joint_names)
     for joint in list(spec.joints):
         if joint.name not in moving:
-            _lock_joint(spec, joint, description.posture_angle(joint.name))
+            lock_joint(spec, joint, description.posture_angle(joint.name))
     for geom in spec.geoms:
         geom.contype, geom.conaffinity = 0, 0
 
@@ -479,13 +348,13 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
     spec.option.timestep = config.physics_dt
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.noslip_iterations = config.noslip_iterations
-    model = _compile(spec, description)
+    model = compile_spec(spec, description)
     excluded: list[tuple[str, str]] = []
     if shapes:
         excluded = touching_pairs(model, _half_sitting_qpos(model, robot), shapes)
         if excluded:
             exclude_pairs(spec, excluded)
-            model = _compile(spec, description)
+            model = compile_spec(spec, description)
 
     def ident(kind: mujoco.mjtObj, name: str) -> int:
         index = mujoco.mj_name2id(model, kind, name)
