@@ -187,14 +187,11 @@ class WholeBodyIK:
         self._w_rows = np.repeat(self._w[:, None], nv, axis=1)
         self._wj = np.empty((_N_TASKS, nv))
         self._jtw = self._wj.T
-        self._pull_tail = np.empty(0)
         diagonal = np.full(nv, w.damping)
         diagonal[6:] += w.posture
         self._damping = np.diag(diagonal)
-        self._pull_matrix = np.zeros((nv, model.nq))
-        self._pull_matrix[6:, 7:] = w.posture * np.eye(nv - 6)
-        self._pull_offset = self._pull_matrix @ robot.q_half_sitting
-        self._pull_tail = self._pull_offset[6:]
+        # The posture pull mu (q_posture - q) on the joint rows: mu q_posture, and mu.
+        self._pull_tail = w.posture * robot.q_half_sitting[7:]
         self._posture = w.posture
         self._max_step2 = max_step * max_step
         self._lower_list, self._upper_list = self._lower.tolist(), self._upper.tolist()
@@ -249,12 +246,7 @@ class WholeBodyIK:
     def _errors(self, targets: IKTargets) -> list[float]:
         """Fill the stacked task error (target minus current) and return the norms of its 7 groups."""
         cog, left, right, lean = targets
-        if isinstance(cog, np.ndarray):  # plain Python numbers: scalar arithmetic on numpy scalars is slower
-            cog = cog.tolist()
-        if isinstance(left, np.ndarray):
-            left = left.tolist()
-        if isinstance(right, np.ndarray):
-            right = right.tolist()
+        cog, left, right = _floats(cog), _floats(left), _floats(right)
         com, hl, hr = self._com, self._left, self._right
         cos, sin = math.cos, math.sin
         left_yaw, right_yaw = left[3], right[3]

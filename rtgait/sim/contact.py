@@ -12,13 +12,13 @@ foot rolled onto an edge of its sole). :class:`Landings` counts the steps whose 
 from __future__ import annotations
 
 import math
-import struct
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
+from rtgait.sim.loop_record import row_packer
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
 if TYPE_CHECKING:
@@ -151,9 +151,7 @@ class ContactMonitor:
         self._table = np.zeros((n_ticks, _COLUMNS))
         # A row is written with one struct packing into the table's bytes: a numpy assignment from a tuple of Python
         # numbers costs twice as much (the values stored are the same float64s).
-        self._buffer = memoryview(self._table).cast("B")
-        self._row_bytes = _COLUMNS * self._table.itemsize
-        self._pack = struct.Struct(f"={_COLUMNS}d").pack_into
+        self._pack, self._buffer, self._row_bytes = row_packer(self._table)
         self.tip_time: float | None = None
         self._cos_tip = math.cos(falls.tip_angle)
         self._cos_fall = math.cos(falls.tilt)
@@ -201,7 +199,7 @@ class ContactMonitor:
     def fall(self, base: np.ndarray) -> str | None:
         """Why the robot has fallen, from the base pose ``(x, y, z, qw, qx, qy, qz)`` at the tick last measured,
         or ``None``."""
-        _, _, z, _, bx, by, _ = base.tolist() if isinstance(base, np.ndarray) else base  # Python floats: cheaper
+        _, _, z, _, bx, by, _ = base.tolist()  # Python floats: cheaper than numpy scalars
         upright = 1.0 - 2.0 * (bx * bx + by * by)  # z component of the base's z axis
         if z < self._z_low:
             return "base too low"

@@ -141,7 +141,7 @@ class TickRecord:
 
 def row_packer(rows: np.ndarray) -> tuple[Callable[..., None], memoryview, int]:
     """``(pack_into, bytes, row size)`` writing a row of Python numbers into the C-contiguous float64 ``rows``."""
-    if rows.dtype != np.float64 or not rows.flags.c_contiguous:  # pragma: no cover - TickRecord allocates them so
+    if rows.dtype != np.float64 or not rows.flags.c_contiguous:  # pragma: no cover - every caller allocates them so
         raise ValueError("rows must be a C-contiguous float64 array")
     n = rows.shape[1]
     return struct.Struct(f"={n}d").pack_into, memoryview(rows).cast("B"), n * rows.itemsize

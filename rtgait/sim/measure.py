@@ -257,7 +257,6 @@ class SimMeasurer:
         self._owner = owner
         self._force = np.zeros(6)  # the one buffer mj_contactForce writes into (contacts not decoded here)
         self._pyramidal = model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL
-        self._landed: list[Landing] = []
         self._rows_of: mujoco.MjData | None = None
         self._base_rows: tuple[np.ndarray, np.ndarray] = (self._force, self._force)
         self.reset()
@@ -369,18 +368,17 @@ class SimMeasurer:
 
         h = self.ground_height
         min_force = self.min_force
-        landings = _NO_LANDINGS
-        self._landed.clear()  # _foot appends this tick's landings
-        left_foot = self._foot(
+        left_foot, left_landing = self._foot(
             0, t, lx, ly, lz, lmx, lmy, lmz, left_count, sites_position[self.left_site],
             sites_rotation[self.left_site],
         )  # fmt: skip
-        right_foot = self._foot(
+        right_foot, right_landing = self._foot(
             1, t, rx, ry, rz, rmx, rmy, rmz, right_count, sites_position[self.right_site],
             sites_rotation[self.right_site],
         )  # fmt: skip
-        if self._landed:
-            landings = tuple(self._landed)
+        landings = _NO_LANDINGS
+        if left_landing is not None or right_landing is not None:
+            landings = tuple(landing for landing in (left_landing, right_landing) if landing is not None)
         self._primed = True
         # ZMP moments about (0, 0, h): (o - O) x F + tau_o per foot, in the order the feet are summed.
         zmp_mx = zmp_my = total = 0.0
@@ -410,17 +408,17 @@ class SimMeasurer:
     def _foot(
         self, index: int, t: float, fx: float, fy: float, fz: float, mx: float, my: float, mz: float, count: int,
         position: list[float], m: list[float],
-    ) -> FootState:
+    ) -> tuple[FootState, Landing | None]:
         """One foot's state from its summed force ``(fx, fy, fz)`` (N) and moment about the world origin (N m), and
-        its sole frame's position and row-major rotation; a landing is kept in ``_landed``."""
+        its sole frame's position and row-major rotation; and its landing at this tick, if it landed."""
         ox, oy, oz = position
         # Moment about the sole origin: tau_o = M - o x F.
         tx = mx - (oy * fz - oz * fy)
         ty = my - (oz * fx - ox * fz)
         tz = mz - (ox * fy - oy * fx)
         # The sole frame's components: R^T v, R row-major (m[3 r + c] = R[r][c]).
-        m0, m1, _, m3, m4, _, m6, m7, m8 = m
-        lfz = m[2] * fx + m[5] * fy + m8 * fz
+        m0, m1, m2, m3, m4, m5, m6, m7, m8 = m
+        lfz = m2 * fx + m5 * fy + m8 * fz
         if lfz > self.min_force:
             ltx = m0 * tx + m3 * ty + m6 * tz
             lty = m1 * tx + m4 * ty + m7 * tz
@@ -439,14 +437,16 @@ class SimMeasurer:
         cosine = m8 if m8 < 1.0 else 1.0
         tilt = math.acos(cosine if cosine > -1.0 else -1.0)
         loaded = self._update_load(index, fz, t)
+        landing = None
         if loaded is None:
             loaded = True
             side: Side = "left" if index == 0 else "right"
-            self._landed.append(_new_tuple(Landing, (t, side, ox, oy, oz, yaw, roll, pitch, fz)))
-        return _new_tuple(
+            landing = _new_tuple(Landing, (t, side, ox, oy, oz, yaw, roll, pitch, fz))
+        foot = _new_tuple(
             FootState,
             ((fx, fy, fz), (tx, ty, tz), fz, cop, cop_local, (ox, oy, oz, yaw), roll, pitch, tilt, loaded, count),
         )
+        return foot, landing
 
     def _update_load(self, index: int, fz: float, t: float) -> bool | None:
         """The foot's load state after this tick's force ``fz`` (N); ``None`` for a landing (then loaded)."""

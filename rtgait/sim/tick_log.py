@@ -34,7 +34,6 @@ plan's DCM ``xi_plan`` and COM ``c_plan``, the IK's COM target minus the correct
 from __future__ import annotations
 
 import math
-import struct
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -43,6 +42,7 @@ import numpy as np
 
 from rtgait.core.closed_loop import CONTROLLERS
 from rtgait.core.footsteps import SoleRect
+from rtgait.sim.loop_record import row_packer
 from rtgait.sim.result import SUPPORT_CODES
 
 if TYPE_CHECKING:
@@ -167,9 +167,7 @@ class TickLog:
         self._sites_position = np.full((n_ticks, model.nsite, 3), math.nan)
         self._sites_rotation = np.full((n_ticks, model.nsite, 9), math.nan)
         self._scalars = np.full((n_ticks, _SCALARS), math.nan)
-        self._buffer = memoryview(self._scalars).cast("B")
-        self._row_bytes = _SCALARS * self._scalars.itemsize
-        self._pack = struct.Struct(f"={_SCALARS}d").pack_into
+        self._pack, self._buffer, self._row_bytes = row_packer(self._scalars)
         # Views of MuJoCo's fixed-size arrays stay valid for the life of ``data``.
         self._length, self._actuator_velocity = data.actuator_length, data.actuator_velocity
         self._site_xpos, self._site_xmat = data.site_xpos, data.site_xmat
