@@ -125,7 +125,6 @@ def in_place_bounds(
     ``max_lean`` (rad): the lean's limit (default: :class:`~rtgait.sim.controllers.ControllerOptions`'s).
     """
     import numpy as np
-    from scipy.spatial import ConvexHull
 
     from rtgait.core.footsteps import mean_heading
     from rtgait.core.online import OnlinePlanner
@@ -141,7 +140,6 @@ def in_place_bounds(
     dcm = np.array([walked.column("dcm_x")[-1], walked.column("dcm_y")[-1]])
     feet = [walked.footprints[site.step]] if site.phase == "single" else walked.footprints[site.step : site.step + 2]
     corners = np.vstack([walk.sole.corners(foot) for foot in feet])
-    polygon = corners[ConvexHull(corners).vertices]
     heading = feet[0].yaw if len(feet) == 1 else mean_heading(feet[0].yaw, feet[1].yaw)
     w = math.sqrt(scenario.gravity / robot.description.cog_height)
     limits = hip_strategy_limits(robot, ControllerOptions().max_lean if max_lean is None else max_lean)
@@ -150,7 +148,8 @@ def in_place_bounds(
     for angle in angles:
         a = math.radians(angle)
         u = np.array([math.cos(a), math.sin(a)])
-        sole = robot.mass * w * max(float(np.max(polygon @ u) - dcm @ u), 0.0)
+        # The polygon's farthest point along u is one of the soles' corners: no hull needed.
+        sole = robot.mass * w * max(float(np.max(corners @ u) - dcm @ u), 0.0)
         # Each heading axis leans at its own limit: the CMP's reach along u is the box's support function.
         lean = robot.mass * w * (abs(math.cos(a - heading)) * forward + abs(math.sin(a - heading)) * lateral)
         bounds[angle] = (sole, lean)
