@@ -2,7 +2,8 @@
 
 :class:`~rtgait.core.online.OnlinePlanner` takes these methods from :class:`PlannerWalk` (a mixin, like
 :class:`~rtgait.core.measured.MeasuredPlanning` and :class:`~rtgait.core.layouts.PlanShapes`): the walk's
-footprints, phase start times (absolute, s: the walk's start time :attr:`~PlannerWalk.t0` plus the timeline's),
+queries (:class:`WalkQueries`, which :class:`~rtgait.core.preview.PreviewPlanner` shares): footprints, phase start
+times (absolute, s: the walk's start time :attr:`~PlannerWalk.t0` plus the timeline's),
 change deadlines and the first step still open, all read from the planner's :class:`~rtgait.core.walk.Walk`; and
 the changes (:meth:`~PlannerWalk.change_step`, :meth:`~PlannerWalk.set_strides`, :meth:`~PlannerWalk.set_footsteps`,
 :meth:`~PlannerWalk.set_velocity`, :meth:`~PlannerWalk.stop`), each made on the walk
@@ -28,10 +29,14 @@ from rtgait.core.velocity_command import VelocityCommand
 from rtgait.core.walk import Walk
 
 
-class PlannerWalk:
-    """The walk methods of :class:`~rtgait.core.online.OnlinePlanner` (see the module docstring)."""
+class WalkQueries:
+    """What a planner tells of its walk, read from its :class:`~rtgait.core.walk.Walk` (``self._walk``) and its
+    start time (``self._t0``, s): shared by :class:`~rtgait.core.online.OnlinePlanner` (through
+    :class:`PlannerWalk`) and :class:`~rtgait.core.preview.PreviewPlanner`."""
 
-    # ----- the walk ---------------------------------------------------------------------------------------
+    _walk: Walk
+    _t0: float
+
     @property
     def walk(self) -> Walk:
         """Footprints, strides, command and deadlines (changed through the planner's methods)."""
@@ -61,11 +66,6 @@ class PlannerWalk:
         """Absolute time at which the walk has come to rest (s); ``inf`` while walking by command."""
         return self._t0 + self.timeline.end_time
 
-    @property
-    def latest_time(self) -> float:
-        """The latest time sampled (s); ``-inf`` before the first sample."""
-        return self._latest
-
     def footprints(self, upto: int | None = None) -> list[Footstep]:
         """Footprints ``F[0..]`` (see :mod:`rtgait.core.footsteps`), as planned now.
 
@@ -90,6 +90,17 @@ class PlannerWalk:
     def contact_feet(self, q: int) -> list[Footstep]:
         """Footprints on the ground during phase ``q``."""
         return self._walk.contact_feet(q)
+
+
+
+class PlannerWalk(WalkQueries):
+    """The walk methods of :class:`~rtgait.core.online.OnlinePlanner` (see the module docstring): the queries of
+    :class:`WalkQueries`, the latest time sampled and the changes."""
+
+    @property
+    def latest_time(self) -> float:
+        """The latest time sampled (s); ``-inf`` before the first sample."""
+        return self._latest
 
     # ----- changes ----------------------------------------------------------------------------------------
     def _changed(self, step: int | None, record: ChangeRecord | None = None) -> None:

@@ -44,10 +44,11 @@ import numpy as np
 from scipy.linalg import solve_discrete_are
 
 from rtgait.core.config import PlannerConfig
-from rtgait.core.footsteps import Footstep, Stride, Timeline
+from rtgait.core.footsteps import Stride, Timeline
 from rtgait.core.hull import outside_margin, sole_extents, two_box_hull, two_box_vertices
 from rtgait.core.lipm import omega
 from rtgait.core.phases import PhaseInfo, phase_info
+from rtgait.core.planner_walk import WalkQueries
 from rtgait.core.walk import StepLimits, Walk
 
 if TYPE_CHECKING:
@@ -142,7 +143,7 @@ def reference_at(times: np.ndarray, timeline: Timeline, segments: tuple[np.ndarr
     return segments[0][q] + s.reshape(shape) * (segments[1][q] - segments[0][q])
 
 
-class PreviewPlanner:
+class PreviewPlanner(WalkQueries):
     """ZMP preview control with the sampling interface of :class:`~rtgait.core.online.OnlinePlanner` (what
     :func:`~rtgait.core.rollout.rollout` uses): ``start``, ``sample_values``, ``change_step`` (accepted until the
     step's lift-off), ``change_deadline``, ``contact_feet``, ``footprints``. It makes no plans (``plans`` stays
@@ -163,38 +164,10 @@ class PreviewPlanner:
         self.change_log: deque[tuple[float, int]] = deque()
         self._t0 = math.nan
 
-    # ----- the walk, as the planner shows it ---------------------------------------------------------------
-    @property
-    def walk(self) -> Walk:
-        return self._walk
-
-    @property
-    def timeline(self) -> Timeline:
-        return self._walk.timeline
-
-    @property
-    def n_steps(self) -> int | None:
-        return self._walk.n_steps
-
-    @property
-    def end_time(self) -> float:
-        return self._t0 + self.timeline.end_time
-
-    def phase_start(self, q: int) -> float:
-        return self._t0 + self.timeline.start_time(q)
-
+    # ----- the walk, as the planner shows it (WalkQueries: walk, timeline, n_steps, end_time, footprints, ...) ----
     def change_deadline(self, step: int) -> float:
         """The changed step's lift-off (s): when the preview window sees a change."""
         return self.phase_start(self._walk.deadline_phase(step))
-
-    def first_open_step(self) -> int:
-        return self._walk.first_open_step()
-
-    def contact_feet(self, q: int) -> list[Footstep]:
-        return self._walk.contact_feet(q)
-
-    def footprints(self, upto: int | None = None) -> list[Footstep]:
-        return self._walk.footprints(upto)
 
     def change_step(self, step: int, *, length=None, width=None, turn=None, through=None) -> None:
         """Change strides ``step..through`` (as the planner's); the preview sees it from the next tick on."""
