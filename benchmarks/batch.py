@@ -1,4 +1,4 @@
-"""Batched planning (rtgait.core.batch) against one rollout per case, on the same cases, on one core.
+"""Batched planning (rtgait.core.analysis.batch) against one rollout per case, on the same cases, on one core.
 
 The cases: the paper's fig4 walk (10 steps, change at step 5 from 0.05 m to the case's length, to the walk's end)
 for 2 connection modes x 20 double-support times (0.05 to 1.5 s) x ``--lengths`` new lengths (-0.1 to 0.45 m):
@@ -27,8 +27,8 @@ from dataclasses import replace  # noqa: E402
 import numpy as np  # noqa: E402
 
 from rtgait.core import OnlinePlanner, Timing, rollout  # noqa: E402
-from rtgait.core.batch import StraightWalk, evaluate_parameters, walk_family  # noqa: E402
-from rtgait.scenario import load_scenario  # noqa: E402
+from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, walk_family  # noqa: E402
+from rtgait.scenario.scenario import load_scenario  # noqa: E402
 from rtgait.viz.run_data import margin_marker  # noqa: E402
 
 MODES = ("real-time", "quasi-real-time")

@@ -21,11 +21,11 @@ import time
 
 import numpy as np
 
-from rtgait.core.online import OnlinePlanner
-from rtgait.core.rollout import rollout
+from rtgait.core.analysis.rollout import rollout
+from rtgait.core.planner.online import OnlinePlanner
 from rtgait.robot.ik import IKTargets, WholeBodyIK
 from rtgait.robot.model import RobotModel
-from rtgait.scenario import load_scenario
+from rtgait.scenario.scenario import load_scenario
 
 
 def run(robot_name: str, dt: float, iterations: int, tolerance: float) -> dict:

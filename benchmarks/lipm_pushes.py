@@ -1,6 +1,6 @@
 """Largest push each controller level survives on the point-mass pendulum, against the capturability bounds.
 
-For every controller level (:mod:`rtgait.core.closed_loop`) and every horizontal direction (every 45 degrees, world
+For every controller level (:mod:`rtgait.core.pendulum.loop`) and every horizontal direction (every 45 degrees, world
 frame, 0 = the walking direction +x, 90 = to the left), the largest impulse that is survived is found by bisection:
 "survived" means no fall and the walk ends at rest. The push is a constant force for 0.1 s on the mass, at one of
 two instants of a step in the middle of the walk (step ``(n + 1) // 2`` of ``n``, the closing step counted):
@@ -9,8 +9,9 @@ two instants of a step in the middle of the walk (step ``(n + 1) // 2`` of ``n``
 * ``double``: starting when the double support after its landing begins (fig8's 0.1 s double support is then all
   inside the push).
 
-For comparison, the capturability bounds of :mod:`rtgait.core.capturability` (Koolen et al. 2012) in that direction,
-for the same instant and the step limits of the adaptive level's :class:`~rtgait.core.stepping.StepAdjustment`:
+For comparison, the capturability bounds of :mod:`rtgait.core.laws.capturability` (Koolen et al. 2012) in that
+direction,
+for the same instant and the step limits of the adaptive level's :class:`~rtgait.core.laws.stepping.StepAdjustment`:
 
 * ``r_max``: reach of the stance sole from its ankle along the direction (:func:`reach_along`); in double support,
   the sole of the foot that carries the next single support;
@@ -20,7 +21,7 @@ for the same instant and the step limits of the adaptive level's :class:`~rtgait
 * the planned DCM's offset from the stance ankle at the push's centre.
 
 ``bound_1`` is the one-step bound, ``bound_N`` the bound for any number of steps. With ``--adapt-timing`` (step
-timing adaptation, :class:`~rtgait.core.stepping.StepAdjustment` ``adapt_timing``), ``bound_1 early`` is the
+timing adaptation, :class:`~rtgait.core.laws.stepping.StepAdjustment` ``adapt_timing``), ``bound_1 early`` is the
 one-step bound with the earliest touch-down the adjustment may choose (the single support shortened to
 ``min_single_support``, but never sooner than ``min_time_to_touchdown`` after the push's centre). With
 ``--max-single-support S`` steps may also be held longer, up to ``S`` s: the ankle's answer to an outward push,
@@ -32,7 +33,7 @@ The bounds treat the push as an impulse at its centre (for a 0.1 s push the DCM 
 cannot be used before it lands. ``share`` is the largest impulse survived divided by ``bound_1``.
 
 A walk that the pendulum does not survive even unpushed gets 0 (the point mass is unstable: ``open-loop`` on fig8,
-12.7 s long, falls at about 10 s from round-off amplified by ``e^{w t}``; see :mod:`rtgait.core.closed_loop`).
+12.7 s long, falls at about 10 s from round-off amplified by ``e^{w t}``; see :mod:`rtgait.core.pendulum.loop`).
 
 Usage: ``python benchmarks/lipm_pushes.py [--json] [--controller C ...] [--scenario fig8] [--mass 57] [--dt 0.002]
 [--phase single|double ...] [--tolerance 0.25] [--adapt-timing [--max-single-support S]] [--grid 32]
@@ -51,14 +52,14 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from rtgait.core.capturability import max_capturable_impulse, reach_along
-from rtgait.core.closed_loop import CONTROLLERS, DEFAULT_MASS, run_closed_loop
-from rtgait.core.footsteps import Footstep
-from rtgait.core.online import OnlinePlanner
-from rtgait.core.plant import Push
-from rtgait.core.rollout import rollout
-from rtgait.core.stepping import StepAdjustment
-from rtgait.scenario import Scenario, load_scenario
+from rtgait.core.analysis.rollout import rollout
+from rtgait.core.geometry.footsteps import Footstep
+from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
+from rtgait.core.laws.stepping import StepAdjustment
+from rtgait.core.pendulum.loop import CONTROLLERS, DEFAULT_MASS, run_closed_loop
+from rtgait.core.pendulum.plant import Push
+from rtgait.core.planner.online import OnlinePlanner
+from rtgait.scenario.scenario import Scenario, load_scenario
 
 PUSH_DURATION = 0.1
 """Length of every push (s)."""

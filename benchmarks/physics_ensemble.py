@@ -16,7 +16,7 @@ foot tipped onto an edge), ``tipped`` (a loaded foot rolled onto an edge of its 
 fall), ``fell`` (the run ended in a fall) or ``incomplete`` (no fall, no tip, but a step did not land).
 
 Runs are spread over worker processes (2 by default: this project's CI machine has 2 cores); progress goes to
-stderr. ``--controller`` names the controller level (:mod:`rtgait.sim.controllers`): ``open-loop`` (the default
+stderr. ``--controller`` names the controller level (:mod:`rtgait.control.controller`): ``open-loop`` (the default
 here: the plan alone, the paper's assumption, whose outcomes the paper reports), ``stabilized`` or ``adaptive``.
 
 ``--refine N`` divides every setting's physics step by ``N`` (the rest of the setting unchanged): a convergence check,
@@ -103,7 +103,7 @@ def _sim(robot_name: str, setting: tuple[tuple[str, float], ...]) -> Any:
 
 def run_one(robot_name: str, controller: str, scenario_name: str, index: int, setting: dict[str, float]) -> dict:
     """Walk one case under one setting (in a worker process); returns its outcome and a few numbers."""
-    from rtgait.scenario import load_scenario
+    from rtgait.scenario.scenario import load_scenario
     from rtgait.sim.run import mujoco_messages, simulate
 
     robot = _robot(robot_name)

@@ -1,6 +1,6 @@
 """Largest push a robot survives in MuJoCo, per controller level, direction and walking phase (run on demand).
 
-For every controller level asked for (``--controller``, :mod:`rtgait.sim.controllers`) and every horizontal
+For every controller level asked for (``--controller``, :mod:`rtgait.control.controller`) and every horizontal
 direction (``--directions``, evenly spaced from 0 = the walking direction +x, counter-clockwise: 90 = to the left),
 the largest impulse survived is found by bisection. The push is a constant force for 0.1 s on the floating base
 (the pelvis), at one of two instants of the middle step of the walk (step ``(n + 1) // 2`` of ``n``, the closing
@@ -28,7 +28,8 @@ where they are can withstand, from the planned DCM ``xi`` at the push's centre (
   ``p_u`` at most that far, so past it the DCM diverges along ``u`` whatever the ankles do, until a step puts a
   foot farther along ``u``;
 * ``lean_bound_Ns``: what the hip strategy's lean adds at most, ``m w`` times
-  :meth:`rtgait.core.hip_strategy.HipStrategyLimits.recoverable_offset` along the push (each heading axis leaning at
+  :meth:`rtgait.core.laws.hip_strategy.HipStrategyLimits.recoverable_offset` along the push (each heading axis leaning
+  at
   its limit), with the robot's lean limits (:func:`rtgait.robot.lean.hip_strategy_limits`).
 
 A push beyond their sum needs a step. Outward in single support there is none to take: the swing foot would have
@@ -84,7 +85,7 @@ class Site:
 
 def push_site(scenario: Any, robot: Any, phase: str) -> Site:
     """The push instant of ``phase`` on the middle step of ``scenario`` walked by ``robot`` (its planned footprints)."""
-    from rtgait.core.online import OnlinePlanner
+    from rtgait.core.planner.online import OnlinePlanner
     from rtgait.robot.motion import robot_scenario
 
     walk = robot_scenario(scenario, robot)
@@ -122,16 +123,16 @@ def in_place_bounds(
 ) -> dict[float, tuple[float, float]]:
     """The in-place bound of the module docstring at ``site``, per direction (deg): ``(sole, lean)`` (N s).
 
-    ``max_lean`` (rad): the lean's limit (default: :class:`~rtgait.sim.controllers.ControllerOptions`'s).
+    ``max_lean`` (rad): the lean's limit (default: :class:`~rtgait.control.controller.ControllerOptions`'s).
     """
     import numpy as np
 
-    from rtgait.core.footsteps import mean_heading
-    from rtgait.core.online import OnlinePlanner
-    from rtgait.core.rollout import rollout
+    from rtgait.control.controller import ControllerOptions
+    from rtgait.core.analysis.rollout import rollout
+    from rtgait.core.geometry.footsteps import mean_heading
+    from rtgait.core.planner.online import OnlinePlanner
     from rtgait.robot.lean import hip_strategy_limits
     from rtgait.robot.motion import robot_scenario
-    from rtgait.sim.controllers import ControllerOptions
 
     walk = robot_scenario(scenario, robot)
     centre = site.start + 0.5 * PUSH_DURATION
@@ -174,7 +175,7 @@ def _setup(robot_name: str, scenario_name: str) -> tuple[Any, Any, Any]:
     key = f"{robot_name}|{scenario_name}|{PHYSICS_DT['value']}"
     if key not in _CACHE:
         from rtgait.robot.model import RobotModel
-        from rtgait.scenario import load_scenario
+        from rtgait.scenario.scenario import load_scenario
         from rtgait.sim.model import SimConfig, build_sim_model
 
         robot = RobotModel.load(robot_name)
@@ -191,9 +192,9 @@ def survives(
     options: dict[str, Any] | None = None,
 ) -> bool:
     """Whether the walk with ``push`` = ``(start, fx, fy)`` (s, N, N; or ``None``) ends at rest without a fall;
-    ``options`` are :class:`~rtgait.sim.controllers.ControllerOptions` fields."""
+    ``options`` are :class:`~rtgait.control.controller.ControllerOptions` fields."""
+    from rtgait.control.controller import ControllerOptions
     from rtgait.sim.contact import Push
-    from rtgait.sim.controllers import ControllerOptions
     from rtgait.sim.run import mujoco_messages, simulate
 
     robot, sim, scenario = _setup(robot_name, scenario_name)
@@ -263,7 +264,7 @@ def run(
     physics_dt: float | None = None,
 ) -> tuple[list[dict[str, Any]], dict[str, Any]]:
     """Every bisection of the benchmark; returns the cases and the settings. ``options``: controller options
-    (:class:`~rtgait.sim.controllers.ControllerOptions` fields) for the closed-loop levels; ``physics_dt``: the
+    (:class:`~rtgait.control.controller.ControllerOptions` fields) for the closed-loop levels; ``physics_dt``: the
     physics step (s)."""
     from tqdm import tqdm
 

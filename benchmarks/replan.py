@@ -30,9 +30,9 @@ import time
 
 import numpy as np
 
-from rtgait.core.footsteps import Timing
-from rtgait.core.online import OnlinePlanner, PlannerConfig, StepChangeTooLateError, straight_walk
-from rtgait.core.pattern import PatternKey, PlanOperator
+from rtgait.core.geometry.footsteps import Timing
+from rtgait.core.lipm.pattern import PatternKey, PlanOperator
+from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, StepChangeTooLateError, straight_walk
 
 
 def run(

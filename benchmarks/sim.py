@@ -48,11 +48,11 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from rtgait.core.online import OnlinePlanner
+from rtgait.core.planner.online import OnlinePlanner
 from rtgait.robot.ik import IKTargets, WholeBodyIK
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
-from rtgait.scenario import load_scenario
+from rtgait.scenario.scenario import load_scenario
 from rtgait.sim.loop import measure_contacts
 from rtgait.sim.model import SimConfig, build_sim_model
 from rtgait.sim.run import simulate
@@ -239,8 +239,8 @@ def walked_velocity(result: Any, start: float, period: float, steps: int) -> tup
 
 def walk_case(job: dict[str, Any]) -> dict[str, Any]:
     """One walk of ``--walks`` (a worker's task): its outcome and measures."""
-    from rtgait.core.walk import CommandClampedWarning
-    from rtgait.sim.controllers import ControllerOptions
+    from rtgait.control.controller import ControllerOptions
+    from rtgait.core.walk.walk import CommandClampedWarning
     from rtgait.sim.run import mujoco_messages
 
     robot = RobotModel.load(job["robot"])

@@ -6,7 +6,7 @@
 * ``adjust_us``: one ``replan_now`` that needs a step adjustment (a push at mid single support, 24 directions and
   sizes): the plan from the measured state, the decision over ``grid**2`` candidates, the plan remade with the new
   landing; operators warm (each case is run twice and the second timed);
-* ``decision_us`` and ``candidates_per_s``: the decision alone (:func:`rtgait.core.stepping.propose_landing`);
+* ``decision_us`` and ``candidates_per_s``: the decision alone (:func:`rtgait.core.laws.stepping.propose_landing`);
 * ``timing_adaptation``: the same three with step timing adaptation on (``adapt_timing``: ``--durations`` single
   supports times the square of ``--timing-grid`` landings, 4 x 256 = 1,024 candidates by default), the operators of the
   candidate timings included (built in one batch at the decision when the plan starts mid-phase, as here: every case
@@ -27,11 +27,11 @@ import time
 import numpy as np
 
 from rtgait.core import stepping
-from rtgait.core.feedback import DcmFeedback
-from rtgait.core.footsteps import SoleRect, Timing
-from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
-from rtgait.core.stepping import StepAdjustment
-from rtgait.core.support import support_polygon
+from rtgait.core.geometry.footsteps import SoleRect, Timing
+from rtgait.core.geometry.support import support_polygon
+from rtgait.core.laws.feedback import DcmFeedback
+from rtgait.core.laws.stepping import StepAdjustment
+from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
 
 SOLE = SoleRect(0.13, 0.10, 0.07, 0.07)
 DT = 0.001
@@ -95,7 +95,7 @@ def adjust_cost(grid: int, durations: int | None = None) -> dict:
         decision.append(time.perf_counter() - began)
         return result
 
-    import rtgait.core.measured as measured  # the planner calls it through this module's name
+    import rtgait.core.planner.measured as measured  # the planner calls it through this module's name
 
     measured.propose_landing = timed
     try:

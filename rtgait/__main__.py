@@ -2,6 +2,6 @@
 
 import sys
 
-from rtgait.cli import main
+from rtgait.cli.main import main
 
 sys.exit(main())

@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rtgait.cli import main
-from rtgait.commands import plan as plan_command
-from rtgait.report import plan_files
-from rtgait.scenario import load_scenario
+from rtgait.cli import plan as plan_command
+from rtgait.cli.main import main
+from rtgait.io.plan_files import plan_files
+from rtgait.scenario.scenario import load_scenario
 
 HEAD_LINE = (
     "t,cog_x,cog_y,cog_z,cog_vx,cog_vy,cog_ax,cog_ay,zmp_x,zmp_y,lfoot_x,lfoot_y,lfoot_z,lfoot_yaw,"
@@ -258,7 +258,7 @@ def test_format_is_refused_where_it_would_be_ignored(tmp_path: Path, capsys: pyt
 def test_progress_printer_is_a_tqdm_bar_fed_with_the_fraction_done() -> None:
     import io
 
-    from rtgait.commands.common import progress_printer
+    from rtgait.cli.common import progress_printer
 
     class Terminal(io.StringIO):
         def isatty(self) -> bool:

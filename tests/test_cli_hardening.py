@@ -14,9 +14,10 @@ from typing import Any
 import pytest
 from scenario_files import scenario_text
 
-from rtgait import cli, outputs
-from rtgait.cli import main
-from rtgait.commands import plan as plan_command
+from rtgait import outputs
+from rtgait.cli import main as cli
+from rtgait.cli import plan as plan_command
+from rtgait.cli.main import main
 from rtgait.core import limits
 
 BASE = scenario_text()

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from rtgait.cli import main
+from rtgait.cli.main import main
 
 
 def _run(tmp_path: Path, *options: str) -> tuple[int, dict]:

@@ -1,4 +1,4 @@
-"""Footstep plan files (:mod:`rtgait.footholds`): loading, walking, exporting and refusing bad steps."""
+"""Footstep plan files (:mod:`rtgait.scenario.footholds`): loading, walking, exporting and refusing bad steps."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rtgait.cli import main
-from rtgait.core.footsteps import Footstep, place_footsteps, standing_feet
-from rtgait.footholds import footstep_plan_text
-from rtgait.scenario import ScenarioError, load_scenario
+from rtgait.cli.main import main
+from rtgait.core.geometry.footsteps import Footstep, place_footsteps, standing_feet
+from rtgait.scenario.footholds import footstep_plan_text
+from rtgait.scenario.scenario import ScenarioError, load_scenario
 
 HEADER = """name = "free-path"
 connection = "quasi-real-time"

@@ -12,10 +12,10 @@ import types
 import numpy as np
 import pytest
 
-from rtgait.core.closed_loop import DEFAULT_DT
-from rtgait.core.footsteps import Timing
-from rtgait.core.plant import Push
-from rtgait.pendulum_sim import (
+from rtgait.core.geometry.footsteps import Timing
+from rtgait.core.pendulum.loop import DEFAULT_DT
+from rtgait.core.pendulum.plant import Push
+from rtgait.io.pendulum_run import (
     DEFAULT_MASS,
     PENDULUM_CSV_COLUMNS,
     as_push,
@@ -23,7 +23,7 @@ from rtgait.pendulum_sim import (
     simulate_pendulum,
     write_pendulum_outputs,
 )
-from rtgait.scenario import load_scenario
+from rtgait.scenario.scenario import load_scenario
 
 
 @pytest.fixture(scope="module")
@@ -110,8 +110,8 @@ def test_the_step_limits_given_bound_every_landing(short_walk):
     """``step_adjustment`` (a robot's ``[stepping]`` limits, as ``simulate --model lipm --robot R`` passes them):
     every landing the pushed walk makes stays in that stride box around the footprint before it, which the core's
     default box (0.45 m wide) would not keep to."""
-    from rtgait.core.online import OnlinePlanner
-    from rtgait.core.stepping import SteppingLimits
+    from rtgait.core.laws.stepping import SteppingLimits
+    from rtgait.core.planner.online import OnlinePlanner
 
     planner = OnlinePlanner(short_walk.planner_config(), short_walk.strides())
     planner.start(0.0)

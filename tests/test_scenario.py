@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
 from rtgait.core.limits import (
     MAX_COG_HEIGHT,
     MAX_HORIZON_STEPS,
@@ -18,9 +19,8 @@ from rtgait.core.limits import (
     MIN_DT,
     MIN_GRAVITY,
 )
-from rtgait.core.online import OnlinePlanner
-from rtgait.core.rollout import Rollout, ScheduledChange, rollout
-from rtgait.scenario import Scenario, ScenarioError, builtin_scenarios, load_scenario
+from rtgait.core.planner.online import OnlinePlanner
+from rtgait.scenario.scenario import Scenario, ScenarioError, builtin_scenarios, load_scenario
 
 BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "sidestep", "turn")
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from rtgait.scenario import GuidePath, ScenarioError, load_scenario, parse_scenario
+from rtgait.scenario.scenario import GuidePath, ScenarioError, load_scenario, parse_scenario
 
 
 def _document(guide: dict) -> dict:

@@ -11,11 +11,14 @@ Quick start::
     planner.change_step(5, length=0.15, through=10)
 """
 
-from rtgait.core.bvp import BoundaryValueSolver
-from rtgait.core.connect import ConnectionSolver
-from rtgait.core.footsteps import Footstep, SoleRect, Stride, Timeline, Timing, place_footsteps, standing_feet
-from rtgait.core.lipm import GRAVITY, CogTrajectory, omega
-from rtgait.core.online import (
+from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
+from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride, Timeline, Timing, place_footsteps, standing_feet
+from rtgait.core.geometry.support import signed_margin, support_polygon
+from rtgait.core.lipm.bvp import BoundaryValueSolver
+from rtgait.core.lipm.closed_form import GRAVITY, CogTrajectory, omega
+from rtgait.core.lipm.connect import ConnectionSolver
+from rtgait.core.lipm.spline import PiecewisePolynomial
+from rtgait.core.planner.online import (
     CONNECTION_MODES,
     FEEDBACK_MODES,
     SAMPLE_FIELDS,
@@ -29,9 +32,6 @@ from rtgait.core.online import (
     VelocityCommand,
     straight_walk,
 )
-from rtgait.core.rollout import Rollout, ScheduledChange, rollout
-from rtgait.core.spline import PiecewisePolynomial
-from rtgait.core.support import signed_margin, support_polygon
 
 __all__ = [
     "CONNECTION_MODES",

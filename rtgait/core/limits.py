@@ -13,7 +13,7 @@ Why these numbers:
   they carry ZMP accelerations no robot has, and the pendulum residual grows past 1e-8 m.
 * ``MAX_STEPS`` / ``MAX_ROLLOUT_TICKS``: a walk's footprints and a rollout's arrays are held in memory
   (``MAX_ROLLOUT_TICKS`` rows of 22 floats is about 200 MB).
-* ``MAX_REPLANS_PER_SAMPLE``: one :meth:`~rtgait.core.online.OnlinePlanner.sample` call replans at every
+* ``MAX_REPLANS_PER_SAMPLE``: one :meth:`~rtgait.core.planner.online.OnlinePlanner.sample` call replans at every
   double-support start it passes; each costs tens of microseconds, so this keeps one call under ~2 ms. A loop
   samples at least once per step anyway.
 """

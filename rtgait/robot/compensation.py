@@ -2,7 +2,7 @@
 COG in closed form so that its ZMP shift is cancelled, and solve the inverse kinematics again.
 
 The planner assumes the pendulum ZMP ``c - c''/w^2``; the legs' and trunk's angular momentum move the real
-(multibody) ZMP by ``(-L'_y, L'_x) / (M g)``. :func:`rtgait.core.angular.fit_correction` turns that shift,
+(multibody) ZMP by ``(-L'_y, L'_x) / (M g)``. :func:`rtgait.core.lipm.angular.fit_correction` turns that shift,
 expanded per walking phase in a truncated Fourier series, into a COG correction ``dc``; the corrected motion's
 multibody ZMP is then compared with the planned one again.
 """
@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rtgait.core.angular import DEFAULT_ORDER, FourierCorrection, angular_zmp_offset, fit_correction
-from rtgait.core.lipm import omega
-from rtgait.core.rollout import Rollout
+from rtgait.core.analysis.rollout import Rollout
+from rtgait.core.lipm.angular import DEFAULT_ORDER, FourierCorrection, angular_zmp_offset, fit_correction
+from rtgait.core.lipm.closed_form import omega
 from rtgait.robot.dynamics import MultibodyCheck, check_motion
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import JointTrajectory, whole_body_motion

@@ -49,7 +49,7 @@ loaded by name (``load_robot("talos")``); any other file is loaded by path. Ever
     rotor_inertia = 1e-5                 # kg m^2; armature = rotor_inertia * gear_ratio^2 (or give armature)
     gear_ratio = 100.0                   # also: kp, kd, effort_limit, natural_frequency, damping_ratio
 
-    [stepping]                           # optional: step adjustment's limits (rtgait.core.stepping.SteppingLimits);
+    [stepping]                           # optional: step adjustment's limits (SteppingLimits);
     max_length = 0.30                    # m, forward and back from the stance foot; every key optional
     min_width = 0.15                     # m between the foot frames, at least 2 x feet.sole.inner (no crossing)
     max_width = 0.40                     # m
@@ -58,8 +58,8 @@ loaded by name (``load_robot("talos")``); any other file is loaded by path. Ever
     min_single_support = 0.5             # s: the shortest step timing adaptation may make
     max_single_support = 1.2             # s: the longest (omit it: steps are only shortened)
 
-    [velocity]                           # optional: bounds of walks by velocity command (PlannerConfig's fields of
-    max_step_length = 0.29               # the same names, rtgait.core.config.VelocityLimits); every key optional
+    [velocity]                           # optional: bounds of walks by velocity command (VelocityLimits)
+    max_step_length = 0.29               # m per step; every key optional
     max_step_lateral = 0.16              # m of sideways displacement per pair of steps: |vy| <= it / 2T
     max_step_turn = 0.6                  # rad of heading change per pair of steps: |wz| <= it / 2T
     min_step_width = 0.15                # m: the narrowest stance a sideways walk closes to, at most the stance
@@ -86,9 +86,9 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from rtgait.core.config import VelocityLimits
-from rtgait.core.footsteps import SoleRect
-from rtgait.core.stepping import SteppingLimits
+from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.laws.stepping import SteppingLimits
+from rtgait.core.planner.config import VelocityLimits
 from rtgait.robot.actuation_table import (
     DEFAULT_NATURAL_FREQUENCY,
     ActuationSpec,
@@ -110,7 +110,7 @@ from rtgait.robot.description_checks import (
     resolve_path,
     resolve_urdf,
 )
-from rtgait.tomlfile import is_finite_number
+from rtgait.scenario.tomlfile import is_finite_number
 
 __all__ = [
     "DEFAULT_NATURAL_FREQUENCY",
@@ -151,12 +151,12 @@ class RobotDescription:
             value.
         actuation: the ``[actuation]`` table (defaults when absent); :meth:`joint_actuation` resolves one joint.
         stepping: the ``[stepping]`` table, step adjustment's limits (keys missing from it take
-            :class:`~rtgait.core.stepping.SteppingLimits`'s defaults); ``None`` when the description has none (then
+            :class:`~rtgait.core.laws.stepping.SteppingLimits`'s defaults); ``None`` when the description has none (then
             each user picks its defaults: the pendulum loop the core's, the MuJoCo loop limits scaled by leg length).
         velocity: the ``[velocity]`` table, the bounds of walks by velocity command
-            (:class:`~rtgait.core.config.VelocityLimits`, applied to the planner's config of every walk of this
+            (:class:`~rtgait.core.planner.config.VelocityLimits`, applied to the planner's config of every walk of this
             robot by :func:`rtgait.robot.motion.robot_scenario`); ``None`` when the description has none (then the
-            :class:`~rtgait.core.config.PlannerConfig` defaults apply).
+            :class:`~rtgait.core.planner.config.PlannerConfig` defaults apply).
         source: where the description came from (``"builtin"`` or a file path); informative only.
     """
 

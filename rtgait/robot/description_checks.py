@@ -22,12 +22,12 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from rtgait.core.config import VELOCITY_KEYS, VelocityLimits
-from rtgait.core.footsteps import SoleRect
-from rtgait.core.stepping import STEPPING_KEYS, SteppingLimits
+from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.laws.stepping import STEPPING_KEYS, SteppingLimits
+from rtgait.core.planner.config import VELOCITY_KEYS, VelocityLimits
 from rtgait.robot.actuation_table import ActuationSpec, ActuatorGroup
 from rtgait.robot.data import RobotDataError, robots_dir, share_dir
-from rtgait.tomlfile import TomlFiles
+from rtgait.scenario.tomlfile import TomlFiles
 
 __all__ = [
     "ERD_PREFIX",
@@ -219,15 +219,16 @@ def parse_actuation(raw: Any, names: UrdfNames) -> ActuationSpec:
 
 
 def parse_stepping(raw: Any, sole: SoleRect) -> SteppingLimits:
-    """The ``[stepping]`` table (:class:`~rtgait.core.stepping.SteppingLimits` checks the values)."""
+    """The ``[stepping]`` table (:class:`~rtgait.core.laws.stepping.SteppingLimits` checks the values)."""
     limits = _limits_table(raw, "stepping", STEPPING_KEYS, SteppingLimits.from_table)
     _soles_apart("stepping.min_width", limits.min_width, sole)
     return limits
 
 
 def parse_velocity(raw: Any, sole: SoleRect) -> VelocityLimits:
-    """The ``[velocity]`` table (:class:`~rtgait.core.config.VelocityLimits` checks the values the way
-    :class:`~rtgait.core.config.PlannerConfig` does; ``min_step_width`` against the robot's stance is checked when
+    """The ``[velocity]`` table (:class:`~rtgait.core.planner.config.VelocityLimits` checks the values the way
+    :class:`~rtgait.core.planner.config.PlannerConfig` does; ``min_step_width`` against the robot's stance is checked
+    when
     it is applied, :func:`rtgait.robot.motion.robot_scenario`)."""
     limits = _limits_table(raw, "velocity", VELOCITY_KEYS, VelocityLimits.from_table)
     _soles_apart("velocity.min_step_width", limits.min_step_width, sole)

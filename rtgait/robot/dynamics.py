@@ -22,7 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 if TYPE_CHECKING:  # annotations only: the check itself needs nothing but arrays and a model
-    from rtgait.core.rollout import Rollout
+    from rtgait.core.analysis.rollout import Rollout
     from rtgait.robot.motion import JointTrajectory
 
 __all__ = ["MultibodyCheck", "check_motion", "finite_differences", "multibody_check"]

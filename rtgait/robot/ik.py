@@ -43,7 +43,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
-from rtgait.core.footsteps import mean_heading
+from rtgait.core.geometry.footsteps import mean_heading
 from rtgait.robot.model import RobotModel
 
 __all__ = ["IKErrors", "IKTargets", "IKWeights", "WholeBodyIK"]
@@ -63,7 +63,7 @@ class IKTargets(NamedTuple):
         left_foot: left sole point ``(x, y, z, yaw)`` (m, rad); the sole is level.
         right_foot: right sole point ``(x, y, z, yaw)`` (m, rad).
         lean: the upper body's lean, a rotation vector (rad, world frame) applied to the upright torso and pelvis
-            targets (the hip strategy, :mod:`rtgait.core.hip_strategy`); ``None``: upright.
+            targets (the hip strategy, :mod:`rtgait.core.laws.hip_strategy`); ``None``: upright.
     """
 
     cog: np.ndarray | Sequence[float]

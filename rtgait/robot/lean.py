@@ -1,6 +1,6 @@
 """The upper body's lean on a real robot: its effective inertia and the hips' torque budget for it.
 
-The hip strategy (:mod:`rtgait.core.hip_strategy`) tilts the pelvis and torso together about the hips while the
+The hip strategy (:mod:`rtgait.core.laws.hip_strategy`) tilts the pelvis and torso together about the hips while the
 whole-body IK holds the COM and both soles where they are. Its effective inertia about an axis ``a`` is the
 centroidal angular momentum of that motion per unit lean rate:
 
@@ -24,7 +24,7 @@ import math
 import numpy as np
 import pinocchio as pin
 
-from rtgait.core.hip_strategy import HipStrategyLimits
+from rtgait.core.laws.hip_strategy import HipStrategyLimits
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
 

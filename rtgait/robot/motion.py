@@ -13,13 +13,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rtgait.core.config import PlannerConfig, VelocityLimits
-from rtgait.core.online import SAMPLE_FIELDS
-from rtgait.core.rollout import Rollout
+from rtgait.core.analysis.rollout import Rollout
+from rtgait.core.planner.config import PlannerConfig, VelocityLimits
+from rtgait.core.planner.online import SAMPLE_FIELDS
 from rtgait.robot.description import RobotError
 from rtgait.robot.ik import IKTargets, WholeBodyIK
 from rtgait.robot.model import BASE_COLUMNS, RobotModel
-from rtgait.scenario import Scenario
+from rtgait.scenario.scenario import Scenario
 
 __all__ = [
     "ERROR_FIELDS",
@@ -163,7 +163,7 @@ def robot_scenario(scenario: Scenario, robot: RobotModel) -> RobotWalk:
 
 
 def _where(rollout: Rollout, k: int) -> str:
-    """Which part of the walk tick ``k`` belongs to, in words (phases as in :mod:`rtgait.core.footsteps`)."""
+    """Which part of the walk tick ``k`` belongs to, in words (phases as in :mod:`rtgait.core.geometry.footsteps`)."""
     phase = int(rollout.phase[k])
     if phase == 0:
         return "the start of the walk"

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from rtgait.core.rollout import Rollout
+from rtgait.core.analysis.rollout import Rollout
 from rtgait.robot.compensation import Compensation, compensate_angular_momentum
 from rtgait.robot.dynamics import MultibodyCheck, check_motion
 from rtgait.robot.model import RobotModel

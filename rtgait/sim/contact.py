@@ -289,7 +289,8 @@ class Landings:
 
 PUSH_SPEED_LIMIT = 10.0
 """Largest push accepted, as the change of COM speed ``|J| / m`` it would give the free robot, in units of
-``sqrt(g z_c)`` (the pendulum plant's limit, :data:`rtgait.core.plant.PUSH_SPEED_LIMIT`): some twenty times what any
+``sqrt(g z_c)`` (the pendulum plant's limit, :data:`rtgait.core.pendulum.plant.PUSH_SPEED_LIMIT`): some twenty times
+what any
 number of steps could recover, so it refuses only physical nonsense (a unit error, a collision), never a push worth
 simulating. 2.6 kN s for Talos (90 kg, COM 0.84 m high), 0.84 kN s for G1."""
 

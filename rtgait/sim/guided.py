@@ -1,10 +1,11 @@
 """Hand-guided walking in physics (the paper's Section 6): a person leads the robot by the hand.
 
-The person is a point that walks a :class:`~rtgait.scenario.GuidePath` at constant speed, starting at the robot's
+The person is a point that walks a :class:`~rtgait.scenario.scenario.GuidePath` at constant speed, starting at the
+robot's
 hand when the walk begins. The person's arm is a horizontal spring-damper between that point and the robot's
 hand (:class:`Leash`); its force is applied to the robot every tick through ``data.xfrc_applied`` on the body
 that carries the hand (with the torque that moves it from the hand to the body's centre of mass, where MuJoCo
-applies it), and read back as the wrist sensor. :class:`rtgait.core.guidance.HandGuide` turns that reading into
+applies it), and read back as the wrist sensor. :class:`rtgait.core.laws.guidance.HandGuide` turns that reading into
 the planner's velocity command, one decision per step (quasi-real-time), and once the person has stopped and the
 command is zero the planner is told to stop.
 
@@ -30,11 +31,11 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
-from rtgait.core.closed_loop import Controller
-from rtgait.core.guidance import HandGuide
-from rtgait.core.online import OnlinePlanner, VelocityCommand
-from rtgait.scenario import GuidePath, Scenario
-from rtgait.sim.controllers import ControllerOptions, WalkingController, make_controller
+from rtgait.control.controller import ControllerOptions, WalkingController, make_controller
+from rtgait.core.laws.guidance import HandGuide
+from rtgait.core.pendulum.loop import Controller
+from rtgait.core.planner.online import OnlinePlanner, VelocityCommand
+from rtgait.scenario.scenario import GuidePath, Scenario
 from rtgait.sim.loop import LoopOptions, run_closed_loop
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SimResult
@@ -149,7 +150,7 @@ class HandPull:
         leash: the person's arm.
         max_steps: the planner is stopped once this many steps are committed, whatever the pull.
         controller: the walking controller, told the pull each tick (the wrist sensor's force at the hand's height)
-            so that it leans against it (:meth:`~rtgait.sim.controllers.WalkingController.set_external_force`).
+            so that it leans against it (:meth:`~rtgait.control.controller.WalkingController.set_external_force`).
     """
 
     def __init__(
@@ -306,7 +307,7 @@ def simulate_guided(
         walk: the scenario as walked by this robot (:func:`rtgait.robot.motion.robot_scenario`); its timing and
             connection (quasi-real-time) build the planner, ``walk.steps`` is the most steps allowed.
         options: further loop settings; its hook, duration and ``stop_after_steps`` are replaced.
-        controller: the controller level (:mod:`rtgait.sim.controllers`).
+        controller: the controller level (:mod:`rtgait.control.controller`).
         controller_options: its gains and landing handling.
         path: the person's path (default: ``walk.guide``).
         leash: the person's arm (default :meth:`Leash.for_robot` of the simulated robot).

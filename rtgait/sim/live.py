@@ -24,11 +24,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rtgait.core.closed_loop import CONTROLLERS
-from rtgait.core.walk import VelocityCommand
+from rtgait.core.pendulum.loop import CONTROLLERS
+from rtgait.core.walk.walk import VelocityCommand
 
 if TYPE_CHECKING:
-    from rtgait.core.config import PlannerConfig
+    from rtgait.core.planner.config import PlannerConfig
     from rtgait.sim.loop import ClosedLoop
 
 __all__ = [
@@ -105,7 +105,7 @@ class CommandLimits:
     def from_config(cls, config: PlannerConfig) -> CommandLimits:
         """From the planner's step limits over a step period ``T``: ``vx = max_step_length / T``; a sideways or
         turning walk opens the stance (or the turn) on every other step only, so ``vy = max_step_lateral / 2T`` and
-        ``wz = max_step_turn / 2T`` (:meth:`rtgait.core.walk.Walk.set_velocity`)."""
+        ``wz = max_step_turn / 2T`` (:meth:`rtgait.core.walk.walk.Walk.set_velocity`)."""
         period = config.timing.step_period
         return cls(
             config.max_step_length / period,

@@ -8,14 +8,14 @@ Every control tick (``sim.control_dt``: 1 ms for Talos, 2 ms for G1) of the walk
    robot's sensors lag by a sample too, and reading them costs no extra ``mj_forward`` (with one physics step a
    period, its contacts and sites as the last tick's record read them, :mod:`rtgait.sim.step_snapshot`);
 2. the walk's scheduled inputs (:mod:`rtgait.sim.loop_inputs`): the ``on_tick`` hook, the footstep changes due at
-   ``t`` (at their connection mode's deadline, as :func:`rtgait.core.rollout.rollout` does) and the velocity
+   ``t`` (at their connection mode's deadline, as :func:`rtgait.core.analysis.rollout.rollout` does) and the velocity
    commands due go to the planner; a walk by command is stopped after its steps;
-3. **control** (:class:`~rtgait.sim.controllers.WalkingController`, the level asked for): the planner's sample, with
-   the level's feedback, re-anchoring, step adjustment and landing handling (:mod:`rtgait.sim.foot_landings`), gives
+3. **control** (:class:`~rtgait.control.controller.WalkingController`, the level asked for): the planner's sample, with
+   the level's feedback, re-anchoring, step adjustment and landing handling (:mod:`rtgait.control.landings`), gives
    the IK's COM and feet targets and the foot force control's ankle tilts;
 4. **IK**: the whole-body IK, warm-started from the previous tick, turns them into joint angles (always one
    Gauss-Newton iteration, so the solution varies smoothly and its finite difference is a clean joint velocity);
-   the ankle tilts are added to the ankle joints (:func:`~rtgait.sim.foot_control.add_ankle_offsets`);
+   the ankle tilts are added to the ankle joints (:func:`~rtgait.control.foot_control.add_ankle_offsets`);
 5. those angles and their velocity become the joint references of the PD servos (:mod:`rtgait.sim.actuation`),
    interpolated linearly over the physics substeps of the period, and ``mj_step`` advances the physics by
    ``sim.substeps`` steps, the servo torques recomputed at each.
@@ -33,7 +33,7 @@ The walk starts from half-sitting, whose COG is higher than the planner's consta
 start before the planner's clock begins; it runs at negative times on the walk's clock, with no feedback.
 
 ``open-loop`` gives the IK the planner's sample unchanged, which is the loop before the controller levels existed
-(the paper's assumption); the levels are described in :mod:`rtgait.sim.controllers`.
+(the paper's assumption); the levels are described in :mod:`rtgait.control.controller`.
 
 :class:`ClosedLoop` is the loop one tick per :meth:`~ClosedLoop.step`, for callers that act between ticks (a live
 viewer sets the velocity command, pushes, switches the controller level); :func:`run_closed_loop` steps one to the
@@ -50,13 +50,13 @@ from collections.abc import Callable, Sequence
 
 import mujoco
 
-from rtgait.core.footsteps import Footstep
-from rtgait.core.online import OnlinePlanner
+from rtgait.control.controller import ControlEvent, ControllerOptions, RobotInfo, WalkingController
+from rtgait.control.foot_control import FootOffsets, add_ankle_offsets, find_ankle_joints
+from rtgait.core.geometry.footsteps import Footstep
+from rtgait.core.planner.online import OnlinePlanner
 from rtgait.robot.ik import IKTargets, WholeBodyIK
 from rtgait.sim.actuation import ReferenceInterpolator
 from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Push, Pushes, measure_contacts
-from rtgait.sim.controllers import ControlEvent, ControllerOptions, RobotInfo, WalkingController
-from rtgait.sim.foot_control import FootOffsets, add_ankle_offsets, find_ankle_joints
 from rtgait.sim.loop_inputs import WalkInputs
 from rtgait.sim.loop_options import (
     LANDING_WINDOW,
@@ -478,7 +478,7 @@ def run_closed_loop(
 
     Args:
         sim: the MuJoCo model of the robot.
-        controller: a controller level (:func:`rtgait.sim.controllers.make_controller`, its period ``sim``'s
+        controller: a controller level (:func:`rtgait.control.controller.make_controller`, its period ``sim``'s
             control period), or an online planner, walked ``open-loop``; its planner must not be started (its clock
             starts at 0 after the start transition).
         options: loop settings (start transition, pushes, fall limits, footstep changes).

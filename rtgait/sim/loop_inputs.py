@@ -5,11 +5,13 @@ In this order, at tick time ``t`` (s, walk clock):
 
 1. the ``LoopOptions.on_tick`` hook, with the MuJoCo state;
 2. the footstep changes (``LoopOptions.changes``) whose connection-mode deadline
-   (:meth:`~rtgait.core.online.OnlinePlanner.change_deadline`) has come, ``t >= deadline``, in deadline order, as
-   :func:`rtgait.core.rollout.rollout` gives them;
+   (:meth:`~rtgait.core.planner.online.OnlinePlanner.change_deadline`) has come, ``t >= deadline``, in deadline order,
+   as
+   :func:`rtgait.core.analysis.rollout.rollout` gives them;
 3. the velocity commands (``LoopOptions.velocity_changes``: ``(t_i, vx, vy, wz)``, m/s and rad/s) whose time has
    come, ``t >= t_i - 1 ns``, until the walk is stopped;
-4. a walk by command is stopped (:meth:`~rtgait.core.online.OnlinePlanner.stop`) once its first open step is past
+4. a walk by command is stopped (:meth:`~rtgait.core.planner.online.OnlinePlanner.stop`) once its first open step is
+past
    ``stop_after_steps``.
 """
 
@@ -22,8 +24,8 @@ if TYPE_CHECKING:
 
     import mujoco
 
-    from rtgait.core.online import OnlinePlanner
-    from rtgait.core.rollout import ScheduledChange
+    from rtgait.core.analysis.rollout import ScheduledChange
+    from rtgait.core.planner.online import OnlinePlanner
     from rtgait.sim.loop_options import LoopOptions
 
 __all__ = ["WalkInputs"]

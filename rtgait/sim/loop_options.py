@@ -8,9 +8,9 @@ from dataclasses import dataclass, field
 
 import mujoco
 
-from rtgait.core.online import OnlinePlanner
-from rtgait.core.rollout import ScheduledChange
-from rtgait.core.stepping import StepAdjustment
+from rtgait.core.analysis.rollout import ScheduledChange
+from rtgait.core.laws.stepping import StepAdjustment
+from rtgait.core.planner.online import OnlinePlanner
 from rtgait.sim.contact import FallLimits, Push
 
 __all__ = [

@@ -61,7 +61,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import mujoco
 import numpy as np
 
-from rtgait.core.footsteps import Footstep, Side
+from rtgait.core.geometry.footsteps import Footstep, Side
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
 if TYPE_CHECKING:  # the model module is being rewritten: only its attribute names are relied on

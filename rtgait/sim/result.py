@@ -36,14 +36,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rtgait.core.footsteps import Footstep
+from rtgait.core.geometry.footsteps import Footstep
 from rtgait.sim.contact import Push
 
 if TYPE_CHECKING:
     import pinocchio as pin
 
-    from rtgait.core.stepping import StepDecision
-    from rtgait.sim.controllers import ControlEvent
+    from rtgait.control.controller import ControlEvent
+    from rtgait.core.laws.stepping import StepDecision
     from rtgait.sim.tick_log import CompleteLog
 
 __all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SUPPORT_CODES", "SimResult", "Stance", "stances"]
@@ -184,7 +184,7 @@ class SimResult:
         wall_time: wall-clock time of the loop (s), the planner, controller, IK and physics.
         robot: the robot's name.
         mass: its mass (kg).
-        controller: the controller level (:data:`rtgait.sim.controllers.CONTROLLERS`).
+        controller: the controller level (:data:`rtgait.control.controller.CONTROLLERS`).
         pushes: the external pushes of the run.
         events: what the controller logged (landings, re-anchoring, step adjustments, replans).
         step_adjustments: the planner's step adjustments, in order.

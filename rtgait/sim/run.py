@@ -20,16 +20,11 @@ from collections.abc import Callable, Iterator, Sequence
 
 import mujoco
 
-from rtgait.core.closed_loop import CONTROLLERS, Controller
-from rtgait.core.online import OnlinePlanner, VelocityCommand
-from rtgait.core.rollout import Rollout, ScheduledChange, rollout
-from rtgait.robot.model import RobotModel
-from rtgait.robot.motion import robot_scenario
-from rtgait.scenario import Scenario
-from rtgait.sim.controllers import ControllerOptions, WalkingController, make_controller
-from rtgait.sim.loop import LoopOptions, Push, SimResult, run_closed_loop
-from rtgait.sim.model import SimConfig, SimModel, build_sim_model
-from rtgait.sim.outputs import (
+from rtgait.control.controller import ControllerOptions, WalkingController, make_controller
+from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
+from rtgait.core.pendulum.loop import CONTROLLERS, Controller
+from rtgait.core.planner.online import OnlinePlanner, VelocityCommand
+from rtgait.io.sim_files import (
     SIM_CSV_COLUMNS,
     SIM_FILES,
     TORQUE_COLUMN_PREFIX,
@@ -38,6 +33,11 @@ from rtgait.sim.outputs import (
     write_sim_outputs,
     write_sim_replay,
 )
+from rtgait.robot.model import RobotModel
+from rtgait.robot.motion import robot_scenario
+from rtgait.scenario.scenario import Scenario
+from rtgait.sim.loop import LoopOptions, Push, SimResult, run_closed_loop
+from rtgait.sim.model import SimConfig, SimModel, build_sim_model
 
 __all__ = [
     "SIM_CSV_COLUMNS",
@@ -96,7 +96,7 @@ def simulate(
         robot: a loaded robot, or a built-in robot name / description file path.
         controller: ``"adaptive"`` (default: feedback, foot force control, measured-state replanning,
             re-anchoring, step adjustment, landing detection), ``"stabilized"`` (feedback and foot force control)
-            or ``"open-loop"`` (the plan alone, the paper's assumption); :mod:`rtgait.sim.controllers`.
+            or ``"open-loop"`` (the plan alone, the paper's assumption); :mod:`rtgait.control.controller`.
         controller_options: the levels' gains and landing handling (default :class:`ControllerOptions`).
         velocity: walk by velocity command ``(vx, vy, wz)`` (m/s, m/s, rad/s) instead of the scenario's footsteps:
             ``scenario.steps`` steps, then a closing step; the scenario's changes do not apply. A sequence of

@@ -40,21 +40,22 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from rtgait.core.closed_loop import CONTROLLERS
-from rtgait.core.footsteps import SoleRect
+from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.pendulum.loop import CONTROLLERS
 from rtgait.sim.loop_record import row_packer
 from rtgait.sim.result import SUPPORT_CODES
 
 if TYPE_CHECKING:
+    from rtgait.control.settings import ControlTargets
     from rtgait.sim.actuation import ReferenceInterpolator
-    from rtgait.sim.control_settings import ControlTargets
     from rtgait.sim.measure import Measurement
     from rtgait.sim.model import SimModel
 
 __all__ = ["LEVEL_CODES", "CompleteLog", "TickLog"]
 
 LEVEL_CODES = {level: code for code, level in enumerate(CONTROLLERS)}
-"""Controller level per tick in :attr:`CompleteLog.level`: its index in :data:`rtgait.core.closed_loop.CONTROLLERS`."""
+"""Controller level per tick in :attr:`CompleteLog.level`: its index in
+:data:`rtgait.core.pendulum.loop.CONTROLLERS`."""
 
 # The per-tick scalars, packed into one row of a float64 table with one ``struct`` call (a numpy assignment from a
 # tuple of Python floats costs several times more): COM velocity (3), base spatial velocity (6), IK sole targets

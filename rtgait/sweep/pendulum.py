@@ -1,8 +1,10 @@
 """The pendulum level of a sweep: every case planned (or preview-controlled) and its ZMP margin measured, batched.
 
 Cases that differ only in the numbers a walk is affine in (``change.length``, ``change.width``,
-``walk.step_length``) form one group: one :class:`~rtgait.core.walk_family.WalkFamily` (or one preview loop), one
-vectorised pass (:mod:`rtgait.core.batch`, :func:`rtgait.core.preview.evaluate_preview`). The numbers are those
+``walk.step_length``) form one group: one :class:`~rtgait.core.analysis.walk_family.WalkFamily` (or one preview loop),
+one
+vectorised pass (:mod:`rtgait.core.analysis.batch`, :func:`rtgait.core.analysis.preview.evaluate_preview`). The numbers
+are those
 ``rtgait plan`` reports for the same scenario. A base scenario the batch cannot take (a turning walk) is rolled out
 case by case instead, with the same results, slowly.
 """
@@ -15,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from rtgait.core.batch import StraightWalk, evaluate_parameters
-from rtgait.core.preview import PREVIEW_PERIOD, PreviewPlanner, evaluate_preview
-from rtgait.scenario import Scenario
+from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters
+from rtgait.core.analysis.preview import PREVIEW_PERIOD, PreviewPlanner, evaluate_preview
+from rtgait.scenario.scenario import Scenario
 from rtgait.sweep.spec import SweepSpec, case_scenario
 
 PARAMETER_AXES = ("walk.step_length", "change.length", "change.width")
@@ -67,8 +69,8 @@ def evaluate_cases(
 
 def rolled_out(scenario: Scenario, method: str) -> dict[str, Any]:
     """One case by a rollout (what ``rtgait plan`` does), for what the batch does not take."""
-    from rtgait.core.online import OnlinePlanner
-    from rtgait.core.rollout import rollout
+    from rtgait.core.analysis.rollout import rollout
+    from rtgait.core.planner.online import OnlinePlanner
     from rtgait.viz.run_data import margin_marker
 
     config = scenario.planner_config()

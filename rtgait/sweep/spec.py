@@ -25,10 +25,10 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from rtgait.core.config import ALL_CONNECTION_MODES
 from rtgait.core.limits import MAX_STRIDE
-from rtgait.scenario import Scenario, ScenarioError, parse_scenario
-from rtgait.tomlfile import TomlFiles, is_finite_number
+from rtgait.core.planner.config import ALL_CONNECTION_MODES
+from rtgait.scenario.scenario import Scenario, ScenarioError, parse_scenario
+from rtgait.scenario.tomlfile import TomlFiles, is_finite_number
 
 MAX_CASES = 200_000
 """Most cases one sweep may have: each keeps one row in memory and, at the pendulum level, about 10 us of work."""
@@ -36,7 +36,7 @@ MAX_PHYSICS_CASES = 5_000
 """Most cases one sweep may walk in physics (``--physics``): each takes seconds of a core."""
 METHODS = (*ALL_CONNECTION_MODES, "preview")
 """Values of the ``connection`` axis: the planner's connection modes, and ``"preview"``, the ZMP preview control
-baseline (:mod:`rtgait.core.preview`)."""
+baseline (:mod:`rtgait.core.analysis.preview`)."""
 
 AXES: dict[str, str] = {
     "change.length": "m",
@@ -55,7 +55,8 @@ class SweepError(ValueError):
 
 
 _FILES = TomlFiles(kind="sweep", folder="scenarios", error=SweepError)
-_SCENARIOS = TomlFiles(kind="scenario", folder="scenarios", error=ScenarioError)  # as rtgait.scenario finds them
+# as rtgait.scenario.scenario finds them
+_SCENARIOS = TomlFiles(kind="scenario", folder="scenarios", error=ScenarioError)
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,8 @@
 Each ``draw_*`` function makes one figure from a :class:`~rtgait.viz.run_data.PlanRun` (a rollout in memory, or a
 finished run read back from its files) and a :class:`FigureInfo` (title, sole, the footprints as planned before any
 change); each ``plot_*`` function writes one to a path whose suffix picks the format (png, pdf, svg) and also takes
-a :class:`~rtgait.core.rollout.Rollout` directly. :func:`render_all` writes the four figures of ``rtgait plan``.
+a :class:`~rtgait.core.analysis.rollout.Rollout` directly. :func:`render_all` writes the four figures of ``rtgait
+plan``.
 
 Conventions (:mod:`rtgait.viz.style`): positions in m, deviations and margins in mm, time in s from the walk's
 start, units in square brackets.
@@ -19,8 +20,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
-from rtgait.core.footsteps import Footstep, SoleRect
-from rtgait.core.rollout import Rollout
+from rtgait.core.analysis.rollout import Rollout
+from rtgait.core.geometry.footsteps import Footstep, SoleRect
 from rtgait.viz.run_data import PLAN_FIGURES, FigureInfo, PlanRun, figure_file, plan_figure_files
 from rtgait.viz.style import (
     BAND_COLOR,

@@ -39,7 +39,7 @@ from rtgait.sim.live import LiveWalk, Pacer
 if TYPE_CHECKING:
     import mujoco
 
-    from rtgait.core.footsteps import SoleRect
+    from rtgait.core.geometry.footsteps import SoleRect
 
 __all__ = [
     "FRAME_RATE",

@@ -18,8 +18,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
 
-from rtgait.core.closed_loop import SUPPORT_CODES, ClosedLoopResult
-from rtgait.core.plant import Push
+from rtgait.core.pendulum.loop import SUPPORT_CODES, ClosedLoopResult
+from rtgait.core.pendulum.plant import Push
 from rtgait.viz.run_data import SIM_CSV, SUMMARY, RunFilesError, read_floats, read_summary, read_table, require_keys
 from rtgait.viz.style import (
     COG_COLOR,

@@ -26,7 +26,7 @@ from typing import Any, Protocol
 import numpy as np
 import pinocchio as pin
 
-from rtgait.core.footsteps import SoleRect
+from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.outputs import write_text_atomic
 from rtgait.viz.replay_meshes import MESH_TRIANGLES
 from rtgait.viz.replay_page import BACKGROUNDS, page_html

@@ -34,7 +34,7 @@ import umsgpack
 from pinocchio.visualize import MeshcatVisualizer
 from scipy.spatial.transform import Rotation
 
-from rtgait.core.footsteps import SoleRect
+from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.viz.replay_meshes import MeshLibrary, encode_mesh
 from rtgait.viz.replay_page import LegendEntry
 

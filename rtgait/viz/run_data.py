@@ -7,7 +7,7 @@ a figure shows (``trajectory.csv`` per tick, ``summary.json`` for the rest). The
 :class:`rtgait.viz.pendulum.PendulumRun`, is read with the helpers here.
 
 Also here, because ``summary.json`` and the figures must agree on it: which tick is *the* minimum ZMP margin
-(:func:`margin_marker`), and the figure file names for each format. No matplotlib: :mod:`rtgait.report` uses this
+(:func:`margin_marker`), and the figure file names for each format. No matplotlib: :mod:`rtgait.io.plan_files` uses this
 module on a core install.
 """
 
@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rtgait.core.footsteps import Footstep, SoleRect
-from rtgait.core.support import support_polygon
+from rtgait.core.geometry.footsteps import Footstep, SoleRect
+from rtgait.core.geometry.support import support_polygon
 
 if TYPE_CHECKING:
-    from rtgait.core.rollout import Rollout
+    from rtgait.core.analysis.rollout import Rollout
 
 __all__ = [
     "FIGURE_FORMATS",

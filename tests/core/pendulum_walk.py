@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import math
 
-from rtgait.core.footsteps import SoleRect, Timing
-from rtgait.core.lipm import GRAVITY
-from rtgait.core.online import PlannerConfig, straight_walk
+from rtgait.core.geometry.footsteps import SoleRect, Timing
+from rtgait.core.lipm.closed_form import GRAVITY
+from rtgait.core.planner.online import PlannerConfig, straight_walk
 
 SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.07)
 MASS = 57.0

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from rtgait.core.angular import angular_zmp_offset, fit_correction
+from rtgait.core.lipm.angular import angular_zmp_offset, fit_correction
 
 W = float(np.sqrt(9.81 / 0.8))
 BREAKS = np.array([0.0, 1.0, 1.8, 2.0, 2.8, 3.0, 5.0])

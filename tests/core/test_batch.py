@@ -1,4 +1,5 @@
-"""Batched evaluation of whole walks (rtgait.core.batch) against the rollout `rtgait plan` makes, case by case."""
+"""Batched evaluation of whole walks (rtgait.core.analysis.batch) against the rollout `rtgait plan` makes, case by
+case."""
 
 from __future__ import annotations
 
@@ -8,13 +9,13 @@ import numpy as np
 import pytest
 
 from rtgait.core import OnlinePlanner, PlannerConfig, ScheduledChange, SoleRect, Stride, Timing, rollout
-from rtgait.core.batch import StraightWalk, evaluate_parameters, evaluate_walks
-from rtgait.core.footsteps import Footstep
-from rtgait.core.hull import PointChain, outside_margin, sole_extents, two_box_hull, two_box_vertices
-from rtgait.core.support import signed_margin, support_polygon
-from rtgait.core.walk_family import TIE
-from rtgait.report import summarize
-from rtgait.scenario import load_scenario
+from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, evaluate_walks
+from rtgait.core.analysis.walk_family import TIE
+from rtgait.core.geometry.footsteps import Footstep
+from rtgait.core.geometry.hull import PointChain, outside_margin, sole_extents, two_box_hull, two_box_vertices
+from rtgait.core.geometry.support import signed_margin, support_polygon
+from rtgait.io.plan_files import summarize
+from rtgait.scenario.scenario import load_scenario
 from rtgait.viz.run_data import MARGIN_TIE_TOLERANCE, margin_marker
 
 PAPER = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "sidestep")

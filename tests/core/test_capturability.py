@@ -10,7 +10,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rtgait.core.capturability import (
+from rtgait.core.geometry.footsteps import Footstep, SoleRect
+from rtgait.core.geometry.support import support_polygon
+from rtgait.core.laws.capturability import (
     capture_bound,
     capture_bound_limit,
     max_capturable_impulse,
@@ -18,10 +20,8 @@ from rtgait.core.capturability import (
     reach_along,
     steps_to_capture,
 )
-from rtgait.core.footsteps import Footstep, SoleRect
-from rtgait.core.lipm import GRAVITY
-from rtgait.core.plant import LipmPlant
-from rtgait.core.support import support_polygon
+from rtgait.core.lipm.closed_form import GRAVITY
+from rtgait.core.pendulum.plant import LipmPlant
 
 ZC, MASS = 0.8, 60.0
 W = math.sqrt(GRAVITY / ZC)

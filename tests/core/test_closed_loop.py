@@ -10,20 +10,20 @@ import numpy as np
 import pytest
 from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, ZC, W
 
-from rtgait.core.capturability import max_capturable_impulse
-from rtgait.core.closed_loop import (
+from rtgait.core.analysis.rollout import rollout
+from rtgait.core.geometry.support import signed_margin, support_polygon
+from rtgait.core.laws.capturability import max_capturable_impulse
+from rtgait.core.laws.stepping import StepAdjustment
+from rtgait.core.pendulum.loop import (
     CONTROLLERS,
     DEFAULT_REPLAN_DCM_ERROR,
     SUPPORT_CODES,
     controller_config,
     run_closed_loop,
 )
-from rtgait.core.online import OnlinePlanner
-from rtgait.core.plant import DEFAULT_MAX_LEAN, Push
-from rtgait.core.rollout import rollout
-from rtgait.core.stepping import StepAdjustment
-from rtgait.core.support import signed_margin, support_polygon
-from rtgait.scenario import load_scenario
+from rtgait.core.pendulum.plant import DEFAULT_MAX_LEAN, Push
+from rtgait.core.planner.online import OnlinePlanner
+from rtgait.scenario.scenario import load_scenario
 
 DT = 0.005
 

@@ -16,11 +16,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.polynomial import polynomial as npoly
 
-from rtgait.core.connect import ConnectionSolver, rest_bump
-from rtgait.core.footsteps import Timeline, Timing
-from rtgait.core.lipm import CogTrajectory, omega, particular_matrix
-from rtgait.core.pattern import DEGREE, SEGMENT_WIDTH, PatternKey, PlanOperator, plan_operator_matrices
-from rtgait.core.spline import PiecewisePolynomial
+from rtgait.core.geometry.footsteps import Timeline, Timing
+from rtgait.core.lipm.closed_form import CogTrajectory, omega, particular_matrix
+from rtgait.core.lipm.connect import ConnectionSolver, rest_bump
+from rtgait.core.lipm.pattern import DEGREE, SEGMENT_WIDTH, PatternKey, PlanOperator, plan_operator_matrices
+from rtgait.core.lipm.spline import PiecewisePolynomial
 
 MOVING = ("start", "double", "end")
 

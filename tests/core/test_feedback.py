@@ -13,11 +13,11 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.spatial import ConvexHull
 
-from rtgait.core.feedback import DcmFeedback, DcmFeedbackGains
-from rtgait.core.footsteps import Footstep, SoleRect
-from rtgait.core.lipm import omega
-from rtgait.core.polygon import project_to_polygon
-from rtgait.core.support import signed_margin, support_polygon
+from rtgait.core.geometry.footsteps import Footstep, SoleRect
+from rtgait.core.geometry.polygon import project_to_polygon
+from rtgait.core.geometry.support import signed_margin, support_polygon
+from rtgait.core.laws.feedback import DcmFeedback, DcmFeedbackGains
+from rtgait.core.lipm.closed_form import omega
 
 W = omega(0.8)  # 1/s, a COM 0.8 m high
 BIG = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])  # counter-clockwise, never reached

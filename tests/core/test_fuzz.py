@@ -24,9 +24,15 @@ import warnings
 import numpy as np
 import pytest
 
-from rtgait.core.footsteps import Footstep, Stride, Timing
-from rtgait.core.lipm import CogTrajectory
-from rtgait.core.online import SAMPLE_FIELDS, OnlinePlanner, PlannerConfig, StepChangeTooLateError, straight_walk
+from rtgait.core.geometry.footsteps import Footstep, Stride, Timing
+from rtgait.core.lipm.closed_form import CogTrajectory
+from rtgait.core.planner.online import (
+    SAMPLE_FIELDS,
+    OnlinePlanner,
+    PlannerConfig,
+    StepChangeTooLateError,
+    straight_walk,
+)
 
 DT = 1e-3
 STREAMS = 24

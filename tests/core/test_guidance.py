@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from rtgait.core.footsteps import Timing
-from rtgait.core.guidance import Admittance, HandGuide
-from rtgait.core.online import OnlinePlanner, PlannerConfig
+from rtgait.core.geometry.footsteps import Timing
+from rtgait.core.laws.guidance import Admittance, HandGuide
+from rtgait.core.planner.online import OnlinePlanner, PlannerConfig
 
 CONFIG = PlannerConfig(timing=Timing(0.7, 0.1), connection="quasi-real-time")  # the paper's experiment
 

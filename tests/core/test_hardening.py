@@ -15,8 +15,9 @@ import warnings
 import pytest
 
 from rtgait.core import limits
-from rtgait.core.footsteps import Footstep, SoleRect, Stride, Timing
-from rtgait.core.online import (
+from rtgait.core.analysis.rollout import rollout
+from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride, Timing
+from rtgait.core.planner.online import (
     CommandClampedWarning,
     OnlinePlanner,
     PlannerConfig,
@@ -24,7 +25,6 @@ from rtgait.core.online import (
     StopCancelledWarning,
     straight_walk,
 )
-from rtgait.core.rollout import rollout
 
 SOLE = SoleRect(0.13, 0.10, 0.07, 0.07)
 

@@ -1,4 +1,4 @@
-"""The hip strategy's lean against a pendulum whose CMP it moves (rtgait.core.hip_strategy).
+"""The hip strategy's lean against a pendulum whose CMP it moves (rtgait.core.laws.hip_strategy).
 
 The plant is the DCM of a linear inverted pendulum, ``xi' = w (xi - cmp)``, advanced exactly over each tick with
 the CMP held, ``cmp = p + L' / (m g)``: the ZMP ``p`` the sole allows, plus the angular momentum rate of the lean
@@ -14,7 +14,7 @@ import math
 
 import pytest
 
-from rtgait.core.hip_strategy import HipStrategy, HipStrategyLimits
+from rtgait.core.laws.hip_strategy import HipStrategy, HipStrategyLimits
 
 MASS, HEIGHT, G = 90.0, 0.877, 9.81
 W = math.sqrt(G / HEIGHT)

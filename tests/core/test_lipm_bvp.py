@@ -16,9 +16,9 @@ from hypothesis import strategies as st
 from numpy.polynomial import polynomial as npoly
 from scipy.integrate import solve_ivp
 
-from rtgait.core.bvp import BoundaryValueSolver, bvp_matrix, component_propagators
-from rtgait.core.lipm import GRAVITY, CogTrajectory, omega, particular_matrix
-from rtgait.core.spline import PiecewisePolynomial, evaluate_polynomials
+from rtgait.core.lipm.bvp import BoundaryValueSolver, bvp_matrix, component_propagators
+from rtgait.core.lipm.closed_form import GRAVITY, CogTrajectory, omega, particular_matrix
+from rtgait.core.lipm.spline import PiecewisePolynomial, evaluate_polynomials
 
 SETTINGS = settings(max_examples=40, deadline=None)
 

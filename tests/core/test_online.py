@@ -17,7 +17,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial import Delaunay
 
-from rtgait.core.footsteps import (
+from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
+from rtgait.core.geometry.footsteps import (
     Footstep,
     SoleRect,
     Stride,
@@ -27,7 +28,7 @@ from rtgait.core.footsteps import (
     place_footsteps,
     wrap_angle,
 )
-from rtgait.core.online import (
+from rtgait.core.planner.online import (
     CONNECTION_MODES,
     SAMPLE_FIELDS,
     OnlinePlanner,
@@ -36,7 +37,6 @@ from rtgait.core.online import (
     VelocityCommand,
     straight_walk,
 )
-from rtgait.core.rollout import Rollout, ScheduledChange, rollout
 
 EPS = 1e-7
 """Half-width (s) of the window sampled around every replanning."""

@@ -14,9 +14,9 @@ import math
 import numpy as np
 import pytest
 
-from rtgait.core.footsteps import Footstep, SoleRect, Timing, place_step
-from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
-from rtgait.core.stepping import StepAdjustment
+from rtgait.core.geometry.footsteps import Footstep, SoleRect, Timing, place_step
+from rtgait.core.laws.stepping import StepAdjustment
+from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
 
 SOLE = SoleRect(0.13, 0.10, 0.07, 0.07)
 DT = 0.001

@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from rtgait.core.footsteps import Footstep, SoleRect
-from rtgait.core.lipm import GRAVITY
-from rtgait.core.plant import (
+from rtgait.core.geometry.footsteps import Footstep, SoleRect
+from rtgait.core.geometry.polygon import clip_to_polygon
+from rtgait.core.geometry.support import signed_margin, support_polygon
+from rtgait.core.lipm.closed_form import GRAVITY
+from rtgait.core.pendulum.plant import (
     DEFAULT_MAX_LEAN,
     PUSH_SPEED_LIMIT,
     LipmPlant,
@@ -19,8 +21,6 @@ from rtgait.core.plant import (
     push_force,
     push_impulse,
 )
-from rtgait.core.polygon import clip_to_polygon
-from rtgait.core.support import signed_margin, support_polygon
 
 ZC, MASS = 0.8, 50.0
 W = math.sqrt(GRAVITY / ZC)

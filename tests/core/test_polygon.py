@@ -1,4 +1,4 @@
-"""rtgait.core.polygon: the per-point and the vectorised nearest point agree, and both agree with a brute-force
+"""rtgait.core.geometry.polygon: the per-point and the vectorised nearest point agree, and both agree with a brute-force
 search over a dense sampling of the polygon's boundary; bad polygons are refused."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
-from rtgait.core.polygon import ConvexPolygon, clip_to_polygon, project_to_polygon
+from rtgait.core.geometry.polygon import ConvexPolygon, clip_to_polygon, project_to_polygon
 
 
 def _random_polygon(rng: np.random.Generator) -> np.ndarray:

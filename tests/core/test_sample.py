@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from rtgait.core import OnlinePlanner, PlannerConfig, Stride, Timing
-from rtgait.core.sample import foot_transform
+from rtgait.core.planner.sample import foot_transform
 
 
 def test_com_names_are_the_cog_values():

@@ -2,7 +2,7 @@
 
 A push toward the stance foot's outside moves the capture point away from where the swing foot may land (the feet
 never cross), so no landing catches it; what can is the ankle, the centre of pressure at the sole's outer edge,
-given time. Independent truths: the pendulum plant integrated in closed form (:mod:`rtgait.core.closed_loop`) and
+given time. Independent truths: the pendulum plant integrated in closed form (:mod:`rtgait.core.pendulum.loop`) and
 the stance sole's own capturability bound (the DCM must not pass the outer edge, ``J < m w (edge - dcm)``).
 """
 
@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, W
 
-from rtgait.core.closed_loop import run_closed_loop
-from rtgait.core.online import OnlinePlanner
-from rtgait.core.plant import Push
-from rtgait.core.stepping import StepAdjustment, SteppingLimits, remainder_options, single_support_options
+from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits, remainder_options, single_support_options
+from rtgait.core.pendulum.loop import run_closed_loop
+from rtgait.core.pendulum.plant import Push
+from rtgait.core.planner.online import OnlinePlanner
 
 LANDING = StepAdjustment(sole=SOLE)
 SHORTER = StepAdjustment(sole=SOLE, adapt_timing=True)

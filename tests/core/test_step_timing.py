@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from rtgait.core.footsteps import SoleRect, Stride, Timeline, Timing
-from rtgait.core.online import SAMPLE_FIELDS, OnlinePlanner, PlannerConfig, straight_walk
-from rtgait.core.walk import VelocityCommand
-from rtgait.core.walk_family import FamilyKey, WalkFamily
+from rtgait.core.analysis.walk_family import FamilyKey, WalkFamily
+from rtgait.core.geometry.footsteps import SoleRect, Stride, Timeline, Timing
+from rtgait.core.planner.online import SAMPLE_FIELDS, OnlinePlanner, PlannerConfig, straight_walk
+from rtgait.core.walk.walk import VelocityCommand
 
 DT = 1e-3
 COL = {name: i for i, name in enumerate(SAMPLE_FIELDS)}

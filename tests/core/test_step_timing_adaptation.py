@@ -1,7 +1,7 @@
 """Step timing adaptation (Morisawa et al. 2006): step adjustment may also shorten the single support of the step it
 adjusts.
 
-Independent truths: the pendulum plant integrated in closed form (:mod:`rtgait.core.closed_loop`) and the
+Independent truths: the pendulum plant integrated in closed form (:mod:`rtgait.core.pendulum.loop`) and the
 capturability bounds of the LIPM (a push beyond the one-step bound at the nominal touch-down, inside it at the
 earliest one); the pendulum equation and the connection conditions of the retimed plan; the swing foot's own
 trajectory (continuous, landing where and when the plan says); a direct evaluation of every candidate's margin.
@@ -15,14 +15,14 @@ import numpy as np
 import pytest
 from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, W
 
-from rtgait.core.batch import halfplane_margin, polygon_halfplanes
-from rtgait.core.capturability import max_capturable_impulse, reach_along
-from rtgait.core.closed_loop import run_closed_loop
-from rtgait.core.footsteps import Timing
-from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
-from rtgait.core.plant import Push
-from rtgait.core.stepping import StepAdjustment, choose_step, remainder_options, single_support_options
-from rtgait.core.support import signed_margin
+from rtgait.core.analysis.batch import halfplane_margin, polygon_halfplanes
+from rtgait.core.geometry.footsteps import Timing
+from rtgait.core.geometry.support import signed_margin
+from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
+from rtgait.core.laws.stepping import StepAdjustment, choose_step, remainder_options, single_support_options
+from rtgait.core.pendulum.loop import run_closed_loop
+from rtgait.core.pendulum.plant import Push
+from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
 
 LANDING = StepAdjustment(sole=SOLE)
 TIMING = StepAdjustment(sole=SOLE, adapt_timing=True)

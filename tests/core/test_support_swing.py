@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rtgait.core.footsteps import (
+from rtgait.core.geometry.footsteps import (
     Footstep,
     SoleRect,
     Stride,
@@ -20,8 +20,8 @@ from rtgait.core.footsteps import (
     stride_between,
     wrap_angle,
 )
-from rtgait.core.support import signed_margin, support_polygon
-from rtgait.core.swing import swing_pose, swing_velocity
+from rtgait.core.geometry.support import signed_margin, support_polygon
+from rtgait.core.geometry.swing import swing_pose, swing_velocity
 
 SETTINGS = settings(max_examples=60, deadline=None)
 SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])  # counter-clockwise unit square

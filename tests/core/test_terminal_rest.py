@@ -1,6 +1,6 @@
 """The walk ends at rest: a plan whose last phase is ``"settle"`` brings the COG to a stop over the last anchor.
 
-The settle segment's ZMP is the anchor plus ``alpha tau^2 (T - tau)^2 / T^4`` (``rtgait.core.connect.rest_bump``)
+The settle segment's ZMP is the anchor plus ``alpha tau^2 (T - tau)^2 / T^4`` (``rtgait.core.lipm.connect.rest_bump``)
 with one more condition, ``c'(t_end) = 0``. Checked here on the trajectory itself, whatever the settle time: COG
 position, velocity and acceleration at the end, the pendulum equation on the settle segment, and the ZMP's
 position and velocity continuous where the settle phase begins.
@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from numpy.polynomial import polynomial as npoly
 
-from rtgait.core.connect import MIN_REST_W_T, ConnectionSolver, rest_bump
-from rtgait.core.footsteps import Stride, Timing
-from rtgait.core.lipm import CogTrajectory, omega
-from rtgait.core.pattern import DEGREE, PatternKey, PlanOperator
-from rtgait.core.spline import PiecewisePolynomial
+from rtgait.core.geometry.footsteps import Stride, Timing
+from rtgait.core.lipm.closed_form import CogTrajectory, omega
+from rtgait.core.lipm.connect import MIN_REST_W_T, ConnectionSolver, rest_bump
+from rtgait.core.lipm.pattern import DEGREE, PatternKey, PlanOperator
+from rtgait.core.lipm.spline import PiecewisePolynomial
 
 W = omega(0.8)
 SETTLE_TIMES = (0.1, 0.3, 2.0)
@@ -162,7 +162,7 @@ WALKS = {
 @pytest.mark.parametrize("walk", sorted(WALKS))
 def test_online_walk_ends_at_rest_over_the_feet(settle, walk):
     # Imported here: the tests above exercise the operator alone and need nothing of the planner.
-    from rtgait.core.online import OnlinePlanner, PlannerConfig
+    from rtgait.core.planner.online import OnlinePlanner, PlannerConfig
 
     config = PlannerConfig(timing=Timing(0.8, 0.2, settle=settle))
     planner = OnlinePlanner(config, WALKS[walk])

@@ -13,9 +13,9 @@ import warnings
 
 import pytest
 
-from rtgait.core.config import PlannerConfig, VelocityLimits
-from rtgait.core.footsteps import Timing, stride_between, wrap_angle
-from rtgait.core.online import CommandClampedWarning, OnlinePlanner
+from rtgait.core.geometry.footsteps import Timing, stride_between, wrap_angle
+from rtgait.core.planner.config import PlannerConfig, VelocityLimits
+from rtgait.core.planner.online import CommandClampedWarning, OnlinePlanner
 
 TIMING = Timing(0.7, 0.1)  # T = 0.8 s, the paper's fig8
 PERIOD = 0.8

@@ -28,10 +28,10 @@ def g1() -> Any:
 
 def planned_walk(robot: Any, scenario_name: str = "fig8", **changes: Any) -> Any:
     """Roll out a built-in scenario with the robot's COG height, step width and sole (and any other changes)."""
-    from rtgait.core.online import OnlinePlanner
-    from rtgait.core.rollout import rollout
+    from rtgait.core.analysis.rollout import rollout
+    from rtgait.core.planner.online import OnlinePlanner
     from rtgait.robot.motion import robot_scenario
-    from rtgait.scenario import load_scenario
+    from rtgait.scenario.scenario import load_scenario
 
     scenario = dataclasses.replace(robot_scenario(load_scenario(scenario_name), robot), **changes)
     planner = OnlinePlanner(scenario.planner_config(), scenario.strides())

@@ -12,7 +12,7 @@ import pytest
 
 pin = pytest.importorskip("pinocchio")
 
-from rtgait.cli import main  # noqa: E402
+from rtgait.cli.main import main  # noqa: E402
 from rtgait.robot.data import data_file  # noqa: E402
 
 TALOS_URDF = "talos_data/robots/talos_reduced.urdf"

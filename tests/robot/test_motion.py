@@ -7,7 +7,7 @@ import pytest
 
 pin = pytest.importorskip("pinocchio")
 
-from rtgait.core.rollout import ScheduledChange  # noqa: E402
+from rtgait.core.analysis.rollout import ScheduledChange  # noqa: E402
 from rtgait.robot.model import BASE_COLUMNS, RobotModel  # noqa: E402
 from rtgait.robot.motion import ERROR_FIELDS, UnreachableError, whole_body_motion  # noqa: E402
 

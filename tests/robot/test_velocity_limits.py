@@ -18,14 +18,14 @@ import pytest
 
 pin = pytest.importorskip("pinocchio")
 
-from rtgait.core.config import VelocityLimits  # noqa: E402
-from rtgait.core.footsteps import stride_between  # noqa: E402
-from rtgait.core.online import CommandClampedWarning, OnlinePlanner  # noqa: E402
-from rtgait.core.rollout import rollout  # noqa: E402
+from rtgait.core.analysis.rollout import rollout  # noqa: E402
+from rtgait.core.geometry.footsteps import stride_between  # noqa: E402
+from rtgait.core.planner.config import VelocityLimits  # noqa: E402
+from rtgait.core.planner.online import CommandClampedWarning, OnlinePlanner  # noqa: E402
 from rtgait.robot.description import RobotError, load_robot  # noqa: E402
 from rtgait.robot.model import RobotModel  # noqa: E402
 from rtgait.robot.motion import robot_scenario, whole_body_motion  # noqa: E402
-from rtgait.scenario import load_scenario  # noqa: E402
+from rtgait.scenario.scenario import load_scenario  # noqa: E402
 
 LEG_CLEARANCE = 0.005  # m: the legs' meshes at least this far apart along the walk
 STEPS = 6

@@ -29,7 +29,7 @@ def talos_sim(talos: Any) -> Any:
 
 def short_scenario(name: str, steps: int, changes: tuple = ()) -> Any:
     """A built-in scenario cut to ``steps`` steps (with ``changes`` instead of its own) and a 1 s settle."""
-    from rtgait.scenario import load_scenario
+    from rtgait.scenario.scenario import load_scenario
 
     scenario = load_scenario(name)
     timing = dataclasses.replace(scenario.timing, settle=1.0)
@@ -45,7 +45,7 @@ def shorten() -> Any:
 @pytest.fixture(scope="session")
 def short_walk(talos: Any, talos_sim: Any) -> Any:
     """fig8's timing (quasi-real-time, T_s 0.7 s, T_dbl 0.1 s) for 3 steps of 0.05 m, then a 0.15 m one."""
-    from rtgait.core.rollout import ScheduledChange
+    from rtgait.core.analysis.rollout import ScheduledChange
     from rtgait.sim.run import simulate
 
     scenario = short_scenario("fig8", 4, (ScheduledChange(4, length=0.15),))

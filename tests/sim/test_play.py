@@ -16,9 +16,9 @@ from pathlib import Path
 
 import pytest
 
-from rtgait.core.config import PlannerConfig
-from rtgait.core.footsteps import Timing
-from rtgait.core.walk import VelocityCommand
+from rtgait.core.geometry.footsteps import Timing
+from rtgait.core.planner.config import PlannerConfig
+from rtgait.core.walk.walk import VelocityCommand
 from rtgait.sim.live import KEYS, CommandLimits, Increments, Pacer, command_after, key_action
 
 RTGAIT = [sys.executable, "-m", "rtgait"]
@@ -60,7 +60,7 @@ def test_each_press_steps_one_component_within_the_limits():
 
 def test_the_limits_are_the_planner_s_own():
     """At the limits the planner takes the command as it is; just beyond, it clamps it (and warns)."""
-    from rtgait.core.online import CommandClampedWarning, OnlinePlanner
+    from rtgait.core.planner.online import CommandClampedWarning, OnlinePlanner
 
     config = PlannerConfig(timing=Timing(0.7, 0.1))
     limits = CommandLimits.from_config(config)
@@ -231,9 +231,9 @@ def test_the_scene_shows_the_plan_s_footprints_and_the_tick_s_points(talos):
     pytest.importorskip("pinocchio")
     import numpy as np
 
+    from rtgait.control.controller import make_controller
     from rtgait.robot.motion import robot_scenario
-    from rtgait.scenario import load_scenario
-    from rtgait.sim.controllers import make_controller
+    from rtgait.scenario.scenario import load_scenario
     from rtgait.sim.live import LiveWalk
     from rtgait.sim.loop import ClosedLoop, LoopOptions
     from rtgait.sim.model import SimConfig, build_sim_model

@@ -17,7 +17,7 @@ from rtgait.sim.result import FALL_MARGIN
 @pytest.fixture(scope="module")
 def blended_walk(short_walk, talos, talos_sim):
     """The shared short walk again with ``ControllerOptions(anchor_blend=0.04)`` (off by default)."""
-    from rtgait.sim.controllers import ControllerOptions
+    from rtgait.control.controller import ControllerOptions
     from rtgait.sim.run import simulate
 
     scenario, _ = short_walk

@@ -13,10 +13,10 @@ import pytest
 pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
-from rtgait.core.closed_loop import CONTROLLERS
-from rtgait.scenario import load_scenario
+from rtgait.control.controller import ControllerOptions
+from rtgait.core.pendulum.loop import CONTROLLERS
+from rtgait.scenario.scenario import load_scenario
 from rtgait.sim.contact import Push
-from rtgait.sim.controllers import ControllerOptions
 from rtgait.sim.loop import LoopOptions
 from rtgait.sim.run import simulate
 
@@ -24,7 +24,7 @@ ROBOTS = ("talos", "g1")
 TILT_LIMIT = 0.1
 """Largest tilt of the base from the orientation the controller commands (rad) a scripted walk may show: 6 degrees.
 From the commanded one, not from upright: the hip strategy leans the pelvis on purpose (up to ``max_lean``, 0.25
-rad) to answer a push the feet cannot (rtgait.core.hip_strategy); a robot tipping over leaves its command."""
+rad) to answer a push the feet cannot (rtgait.core.laws.hip_strategy); a robot tipping over leaves its command."""
 LEAN_LIMIT = 0.25 * math.sqrt(2.0) + 0.05
 """Largest tilt from upright the controller may command (rad): the hip strategy's lean, at most 0.25 rad on each
 heading axis (both at once: sqrt(2) x 0.25), and the walk's own few hundredths."""
@@ -177,7 +177,7 @@ def test_an_outward_push_in_single_support_is_stood_on_the_stance_foot_held_long
 def test_the_hip_strategy_stands_a_forward_push_the_feet_alone_do_not(robots):
     # 61 N s forward in Talos's single support: with the feet alone (the DCM law's ZMP at the toe edge, the step
     # moved and sooner) it falls at this and every push from 60 to 63 N s, at 1 and 0.5 ms physics steps; leaning its
-    # upper body forward as well (rtgait.core.hip_strategy), it walks 61 and 62 N s through at both.
+    # upper body forward as well (rtgait.core.laws.hip_strategy), it walks 61 and 62 N s through at both.
     model, sim = robots["talos"]
     scenario = short(4, 0.1)
     single = scenario.timing.start + scenario.timing.single_support + scenario.timing.double_support
@@ -197,8 +197,8 @@ def outward_bounds(model: Any, scenario: Any, centre: float) -> tuple[float, flo
     """The in-place bound of an outward push (-y, the right foot standing) centred at ``centre`` (s): the stance
     sole's, ``m w (xi_y - e_y)`` with ``e_y`` the sole's outer edge and ``xi`` the plan's DCM there, and the lean's
     share, ``m w`` times its recoverable offset sideways (N s)."""
-    from rtgait.core.online import OnlinePlanner
-    from rtgait.core.rollout import rollout
+    from rtgait.core.analysis.rollout import rollout
+    from rtgait.core.planner.online import OnlinePlanner
     from rtgait.robot.lean import hip_strategy_limits
     from rtgait.robot.motion import robot_scenario
 

@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
-from rtgait.cli import main
+from rtgait.cli.main import main
 
 
 def test_simulate_writes_csv_summary_and_figure(
@@ -123,7 +123,7 @@ def test_a_step_the_robot_cannot_reach_is_refused_before_simulating(
 def test_pushes_that_would_silently_not_act_are_refused(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], extra: list[str], words: str
 ) -> None:
-    from rtgait.commands import simulate as simulate_command
+    from rtgait.cli import simulate as simulate_command
 
     monkeypatch.setattr(simulate_command, "load_robot", lambda name: pytest.fail("the robot was loaded"))
     assert main(["simulate", "fig8", "--out", str(tmp_path / "never"), *extra]) == 2
@@ -134,7 +134,7 @@ def test_pushes_that_would_silently_not_act_are_refused(
 def test_a_run_longer_than_the_tick_limit_is_refused_before_anything_loads(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], write_scenario
 ) -> None:
-    from rtgait.commands import simulate as simulate_command
+    from rtgait.cli import simulate as simulate_command
 
     monkeypatch.setattr(simulate_command, "load_robot", lambda name: pytest.fail("the robot was loaded"))
     # 1000 steps of 1 s: planned every 10 ms, 100 thousand samples; simulated every 1 ms, too many. The run lasts
@@ -153,7 +153,7 @@ def test_a_run_longer_than_the_tick_limit_is_refused_before_anything_loads(
 def test_an_out_that_is_a_file_is_refused_before_simulating(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from rtgait.commands import simulate as simulate_command
+    from rtgait.cli import simulate as simulate_command
 
     monkeypatch.setattr(simulate_command, "load_robot", lambda name: pytest.fail("the robot was loaded"))
     out = tmp_path / "o"

@@ -9,9 +9,9 @@ import pytest
 mujoco = pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
-from rtgait.core.footsteps import Stride  # noqa: E402
-from rtgait.core.online import OnlinePlanner  # noqa: E402
-from rtgait.core.rollout import ScheduledChange  # noqa: E402
+from rtgait.core.analysis.rollout import ScheduledChange  # noqa: E402
+from rtgait.core.geometry.footsteps import Stride  # noqa: E402
+from rtgait.core.planner.online import OnlinePlanner  # noqa: E402
 from rtgait.robot.motion import robot_scenario  # noqa: E402
 from rtgait.sim.loop import LoopOptions, run_closed_loop  # noqa: E402
 from rtgait.sim.model import SimConfig, build_sim_model  # noqa: E402

@@ -11,18 +11,18 @@ import pytest
 pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
-from rtgait.core.closed_loop import controller_config
-from rtgait.core.footsteps import SoleRect, Timing
-from rtgait.core.online import OnlinePlanner, PlannerConfig, straight_walk
-from rtgait.core.stepping import SteppingLimits
-from rtgait.sim.controllers import (
+from rtgait.control.controller import (
     CONTROLLERS,
     ControllerOptions,
     RobotInfo,
     make_controller,
     step_limits,
 )
-from rtgait.sim.foot_control import split_zmp
+from rtgait.control.foot_control import split_zmp
+from rtgait.core.geometry.footsteps import SoleRect, Timing
+from rtgait.core.laws.stepping import SteppingLimits
+from rtgait.core.pendulum.loop import controller_config
+from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
 from rtgait.sim.measure import FootState, Landing, Measurement
 
 SOLE = SoleRect(front=0.105, back=0.105, inner=0.065, outer=0.065)

@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from rtgait.sim.external_force import ExternalForce, lean
+from rtgait.control.external_force import ExternalForce, lean
 
 G = 9.81
 
@@ -54,8 +54,8 @@ def pulled(talos, talos_sim, shorten):
     """Four steps of fig8 on Talos pulled forward at the pelvis from the walk's start: by 15 N with the controller
     not told of it, by 30 N told (a steady 30 N pull topples the robot that does not lean)."""
     pytest.importorskip("mujoco")
+    from rtgait.control.controller import make_controller
     from rtgait.robot.motion import robot_scenario
-    from rtgait.sim.controllers import make_controller
     from rtgait.sim.loop import LoopOptions, run_closed_loop
 
     walk = robot_scenario(shorten("fig8", 4), talos)

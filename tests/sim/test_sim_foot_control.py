@@ -10,8 +10,7 @@ import pytest
 
 pytest.importorskip("mujoco")  # the measured feet's type lives with the MuJoCo measurement
 
-from rtgait.core.footsteps import SoleRect
-from rtgait.sim.foot_control import (
+from rtgait.control.foot_control import (
     FootControlGains,
     FootForceControl,
     FootOffsets,
@@ -20,6 +19,7 @@ from rtgait.sim.foot_control import (
     find_ankle_joints,
     split_zmp,
 )
+from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.sim.measure import FootState
 
 SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.05)

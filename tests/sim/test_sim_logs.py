@@ -24,10 +24,10 @@ pytest.importorskip("pyarrow")
 import pyarrow.parquet as pq
 from scenario_files import scenario_text
 
-from rtgait.core.footsteps import Footstep, SoleRect
-from rtgait.scenario import load_scenario
-from rtgait.sim.figure import sole_extent
-from rtgait.sim.log_file import LOG_FORMAT, log_columns, read_sim_log
+from rtgait.core.geometry.footsteps import Footstep, SoleRect
+from rtgait.io.sim_log import LOG_FORMAT, log_columns, read_sim_log
+from rtgait.scenario.scenario import load_scenario
+from rtgait.viz.sim_figure import sole_extent
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "logs.md"
 PUSH_START, PUSH_DURATION, PUSH_FORCE = 1.0, 0.1, (50.0, 0.0, 0.0)
@@ -296,7 +296,7 @@ def _drawing(figure: Any) -> list[tuple[str, np.ndarray]]:
 
 def test_zmp_sim_drawn_from_sim_parquet_is_that_of_the_run(logged: tuple[Any, Path]) -> None:
     pytest.importorskip("matplotlib")
-    from rtgait.sim.figure import ZmpSimRun, draw_zmp_sim, read_zmp_sim_run
+    from rtgait.viz.sim_figure import ZmpSimRun, draw_zmp_sim, read_zmp_sim_run
 
     result, out = logged
     in_memory = _drawing(draw_zmp_sim(ZmpSimRun.from_result(result, "short (quasi-real-time)")))
@@ -312,11 +312,11 @@ def test_zmp_sim_drawn_from_sim_parquet_is_that_of_the_run(logged: tuple[Any, Pa
 def test_without_pyarrow_simulate_says_so_in_one_line_and_writes_the_rest(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    import rtgait.sim.log_file
-    import rtgait.sim.outputs
-    from rtgait.cli import main
+    import rtgait.io.sim_files
+    import rtgait.io.sim_log
+    from rtgait.cli.main import main
 
-    for module in (rtgait.sim.log_file, rtgait.sim.outputs):
+    for module in (rtgait.io.sim_log, rtgait.io.sim_files):
         monkeypatch.setattr(module, "parquet_available", lambda: False)
     path = tmp_path / "tiny.toml"
     path.write_text(scenario_text(name="tiny", single_support=0.7, double_support=0.1, dt=0.005, steps=1,

@@ -13,10 +13,10 @@ import pytest
 pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
-from rtgait.core.closed_loop import CONTROLLERS
+from rtgait.control.controller import make_controller
+from rtgait.control.level_fade import LEVEL_FADE, fade_weight
+from rtgait.core.pendulum.loop import CONTROLLERS
 from rtgait.robot.motion import robot_scenario
-from rtgait.sim.controllers import make_controller
-from rtgait.sim.level_fade import LEVEL_FADE, fade_weight
 from rtgait.sim.loop import ClosedLoop, LoopOptions
 
 QUICK = LoopOptions(start_ramp=0.5, start_hold=0.3, after=0.3)

@@ -13,10 +13,10 @@ import pytest
 pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
-from rtgait.core.rollout import ScheduledChange
+from rtgait.control.controller import make_controller
+from rtgait.core.analysis.rollout import ScheduledChange
 from rtgait.robot.motion import robot_scenario
 from rtgait.sim.contact import Push
-from rtgait.sim.controllers import make_controller
 from rtgait.sim.loop import ClosedLoop, LoopOptions, SimResult, run_closed_loop
 
 QUICK = LoopOptions(start_ramp=0.5, start_hold=0.3, after=0.3)
@@ -98,7 +98,7 @@ def test_a_ring_record_keeps_the_last_ticks_of_the_whole_record(talos, talos_sim
 
 def test_an_open_ended_walk_by_command_has_bounded_memory(talos, talos_sim):
     """No end, no stop: it walks as long as it is stepped, the record stays at its ring's size."""
-    from rtgait.scenario import load_scenario
+    from rtgait.scenario.scenario import load_scenario
 
     walk = robot_scenario(load_scenario("fig8"), talos)
     level = make_controller("adaptive", walk.planner_config(), None, walk.sole, talos, dt=talos_sim.control_dt)

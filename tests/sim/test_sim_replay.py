@@ -14,7 +14,7 @@ pytest.importorskip("meshcat")
 
 import pinocchio as pin
 
-from rtgait.cli import main
+from rtgait.cli.main import main
 from rtgait.sim.run import replay_paths
 
 

@@ -1,4 +1,4 @@
-"""The blend of a foot's IK target (rtgait.sim.target_blend): it starts with the old target's pose and rate, ends on
+"""The blend of a foot's IK target (rtgait.control.target_blend): it starts with the old target's pose and rate, ends on
 the controller's target, and stays within the minimum-jerk bounds."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from rtgait.sim.target_blend import FootBlend
+from rtgait.control.target_blend import FootBlend
 
 T, DT = 0.04, 0.001
 

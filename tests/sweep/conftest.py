@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from rtgait.sweep.cli import add_parser, run
+from rtgait.cli.sweep import add_parser, run
 
 TINY = """name = "tiny"
 connection = "real-time"

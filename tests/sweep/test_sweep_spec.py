@@ -67,7 +67,7 @@ def test_too_many_cases(spec_file, tmp_path, monkeypatch):
 
 
 def test_too_many_physics_cases_and_options_without_physics(spec_file, tmp_path, monkeypatch):
-    import rtgait.sweep.cli as cli
+    import rtgait.cli.sweep as cli
 
     monkeypatch.setattr(cli, "MAX_PHYSICS_CASES", 10)
     with pytest.raises(SweepError, match="walk in physics"):

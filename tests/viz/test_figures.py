@@ -14,10 +14,10 @@ pytest.importorskip("matplotlib")
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from rtgait.core.online import OnlinePlanner
-from rtgait.core.rollout import Rollout, rollout
-from rtgait.report import summarize
-from rtgait.scenario import Scenario, load_scenario
+from rtgait.core.analysis.rollout import Rollout, rollout
+from rtgait.core.planner.online import OnlinePlanner
+from rtgait.io.plan_files import summarize
+from rtgait.scenario.scenario import Scenario, load_scenario
 from rtgait.viz.figures import DRAW, MARKER_GID, MIN_DEVIATION_SPAN
 from rtgait.viz.pendulum import PendulumRun, draw_pendulum
 from rtgait.viz.run_data import FigureInfo, PlanRun, margin_marker
@@ -144,7 +144,7 @@ def _tick_labels(figure: Figure) -> list[str]:
 
 
 def _pendulum_run() -> PendulumRun:
-    from rtgait.pendulum_sim import simulate_pendulum
+    from rtgait.io.pendulum_run import simulate_pendulum
 
     scenario = load_scenario("fig8")
     result = simulate_pendulum(scenario, "adaptive", [(5.0, 0.1, 250.0, 0.0)])

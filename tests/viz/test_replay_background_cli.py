@@ -7,7 +7,7 @@ import pytest
 pytest.importorskip("meshcat")
 pytest.importorskip("pinocchio")
 
-from rtgait.cli import main
+from rtgait.cli.main import main
 
 
 @pytest.mark.parametrize("background", ["sky", "white"])

@@ -1,0 +1,1 @@
+"""The ``rtgait`` command: one module per subcommand, parsed and dispatched by :mod:`rtgait.cli.main`."""

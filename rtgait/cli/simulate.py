@@ -1,0 +1,405 @@
+"""``rtgait simulate``: walk a scenario in closed loop, on a robot in MuJoCo physics or on the point-mass pendulum."""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import math
+import sys
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import asdict
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rtgait.cli.common import (
+    PROG,
+    RunError,
+    add_format_option,
+    add_replay_background_option,
+    check_run_length,
+    load_robot,
+    numbers,
+    out_folder,
+    progress_printer,
+    require_extras,
+    robot_walk,
+)
+from rtgait.io.plan_files import pendulum_report
+from rtgait.outputs import check_destination, staged_outputs
+from rtgait.scenario.scenario import Scenario, ScenarioError, load_scenario
+
+if TYPE_CHECKING:
+    from rtgait.robot.model import RobotModel
+    from rtgait.sim.loop import Push, SimResult
+    from rtgait.sim.model import SimConfig
+
+MODELS = ("mujoco", "lipm")
+"""What ``--model`` can simulate: the robot in MuJoCo, or the linear inverted pendulum's point mass."""
+CONTROLLERS = ("open-loop", "stabilized", "adaptive")
+"""The controller levels (``docs/closed_loop.md``)."""
+
+
+def add_parser(commands: Any) -> None:
+    simulate = commands.add_parser(
+        "simulate",
+        help="walk a scenario on a robot in MuJoCo physics (planner + whole-body IK + position servos at 1 kHz)",
+        description="Walk the scenario in closed loop in MuJoCo at 1 kHz: each tick the online planner samples, "
+        "the whole-body IK solves and the joint servos track; the measured ZMP (centre of pressure of the contact "
+        "forces), base pose, COG and contacts are logged, and falls end the run. Writes sim.csv, sim.parquet (the "
+        "complete log, docs/logs.md; needs pyarrow), summary.json and zmp_sim.png (and with --html, replay.html: "
+        "the simulated motion in 3D). A scenario with a [guide] path "
+        "(e.g. guided) is walked led by the hand: a person pulls the robot's hand along it. A walk the robot "
+        "cannot reach kinematically is refused before simulating, as by plan --robot.",
+    )
+    simulate.add_argument("scenario", metavar="SCENARIO", help="built-in scenario name or scenario .toml file")
+    simulate.add_argument(
+        "--model",
+        choices=MODELS,
+        default="mujoco",
+        help="mujoco (default): the robot in MuJoCo physics; lipm: a point mass on the linear inverted pendulum, "
+        "its ZMP the commanded one clipped to the feet on the ground (numpy only, no robot model needed)",
+    )
+    simulate.add_argument(
+        "--controller",
+        choices=CONTROLLERS,
+        help="adaptive (default): + replanning from the measured state, re-anchoring on landings, step adjustment "
+        "and landing detection; stabilized: the plan + DCM feedback on the measured COM state and foot force control "
+        "from the measured wrench of each foot; open-loop: the plan alone (the paper's assumption)",
+    )
+    simulate.add_argument(
+        "--robot",
+        metavar="NAME_OR_FILE",
+        help="robot (default talos with --model mujoco); its COG height, sole and step width replace the scenario's "
+        "(and with --model lipm its mass)",
+    )
+    simulate.add_argument(
+        "--mass", metavar="KG", type=float, help="--model lipm: the point mass (default the scenario's, else 57 kg)"
+    )
+    simulate.add_argument(
+        "--control-dt",
+        metavar="S",
+        type=float,
+        help="control period (s): a new joint reference every period (default: the robot description's, 1 ms for "
+        "Talos, 2 ms for G1; 1 ms with --model lipm)",
+    )
+    simulate.add_argument(
+        "--physics-dt",
+        metavar="S",
+        type=float,
+        help="--model mujoco: physics step (s, default 0.001); at most the control period and dividing it",
+    )
+    simulate.add_argument("--out", metavar="DIR", type=out_folder, help="output folder (default: out/<scenario>-sim)")
+    simulate.add_argument(
+        "--velocity",
+        metavar="VX,VY,WZ[@T]",
+        action="append",
+        help="walk the scenario's number of steps by a velocity command instead of its footsteps (m/s, m/s, rad/s); "
+        "repeat it with @T for a new command from time T on (s, walk clock), e.g. --velocity 0.2,0,0 --velocity "
+        "0,0,0.3@5 (MuJoCo)",
+    )
+    simulate.add_argument(
+        "--push",
+        metavar="T,DURATION,FX,FY",
+        action="append",
+        default=[],
+        help="push the base with a horizontal force (N) from time T (s, on the walk's clock: 0 when the walk starts, "
+        "after MuJoCo's 1.5 s start transition from half-sitting) for DURATION (s); may be repeated, for pushes "
+        "that do not overlap",
+    )
+    simulate.add_argument("--stabilizer", action="store_true", help=argparse.SUPPRESS)  # removed: a clear error
+    simulate.add_argument("--no-figures", action="store_true", help="skip the figure (zmp_sim or pendulum)")
+    add_format_option(
+        simulate,
+        default="png",
+        description="file format of the figure (zmp_sim, or pendulum with --model lipm): png (default), pdf or svg",
+    )
+    simulate.add_argument(
+        "--html", action="store_true", help="write replay.html, a 3D replay of the simulated motion (needs meshcat)"
+    )
+    add_replay_background_option(simulate)
+    simulate.add_argument("--quiet", action="store_true", help="print nothing on success")
+
+
+def _push_values(texts: Sequence[str], run_time: float) -> list[tuple[float, float, float, float]]:
+    """The ``--push`` options as ``(start, duration, fx, fy)`` (s, s, N, N), refusing what would silently not
+    happen: a push that starts after the run (``run_time``, s) has ended, and overlapping pushes (the MuJoCo loop
+    applies one at a time, so the later one would cut the earlier one short)."""
+    pushes = []
+    for text in texts:
+        start, duration, fx, fy = numbers(text, 4, "--push")
+        if not start >= 0.0:
+            raise ScenarioError(f"--push start must be a time >= 0 s, got {start:g} in {text!r}")
+        if not duration > 0.0:
+            raise ScenarioError(f"--push duration must be > 0 s, got {duration:g} in {text!r}")
+        if start >= run_time:
+            raise ScenarioError(
+                f"--push {text} starts after the run has ended (at {run_time:.2f} s on the walk's clock)"
+            )
+        pushes.append((start, duration, fx, fy))
+    ordered = sorted(zip(pushes, texts, strict=True), key=lambda pair: pair[0][0])
+    for (first, first_text), (second, second_text) in itertools.pairwise(ordered):
+        if second[0] < first[0] + first[1]:
+            raise ScenarioError(f"--push {first_text} and --push {second_text} overlap: pushes act one at a time")
+    return pushes
+
+
+def _pushes(texts: Sequence[str], run_time: float) -> list[Push]:
+    """The ``--push`` options as the MuJoCo loop's pushes (:func:`_push_values`)."""
+    from rtgait.sim.loop import Push
+
+    pushes = []
+    for start, duration, fx, fy in _push_values(texts, run_time):
+        try:
+            pushes.append(Push(start=start, duration=duration, force=(fx, fy, 0.0)))
+        except ValueError as error:  # "push start must be ..."
+            raise ScenarioError(f"--{error}") from None
+    return pushes
+
+
+STABILIZER_REMOVED = (
+    "--stabilizer was removed: its COG-shift stabiliser is replaced by the controller levels, use --controller "
+    "stabilized (DCM feedback and foot force control) or adaptive (the default)"
+)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.stabilizer:
+        raise ScenarioError(STABILIZER_REMOVED)
+    scenario = load_scenario(args.scenario)
+    out: Path = args.out if args.out is not None else Path("out") / f"{scenario.name}-sim"
+    if args.model == "lipm":
+        return _simulate_pendulum(args, scenario, out)
+    if args.mass is not None:
+        raise ScenarioError("--mass is for --model lipm (the robot's mass is its model's)")
+    _check_periods(args.control_dt, args.physics_dt)
+    args.robot = args.robot or "talos"
+    controller = args.controller or "adaptive"
+    velocity, schedule = _velocities(args.velocity)
+    try:
+        from rtgait.robot.motion import whole_body_motion
+        from rtgait.sim.run import mujoco_messages, planned_walk
+    except ImportError:
+        raise RunError("simulate needs MuJoCo and Pinocchio: pip install 'rtgait[robot,sim]'") from None
+    pushes = _check_simulation(args, scenario, velocity, out)
+    robot = load_robot(args.robot)
+    walk = robot_walk(scenario, robot)
+    config = _physics_config(robot, args.control_dt, args.physics_dt)
+    for push in pushes:
+        try:
+            push.check(robot.mass, walk.cog_height, walk.gravity)
+        except ValueError as error:
+            raise ScenarioError(f"--push at {push.start:g} s: {error}") from None
+    # The check of `plan --robot`, on the walk the simulation will ask for: a robot that cannot reach it is refused.
+    for command in [velocity] if not schedule else [v for _, *v in schedule]:  # each command's walk must be reachable
+        whole_body_motion(robot, planned_walk(scenario, robot, command))
+    show = not args.quiet and sys.stderr.isatty()
+    progress = progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
+    extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection, "walk": _walk_facts(walk)}
+    with mujoco_messages() as messages:  # else MuJoCo appends them to MUJOCO_LOG.TXT in the working folder
+        result = _physics(scenario, walk, robot, config, controller, schedule or velocity, pushes, progress, extra)
+    extra["mujoco_warnings"] = messages
+    if show:
+        sys.stderr.write("\r\033[K")
+    summary = _write_simulation(result, scenario, walk, robot, out, args, extra)
+    if not args.quiet:
+        from rtgait.io.sim_files import sim_report
+
+        sys.stdout.write(sim_report(summary, out))
+    return 0
+
+
+def _velocities(texts: Sequence[str] | None) -> tuple[tuple[float, ...] | None, list[tuple[float, ...]]]:
+    """``--velocity`` options: the one command ``(vx, vy, wz)`` (m/s, m/s, rad/s), or the schedule ``(t, vx, vy,
+    wz)`` of several (the first from the walk's start unless it says ``@T``), in time order."""
+    if not texts:
+        return None, []
+    schedule = []
+    for i, text in enumerate(texts):
+        command, _, at = text.partition("@")
+        values = numbers(command, 3, "--velocity")
+        t = 0.0 if not at and i == 0 else numbers(at, 1, f"--velocity ...@T (in {text!r})")[0]
+        if not at and i > 0:
+            raise ScenarioError(f"--velocity {text}: a command after the first needs its time, VX,VY,WZ@T")
+        schedule.append((t, *values))
+    times = [item[0] for item in schedule]
+    if times != sorted(times) or len(set(times)) != len(times) or times[0] < 0.0:
+        raise ScenarioError(f"--velocity times must be >= 0 s and increasing, got {times}")
+    if len(schedule) == 1 and schedule[0][0] == 0.0:
+        return schedule[0][1:], []
+    return schedule[0][1:], schedule
+
+
+def _check_periods(control_dt: float | None, physics_dt: float | None) -> None:
+    """The periods asked for, when both are known before the robot is (s); each must be a duration > 0."""
+    for name, value in (("--control-dt", control_dt), ("--physics-dt", physics_dt)):
+        if value is not None and not (math.isfinite(value) and 1e-5 <= value <= 0.1):
+            raise ScenarioError(f"{name} must be within [1e-05, 0.1] s, got {value}")
+    if control_dt is not None and physics_dt is not None:
+        from rtgait.sim.actuation import substeps
+
+        try:
+            substeps(control_dt, physics_dt)
+        except ValueError as error:
+            raise ScenarioError(f"--physics-dt: {error}") from None
+
+
+def _physics_config(robot: RobotModel, control_dt: float | None, physics_dt: float | None) -> SimConfig:
+    """The physics parameters with the periods asked for, checked against the robot's own control period."""
+    from rtgait.sim.actuation import substeps
+    from rtgait.sim.run import sim_config
+
+    config = sim_config(None, control_dt, physics_dt)
+    actuation = robot.description.actuation
+    control = actuation.control_dt if control_dt is None else control_dt
+    try:
+        substeps(control, actuation.physics_dt if config.physics_dt is None else config.physics_dt)
+    except ValueError as error:
+        raise ScenarioError(f"--physics-dt: {error} (the control period of {robot.name})") from None
+    return config
+
+
+def _walk_facts(walk: Scenario) -> dict[str, Any]:
+    """The walk's COG height, step width and sole as the robot gives them, for the summary."""
+    sole = walk.sole
+    return {
+        "cog_height": walk.cog_height,
+        "step_width": walk.step_width,
+        "sole": {"front": sole.front, "back": sole.back, "inner": sole.inner, "outer": sole.outer},
+        "source": "from the robot description (the scenario's own are not used)",
+    }
+
+
+def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) -> int:
+    """``simulate --model lipm``: the walk on the point-mass pendulum at the controller level asked for."""
+    from rtgait.io.pendulum_run import PENDULUM_FILES, simulate_pendulum, write_pendulum_outputs
+    from rtgait.viz.run_data import PENDULUM_FIGURE, figure_file
+
+    for option, why in (("velocity", "walks by command"), ("html", "the 3D replay"), ("physics_dt", "its step")):
+        if getattr(args, option):
+            raise ScenarioError(f"--{option.replace('_', '-')} ({why}) is for --model mujoco")
+    if scenario.guide is not None:
+        raise ScenarioError(f"{scenario.name} is led by the hand ([guide]): that needs --model mujoco")
+    mass = args.mass
+    stepping = None
+    if args.robot is not None:
+        robot = load_robot(args.robot)
+        scenario = robot_walk(scenario, robot)
+        mass = robot.mass if mass is None else mass
+        stepping = robot.description.stepping  # the robot's step limits ([stepping]), if it has them
+    if mass is not None and not (math.isfinite(mass) and 1.0 <= mass <= 500.0):
+        raise ScenarioError(f"--mass must be within [1, 500] kg, got {mass}")
+    dt = 0.001 if args.control_dt is None else args.control_dt
+    if not (math.isfinite(dt) and 1e-5 <= dt <= min(scenario.timing.single_support, scenario.timing.double_support)):
+        raise ScenarioError(f"--control-dt must be within [1e-05 s, the shortest phase], got {dt}")
+    run_time = scenario.duration + 0.5
+    check_run_length(run_time, dt)
+    pushes = _push_values(args.push, run_time)
+    figures = not args.no_figures
+    require_extras(figures, html=False)
+    figure_name = figure_file(PENDULUM_FIGURE, args.figure_format or "png")
+    check_destination(out, [*PENDULUM_FILES, *([figure_name] if figures else [])])
+    controller = args.controller or "adaptive"
+    show = not args.quiet and sys.stderr.isatty()
+    progress = progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
+    try:
+        adjust = None if stepping is None else stepping.adjustment(scenario.sole)
+        result = simulate_pendulum(
+            scenario, controller, pushes, mass=mass, dt=dt, progress=progress, step_adjustment=adjust
+        )
+    except ValueError as error:  # a push beyond physical sense, caught by the plant
+        raise ScenarioError(f"--push: {error}") from None
+    if show:
+        sys.stderr.write("\r\033[K")
+    extra = {"scenario": scenario.name, "connection": scenario.connection}
+    with staged_outputs(out) as staging:
+        summary = write_pendulum_outputs(result, staging.folder, extra)
+        for name in summary["files"]:
+            staging.add(name)
+        if figures:
+            from rtgait.viz.pendulum import plot_pendulum
+
+            plot_pendulum(result, staging.add(figure_name), title=f"{scenario.name} ({scenario.connection})")
+            summary["files"].append(figure_name)
+            text = json.dumps(summary, indent=2, allow_nan=False) + "\n"  # again, now listing the figure
+            (staging.folder / "summary.json").write_text(text, encoding="utf-8")
+    if not args.quiet:
+        sys.stdout.write(pendulum_report(summary, out))
+    return 0
+
+
+def _check_simulation(
+    args: argparse.Namespace, scenario: Scenario, velocity: tuple[float, ...] | None, out: Path
+) -> list[Push]:  # velocity: the first command, enough to tell a walk by command
+    """Everything about a simulation that can be checked before loading the robot; returns the pushes."""
+    from rtgait.io.sim_files import sim_figure_file
+    from rtgait.io.sim_log import LOG_FILE, parquet_available
+    from rtgait.sim.run import simulated_time
+
+    run_time = simulated_time(scenario, velocity=velocity)
+    check_run_length(run_time, args.physics_dt or 0.001)
+    lead = 1.5  # the start transition (LoopOptions' start_ramp + start_hold): the walk's clock starts after it
+    pushes = _pushes(args.push, run_time - lead)
+    figures = not args.no_figures
+    require_extras(figures, args.html)
+    names = ["sim.csv", "summary.json"] + ([sim_figure_file(args.figure_format)] if figures else [])
+    if parquet_available():
+        names.append(LOG_FILE)
+    else:
+        warnings.warn(f"pyarrow is not installed: {LOG_FILE} (the complete log) is not written; pip install "
+                      "'rtgait[sim]'", stacklevel=1)  # fmt: skip
+    check_destination(out, names + (["replay.html"] if args.html else []))
+    return pushes
+
+
+def _physics(
+    scenario: Scenario,
+    walk: Scenario,
+    robot: RobotModel,
+    config: SimConfig,
+    controller: str,
+    velocity: tuple[float, ...] | list[tuple[float, ...]] | None,
+    pushes: list[Push],
+    progress: Callable[[float], None] | None,
+    extra: dict[str, Any],
+) -> SimResult:
+    """Walk ``scenario`` (as ``robot`` walks it: ``walk``) in MuJoCo; a guided walk's outcome goes into ``extra``."""
+    from rtgait.sim.model import build_sim_model
+    from rtgait.sim.run import loop_options, simulate
+
+    sim = build_sim_model(robot, config)
+    if scenario.guide is None or velocity is not None:
+        return simulate(scenario, robot, controller=controller, velocity=velocity, push=pushes or None, sim=sim,
+                        progress=progress)  # type: ignore[arg-type]  # fmt: skip
+    # Led by the hand: the outcome (where the person led the robot) goes into the summary too.
+    from rtgait.sim.guided import simulate_guided
+
+    options = loop_options(pushes or None)
+    result, led = simulate_guided(sim, walk, options, controller=controller, progress=progress)  # type: ignore[arg-type]
+    extra["guide"] = {**asdict(led), "base_error": led.base_error}
+    return result
+
+
+def _write_simulation(
+    result: SimResult,
+    scenario: Scenario,
+    walk: Scenario,
+    robot: RobotModel,
+    out: Path,
+    args: argparse.Namespace,
+    extra: dict[str, Any],
+) -> dict[str, Any]:
+    """Write the simulation's outputs into a staging folder, then replace the previous ones in ``out`` together."""
+    from rtgait.sim.run import write_sim_outputs
+
+    with staged_outputs(out) as staging:
+        summary = write_sim_outputs(
+            result, staging.folder, figure=not args.no_figures, figure_format=args.figure_format,
+            title=f"{scenario.name} ({scenario.connection})", extra=extra, replay=robot if args.html else None,
+            sole=walk.sole,  # the sole the walk was planned with
+            background=args.replay_background,
+        )  # fmt: skip
+        for name in summary["files"]:
+            staging.add(name)
+    return summary

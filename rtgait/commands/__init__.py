@@ -1,1 +1,0 @@
-"""The ``rtgait`` subcommands, one module each; :mod:`rtgait.cli` parses and dispatches."""

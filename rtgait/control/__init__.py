@@ -1,0 +1,1 @@
+"""The walking controller: estimated state and the online planner in, task targets for the whole-body IK out."""

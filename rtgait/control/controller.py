@@ -1,0 +1,463 @@
+"""The controller levels of the MuJoCo loop: planner sample -> feedback -> IK targets, once per control tick.
+
+Names and planner settings are those of :mod:`rtgait.core.pendulum.loop` (:func:`~rtgait.core.pendulum.loop.
+controller_config`), the pendulum-level loop:
+
+* ``"open-loop"``: the plan alone (the paper's assumption): COM and feet targets are the planner's sample.
+* ``"stabilized"``: the DCM law (:class:`~rtgait.core.laws.feedback.DcmFeedback`) on the measured DCM gives a commanded
+ZMP
+  ``p_cmd`` and a COM correction ``d`` (COM admittance ``d' = -A (p_cmd - p_measured) - d / T_c``, added to the planned
+  COM), and foot force control (:mod:`rtgait.control.foot_control`) makes the feet produce ``p_cmd``: split between the
+  feet in contact, each sole's CoP servoed by its ankle, the force difference by the feet's heights.
+* ``"adaptive"``: ``"stabilized"`` with a planner that closes the loop:
+:meth:`~rtgait.core.planner.online.OnlinePlanner.
+  observe` every tick, replanning from the measured state, step adjustment in a stride box sized for the robot
+  (:func:`step_limits`), re-anchoring on the landed feet, and landing detection.
+
+  *When the measured state enters the plan* (``ControllerOptions.measured_replanning``). ``"on-error"`` (default):
+  when the measured DCM is more than ``replan_dcm_error`` (25 mm) off the plan's, the plan under way is remade from the
+  measured state and the step adjustment may move the next landing; every other plan (the start, the regular
+  double-support replans, the re-anchoring at landings) continues the plan under way, whose COM the stiff servos
+  track with the feedback law's correction. ``"always"``: the core's ``feedback="measured"``, every plan from the
+  measured state. On a stiff position-controlled robot ``"always"`` turns each tick's servo lag into a new plan: the
+  IK's COM target follows the robot instead of holding it, and G1 fell on fig6 (Talos walked either way).
+
+  *Landings* (:mod:`rtgait.control.landings`, :class:`~rtgait.control.landings.FootLandings`, which the
+  controller owns and calls every tick): every landing is classified (early, on time, late, re-landing, ignored) and
+  re-anchors the plan on its measured pose (:meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown`, an immediate
+  replan); an early one holds its foot where it landed and switches support at once, a late one lowers its foot's
+  target until it finds the ground, and a re-anchored or held foot's IK target is blended to its new pose over
+  ``anchor_blend`` (40 ms). The other levels only log landings.
+
+  *The hip strategy* (both closed levels, :mod:`rtgait.core.laws.hip_strategy`, ``ControllerOptions.hip_strategy``):
+  when
+  the DCM law's ZMP is limited by the support polygon, the shortfall is asked of the upper body's lean (the IK's
+  ``lean`` target), whose rate of angular momentum moves the CMP past the sole; the lean returns upright once nothing
+  is asked, also after a switch to ``"open-loop"``.
+
+  *When no step catches the error, the plan is kept* (:meth:`WalkingController._dcm_error_replan`): no replan for
+  an outward DCM error in single support, and a later step's landing and timing are kept when no candidate for it
+  catches the error (the core's ``on_failure="keep"``).
+
+All on Python floats; the support polygon (numpy) is rebuilt only when the feet in contact move.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+from rtgait.control.external_force import ExternalForce, shifted_measurement
+from rtgait.control.foot_control import FootForceControl, FootOffsets, split_zmp
+from rtgait.control.landings import FootLandings
+from rtgait.control.settings import (
+    ERROR_REPLAN_INTERVAL,
+    ERROR_REPLAN_MIN_REMAINDER,
+    SIM_COM_ADMITTANCE,
+    SIM_COP_ADMITTANCE,
+    ControlEvent,
+    ControllerOptions,
+    ControlTargets,
+    RobotInfo,
+    controller_step_adjustment,
+    step_limits,
+)
+from rtgait.core.geometry.footsteps import Footstep, Side, SoleRect, Stride, mean_heading
+from rtgait.core.geometry.support import support_polygon
+from rtgait.core.laws.feedback import DcmFeedback
+from rtgait.core.laws.hip_strategy import HipStrategy
+from rtgait.core.pendulum.loop import CONTROLLERS, Controller, controller_config
+from rtgait.core.planner.config import PlannerConfig
+from rtgait.core.planner.online import OnlinePlanner
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    import numpy as np
+
+    from rtgait.core.laws.stepping import StepAdjustment
+    from rtgait.robot.model import RobotModel
+    from rtgait.sim.measure import FootState, Measurement
+
+__all__ = [
+    "CONTROLLERS",
+    "ERROR_REPLAN_INTERVAL",
+    "ERROR_REPLAN_MIN_REMAINDER",
+    "SIM_COM_ADMITTANCE",
+    "SIM_COP_ADMITTANCE",
+    "ControlEvent",
+    "ControlTargets",
+    "ControllerOptions",
+    "RobotInfo",
+    "WalkingController",
+    "make_controller",
+    "step_limits",
+]
+
+_NO_EVENTS: tuple[ControlEvent, ...] = ()
+_NO_OFFSETS = FootOffsets()
+_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
+_SIDES: tuple[Side, Side] = ("left", "right")
+
+
+class WalkingController:
+    """One controller level around an online planner (module docstring). Build with :func:`make_controller`."""
+
+    def __init__(
+        self, level: Controller, planner: OnlinePlanner, info: RobotInfo, dt: float, options: ControllerOptions
+    ) -> None:
+        if level not in CONTROLLERS:
+            raise ValueError(f"level must be one of {', '.join(CONTROLLERS)}, got {level!r}")
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise ValueError(f"dt must be a control period > 0 s, got {dt}")
+        self.level, self.planner, self.info, self.dt, self.options = level, planner, info, float(dt), options
+        self.sole = info.sole
+        closed = level != "open-loop"
+        self.feedback = DcmFeedback(planner.w, options.gains, dt) if closed else None
+        self.foot = FootForceControl(options.foot, dt) if closed and options.foot is not None else None
+        self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
+        self._last_error_replan = -math.inf
+        tau = options.measurement_filter
+        self._smoothing = 1.0 if tau == 0.0 else -math.expm1(-dt / tau)
+        # A known external force (a person's pull on the hand): the robot leans against it (set_external_force).
+        self.external = ExternalForce(info.mass, planner.w, dt)
+        # The hip strategy: the upper body leans when the DCM law asks the feet for more than the sole gives.
+        lean = info.lean if options.hip_strategy else None
+        if lean is not None and options.max_lean != lean.max_lean:
+            lean = dataclasses.replace(lean, max_lean=options.max_lean)
+        self.hip = HipStrategy(lean, info.mass, dt) if lean is not None else None
+        self._polygon_key: tuple[float, ...] | None = None
+        self._polygon: np.ndarray | None = None
+        # The feet's landings: classification, re-anchoring, holds, heights and the IK targets' blends.
+        self.foot_landings = FootLandings(planner, options, self.dt, adaptive=level == "adaptive")
+        self._landings_update, self._landings_ik = self.foot_landings.update, self.foot_landings.ik_targets  # per tick
+        self.reset()
+
+    def reset(self) -> None:
+        """Zero the feedback states and forget the feet's landing states (called by :meth:`start`)."""
+        if self.feedback is not None:
+            self.feedback.reset()
+        if self.foot is not None:
+            self.foot.reset()
+        if self.hip is not None:
+            self.hip.reset()
+        self._filtered: list[float] | None = None  # zmp x, y; per foot: normal force, cop x, cop y
+        self._replans = self._adjustments = 0
+        self.foot_landings.reset()
+
+    def start(self, t0: float, measurement: Measurement | None = None) -> None:
+        """Start the walk at ``t0`` (s). ``"adaptive"`` with a measurement starts the planner from the measured feet
+        and COM state; the other levels start from the plan's own standing feet (the paper's)."""
+        self.reset()
+        planner = self.planner
+        if self.level == "adaptive" and measurement is not None:
+            m = measurement
+            feet = (m.left.footstep("left"), m.right.footstep("right"))
+            if self._on_error:  # standing: the COM where the plan has it, between the measured feet, at rest
+                planner.start(t0, feet=feet)
+            else:
+                planner.start(t0, feet=feet, cog=m.com[:2], cog_vel=m.com_vel[:2])
+        else:
+            planner.start(t0)
+        self._last_error_replan = -math.inf
+        self._replans, self._adjustments = planner.replan_count, planner.step_adjustment_count
+
+    # ----- the tick ------------------------------------------------------------------------------------------------
+    def tick(self, t: float, measurement: Measurement) -> ControlTargets:
+        """The IK targets at ``t`` (s) for this tick's measurement (:class:`~rtgait.sim.measure.Measurement`)."""
+        external = self.external
+        leaning = external.active
+        if leaning:  # plan and feed back in the frame of the unpulled pendulum (external_force.py)
+            rate = external.rate
+            measurement = shifted_measurement(
+                measurement, (-external.offset[0], -external.offset[1]), (-rate[0], -rate[1]), self.planner.w
+            )
+        planner, m = self.planner, measurement
+        adaptive = self.level == "adaptive"
+        events: list[ControlEvent] = []
+        if adaptive:
+            planner.observe(t, m.com[:2], m.com_vel[:2])  # with "always", may replan at once (DCM error)
+        values, support, q = planner.sample_values(t)
+        if self._on_error and self._dcm_error_replan(t, m, values, support, q, events):
+            values, support, q = planner.sample_values(t)
+        # The landings (may replan: a touch-down), the feet's targets and the support acted on (foot_landings.py).
+        values, planned_support, q, left, right, support = self._landings_update(t, m, values, support, q, events)
+        self._planner_events(t, events)
+
+        planned_zmp = (values[9], values[10])
+        com = (values[0], values[1], values[2])
+        offsets = _NO_OFFSETS
+        zmp, com_offset = planned_zmp, (0.0, 0.0)
+        shortfall = (0.0, 0.0)
+        if self.feedback is not None:
+            zmp_measured, left_state, right_state = self._filter(m)
+            polygon = self._support_polygon(support, left, right)
+            # The DCM with the planner's w (the measurer's may differ), so that it compares with the plan's.
+            w = planner.w
+            dcm = (m.com[0] + m.com_vel[0] / w, m.com[1] + m.com_vel[1] / w)
+            out = self.feedback.update(planned_zmp, (values[21], values[22]), dcm, polygon, None, zmp_measured)
+            zmp, com_offset = out.zmp, out.com_offset
+            if out.saturated and self.hip is not None:
+                # The law asks more than the sole gives: the rest is asked of the upper body's lean. (Asked only
+                # while the DCM is within 20 mm of the polygon's edge or past it, the lean came too late.)
+                shortfall = (out.zmp_unsaturated[0] - zmp[0], out.zmp_unsaturated[1] - zmp[1])
+            com = (com[0] + com_offset[0], com[1] + com_offset[1], com[2])
+            if self.foot is not None:
+                split = split_zmp(zmp, left, right, self.sole, support)
+                offsets = self.foot.update(split, left_state, right_state, support)
+                left = (left[0], left[1], left[2] + offsets.left_height, left[3])
+                right = (right[0], right[1], right[2] + offsets.right_height, right[3])
+        if leaning:
+            com = (com[0] + external.offset[0], com[1] + external.offset[1], com[2])
+        lean = None
+        if self.hip is not None:  # also without feedback (open-loop after a switch): a lean under way returns
+            leaned = self.hip.update(shortfall, mean_heading(left[3], right[3]))
+            if leaned.lean != (0.0, 0.0, 0.0):
+                lean = leaned.lean
+        # The blends act on the IK's targets only: the polygon and split have the feet where they are.
+        left, right = self._landings_ik(t, left, right)
+        return _new_tuple(ControlTargets, (
+            t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
+            planned_support, (values[21], values[22]), lean,
+        ))  # fmt: skip
+
+    def _dcm_error_replan(
+        self, t: float, m: Measurement, values: list[float], support: str, q: int, events: list[ControlEvent]
+    ) -> bool:
+        """``"on-error"``: replan from the measured state when the measured DCM is more than ``replan_dcm_error`` off
+        the plan's, as the core's ``observe`` does with ``feedback="measured"`` (at most every
+        :data:`ERROR_REPLAN_INTERVAL`, not within :data:`ERROR_REPLAN_MIN_REMAINDER` of a phase's end); returns
+        whether it replanned.
+
+        *A step that does not catch the push is not taken when it is a later step's.* The replan's step adjustment
+        moves the landing of the step swinging now or, within the limits' ``min_time_to_touchdown`` of its
+        touch-down, the next one's. For that later step, when no candidate keeps the plan's ZMP inside the support
+        (the core's emergency decision: the best margin, still outside), the core's ``on_failure="keep"`` keeps its
+        landing and timing, and the plan goes on from the planned state: the measured state stays out of the plan,
+        the stiff servos keep pulling the COM back to the plan and the DCM law with the foot force control recover
+        what the sole can (the ``"stabilized"`` level's recovery). Such a step would be a later landing moved far
+        to reshape the plan's connection while the robot must first stand a single support on the foot away from
+        the push. The step swinging now, or lifting off next, still takes its best landing (``"continue"``): that
+        foot can still go toward the capture point."""
+        threshold = self.options.replan_dcm_error
+        w = self.planner.w
+        ex = m.com[0] + m.com_vel[0] / w - values[21]
+        ey = m.com[1] + m.com_vel[1] / w - values[22]
+        if ex * ex + ey * ey <= threshold * threshold or t - self._last_error_replan < ERROR_REPLAN_INTERVAL:
+            return False
+        planner = self.planner
+        remainder = planner.phase_start(q) + planner.timeline.duration(q) - t
+        if remainder < ERROR_REPLAN_MIN_REMAINDER:
+            return False
+        self._last_error_replan = t
+        adjust = self.options.step_adjustment
+        if self._only_crossing_catches(values, support, ex, ey) and not _lengthens(adjust):
+            events.append(ControlEvent(t, "replan-skipped", support, "outward DCM error in single support"))
+            return False
+        if adjust is not None and support in _SIDES and remainder < adjust.min_time_to_touchdown:
+            adjust = dataclasses.replace(adjust, on_failure="keep")  # the core moves the next step's landing
+        replanned = planner.replan_now(t, "dcm-error", feedback="measured", step_adjustment=adjust or False)
+        if replanned is not None and self.options.com_reference == "planned":
+            # The footsteps are the measured state's; the COM goes on from where the plan had it, so that the
+            # servos keep pulling the robot back: the plan under way remade from the state sampled before.
+            planner.observe(t, (values[0], values[1]), (values[3], values[4]))
+            planner.replan_now(t, "dcm-error-plan", feedback="measured", step_adjustment=False)
+            planner.observe(t, m.com[:2], m.com_vel[:2])
+        return replanned is not None
+
+    @staticmethod
+    def _only_crossing_catches(values: list[float], support: str, ex: float, ey: float) -> bool:
+        """Whether, in a single support, the DCM error ``(ex, ey)`` (m) points outward from the stance foot more
+        than along it: the capture point then moves away from where the swing foot may land (the stride box keeps
+        it on its own side, the leg collision model would refuse a crossing step), so no landing catches it and
+        the plan under way is kept: unless step timing adaptation may lengthen the single support
+        (``max_single_support``), when the replan's decision may hold the stance longer (:func:`_lengthens`)."""
+        if support not in _SIDES:
+            return False
+        i = 13 if support == "left" else 17  # the stance foot's (x, y, z, yaw) in the sample
+        yaw = values[i + 3]
+        c, s = math.cos(yaw), math.sin(yaw)
+        along, lateral = c * ex + s * ey, -s * ex + c * ey
+        outward = lateral if support == "left" else -lateral
+        return outward > abs(along)
+
+    # ----- the support polygon -------------------------------------------------------------------------------------
+    def _support_polygon(self, support: str, left: tuple[float, ...], right: tuple[float, ...]) -> np.ndarray:
+        """The support polygon of the feet in contact (cached until they move)."""
+        # The key without building lists (every tick): the ground poses of the feet in contact.
+        if support == "double":
+            key: tuple[float, ...] = (left[0], left[1], left[3], right[0], right[1], right[3])
+        elif support == "left":
+            key = (left[0], left[1], left[3])
+        elif support == "right":
+            key = (right[0], right[1], right[3])
+        else:
+            key = ()
+        if key != self._polygon_key or self._polygon is None:
+            chosen = [(pose, side) for pose, side in ((left, "left"), (right, "right")) if support in ("double", side)]
+            feet = [Footstep(pose[0], pose[1], pose[3], side) for pose, side in chosen]  # type: ignore[arg-type]
+            self._polygon, self._polygon_key = support_polygon(feet, self.sole), key
+        return self._polygon
+
+    # ----- measurements and the planner's log ----------------------------------------------------------------------
+    def _filter(self, m: Measurement) -> tuple[tuple[float, float] | None, FootState, FootState]:
+        """The measured ZMP and feet with their loads and CoPs low-passed (NaN restarts a filter)."""
+        (zx, zy), fl, fr = m.zmp, m.left, m.right
+        (lx, ly), (rx, ry) = fl.cop_local, fr.cop_local
+        lz, rz = fl.normal_force, fr.normal_force
+        state = self._filtered
+        if state is not None and self._smoothing != 1.0:
+            # Each of the eight filters written out (a comprehension over them costs twice as much):
+            # s + a (r - s), or the raw value r where either is NaN.
+            a = self._smoothing
+            s0, s1, s2, s3, s4, s5, s6, s7 = state
+            zx = zx if (s0 != s0 or zx != zx) else s0 + a * (zx - s0)
+            zy = zy if (s1 != s1 or zy != zy) else s1 + a * (zy - s1)
+            lz = lz if (s2 != s2 or lz != lz) else s2 + a * (lz - s2)
+            lx = lx if (s3 != s3 or lx != lx) else s3 + a * (lx - s3)
+            ly = ly if (s4 != s4 or ly != ly) else s4 + a * (ly - s4)
+            rz = rz if (s5 != s5 or rz != rz) else s5 + a * (rz - s5)
+            rx = rx if (s6 != s6 or rx != rx) else s6 + a * (rx - s6)
+            ry = ry if (s7 != s7 or ry != ry) else s7 + a * (ry - s7)
+        self._filtered = [zx, zy, lz, lx, ly, rz, rx, ry]
+        # FootState._replace(normal_force=..., cop_local=...) written out: _replace costs a microsecond a foot.
+        left = _new_tuple(type(fl), (fl[0], fl[1], lz, fl[3], (lx, ly), fl[5], fl[6], fl[7], fl[8], fl[9], fl[10]))
+        right = _new_tuple(type(fr), (fr[0], fr[1], rz, fr[3], (rx, ry), fr[5], fr[6], fr[7], fr[8], fr[9], fr[10]))
+        return (None if zx != zx else (zx, zy)), left, right
+
+    def _planner_events(self, t: float, events: list[ControlEvent]) -> None:
+        """Step adjustments and the replans other than the regular ones, since the last tick."""
+        planner = self.planner
+        new = planner.step_adjustment_count - self._adjustments
+        if new:
+            self._adjustments = planner.step_adjustment_count
+            for decision in list(planner.step_adjustments)[-new:]:
+                x, y = decision.landing
+                kind = "step-refused" if decision.kept else "step-adjustment"
+                events.append(ControlEvent(t, kind, "", decision.reason, x, y))
+        new = planner.replan_count - self._replans
+        if new:
+            self._replans = planner.replan_count
+            for record in list(planner.plans)[-new:]:
+                if record.reason not in ("start", "double-support"):
+                    events.append(ControlEvent(t, "replan", "", record.reason))
+
+    # ----- switching level mid-walk --------------------------------------------------------------------------------
+    def set_external_force(self, force: tuple[float, float], height: float) -> None:
+        """A horizontal force (N, world frame) measured on the robot at ``height`` (m above the ground), e.g. a
+        wrist sensor's reading: the closed-loop levels lean against it so the ZMP stays planned
+        (:mod:`rtgait.control.external_force`); ``"open-loop"`` ignores it (the paper's robot knows nothing)."""
+        if self.level != "open-loop":
+            self.external.set(force, height)
+
+    def set_level(self, level: Controller) -> None:
+        """Switch to controller level ``level`` (``"open-loop"``, ``"stabilized"``, ``"adaptive"``) mid-walk or
+        before the start, without a jump in the IK's targets.
+
+        The planner and its plan go on as they are (no replan at the switch); its settings become the new level's,
+        made from its current ones as :func:`make_controller` makes them (:func:`~rtgait.core.pendulum.loop.
+        controller_config`: measured-state replanning, the DCM-error threshold and step adjustment for
+        ``"adaptive"`` only). What each switch starts, stops or resets:
+
+        * to a closed level from ``"open-loop"``: a new DCM feedback law and foot force control, from zero state
+          (no COM or foot offset, an empty integral), so the targets start from the plan's; the commanded ZMP steps
+          to the law's (it is no IK target: the foot force control it drives integrates from zero);
+        * to ``"open-loop"``: the COM and foot offsets held at the switch fade out over
+          :data:`rtgait.control.level_fade.LEVEL_FADE` (0.2 s, smooth) instead of vanishing
+          (:mod:`rtgait.control.level_fade`), then the feedback and foot force control are dropped;
+        * between ``"stabilized"`` and ``"adaptive"``: the feedback and foot force control go on unchanged;
+        * into ``"adaptive"``: the planner is observed from the next tick on (a DCM error beyond
+          ``replan_dcm_error`` replans at once from the measured state, the next landings re-anchor the plan) and
+          the DCM-error replan's rate limit is cleared; out of it, a late foot's descent stops (the height it reached
+          is shed over its next swing, as after any landing) and landings are only logged again.
+
+        The feet's landing states (early and late touch-downs under way, their heights) are kept, and so is the
+        stride box of step adjustment in the options (it acts in ``"adaptive"`` only; a return to it reuses it).
+
+        Raises:
+            ValueError: an unknown level.
+        """
+        if level not in CONTROLLERS:
+            raise ValueError(f"level must be one of {', '.join(CONTROLLERS)}, got {level!r}")
+        if level == self.level:
+            return
+        from rtgait.control.level_fade import LEVEL_FADE, FeedbackFade, FootFade
+
+        options, planner = self.options, self.planner
+        adjust = controller_step_adjustment(options, self.info) if level == "adaptive" else None
+        config = controller_config(
+            planner.config, level, self.sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
+        )
+        if level == "adaptive" and options.measured_replanning == "on-error":
+            self.options = options = dataclasses.replace(options, step_adjustment=adjust)
+            config = dataclasses.replace(config, feedback="planned", step_adjustment=None)
+            self.foot_landings.options = options
+        planner.config = config
+        if self.level == "open-loop":  # up: new laws from zero state (a fade under way goes on around them)
+            feedback = DcmFeedback(planner.w, options.gains, self.dt)
+            foot = FootForceControl(options.foot, self.dt) if options.foot is not None else None
+            if isinstance(self.feedback, FeedbackFade):
+                self.feedback.inner = feedback
+            else:
+                self.feedback = feedback
+            if isinstance(self.foot, FootFade):
+                self.foot.inner = foot
+            else:
+                self.foot = foot
+        elif level == "open-loop":  # down: fade the offsets out (nothing to fade before the start)
+            ticks = max(1, round(LEVEL_FADE / self.dt))
+            offset = self.feedback.com_offset if self.feedback is not None else (0.0, 0.0)
+            offsets = self.foot.offsets if self.foot is not None else FootOffsets()
+            moved = any(offset) or any(offsets)
+            self.feedback = FeedbackFade(self, None, offset, ticks) if moved else None
+            self.foot = FootFade(self, None, offsets, ticks) if moved and self.foot is not None else None
+        self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
+        if level == "adaptive":
+            self._last_error_replan = -math.inf
+        self.foot_landings.set_adaptive(level == "adaptive")
+        self.level = level
+
+
+def _lengthens(adjust: StepAdjustment | None) -> bool:
+    """Whether step adjustment ``adjust`` may give a step a longer single support: then a DCM error toward the
+    stance foot's outside has an answer, the stance held longer while the sole's centre of pressure at its outer
+    edge brings the DCM back, and the controller replans for it."""
+    return adjust is not None and adjust.adapt_timing and adjust.max_single_support is not None
+
+
+def make_controller(
+    level: Controller,
+    planner_config: PlannerConfig,
+    strides: Sequence[Stride] | None,
+    sole: SoleRect,
+    robot: RobotInfo | RobotModel,
+    *,
+    dt: float = 0.001,
+    options: ControllerOptions | None = None,
+) -> WalkingController:
+    """A controller of level ``level`` (``"open-loop"``, ``"stabilized"``, ``"adaptive"``) with its own planner.
+
+    Args:
+        level: the controller level (module docstring).
+        planner_config: the planner's base configuration; the level's is made from it by
+            :func:`~rtgait.core.pendulum.loop.controller_config` (the levels differ only by what the loop adds).
+        strides: the walk; ``None`` to walk by velocity command.
+        sole: the sole rectangle (m), for support polygons, the ZMP split and step adjustment.
+        robot: a :class:`RobotInfo` or a loaded :class:`~rtgait.robot.model.RobotModel`.
+        dt: control period (s).
+        options: feedback gains and landing handling (:class:`ControllerOptions`).
+    """
+    options = options or ControllerOptions()
+    info = robot if isinstance(robot, RobotInfo) else RobotInfo.from_robot(robot, sole)
+    if info.sole != sole:
+        info = dataclasses.replace(info, sole=sole)
+    adjust = controller_step_adjustment(options, info) if level == "adaptive" else None
+    config = controller_config(
+        planner_config, level, sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
+    )
+    if level == "adaptive" and options.measured_replanning == "on-error":
+        # The controller takes the measured state in, and steps elsewhere, only on a DCM error (_dcm_error_replan).
+        options = dataclasses.replace(options, step_adjustment=adjust)
+        config = dataclasses.replace(config, feedback="planned", step_adjustment=None)
+    return WalkingController(level, OnlinePlanner(config, strides), info, dt, options)

@@ -1,0 +1,330 @@
+"""The feet's landings in the MuJoCo loop: what a landing does to the plan and to its foot's target
+(:class:`FootLandings`, owned and called every tick by :class:`~rtgait.control.controller.WalkingController`).
+
+Landings come detected by the measurer (:class:`~rtgait.sim.measure.Landing`: side, measured sole pose). Each one is
+logged with its kind; in the ``"adaptive"`` level it also acts (``FootLandings.adaptive``), in the others it is only
+logged. Settings (s, m, m/s) are those of :class:`~rtgait.control.settings.ControllerOptions`.
+
+**Classification** of a landing of foot ``i`` at ``t`` (s), the plan's phase ``q`` starting at ``t_q`` and lasting
+``T_q``:
+
+* *re-landing*: the foot's last swing already ended on the ground, or the plan has it standing and ``q`` is not the
+  phase right after its swing (a bounce, or a standing foot unloaded and loaded again);
+* the plan has the foot swinging: *on time* when ``t_q + T_q - t <= on_time_window`` (80 ms; the swing's height
+  profile ends flat, so a robot whose stance side gives 2 mm lands that early at every step), *early* when
+  ``t - t_q >= early_touchdown_fraction T_q`` (the swing's second half), else *ignored* (a scuff);
+* the swing is over: *late* when the foot was in the air at the swing's end and ``late_grace`` (10 ms, the landing's
+  detection lag) has passed since, else on time.
+
+**Re-anchoring.** In ``"adaptive"`` every landing but an ignored one is reported with its measured pose
+(:meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown`: re-anchoring and an immediate replan, after which the
+tick's
+sample is taken again); a re-landing only when it moved ``relanding_tolerance`` (10 mm, heading ``2 x`` that in rad)
+from where the foot was last anchored. A refused touch-down is logged (``"touchdown-refused"``); the plan stays.
+
+**Heights.** Each foot's target is the plan's ``(x, y, z_plan, yaw)`` with a height offset ``z`` (m) on top:
+
+* a new swing sheds the offset its foot stood at linearly, ``z(t) = z_0 (1 - s)``, ``s = (t - t_lift) / T_swing``;
+* an *early* landing holds the foot where it landed, ``(x_l, y_l, yaw_l)``, until the plan's double support: its
+  target goes on down with the plan, ``max(z_plan + z, z_floor)``, to a floor ``z_floor = z_plan(t_l) + z -
+  late_descent_limit`` (2 cm below where it touched: on a higher ground the foot must not push the robot up); at the
+  hold's end (the plan's double support, where ``z_plan = 0``) the offset keeps the height the target reached,
+  ``z <- max(z, z_floor)``; meanwhile polygon and ZMP split take both feet (the support :meth:`FootLandings.update`
+  gives);
+* a *late* foot's target descends at ``late_descent_speed`` (0.3 m/s) to ``-late_descent_limit``,
+  ``z <- max(z - v dt, -late_descent_limit)`` per tick, while the other foot carries the robot (auto_stabilizer
+  ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset`` -0.02 m; unlike auto_stabilizer the plan is not
+  delayed). Once it lands it stands at the ground's measured height ``z_g = min(0, max(-late_descent_limit, z_l))``:
+  kept as deep as the target went, it would extend the stance leg, lift the body and make the next landing later
+  still. The offset goes there linearly over the single support the foot carries next, ``z = z_land + (z_g -
+  z_land) s``, ``s = (t - t_l) / (t_end - t_l)``.
+
+**No step in a loaded foot's target.** A re-anchoring moves the landed foot's target onto its measured pose, a few
+millimetres from where the servos had it, and an early landing's hold starts and ends with a jump of its own; the IK
+gets the foot's target moved from its old pose and rate (the finite difference of the last two IK targets) to the new
+one over ``anchor_blend`` (40 ms) along the planner's own retargeted-swing quintic (:mod:`rtgait.control.target_blend`),
+and so do swing feet re-anchored less than ``anchor_blend`` before the plan's touch-down (the planner's retargeted
+swing takes the others there smoothly over what is left of the swing). The planner, the support polygon and the ZMP
+split have the foot where it was measured at once: only :meth:`FootLandings.ik_targets` blends.
+
+Python floats and lists of two (left, right) only: the per-tick work is a few comparisons unless a foot lands.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from rtgait.control.settings import ControlEvent
+from rtgait.control.target_blend import FootBlend, Pose
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from rtgait.control.settings import ControllerOptions
+    from rtgait.core.geometry.footsteps import Side
+    from rtgait.core.planner.online import OnlinePlanner
+    from rtgait.sim.measure import Landing, Measurement
+
+__all__ = ["FootLandings"]
+
+_SIDES: tuple[Side, Side] = ("left", "right")
+
+
+class FootLandings:
+    """The landing states of both feet and the targets they give (module docstring).
+
+    Values in, values out: :meth:`update` takes a tick's planner sample and measurement and returns the sample
+    (taken again when a touch-down replanned), the feet's targets before foot force control and the support the
+    controller acts on; :meth:`ik_targets` gives the IK's feet targets with the blends.
+
+    Args:
+        planner: the controller's online planner (re-anchored on landings in ``"adaptive"``).
+        options: the landing settings (:class:`~rtgait.control.settings.ControllerOptions`).
+        dt: control period (s).
+        adaptive: whether landings act on the plan and the feet (the ``"adaptive"`` level) or are only logged.
+    """
+
+    def __init__(self, planner: OnlinePlanner, options: ControllerOptions, dt: float, *, adaptive: bool) -> None:
+        self.planner, self.options, self.dt = planner, options, dt
+        self.adaptive = adaptive
+        """Whether landings act (``"adaptive"``); set through :meth:`set_adaptive`."""
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the feet's landing states (a new start)."""
+        self._phase = -1  # the plan's phase at the last tick
+        # Early touch-down: (x, y, yaw) where it landed, and the least height of its target (m).
+        self._hold: list[tuple[float, float, float, float] | None] = [None, None]
+        self._late = [False, False]  # the swing ended in the air ...
+        self._late_from = [math.inf, math.inf]  # ... and from when (s) it counts as late
+        self._landed = [True, True]  # whether the foot's last swing ended on the ground
+        self._anchor: list[tuple[float, float, float] | None] = [None, None]  # the last re-anchored pose per foot
+        self._swing_phase = [-2, -2]  # phase of each foot's last swing
+        self._z = [0.0, 0.0]  # height of each foot's target above the plan (m): landing heights, late descent
+        self._blend: list[tuple[float, float, float] | None] = [None, None]  # (height, swing start, duration)
+        # A late foot that landed: its target's height returns from where it landed to the measured ground's, over
+        # its stance's single support: (height at the landing, ground height, from, until) (m, m, s, s).
+        self._ground: list[tuple[float, float, float, float] | None] = [None, None]
+        # A re-anchored or held foot's IK target is blended to where the foot is to stand (rtgait.control.target_blend).
+        self._blends = (FootBlend("left"), FootBlend("right"))
+        # The pose (x, y, yaw) a landing of this tick sends the foot to, when its target is to be blended there.
+        self._moved: list[tuple[float, float, float] | None] = [None, None]
+        self._last_ik: tuple[Pose, Pose] | None = None  # the IK's feet targets of the last tick
+
+    def set_adaptive(self, adaptive: bool) -> None:
+        """Landings act (``True``, the ``"adaptive"`` level) or are only logged; out of it a late foot's descent
+        stops (the height it reached is shed over its next swing, as after any landing). Holds, heights and blends
+        under way are kept."""
+        self.adaptive = adaptive
+        if not adaptive:
+            self._late = [False, False]
+
+    # ----- the tick ------------------------------------------------------------------------------------------------
+    def update(
+        self, t: float, m: Measurement, values: list[float], support: str, q: int, events: list[ControlEvent]
+    ) -> tuple[list[float], str, int, Pose, Pose, str]:
+        """This tick's landing bookkeeping at ``t`` (s) for the planner's sample ``values`` in phase ``q`` of
+        support ``support``: a new phase (holds end, swings start, late feet), the height offsets, and the landings
+        of ``m`` (logged to ``events``; re-anchored in ``"adaptive"``).
+
+        Returns:
+            ``(values, support, q, left, right, acting)``: the sample, taken again after a touch-down that
+            replanned; both feet's targets ``(x, y, z, yaw)`` (m, rad) before foot force control; and the support
+            the controller acts on: the plan's, both feet while a foot that landed early is held, the other foot
+            while one is late.
+        """
+        if q != self._phase:
+            held = (self._hold[0] is not None, self._hold[1] is not None)
+            before = self.targets(values) if held[0] or held[1] else None
+            self._enter_phase(q, support, m)  # ends the holds of early landings
+            if before is not None:
+                after = self.targets(values)
+                goals = [(a[0], a[1], a[3]) if h else None for a, h in zip(after, held, strict=True)]
+                self._start_blends(t, before, after, goals)
+        self._update_heights(t)
+        if m.landings:
+            before = self.targets(values)
+            for landing in m.landings:
+                if self._landing(t, landing, values, support, q, events) and self.adaptive:
+                    values, support, q = self.planner.sample_values(t)  # the touch-down replanned
+            moved, self._moved = self._moved, [None, None]
+            if moved[0] is not None or moved[1] is not None:
+                self._start_blends(t, before, self.targets(values), moved)
+        left, right = self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21])
+        # The feet the controller acts on (inline: every tick): the plan's, both after an early touch-down, the
+        # other while one is late.
+        acting = support
+        if support in _SIDES:
+            if self._hold[1 if support == "left" else 0] is not None:
+                acting = "double"
+        else:
+            late_left = self._late[0] and t >= self._late_from[0]
+            late_right = self._late[1] and t >= self._late_from[1]
+            if late_left != late_right:
+                acting = "right" if late_left else "left"
+        return values, support, q, left, right, acting
+
+    def ik_targets(self, t: float, left: Pose, right: Pose) -> tuple[Pose, Pose]:
+        """The IK's feet targets at ``t`` (s) for the controller's final ``left`` and ``right`` (force control
+        included): blended where a blend is under way (:mod:`rtgait.control.target_blend`). Call once per tick, last:
+        the next blends start from these targets and their rate."""
+        blends = self._blends
+        if blends[0].active:
+            left = blends[0].apply(t, left)
+        if blends[1].active:
+            right = blends[1].apply(t, right)
+        self._last_ik = (left, right)
+        return left, right
+
+    # ----- phases and landings -------------------------------------------------------------------------------------
+    def _enter_phase(self, q: int, support: str, m: Measurement) -> None:
+        """Bookkeeping when the plan enters phase ``q``: a swing that ended in the air is late; a new swing blends
+        its foot's landing height out and forgets the last landing."""
+        previous = self._phase
+        self._phase = q
+        for i in (0, 1):
+            hold = self._hold[i]
+            if hold is not None:  # an early touch-down holds until the swing's end (the plan's z = 0 there)
+                self._z[i], self._hold[i] = max(self._z[i], hold[3]), None
+            if self._swing_phase[i] != previous or previous < 0:
+                continue
+            if self._blend[i] is not None:  # the swing is over: so is the blend of its foot's height
+                self._blend[i], self._z[i] = None, 0.0
+            if not self._landed[i]:
+                loaded = (m.left, m.right)[i].loaded
+                self._late[i] = self.adaptive and not loaded
+                self._late_from[i] = self.planner.phase_start(q) + self.options.late_grace
+                self._landed[i] = loaded
+        if support in _SIDES:  # a single support: the other foot lifts off
+            i = 1 if support == "left" else 0
+            self._swing_phase[i] = q
+            self._landed[i] = self._late[i] = False
+            self._ground[i] = None
+            planner = self.planner
+            self._blend[i] = (self._z[i], planner.phase_start(q), planner.timeline.duration(q))
+
+    def _landing(
+        self, t: float, landing: Landing, values: list[float], support: str, q: int, events: list[ControlEvent]
+    ) -> bool:
+        """Classify a landing and, in ``"adaptive"``, act on it; returns whether the planner replanned."""
+        i = 0 if landing.side == "left" else 1
+        planner = self.planner
+        swinging = support in _SIDES and _SIDES[i] != support  # the plan has this foot swinging
+        if self._landed[i] or not (swinging or q == self._swing_phase[i] + 1):
+            kind = "re-landing"  # it bounced, or a standing foot was unloaded and loaded again
+        elif swinging:
+            start, duration = planner.phase_start(q), planner.timeline.duration(q)
+            if start + duration - t <= self.options.on_time_window:
+                kind = "on time"  # the foot follows the plan down: nothing to switch
+            elif t - start >= self.options.early_touchdown_fraction * duration:
+                kind = "early"
+            else:
+                kind = "ignored"
+        else:
+            kind = "late" if self._late[i] and t >= self._late_from[i] else "on time"
+        events.append(ControlEvent(t, "landing", landing.side, kind, landing.x, landing.y))
+        if kind == "ignored" or not self.adaptive:
+            return False
+        anchor = self._anchor[i]
+        if kind == "re-landing" and anchor is not None:
+            tolerance = self.options.relanding_tolerance
+            moved = math.hypot(landing.x - anchor[0], landing.y - anchor[1])
+            if moved < tolerance and abs(math.remainder(landing.yaw - anchor[2], math.tau)) < 2.0 * tolerance:
+                return False  # where it was anchored: nothing to re-anchor
+        self._landed[i] = True
+        if self._late[i] and t >= self._late_from[i]:
+            # Lowered to find the ground: stand where the sole met it. The target went below the plan because the
+            # foot was higher than planned when the swing ended (a body that rose or rolled, or a lower ground);
+            # the measured sole height is the ground's, and keeping the target's own depth instead would extend
+            # the stance leg, lift the body and make the next landing later still. The target returns to it over
+            # the single support this foot carries next (a loaded foot's target moved at the descent's speed made
+            # the ankle damping chatter).
+            limit = self.options.late_descent_limit
+            ground = min(0.0, max(-limit, landing.z))
+            stance = q + 1 if support == "double" else q
+            until = planner.phase_start(stance) + planner.timeline.duration(stance)
+            self._ground[i] = (self._z[i], ground, t, max(until, t + self.dt))
+        self._late[i] = False
+        if kind == "early":
+            # Stand on it from now on where it landed; it goes on down with the plan (a stiff robot sags: most early
+            # landings are that), but no further than late_descent_limit below where it touched (a higher ground).
+            self._blend[i] = None
+            floor = values[15 + 4 * i] + self._z[i] - self.options.late_descent_limit
+            self._hold[i] = (landing.x, landing.y, landing.yaw, floor)
+            self._moved[i] = (landing.x, landing.y, landing.yaw)
+        # A swinging foot's target goes on from where it is to where it landed over what is left of the swing (the
+        # planner's retargeted swing, smooth): blended only when that is shorter than anchor_blend.
+        remainder = planner.phase_start(q) + planner.timeline.duration(q) - t if swinging else 0.0
+        try:
+            index = planner.touchdown(t, landing.side, landing.x, landing.y, landing.yaw)
+        except (ValueError, RuntimeError) as error:
+            events.append(ControlEvent(t, "touchdown-refused", landing.side, str(error), landing.x, landing.y))
+            return False
+        self._anchor[i] = (landing.x, landing.y, landing.yaw)
+        if remainder < self.options.anchor_blend:
+            self._moved[i] = (landing.x, landing.y, landing.yaw)
+        events.append(ControlEvent(t, "touchdown", landing.side, f"footprint {index}", landing.x, landing.y))
+        return True
+
+    # ----- heights and targets -------------------------------------------------------------------------------------
+    def _update_heights(self, t: float) -> None:
+        """This tick's height offsets of the feet's targets (m): a landing height blended out over the swing that
+        follows it, or the descent of a late foot."""
+        for i in (0, 1):
+            blend = self._blend[i]
+            if blend is not None:
+                height, start, duration = blend
+                s = (t - start) / duration
+                if s >= 1.0:
+                    self._blend[i] = None
+                    self._z[i] = 0.0
+                else:
+                    self._z[i] = height * (1.0 - (0.0 if s < 0.0 else s))  # max(s, 0.0), without the call
+            elif self._late[i] and t >= self._late_from[i]:
+                limit = self.options.late_descent_limit
+                z = self._z[i] - self.options.late_descent_speed * self.dt
+                self._z[i] = -limit if -limit > z else z  # max(z, -limit), without the call
+            elif (ground := self._ground[i]) is not None:  # landed late: back to the ground's height
+                landed, level, start, until = ground
+                s = (t - start) / (until - start)
+                if s >= 1.0:
+                    self._z[i], self._ground[i] = level, None
+                else:
+                    self._z[i] = landed + (level - landed) * (0.0 if s < 0.0 else s)  # max(s, 0.0)
+
+    def _foot_target(self, i: int, planned: list[float]) -> Pose:
+        """Foot ``i``'s target ``(x, y, z, yaw)`` before foot force control."""
+        hold = self._hold[i]
+        if hold is not None:  # early touch-down: where it landed, down with the plan to a floor
+            z = planned[2] + self._z[i]
+            return (hold[0], hold[1], hold[3] if hold[3] > z else z, hold[2])  # max(z, floor), without the call
+        return (planned[0], planned[1], planned[2] + self._z[i], planned[3])
+
+    def targets(self, values: list[float]) -> tuple[Pose, Pose]:
+        """Both feet's targets ``(x, y, z, yaw)`` before foot force control, for the sample ``values``."""
+        return self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21])
+
+    def _start_blends(
+        self,
+        t: float,
+        before: tuple[Pose, Pose],
+        after: tuple[Pose, Pose],
+        goals: Sequence[tuple[float, float, float] | None],
+    ) -> None:
+        """Blend the IK's targets of the feet re-anchored or held at ``t`` (s) over ``anchor_blend`` to the poses
+        ``goals`` (x, y, yaw; ``None``: not this foot) they are to stand at (:mod:`rtgait.control.target_blend`), from
+        where the IK had them: ``before`` and ``after`` are the tick's targets without and with the change."""
+        duration = self.options.anchor_blend
+        if duration <= 0.0:
+            return
+        last, rate = self._last_ik, 1.0 / self.dt
+        for i in (0, 1):
+            goal = goals[i]
+            if goal is None:
+                continue
+            old = self._blends[i].apply(t, before[i])  # a blend under way goes on from where it has the target
+            previous = old if last is None else last[i]
+            vx, vy = (old[0] - previous[0]) * rate, (old[1] - previous[1]) * rate
+            vyaw = math.remainder(old[3] - previous[3], math.tau) * rate
+            self._blends[i].start(t, old, (vx, vy, vyaw), goal, old[2] - after[i][2], duration)

@@ -1,0 +1,257 @@
+"""Many plans at once: stacked inputs through one precomputed operator, and whole walks evaluated in batches.
+
+Everything in a plan is linear in its inputs ``y = [p0, dp0, c0, dc0, anchors...]`` (per axis), so a family of
+plans that share a timing (candidate landing points, perturbed states, a sweep over step changes) is one operator
+applied to a stack of inputs. The first three functions here stay numpy-only and allocation-light so that a decision
+over a thousand candidates takes well under a millisecond.
+
+Margins use the half-planes of the convex support polygon: ``min_k (b_k - n_k . p)`` over its edges, the signed
+distance to the boundary when ``p`` is inside (exact) and a lower bound of it, negative, when outside. That is
+all a feasibility test or a ranking needs, at a fraction of the cost of the exact outside distance
+(:func:`rtgait.core.geometry.support.signed_margin`).
+
+Whole walks (:func:`evaluate_walks`, :func:`evaluate_parameters`): straight walks whose step lengths and widths
+change while walking, rolled out exactly as :func:`rtgait.core.analysis.rollout.rollout` does (``rtgait plan``: sampled
+every
+``dt``, each change handed over at its deadline), give per case the smallest signed ZMP margin
+``min_t signed_margin(zmp(t), polygon(t))`` (m), the time of its first occurrence (s) and the largest
+``|zmp - zmp_ref|`` per axis in the connecting segments (m), the same numbers as ``summary.json`` to round-off
+(:mod:`rtgait.core.analysis.walk_family` explains how: per timing the walk is affine in its stride lengths and widths,
+and
+per phase the ZMP has a two-vector shape whose extreme over the phase's ticks is a binary search). Cases are
+grouped by everything but those numbers (one :class:`~rtgait.core.analysis.walk_family.WalkFamily` per group, cached),
+each group evaluated in one vectorised pass. The ``"auto"`` connection is evaluated by the rule of
+:mod:`rtgait.core.planner.auto`, its predictions made the same way.
+
+When the smallest margin is reached at several ticks (a walk whose ZMP stays inside has its minimum, the ankle's
+distance to its sole's edge, in every single support), the time reported follows ``rtgait plan``'s rule: the first
+tick within :data:`~rtgait.core.analysis.walk_family.TIE` of the minimum at or after the first change is handed over,
+else
+the first such tick.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rtgait.core.analysis.walk_family import ChangeShape, FamilyKey, WalkFamily, family_key
+from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.lipm.pattern import DEGREE
+
+if TYPE_CHECKING:
+    from rtgait.core.analysis.rollout import ScheduledChange
+    from rtgait.core.planner.config import PlannerConfig
+
+
+def segment_zmp_rows(G: np.ndarray, duration: float, n_times: int, segment: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Times (s, local to the segment) and the matrix ``M`` ``(n_times, n_inputs)`` with ``zmp(t_i) = M[i] @ y``.
+
+    ``G`` is a plan operator (:class:`~rtgait.core.lipm.pattern.PlanOperator`); ``y`` its inputs, one column per axis.
+    """
+    if n_times < 2:
+        raise ValueError(f"n_times must be >= 2, got {n_times}")
+    times = np.linspace(0.0, duration, n_times)
+    powers = times[:, None] ** np.arange(DEGREE + 1)[None, :]  # (n_times, DEGREE + 1)
+    rows = 12 * segment
+    return times, powers @ G[rows : rows + DEGREE + 1]
+
+
+def polygon_halfplanes(polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit outward normals ``(k, 2)`` and offsets ``(k,)`` of a counter-clockwise convex polygon ``(k, 2)`` (m):
+    a point ``p`` is inside iff ``n . p <= b`` for every edge."""
+    polygon = np.asarray(polygon, dtype=float)
+    edge = np.roll(polygon, -1, axis=0) - polygon
+    normal = np.column_stack([edge[:, 1], -edge[:, 0]])  # right of a counter-clockwise edge: outward
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    return normal, np.einsum("kd,kd->k", normal, polygon)
+
+
+def halfplane_margin(points: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """``min_k (b_k - n_k . p)`` for points ``(..., 2)`` (m): the signed distance inside, a lower bound outside."""
+    return np.min(offsets - points @ normals.T, axis=-1)
+
+
+
+
+# ----- whole walks ----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StraightWalk:
+    """One walk as ``rtgait plan`` rolls it out: ``steps`` forward steps of ``step_length`` (m) at the config's
+    step width, one closing step, no turning, and ``changes`` of lengths and widths handed over at their deadline.
+
+    ``config.connection`` may be ``"real-time"``, ``"quasi-real-time"`` or ``"auto"``; ``dt`` is the sampling
+    period (s) and ``sole`` the sole rectangle of the support polygons (m).
+    """
+
+    config: PlannerConfig
+    sole: SoleRect
+    dt: float
+    steps: int
+    step_length: float
+    changes: tuple[ScheduledChange, ...] = ()
+
+    def shapes(self) -> tuple[ChangeShape, ...]:
+        """The changes as :class:`~rtgait.core.analysis.walk_family.ChangeShape` s, each handed over at its mode's
+        deadline
+        (auto: the quasi-real-time one, where its decision is made)."""
+        mode = self.config.connection
+        out = []
+        for change in self.changes:
+            if change.turn not in (None, 0.0):
+                raise ValueError(f"change of step {change.step}: batched evaluation needs straight walks (no turn)")
+            if change.length is None and change.width is None:
+                raise ValueError(f"change of step {change.step} changes nothing")
+            phase = 2 * change.step - 1 if mode == "real-time" else 2 * change.step - 2
+            through = change.step if change.through is None else change.through
+            out.append(ChangeShape(change.step, through, change.length is not None, change.width is not None, phase))
+        return tuple(out)
+
+    def parameters(self) -> np.ndarray:
+        """``theta = [1, step_length, step_width, change values...]`` (m), the family's parameters."""
+        values = [1.0, self.step_length, self.config.step_width]
+        for change in self.changes:
+            values += [v for v in (change.length, change.width) if v is not None]
+        return np.array(values)
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Per case (arrays of length ``B``): ``zmp_margin_min`` (m, signed, > 0 inside), ``zmp_margin_min_time`` (s),
+    ``zmp_deviation_max`` ``(B, 2)`` (m, x and y), and for auto walks the connection each change took
+    (``decisions``: one string per case, the changes' kinds joined by ``,``; empty for other modes)."""
+
+    zmp_margin_min: np.ndarray
+    zmp_margin_min_time: np.ndarray
+    zmp_deviation_max: np.ndarray
+    decisions: np.ndarray
+
+    @property
+    def zmp_outside(self) -> np.ndarray:
+        """Whether the ZMP leaves the support polygon anywhere, per case."""
+        return self.zmp_margin_min < 0.0
+
+    def __len__(self) -> int:
+        return len(self.zmp_margin_min)
+
+
+@lru_cache(maxsize=256)
+def walk_family(key: FamilyKey) -> WalkFamily:
+    """The (cached) family of ``key``: building one costs a few milliseconds, evaluating a case microseconds."""
+    return WalkFamily(key)
+
+
+def evaluate_parameters(walk: StraightWalk, theta: np.ndarray) -> BatchResult:
+    """Evaluate the walks that are ``walk`` with the parameters ``theta`` ``(B, P)`` (:meth:`StraightWalk.parameters`
+    layout: ``[1, step_length, step_width, change values...]``, m): one family, the fastest path."""
+    theta = np.atleast_2d(np.asarray(theta, dtype=float))
+    if not np.all(np.isfinite(theta)):
+        raise ValueError("theta must be finite")
+    shapes = walk.shapes()
+    if walk.config.connection != "auto":
+        result = walk_family(family_key(walk.config, walk.sole, walk.dt, walk.steps, shapes)).evaluate(theta)
+        decisions = np.full(len(theta), "", dtype=object)
+        return BatchResult(result.margin, result.time, result.deviation, decisions)
+    return _evaluate_auto(walk, shapes, theta)
+
+
+def evaluate_walks(walks: Sequence[StraightWalk]) -> BatchResult:
+    """Evaluate every walk of ``walks`` (grouped by family, each group in one pass); results in input order."""
+    groups: dict[tuple, list[int]] = {}
+    thetas = []
+    for index, walk in enumerate(walks):
+        groups.setdefault((_group_key(walk), walk.config.connection == "auto"), []).append(index)
+        thetas.append(walk.parameters())
+    n = len(walks)
+    margin, time, deviation = np.empty(n), np.empty(n), np.empty((n, 2))
+    decisions = np.full(n, "", dtype=object)
+    for members in groups.values():
+        first = walks[members[0]]
+        result = evaluate_parameters(first, np.stack([thetas[i] for i in members]))
+        margin[members], time[members] = result.zmp_margin_min, result.zmp_margin_min_time
+        deviation[members], decisions[members] = result.zmp_deviation_max, result.decisions
+    return BatchResult(margin, time, deviation, decisions)
+
+
+def _group_key(walk: StraightWalk) -> tuple:
+    config = walk.config
+    auto = (config.auto_margin,) if config.connection == "auto" else ()
+    return (family_key(config, walk.sole, walk.dt, walk.steps, walk.shapes()), *auto)
+
+
+def _evaluate_auto(walk: StraightWalk, shapes: tuple[ChangeShape, ...], theta: np.ndarray) -> BatchResult:
+    """Auto walks: each change decided in deadline order by :mod:`rtgait.core.planner.auto`'s rule, its options
+    predicted
+    on the families they make (cases that made the same earlier choices share them), then the walks evaluated."""
+    from rtgait.core.planner.auto import auto_options  # auto uses this module's half-planes: import when used
+
+    config, n = walk.config, walk.steps + 1
+    B = len(theta)
+    # Decide in deadline order; reorder the parameter columns the same way, so that the parameters of the changes
+    # decided so far are always the first columns.
+    order = sorted(range(len(shapes)), key=lambda c: shapes[c].decided_phase)
+    blocks, column = [], 3
+    for s in shapes:
+        width = int(s.length) + int(s.width)
+        blocks.append(list(range(column, column + width)))
+        column += width
+    theta = theta[:, [0, 1, 2, *(c for i in order for c in blocks[i])]]
+    shapes = tuple(shapes[i] for i in order)
+    chosen: list[list[ChangeShape]] = [[] for _ in range(B)]
+    kinds: list[list[str]] = [[] for _ in range(B)]
+    for shape in shapes:
+        arrival = shape.decided_phase  # the quasi-real-time deadline, 2k - 2: the next plan is that phase's
+        options = auto_options(shape.step, shape.through, arrival, n, config.horizon_steps)
+        histories: dict[tuple[ChangeShape, ...], list[int]] = {}
+        for row in range(B):
+            histories.setdefault(tuple(chosen[row]), []).append(row)
+        for history, rows in histories.items():
+            predicted = np.empty((len(rows), len(options)))
+            for k, option in enumerate(options):
+                commit = arrival if option.commit_phase is None else option.commit_phase
+                candidate = (*history, shape._replace(step=option.step, through=option.through, decided_phase=commit))
+                family = walk_family(family_key(config, walk.sole, walk.dt, walk.steps, candidate))
+                result = family.evaluate(_columns(theta[rows], candidate, shapes), (option.window,))
+                predicted[:, k] = result.predicted[:, 0]
+            reach = predicted >= config.auto_margin
+            pick = np.where(reach.any(axis=1), np.argmax(reach, axis=1), np.argmax(predicted, axis=1))
+            for row, k in zip(rows, pick.tolist(), strict=True):
+                option = options[k]
+                commit = arrival if option.commit_phase is None else option.commit_phase
+                chosen[row].append(shape._replace(step=option.step, through=option.through, decided_phase=commit))
+                kinds[row].append(option.kind)
+    margin, time, deviation = np.empty(B), np.empty(B), np.empty((B, 2))
+    finals: dict[tuple[ChangeShape, ...], list[int]] = {}
+    for row in range(B):
+        finals.setdefault(tuple(chosen[row]), []).append(row)
+    for final, rows in finals.items():
+        family = walk_family(family_key(config, walk.sole, walk.dt, walk.steps, final))
+        # rtgait plan's time rule counts from the first change's hand-over: its arrival, whatever was chosen.
+        arrival = family.phase_start(shapes[0].decided_phase) if shapes else None
+        result = family.evaluate(_columns(theta[rows], final, shapes), change_time=arrival)
+        margin[rows], time[rows], deviation[rows] = result.margin, result.time, result.deviation
+    return BatchResult(margin, time, deviation, np.array([",".join(k) for k in kinds], dtype=object))
+
+
+def _columns(theta: np.ndarray, chosen: tuple[ChangeShape, ...], original: tuple[ChangeShape, ...]) -> np.ndarray:
+    """``theta``'s columns for a family of the first ``len(chosen)`` changes (their parameters come first)."""
+    used = 3 + sum(int(s.length) + int(s.width) for s in original[: len(chosen)])
+    return theta[:, :used]
+
+
+__all__ = [
+    "BatchResult",
+    "StraightWalk",
+    "evaluate_parameters",
+    "evaluate_walks",
+    "halfplane_margin",
+    "polygon_halfplanes",
+    "segment_zmp_rows",
+    "walk_family",
+]

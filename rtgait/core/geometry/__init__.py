@@ -1,0 +1,1 @@
+"""Footsteps, sole rectangles, support polygons, swing trajectories and the half-plane tests of ZMP margins."""

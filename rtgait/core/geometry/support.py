@@ -1,0 +1,43 @@
+"""Support polygons and the signed ZMP margin (feasibility of a plan).
+
+The margin is the signed distance (m) from the ZMP to the boundary of the support polygon: positive inside,
+negative outside. A plan whose margin goes negative anywhere asks for a ZMP the feet cannot produce.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import ConvexHull
+
+from rtgait.core.geometry.footsteps import Footstep, SoleRect
+
+
+def support_polygon(feet: list[Footstep], sole: SoleRect) -> np.ndarray:
+    """Counter-clockwise vertices ``(k, 2)`` (m) of the convex hull of the soles of the feet in contact."""
+    if not feet:
+        raise ValueError("a support polygon needs at least one foot in contact")
+    corners = np.concatenate([sole.corners(foot) for foot in feet])
+    if len(feet) == 1:
+        return corners
+    hull = ConvexHull(corners)
+    return corners[hull.vertices]  # scipy orders 2-D hull vertices counter-clockwise
+
+
+def signed_margin(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """Signed distance (m) of each point ``(k, 2)`` to a convex counter-clockwise ``polygon`` ``(n, 2)``.
+
+    Inside, the distance to the nearest edge line is the distance to the boundary (convexity); outside, it is
+    the Euclidean distance to the nearest edge segment, negated.
+    """
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    start = polygon
+    edge = np.roll(polygon, -1, axis=0) - polygon
+    length = np.linalg.norm(edge, axis=1)
+    rel = points[:, None, :] - start[None, :, :]  # (k, n, 2)
+    # Left of every counter-clockwise edge = inside.
+    inside_dist = (edge[None, :, 0] * rel[..., 1] - edge[None, :, 1] * rel[..., 0]) / length[None, :]
+    inside = np.all(inside_dist >= 0.0, axis=1)
+    along = np.clip(np.einsum("knd,nd->kn", rel, edge) / length[None, :] ** 2, 0.0, 1.0)
+    nearest = start[None] + along[..., None] * edge[None]
+    outside_dist = np.min(np.linalg.norm(points[:, None, :] - nearest, axis=2), axis=1)
+    return np.where(inside, np.min(inside_dist, axis=1), -outside_dist)

@@ -1,0 +1,1 @@
+"""Feedback and decision laws: the DCM law, step adjustment, the hip strategy, capturability and hand guidance."""

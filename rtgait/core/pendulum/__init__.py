@@ -1,0 +1,1 @@
+"""The linear inverted pendulum test bench: a point-mass plant, the closed loop around it, and its result."""

@@ -1,0 +1,1 @@
+"""The online planner: a control loop samples it every tick, observes the robot and changes footsteps while walking."""

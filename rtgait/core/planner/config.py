@@ -1,0 +1,204 @@
+"""Parameters of the online planner, checked where they enter (ranges in :mod:`rtgait.core.limits`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import InitVar, dataclass, field
+from typing import Literal
+
+from rtgait.core.geometry.footsteps import Side, SoleRect, Timing
+from rtgait.core.laws.stepping import StepAdjustment
+from rtgait.core.limits import MAX_HORIZON_STEPS, MAX_PHASE_W_T, MAX_STRIDE, check_range
+from rtgait.core.lipm.closed_form import GRAVITY, omega
+from rtgait.core.lipm.connect import MIN_REST_W_T
+
+ConnectionMode = Literal["real-time", "quasi-real-time", "auto"]
+CONNECTION_MODES: tuple[ConnectionMode, ConnectionMode] = ("real-time", "quasi-real-time")
+"""The paper's two connection modes (Section 4.1)."""
+ALL_CONNECTION_MODES: tuple[ConnectionMode, ...] = (*CONNECTION_MODES, "auto")
+"""Every accepted ``connection``: the paper's two and ``"auto"``, which chooses per change
+(:mod:`rtgait.core.planner.auto`)."""
+MAX_AUTO_MARGIN = 0.5
+"""Largest ``auto_margin`` accepted (m): no sole is a metre wide."""
+FeedbackMode = Literal["planned", "measured"]
+FEEDBACK_MODES: tuple[FeedbackMode, FeedbackMode] = ("planned", "measured")
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """Parameters of the online planner.
+
+    Attributes:
+        cog_height: constant COG height above the ground ``zc`` (m), within [0.05, 10].
+        timing: phase durations (s); every phase must also satisfy ``w * T <= 20`` (see
+            :data:`~rtgait.core.limits.MAX_PHASE_W_T`; 5.7 s at the default height).
+        step_width: lateral distance between the feet when standing and in straight walking (m).
+        step_height: peak swing-foot height (m).
+        horizon_steps: steps covered by each plan after its first double support, 1..20.
+        connection: ``"real-time"``, ``"quasi-real-time"`` or ``"auto"`` (per change, the latest connection
+            predicted to keep the ZMP margin at least ``auto_margin``, else a later step:
+            :mod:`rtgait.core.planner.auto`).
+        gravity: (m/s^2), within [0.1, 100].
+        first_degree: degree of the free ZMP polynomial of the first segment, 4 (default: ZMP position and
+            velocity continuous across a replan) or 2 (the paper's minimal variant: ZMP position only).
+        first_side: which foot swings first.
+        max_step_length: largest forward (or backward) stride a velocity command makes (m).
+        max_step_lateral: largest lateral displacement a velocity command makes per pair of steps (m): the step
+            toward the motion lands this much wider than the step after it, so ``|vy| <= max_step_lateral / 2T``
+            over a step period ``T`` (:meth:`~rtgait.core.walk.walk.Walk.set_velocity`).
+        max_step_turn: largest heading change a velocity command makes per pair of steps (rad), half of it per
+            step, so ``|wz| <= max_step_turn / 2T``. A command beyond any of the three is clamped, with a warning.
+        min_step_width: narrowest stance a sideways walk by command may close to (m), within (0, step_width];
+            ``None`` (default): ``step_width``, i.e. the feet only ever open beyond the straight-walking stance.
+        history_steps: footprints, strides, plan records and change records kept behind the current step, so an
+            endless walk's memory stays flat; ``None`` keeps everything.
+        feedback: where each new plan starts: ``"planned"`` (the paper's: from the plan being executed) or
+            ``"measured"`` (from the state last given to :meth:`~rtgait.core.planner.online.OnlinePlanner.observe`).
+        replan_dcm_error: with ``feedback="measured"``, replan at once
+        (:meth:`~rtgait.core.planner.online.OnlinePlanner.
+            replan_now`) when the observed DCM is farther than this from the plan's (m); ``None``: only at
+            double-support starts.
+        step_adjustment: push recovery by stepping (:mod:`rtgait.core.laws.stepping`); ``None`` (default): off.
+        auto_margin: with ``connection="auto"``, the ZMP margin (m, signed) a connection's prediction must reach to
+            be taken, within [-0.5, 0.5].
+        sole: the sole rectangle (m) of the support polygons the auto connection predicts against; required with
+            ``connection="auto"``, unused otherwise.
+    """
+
+    cog_height: float = 0.8
+    timing: Timing = field(default_factory=lambda: Timing(0.8, 0.2))
+    step_width: float = 0.19
+    step_height: float = 0.05
+    horizon_steps: int = 3
+    connection: ConnectionMode = "real-time"
+    gravity: float = GRAVITY
+    first_degree: int = 4
+    first_side: Side = "right"
+    max_step_length: float = 0.3
+    max_step_lateral: float = 0.1
+    max_step_turn: float = 0.4
+    min_step_width: float | None = None
+    history_steps: int | None = 1000
+    feedback: FeedbackMode = "planned"
+    replan_dcm_error: float | None = None
+    step_adjustment: StepAdjustment | None = None
+    auto_margin: float = 0.01
+    sole: SoleRect | None = None
+    com_height: InitVar[float | None] = None
+    """``cog_height`` under the name most libraries use (placo, Pinocchio, mc_rtc): ``PlannerConfig(com_height=0.8)``
+    sets ``cog_height``; giving both with different values is an error."""
+
+    def __post_init__(self, com_height: float | None) -> None:
+        if com_height is not None:
+            if self.cog_height != 0.8 and self.cog_height != com_height:
+                raise ValueError(f"com_height ({com_height}) and cog_height ({self.cog_height}) disagree: give one")
+            object.__setattr__(self, "cog_height", com_height)
+        w = omega(self.cog_height, self.gravity)  # validates both ranges
+        if not isinstance(self.timing, Timing):
+            raise ValueError(f"timing must be a Timing, got {type(self.timing).__name__}")
+        for name in ("single_support", "double_support", "start", "end", "settle"):
+            duration = getattr(self.timing, name)
+            if w * duration > MAX_PHASE_W_T:
+                raise ValueError(
+                    f"timing {name} must be at most {MAX_PHASE_W_T / w:.3g} s at this COG height and gravity "
+                    f"(w T <= {MAX_PHASE_W_T:g}, w = {w:.3g} 1/s), got {duration}"
+                )
+        if w * self.timing.settle < MIN_REST_W_T:
+            raise ValueError(
+                f"timing settle must be at least {MIN_REST_W_T / w:.3g} s at this COG height and gravity (w T >= "
+                f"{MIN_REST_W_T:g}: shorter, the ZMP would have to leave the feet to bring the COG to rest), "
+                f"got {self.timing.settle}"
+            )
+        if self.connection not in ALL_CONNECTION_MODES:
+            raise ValueError(f"connection must be one of {ALL_CONNECTION_MODES}, got {self.connection!r}")
+        check_range("auto_margin", self.auto_margin, -MAX_AUTO_MARGIN, MAX_AUTO_MARGIN, "m")
+        if self.sole is not None and not isinstance(self.sole, SoleRect):
+            raise ValueError(f"sole must be a SoleRect or None, got {type(self.sole).__name__}")
+        if self.connection == "auto" and self.sole is None:
+            raise ValueError("connection 'auto' needs sole (a SoleRect): it predicts the ZMP margin of each change")
+        if self.feedback not in FEEDBACK_MODES:
+            raise ValueError(f"feedback must be one of {FEEDBACK_MODES}, got {self.feedback!r}")
+        if (
+            not isinstance(self.horizon_steps, int)
+            or isinstance(self.horizon_steps, bool)
+            or not 1 <= self.horizon_steps <= MAX_HORIZON_STEPS
+        ):
+            raise ValueError(f"horizon_steps must be an integer in 1..{MAX_HORIZON_STEPS}, got {self.horizon_steps!r}")
+        if self.first_degree not in (2, 4):
+            raise ValueError(f"first_degree must be 2 or 4, got {self.first_degree!r}")
+        if self.first_side not in ("left", "right"):
+            raise ValueError(f"first_side must be 'left' or 'right', got {self.first_side!r}")
+        for name in ("step_width", "max_step_length", "max_step_lateral"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 < value <= MAX_STRIDE):
+                raise ValueError(f"{name} must be within (0, {MAX_STRIDE:g}] m, got {value}")
+        if not (math.isfinite(self.max_step_turn) and 0.0 < self.max_step_turn < math.pi / 2):
+            raise ValueError(f"max_step_turn must be within (0, pi/2) rad, got {self.max_step_turn}")
+        narrowest = self.min_step_width
+        if narrowest is not None and not (math.isfinite(narrowest) and 0.0 < narrowest <= self.step_width):
+            raise ValueError(
+                f"min_step_width must be None or within (0, step_width = {self.step_width:g}] m, got {narrowest}"
+            )
+        check_range("step_height", self.step_height, 0.0, MAX_STRIDE, "m")
+        if self.replan_dcm_error is not None:
+            check_range("replan_dcm_error", self.replan_dcm_error, 1e-4, 1.0, "m")
+        if self.step_adjustment is not None and not isinstance(self.step_adjustment, StepAdjustment):
+            raise ValueError("step_adjustment must be a StepAdjustment or None")
+        history = self.history_steps
+        if history is not None and (not isinstance(history, int) or isinstance(history, bool) or history < 8):
+            raise ValueError(f"history_steps must be None or an integer >= 8, got {history!r}")
+
+    @property
+    def w(self) -> float:
+        """Pendulum frequency ``sqrt(g / zc)`` (1/s)."""
+        return omega(self.cog_height, self.gravity)
+
+
+VELOCITY_KEYS = ("max_step_length", "max_step_lateral", "max_step_turn", "min_step_width")
+"""The :class:`PlannerConfig` fields that bound the strides of a walk by velocity command, as a robot description's
+``[velocity]`` table names them."""
+
+
+@dataclass(frozen=True)
+class VelocityLimits:
+    """A robot's bounds on the strides of walks by velocity command (a robot description's ``[velocity]`` table):
+    each field not ``None`` replaces the :class:`PlannerConfig` field of the same name (m, m, rad, m).
+
+    They are the robot's own: how far its legs reach sideways and how far its feet may turn against each other
+    without the soles or legs meeting, so a command within them asks nothing the robot cannot step; the
+    planner's defaults (0.3 m, 0.1 m, 0.4 rad, no narrowing) suit no robot in particular.
+    """
+
+    max_step_length: float | None = None
+    max_step_lateral: float | None = None
+    max_step_turn: float | None = None
+    min_step_width: float | None = None
+
+    @classmethod
+    def from_table(cls, table: dict, where: str = "velocity") -> VelocityLimits:
+        """From a ``[velocity]`` table (keys :data:`VELOCITY_KEYS`, all optional), each value checked as
+        :class:`PlannerConfig` checks it; an error names ``where.key``."""
+        for key, value in table.items():
+            if key not in VELOCITY_KEYS:
+                raise ValueError(f"{where}: unknown key {key!r} (known: {', '.join(VELOCITY_KEYS)})")
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ValueError(f"{where}.{key} must be a number, got {value!r}")
+            if key == "min_step_width":  # against the robot's own stance when applied (apply)
+                if not (math.isfinite(value) and 0.0 < value <= MAX_STRIDE):
+                    raise ValueError(f"{where}.min_step_width must be within (0, {MAX_STRIDE:g}] m, got {value!r}")
+                continue
+            try:
+                PlannerConfig(**{key: float(value)})
+            except ValueError as error:
+                raise ValueError(f"{where}.{error}") from None
+        return cls(**{key: float(value) for key, value in table.items()})
+
+    def apply(self, config: PlannerConfig, where: str = "velocity") -> PlannerConfig:
+        """``config`` with these limits; an error names ``where.key`` (e.g. ``min_step_width`` wider than the
+        config's ``step_width``)."""
+        changes = {key: getattr(self, key) for key in VELOCITY_KEYS if getattr(self, key) is not None}
+        try:
+            return dataclasses.replace(config, **changes)
+        except ValueError as error:
+            raise ValueError(f"{where}.{error}") from None

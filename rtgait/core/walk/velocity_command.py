@@ -1,0 +1,99 @@
+"""Walking by velocity command: the command, the bounds on the strides it makes, and how a command becomes a stride.
+
+A joystick-like command ``(vx, vy, wz)`` (forward and lateral speed in m/s, positive left; yaw rate in rad/s)
+asks, over the step period ``T = single_support + double_support`` (s), a forward stride ``vx T`` per step and,
+per pair of steps (one by each foot), a lateral displacement ``D = 2 vy T`` and a heading change ``2 wz T``.
+:func:`stride_from_command` turns it into the next :class:`~rtgait.core.geometry.footsteps.Stride`, within
+:class:`StepLimits`; a command beyond them is clamped, and :func:`warn_if_clamped` says so with a
+:class:`CommandClampedWarning`. :class:`~rtgait.core.walk.walk.Walk` makes the strides of a walk by command with these.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+from rtgait.core.geometry.footsteps import Footstep, Side, Stride, other_side
+
+
+class CommandClampedWarning(UserWarning):
+    """A velocity command asked for steps beyond the configured step limits; they were clamped."""
+
+
+@dataclass(frozen=True)
+class VelocityCommand:
+    """Joystick-like walking command: forward (m/s), lateral (m/s, positive left) and yaw rate (rad/s)."""
+
+    vx: float = 0.0
+    vy: float = 0.0
+    wz: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("vx", "vy", "wz"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"velocity command {name} must be finite, got {getattr(self, name)}")
+
+
+@dataclass(frozen=True)
+class StepLimits:
+    """Bounds on the strides made from velocity commands (:meth:`~rtgait.core.walk.walk.Walk.set_velocity`): forward
+    stride (m), lateral displacement per pair of steps (m), heading change per pair of steps (rad), and the narrowest
+    stance a sideways walk may close to (m; ``None``: the walk's ``step_width``)."""
+
+    length: float
+    lateral: float
+    turn: float
+    min_width: float | None = None
+
+
+def stride_from_command(
+    stance: Footstep, command: VelocityCommand | None, limits: StepLimits, period: float, step_width: float
+) -> Stride:
+    """The stride of the next step from ``stance`` under ``command`` (``None``: standing still), within ``limits``.
+
+    Over a step period ``T`` (``period``, s) a command ``(vx, vy, wz)`` asks per step a forward stride ``vx T`` and
+    per pair of steps (one by each foot) a lateral displacement ``D = 2 vy T`` and a heading change ``2 wz T``:
+
+    - Forward: every step ``vx T``, within ``+-limits.length``.
+    - Sideways: the feet cannot cross, so only the step toward the motion can carry the body sideways: it lands
+      ``D`` wider than the step after it, and the two widths are spread evenly around the straight-walking
+      stance ``w0`` (``step_width``, m), ``w0 + D/2`` and ``w0 - D/2``, the narrow one never below
+      ``limits.min_width`` (whatever it cannot close goes to the wide one). Over a pair of steps the body moves
+      ``D``; the stance opens at most ``D/2`` beyond ``w0`` where the robot allows narrowing, instead of ``D`` (the
+      leg's sideways lean and the hip's abduction are what limit a sideways walk). ``D <= limits.lateral``.
+    - Turning: every step turns ``wz T`` (both feet alike), so the feet alternate between toeing out and in by
+      ``wz T`` rather than one foot turning ``2 wz T`` and the other closing: half the angle between the feet
+      (their heels or toes, and the hips' yaw, are what limit a turn). ``2 |wz| T <= limits.turn``.
+    """
+    command = command or VelocityCommand()
+    landing: Side = other_side(stance.side)
+    length = min(max(command.vx * period, -limits.length), limits.length)
+    shift = min(2.0 * abs(command.vy) * period, limits.lateral)
+    nominal = step_width
+    narrowest = nominal if limits.min_width is None else min(limits.min_width, nominal)
+    narrow = max(nominal - 0.5 * shift, narrowest)
+    toward = "left" if command.vy > 0.0 else "right"
+    width = narrow + shift if landing == toward else narrow
+    half_turn = 0.5 * limits.turn
+    turn = min(max(command.wz * period, -half_turn), half_turn)
+    return Stride(length=length, width=width, turn=turn)
+
+
+def warn_if_clamped(command: VelocityCommand, limits: StepLimits, period: float) -> None:
+    """Warn (:class:`CommandClampedWarning`) when ``command`` asks more than ``limits`` allow over a step period
+    ``period`` (s), the bounds :func:`stride_from_command` clamps it to. The warning names the caller's caller
+    (``stacklevel=3``: whoever called the method that calls this)."""
+    asked = (abs(command.vx) * period, 2.0 * abs(command.vy) * period, 2.0 * abs(command.wz) * period)
+    allowed = (limits.length, limits.lateral, limits.turn)
+    if any(a > b * (1.0 + 1e-12) for a, b in zip(asked, allowed, strict=True)):
+        warnings.warn(
+            f"velocity command ({command.vx:g} m/s, {command.vy:g} m/s, {command.wz:g} rad/s) exceeds the step "
+            f"limits (step length {limits.length:g} m per {period:g} s step; lateral {limits.lateral:g} m and "
+            f"turn {limits.turn:g} rad per pair of steps): clamped",
+            CommandClampedWarning,
+            stacklevel=3,
+        )
+
+
+__all__ = ["CommandClampedWarning", "StepLimits", "VelocityCommand", "stride_from_command", "warn_if_clamped"]

@@ -1,0 +1,1 @@
+"""Walking scenarios: the scenario model and its files, footstep plans, guide paths, checks and TOML helpers."""

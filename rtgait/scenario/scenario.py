@@ -1,0 +1,481 @@
+"""Walking scenarios: a robot, a timing, a walk and the footstep changes made while walking.
+
+A scenario is a small TOML file. The built-in ones (the paper's Section 5 cases and a few more) ship as package
+data in ``rtgait/scenarios/`` and are loaded by name; any other file is loaded by path::
+
+    name = "my-walk"
+    description = "one line shown by `rtgait scenarios`"
+    connection = "real-time"            # or "quasi-real-time", or "auto" (chosen per change)
+    # auto_margin = 0.01                # m, optional with "auto": the ZMP margin a connection must keep
+
+    [robot]
+    cog_height = 0.80                   # m, constant COG height above the ground
+    gravity = 9.81                      # m/s^2, optional
+    mass = 57.0                         # kg, optional: pushes act on it in `rtgait simulate --model lipm`
+
+    [robot.sole]                        # sole rectangle around the foot frame, m
+    front = 0.13
+    back = 0.10
+    inner = 0.07
+    outer = 0.07
+
+    [timing]
+    single_support = 0.8                # s
+    double_support = 0.2                # s
+    dt = 0.005                          # s, control period of the rollout
+    horizon_steps = 3                   # steps covered by each plan
+    # start, end, settle: optional durations (s) of the first/last double support and of the settling phase
+
+    [walk]
+    steps = 10                          # forward steps; one more step then brings the feet side by side
+    step_length = 0.05                  # m
+    step_width = 0.19                   # m, lateral distance between the feet
+    step_height = 0.05                  # m, swing-foot peak height
+    # yaw = 0.0                         # rad, optional turn of every forward step
+    # first_foot = "right"              # optional, the foot that swings first
+
+    [[walk.change]]                     # any number of these
+    step = 5                            # 1-based step whose stride changes
+    length = 0.15                       # m; optional width (m) and yaw (rad) too
+    # only = false                      # true: this step only; false: this step and all later forward steps
+
+    [guide]                             # optional: a hand-guided walk (``rtgait simulate``), see GuidePath
+    forward = 1.0                       # m, straight ahead first
+    turn = 1.57                         # rad, then a turn (positive to the left) ...
+    radius = 1.0                        # m, ... on an arc of this radius
+    after = 0.5                         # m, straight on after the turn, then the person stops
+    speed = 0.15                        # m/s, the person's walking speed
+
+With ``[guide]``, ``rtgait simulate`` ignores the walk's footsteps: a person pulls the robot's hand along that path
+and the hand force sets the steps (:mod:`rtgait.sim.guided`); ``walk.steps`` is then the most steps it may take.
+
+A file with ``[[footstep]]`` entries instead of ``walk.steps`` is a footstep plan, absolute footholds each with its
+own timing if wanted: :func:`load_scenario` hands it to :mod:`rtgait.scenario.footholds`, which returns a
+:class:`Scenario`
+too (``footholds`` set, per-step timings in ``timing.per_step``).
+
+Every problem with a file raises :class:`ScenarioError` with one line naming the offending field. Sizes and
+physical quantities are bounded by :mod:`rtgait.core.limits` (steps, phase durations and ``w T``, the control
+period and the number of samples it makes, the horizon, COG height, gravity, stride lengths), checked here so that
+the message names the TOML field; two ``[[walk.change]]`` entries for the same step are refused.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from rtgait.core.analysis.rollout import ScheduledChange
+from rtgait.core.geometry.footsteps import (
+    Footstep,
+    Side,
+    SoleRect,
+    Stride,
+    Timeline,
+    Timing,
+    place_footsteps,
+    standing_feet,
+    stride_between,
+)
+from rtgait.core.limits import (
+    MAX_COG_HEIGHT,
+    MAX_GRAVITY,
+    MAX_HORIZON_STEPS,
+    MAX_PHASE_DURATION,
+    MAX_STEPS,
+    MAX_STRIDE,
+    MIN_COG_HEIGHT,
+    MIN_DT,
+    MIN_GRAVITY,
+    MIN_PHASE_DURATION,
+)
+from rtgait.core.planner.config import ALL_CONNECTION_MODES, MAX_AUTO_MARGIN
+from rtgait.core.planner.online import ConnectionMode, PlannerConfig
+from rtgait.scenario.checks import (
+    PHASES,
+    ScenarioError,
+    check_distinct_steps,
+    check_phase_lengths,
+    check_ticks,
+    within,
+)
+from rtgait.scenario.guide_path import GuidePath
+from rtgait.scenario.tomlfile import NumberRule, TomlFiles
+
+__all__ = [
+    "MAX_WALK_STEPS",
+    "PHASES",
+    "GuidePath",
+    "Scenario",
+    "ScenarioError",
+    "builtin_scenarios",
+    "load_scenario",
+    "parse_scenario",
+]
+
+_NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
+# Stride.turn must stay strictly inside +-pi/2; checking yaws with this rule gives the error a TOML field name.
+_YAW_RULE: NumberRule = "|x| < pi/2"
+MAX_WALK_STEPS = MAX_STEPS - 1
+"""Most forward steps of a scenario: the closing step makes :data:`~rtgait.core.limits.MAX_STEPS`."""
+_STEPS_WHY = f"one closing step is added and a walk has at most {MAX_STEPS} steps"
+_HORIZON_WHY = "the size and cost of every plan grow with it"
+_COG_HEIGHT_BOUNDS = (MIN_COG_HEIGHT, MAX_COG_HEIGHT)
+_GRAVITY_BOUNDS = (MIN_GRAVITY, MAX_GRAVITY)
+_PHASE_BOUNDS = (MIN_PHASE_DURATION, MAX_PHASE_DURATION)
+_LENGTH_BOUNDS = (-MAX_STRIDE, MAX_STRIDE)
+_WIDTH_BOUNDS = (0.0, MAX_STRIDE)
+_MASS_BOUNDS = (1.0, 500.0)  # kg: from a toy biped to the heaviest humanoid built
+
+
+
+
+_FILES = TomlFiles(kind="scenario", folder="scenarios", error=ScenarioError)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Everything needed to roll out one walk.
+
+    Attributes:
+        name: short identifier, also the default output folder name.
+        description: one line for listings.
+        connection: ``"real-time"``, ``"quasi-real-time"`` or ``"auto"`` (:mod:`rtgait.core.planner.auto`).
+        cog_height: constant COG height above the ground (m).
+        gravity: (m/s^2).
+        sole: sole rectangle around the foot frame (m).
+        timing: phase durations (s).
+        dt: control period at which the walk is sampled (s).
+        horizon_steps: steps covered by each plan after its first double support.
+        steps: number of forward steps; one closing step (length 0) follows them.
+        step_length: forward length of each step (m).
+        step_width: lateral distance between the feet (m).
+        step_height: peak swing-foot height (m).
+        changes: footstep changes, each handed to the planner at its connection mode's deadline.
+        yaw: turn of every forward step (rad), positive to the left.
+        first_foot: the foot that swings first.
+        source: where the scenario came from (``"builtin"`` or a file path); informative only.
+        guide: a hand-guided walk's path (``[guide]``), or ``None``.
+        mass: the robot's mass (kg, ``[robot] mass``) for pendulum-level simulations, where pushes act on it;
+            ``None``: not given (``rtgait simulate --model lipm`` then takes an HRP-2-like 57 kg).
+        auto_margin: with ``connection = "auto"``, the ZMP margin (m) a connection must be predicted to keep.
+        footholds: a footstep plan's landings ``F[2..steps + 2]`` in the world frame (m, rad), one per step, the
+            last one being the closing step (:mod:`rtgait.scenario.footholds`); ``None`` for a walk given by
+            ``step_length`` and ``yaw``. Its strides start from the standing feet (``step_width`` apart at the
+            origin), so a different ``step_width`` (a robot's) moves the first stride, never a foothold. Per-step
+            timings, if any, are in ``timing.per_step``.
+    """
+
+    name: str
+    description: str
+    connection: ConnectionMode
+    cog_height: float
+    gravity: float
+    sole: SoleRect
+    timing: Timing
+    dt: float
+    horizon_steps: int
+    steps: int
+    step_length: float
+    step_width: float
+    step_height: float
+    changes: tuple[ScheduledChange, ...] = ()
+    yaw: float = 0.0
+    first_foot: Side = "right"
+    source: str = field(default="", compare=False)
+    guide: GuidePath | None = None
+    mass: float | None = None
+    auto_margin: float = 0.01
+    footholds: tuple[Footstep, ...] | None = None
+
+    def __post_init__(self) -> None:
+        # The TOML loader already checks every field with its file path; these checks cover scenarios built in
+        # code or modified with dataclasses.replace (the CLI's --dt, a robot's COG height and step width). The
+        # limits (rtgait.core.limits) are checked here, before any work, so no accepted scenario can exhaust
+        # memory or time or leave the range where the closed form is well conditioned.
+        if not _NAME_PATTERN.fullmatch(self.name):
+            raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {self.name!r}")
+        if self.connection not in ALL_CONNECTION_MODES:
+            raise ScenarioError(
+                f"connection must be one of {', '.join(ALL_CONNECTION_MODES)}, got {self.connection!r}"
+            )
+        within("auto_margin", self.auto_margin, (-MAX_AUTO_MARGIN, MAX_AUTO_MARGIN), "m")
+        if self.connection == "auto" and not self.timing.uniform:
+            raise ScenarioError('connection = "auto" needs one timing for every step: per-step timings are unsupported')
+        within("cog_height", self.cog_height, _COG_HEIGHT_BOUNDS, "m")
+        within("gravity", self.gravity, _GRAVITY_BOUNDS, "m/s^2")
+        if self.mass is not None:
+            within("mass", self.mass, _MASS_BOUNDS, "kg")
+        self._check_period()
+        _FILES.count(self.steps, "steps", high=MAX_WALK_STEPS, why=_STEPS_WHY)
+        _FILES.count(self.horizon_steps, "horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY)
+        check_phase_lengths(self.timing, self.cog_height, self.gravity)
+        check_ticks(self.duration, self.dt)
+        for index, change in enumerate(self.changes):
+            if not 1 <= change.step <= self.steps:
+                raise ScenarioError(
+                    f"walk.change[{index}].step must be a step of the walk (1..{self.steps}), got {change.step}"
+                )
+        check_distinct_steps([change.step for change in self.changes], "walk.change")
+        if self.footholds is not None:
+            if len(self.footholds) != self.steps + 1:
+                raise ScenarioError(
+                    f"footholds must hold steps + 1 = {self.steps + 1} landings, got {len(self.footholds)}"
+                )
+            if self.changes:
+                raise ScenarioError("a footstep plan has no walk.change entries: edit the footholds instead")
+            if self.footholds[0].side != self.first_foot:
+                raise ScenarioError(f"the first footstep must be the first foot ({self.first_foot})")
+
+    def _check_period(self) -> None:
+        """``dt`` is a number within [MIN_DT, the shortest phase]."""
+        if not (isinstance(self.dt, (int, float)) and math.isfinite(self.dt) and self.dt > 0.0):
+            raise ScenarioError(f"dt must be a number > 0 s, got {self.dt}")
+        if self.dt < MIN_DT:
+            raise ScenarioError(f"dt must be at least {MIN_DT:g} s, got {self.dt}")
+        shortest = self.timing.shortest_phase
+        if self.dt > shortest:
+            # A period longer than a phase would skip whole phases (and their replans) between two samples.
+            raise ScenarioError(f"dt must not exceed the shortest phase ({shortest} s), got {self.dt}")
+
+    def planner_config(self) -> PlannerConfig:
+        """The online planner's parameters for this scenario."""
+        return PlannerConfig(
+            cog_height=self.cog_height,
+            timing=self.timing,
+            step_width=self.step_width,
+            step_height=self.step_height,
+            horizon_steps=self.horizon_steps,
+            connection=self.connection,
+            gravity=self.gravity,
+            first_side=self.first_foot,
+            # The auto connection predicts margins against the sole; the other modes do not need it.
+            auto_margin=self.auto_margin,
+            sole=self.sole if self.connection == "auto" else None,
+        )
+
+    def strides(self) -> list[Stride]:
+        """Strides of the walk as planned before any change: ``steps`` forward ones, then a closing one (of a
+        footstep plan: from each foothold to the next, the standing feet first)."""
+        if self.footholds is not None:
+            chain = [*standing_feet(self.step_width, self.first_foot), *self.footholds]
+            return [stride_between(a, b) for a, b in itertools.pairwise(chain[1:])]
+        forward = Stride(self.step_length, self.step_width, self.yaw)
+        # The closing step lands beside the last footprint so the walk ends standing with parallel feet.
+        return [forward] * self.steps + [Stride(0.0, self.step_width, 0.0)]
+
+    def nominal_footprints(self) -> list[Footstep]:
+        """Footprints ``F[0..steps+1]`` the walk would have without any change (m, rad)."""
+        if self.footholds is not None:
+            return [*standing_feet(self.step_width, self.first_foot), *self.footholds]
+        return place_footsteps(standing_feet(self.step_width, self.first_foot), self.strides())
+
+    @property
+    def duration(self) -> float:
+        """Time from the start until the COG has come to rest (s)."""
+        t = self.timing
+        # steps + 1 steps in all (the closing one), each but the last followed by a double support.
+        n = self.steps + 1
+        if t.per_step:
+            return Timeline(t, n, t.per_step).end_time
+        return t.start + n * t.single_support + (n - 1) * t.double_support + t.end + t.settle
+
+
+# ----- TOML parsing ---------------------------------------------------------------------------------------------
+
+
+def _number(
+    data: dict[str, Any],
+    key: str,
+    where: str,
+    *,
+    rule: NumberRule = "any",
+    unit: str = "",
+    bounds: tuple[float, float] | None = None,
+) -> float:
+    """A finite number from ``data[key]`` of the table ``where`` (empty: the document) satisfying ``rule`` and
+    lying within ``bounds`` (inclusive)."""
+    path = f"{where}.{key}" if where else key
+    # Scenario messages word the unit of an unconstrained number "(in m)"; tests and users rely on that wording.
+    shown_unit = f"(in {unit})" if rule == "any" and unit else unit
+    value = _FILES.number(data[key], path, rule=rule, unit=shown_unit)
+    if bounds is not None:
+        within(path, value, bounds, unit)
+    return value
+
+
+def _choice(data: dict[str, Any], key: str, where: str, choices: tuple[str, ...]) -> str:
+    value = data[key]
+    path = f"{where}.{key}" if where else key
+    if value not in choices:
+        raise ScenarioError(f"{path} must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
+    return value
+
+
+def _parse_changes(raw: Any, steps: int) -> tuple[ScheduledChange, ...]:
+    if not isinstance(raw, list):
+        raise ScenarioError("walk.change must be an array of tables, written [[walk.change]]")
+    changes = []
+    for index, entry in enumerate(raw):
+        where = f"walk.change[{index}]"
+        entry = _FILES.table(entry, where)
+        _FILES.check_keys(entry, where, ("step",), ("length", "width", "yaw", "only"))
+        step = _FILES.count(entry["step"], f"{where}.step")
+        if step > steps:
+            raise ScenarioError(f"{where}.step must be a step of the walk (1..{steps}), got {step}")
+        length = _number(entry, "length", where, unit="m", bounds=_LENGTH_BOUNDS) if "length" in entry else None
+        width = _number(entry, "width", where, rule="> 0", unit="m", bounds=_WIDTH_BOUNDS) if "width" in entry else None
+        yaw = _number(entry, "yaw", where, rule=_YAW_RULE, unit="rad") if "yaw" in entry else None
+        if length is None and width is None and yaw is None:
+            raise ScenarioError(f"{where} changes nothing: give at least one of length, width, yaw")
+        only = entry.get("only", False)
+        if not isinstance(only, bool):
+            raise ScenarioError(f"{where}.only must be true or false, got {only!r}")
+        # By default a change persists (the user now wants longer/wider/turning steps); the closing step
+        # steps + 1 is never touched so the walk still ends with the feet side by side.
+        through = None if only else steps
+        changes.append(ScheduledChange(step, length=length, width=width, turn=yaw, through=through))
+    return tuple(changes)  # Scenario refuses two changes of one step, naming both entries
+
+
+def _parse_guide(raw: Any) -> GuidePath:
+    table = _FILES.table(raw, "guide")
+    keys = ("forward", "turn", "radius", "after", "speed")
+    _FILES.check_keys(table, "guide", (), keys)
+    units = {"forward": "m", "turn": "rad", "radius": "m", "after": "m", "speed": "m/s"}
+    values = {key: _number(table, key, "guide", unit=units[key]) for key in keys if key in table}
+    try:
+        return GuidePath(**values)
+    except ValueError as error:
+        raise ScenarioError(str(error)) from None
+
+
+def parse_common(data: dict[str, Any]) -> dict[str, Any]:
+    """The parts a scenario and a footstep plan (:mod:`rtgait.scenario.footholds`) share: ``name``, ``description``,
+    ``connection``, ``auto_margin``, ``[robot]`` and ``[timing]``, checked, as :class:`Scenario` keywords."""
+    name = _FILES.string(data, "name")
+    if not _NAME_PATTERN.fullmatch(name):
+        raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
+    description = _FILES.string(data, "description") if "description" in data else ""
+    if "\n" in description:
+        raise ScenarioError("description must be a single line")
+    connection = _choice(data, "connection", "", ALL_CONNECTION_MODES)
+    auto_margin = 0.01
+    if "auto_margin" in data:
+        if connection != "auto":
+            raise ScenarioError(f'auto_margin is for connection = "auto", got connection = "{connection}"')
+        auto_margin = _number(data, "auto_margin", "", unit="m", bounds=(-MAX_AUTO_MARGIN, MAX_AUTO_MARGIN))
+
+    robot = _FILES.table(data["robot"], "robot")
+    _FILES.check_keys(robot, "robot", ("cog_height", "sole"), ("gravity", "mass"))
+    cog_height = _number(robot, "cog_height", "robot", rule="> 0", unit="m", bounds=_COG_HEIGHT_BOUNDS)
+    gravity = 9.81
+    if "gravity" in robot:
+        gravity = _number(robot, "gravity", "robot", rule="> 0", unit="m/s^2", bounds=_GRAVITY_BOUNDS)
+    mass = _number(robot, "mass", "robot", rule="> 0", unit="kg", bounds=_MASS_BOUNDS) if "mass" in robot else None
+    sole_table = _FILES.table(robot["sole"], "robot.sole")
+    sides = ("front", "back", "inner", "outer")
+    _FILES.check_keys(sole_table, "robot.sole", sides, ())
+    sole_values = {key: _number(sole_table, key, "robot.sole", rule=">= 0", unit="m") for key in sides}
+    if sole_values["front"] + sole_values["back"] <= 0.0 or sole_values["inner"] + sole_values["outer"] <= 0.0:
+        raise ScenarioError("robot.sole must have a positive length (front + back) and width (inner + outer)")
+    sole = SoleRect(**sole_values)
+
+    timing_table = _FILES.table(data["timing"], "timing")
+    durations = ("single_support", "double_support")
+    extra_durations = ("start", "end", "settle")
+    _FILES.check_keys(timing_table, "timing", (*durations, "dt", "horizon_steps"), extra_durations)
+    timing_values = {
+        key: _number(timing_table, key, "timing", rule="> 0", unit="s", bounds=_PHASE_BOUNDS)
+        for key in (*durations, *extra_durations)
+        if key in timing_table
+    }
+    timing = Timing(**timing_values)
+    dt = _number(timing_table, "dt", "timing", rule="> 0", unit="s", bounds=(MIN_DT, MAX_PHASE_DURATION))
+    horizon_steps = _FILES.count(
+        timing_table["horizon_steps"], "timing.horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY
+    )
+    return {
+        "name": name, "description": description, "connection": connection, "auto_margin": auto_margin,
+        "cog_height": cog_height, "gravity": gravity, "mass": mass, "sole": sole, "timing": timing, "dt": dt,
+        "horizon_steps": horizon_steps,
+    }  # fmt: skip
+
+
+number = _number
+"""A finite number of a scenario-like file, checked and worded as the scenario's own fields (for
+:mod:`rtgait.scenario.footholds`)."""
+
+
+def build_scenario(**fields: Any) -> Scenario:
+    """:class:`Scenario` from parsed fields, its cross-field messages pointed at the TOML table they live in."""
+    try:
+        return Scenario(**fields)
+    except ScenarioError as error:
+        message = str(error)
+        if message.startswith("dt "):
+            message = "timing." + message
+        raise ScenarioError(message) from None
+
+
+def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
+    """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
+    _FILES.check_keys(
+        data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide", "auto_margin")
+    )
+    common = parse_common(data)
+    connection = common["connection"]
+
+    walk = _FILES.table(data["walk"], "walk")
+    walk_required = ("steps", "step_length", "step_width", "step_height")
+    _FILES.check_keys(walk, "walk", walk_required, ("yaw", "first_foot", "change"))
+    steps = _FILES.count(walk["steps"], "walk.steps", high=MAX_WALK_STEPS, why=_STEPS_WHY)
+    step_length = _number(walk, "step_length", "walk", unit="m", bounds=_LENGTH_BOUNDS)
+    step_width = _number(walk, "step_width", "walk", rule="> 0", unit="m", bounds=_WIDTH_BOUNDS)
+    step_height = _number(walk, "step_height", "walk", rule=">= 0", unit="m")
+    yaw = _number(walk, "yaw", "walk", rule=_YAW_RULE, unit="rad") if "yaw" in walk else 0.0
+    first_foot = _choice(walk, "first_foot", "walk", ("right", "left")) if "first_foot" in walk else "right"
+    changes = _parse_changes(walk["change"], steps) if "change" in walk else ()
+    guide = _parse_guide(data["guide"]) if "guide" in data else None
+    if guide is not None and connection != "quasi-real-time":
+        raise ScenarioError("a [guide] walk uses the quasi-real-time connection (the paper's Section 6)")
+
+    return build_scenario(
+        **common,
+        steps=steps,
+        step_length=step_length,
+        step_width=step_width,
+        step_height=step_height,
+        changes=changes,
+        yaw=yaw,
+        first_foot=first_foot,
+        source=source,
+        guide=guide,
+    )
+
+
+# ----- finding scenarios ----------------------------------------------------------------------------------------
+
+
+def builtin_scenarios() -> dict[str, str]:
+    """Built-in scenario names mapped to their one-line descriptions."""
+    return {name: load_scenario(name).description for name in _FILES.builtin_names()}
+
+
+def load_scenario(name_or_path: str | Path) -> Scenario:
+    """Load a built-in scenario by name, or any scenario TOML file by path; a file with ``[[footstep]]``
+    entries is a footstep plan (:mod:`rtgait.scenario.footholds`).
+
+    A string that is a built-in name wins over a file of the same name in the current folder; anything that
+    looks like a path (a ``.toml`` suffix, a folder separator, or an existing file) is read as a file.
+    """
+    document = _FILES.load(name_or_path)
+    if "footstep" in document.data:
+        from rtgait.scenario.footholds import parse_footstep_plan  # it builds on this module
+
+        return parse_footstep_plan(document.data, document.source)
+    return parse_scenario(document.data, document.source)
