@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, W
 
-from rtgait.core.analysis.batch import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.footsteps import Timing
+from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.support import signed_margin
 from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
 from rtgait.core.laws.stepping import StepAdjustment, choose_step, remainder_options, single_support_options

@@ -41,41 +41,11 @@ import numpy as np
 
 from rtgait.core.analysis.walk_family import ChangeShape, FamilyKey, WalkFamily, family_key
 from rtgait.core.geometry.footsteps import SoleRect
-from rtgait.core.lipm.pattern import DEGREE
+from rtgait.core.planner.auto import auto_options
 
 if TYPE_CHECKING:
     from rtgait.core.analysis.rollout import ScheduledChange
     from rtgait.core.planner.config import PlannerConfig
-
-
-def segment_zmp_rows(G: np.ndarray, duration: float, n_times: int, segment: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Times (s, local to the segment) and the matrix ``M`` ``(n_times, n_inputs)`` with ``zmp(t_i) = M[i] @ y``.
-
-    ``G`` is a plan operator (:class:`~rtgait.core.lipm.pattern.PlanOperator`); ``y`` its inputs, one column per axis.
-    """
-    if n_times < 2:
-        raise ValueError(f"n_times must be >= 2, got {n_times}")
-    times = np.linspace(0.0, duration, n_times)
-    powers = times[:, None] ** np.arange(DEGREE + 1)[None, :]  # (n_times, DEGREE + 1)
-    rows = 12 * segment
-    return times, powers @ G[rows : rows + DEGREE + 1]
-
-
-def polygon_halfplanes(polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit outward normals ``(k, 2)`` and offsets ``(k,)`` of a counter-clockwise convex polygon ``(k, 2)`` (m):
-    a point ``p`` is inside iff ``n . p <= b`` for every edge."""
-    polygon = np.asarray(polygon, dtype=float)
-    edge = np.roll(polygon, -1, axis=0) - polygon
-    normal = np.column_stack([edge[:, 1], -edge[:, 0]])  # right of a counter-clockwise edge: outward
-    normal /= np.linalg.norm(normal, axis=1)[:, None]
-    return normal, np.einsum("kd,kd->k", normal, polygon)
-
-
-def halfplane_margin(points: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """``min_k (b_k - n_k . p)`` for points ``(..., 2)`` (m): the signed distance inside, a lower bound outside."""
-    return np.min(offsets - points @ normals.T, axis=-1)
-
-
 
 
 # ----- whole walks ----------------------------------------------------------------------------------------------
@@ -189,7 +159,6 @@ def _evaluate_auto(walk: StraightWalk, shapes: tuple[ChangeShape, ...], theta: n
     """Auto walks: each change decided in deadline order by :mod:`rtgait.core.planner.auto`'s rule, its options
     predicted
     on the families they make (cases that made the same earlier choices share them), then the walks evaluated."""
-    from rtgait.core.planner.auto import auto_options  # auto uses this module's half-planes: import when used
 
     config, n = walk.config, walk.steps + 1
     B = len(theta)
@@ -250,8 +219,5 @@ __all__ = [
     "StraightWalk",
     "evaluate_parameters",
     "evaluate_walks",
-    "halfplane_margin",
-    "polygon_halfplanes",
-    "segment_zmp_rows",
     "walk_family",
 ]

@@ -45,10 +45,10 @@ from rtgait.core.geometry.hull import (
     two_box_vertices,
 )
 from rtgait.core.limits import MAX_ROLLOUT_TICKS, MIN_DT
+from rtgait.core.planner.auto import AUTO_SAMPLES
 from rtgait.core.planner.config import PlannerConfig
+from rtgait.core.planner.online import OnlinePlanner
 
-AUTO_SAMPLES = 33
-"""Samples per free segment at which the auto connection predicts a plan's ZMP margin (both ends included)."""
 TIE = 1e-9
 """Margins (m) within this of the minimum are tied with it (``rtgait.viz.run_data.MARGIN_TIE_TOLERANCE``)."""
 _STRUCTURE_TOLERANCE = 1e-9
@@ -132,7 +132,6 @@ class WalkFamily:
     def __init__(self, key: FamilyKey) -> None:
         if not key.timing.uniform:
             raise ValueError("the batched evaluation needs one timing for every step: per-step timings are unsupported")
-        from rtgait.core.planner.online import OnlinePlanner  # online imports this module's package; import when used
 
         self.key = key
         if not (math.isfinite(key.dt) and key.dt >= MIN_DT):
@@ -438,5 +437,5 @@ def family_key(
 
 
 __all__ = [
-    "AUTO_SAMPLES", "TIE", "ChangeShape", "FamilyKey", "FamilyResult", "WalkFamily", "affine_footprints", "family_key",
+    "TIE", "ChangeShape", "FamilyKey", "FamilyResult", "WalkFamily", "affine_footprints", "family_key",
 ]  # fmt: skip

@@ -329,3 +329,16 @@ class PlanOperator:
     def solve(self, y: np.ndarray) -> np.ndarray:
         """Per-segment data ``(m, SEGMENT_WIDTH, d)`` for stacked inputs ``y`` ``(4 + K, d)``."""
         return (self.G @ y).reshape(self.n_segments, SEGMENT_WIDTH, -1)
+
+
+def segment_zmp_rows(G: np.ndarray, duration: float, n_times: int, segment: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Times (s, local to the segment) and the matrix ``M`` ``(n_times, n_inputs)`` with ``zmp(t_i) = M[i] @ y``.
+
+    ``G`` is a plan operator (:class:`~rtgait.core.lipm.pattern.PlanOperator`); ``y`` its inputs, one column per axis.
+    """
+    if n_times < 2:
+        raise ValueError(f"n_times must be >= 2, got {n_times}")
+    times = np.linspace(0.0, duration, n_times)
+    powers = times[:, None] ** np.arange(DEGREE + 1)[None, :]  # (n_times, DEGREE + 1)
+    rows = 12 * segment
+    return times, powers @ G[rows : rows + DEGREE + 1]

@@ -11,8 +11,7 @@ import math
 
 import numpy as np
 
-from rtgait.core.analysis.batch import segment_zmp_rows
-from rtgait.core.lipm.pattern import DEGREE, MOVING_KINDS, PlanOperator
+from rtgait.core.lipm.pattern import DEGREE, MOVING_KINDS, PlanOperator, segment_zmp_rows
 
 EAGER_SEGMENTS = 1
 """Segments evaluated at replan time: the one that begins. Later ones are evaluated by the first sample that needs

@@ -17,8 +17,9 @@ is accepted until step ``k`` lifts off (the real-time deadline) and decided at o
 
 Each option is *predicted* with the plan operators: the planner makes, from the plan being executed, the plans it
 would make at the coming double-support starts with the footprints the option gives, and takes the smallest
-half-plane ZMP margin (:func:`~rtgait.core.analysis.batch.halfplane_margin`, against each phase's support polygon) at
-:data:`~rtgait.core.analysis.walk_family.AUTO_SAMPLES` evenly spaced times over the free first segment of each plan in
+half-plane ZMP margin (:func:`~rtgait.core.geometry.halfplanes.halfplane_margin`, against each phase's support polygon)
+at
+:data:`~AUTO_SAMPLES` evenly spaced times over the free first segment of each plan in
 the
 option's *window*: from the first plan that sees the change through ``horizon_steps + 1`` double supports later
 (:func:`window`). The first option, in the order above, whose prediction reaches ``auto_margin`` is taken; if none
@@ -37,12 +38,14 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from rtgait.core.analysis.batch import halfplane_margin, polygon_halfplanes
-from rtgait.core.analysis.walk_family import AUTO_SAMPLES
+from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.support import support_polygon
 
 if TYPE_CHECKING:
     from rtgait.core.planner.online import OnlinePlanner
+
+AUTO_SAMPLES = 33
+"""Samples per free segment at which the auto connection predicts a plan's ZMP margin (both ends included)."""
 
 AUTO_KINDS = ("real-time", "quasi-real-time", "deferred")
 
@@ -227,4 +230,6 @@ class AutoConnection:
         return margin
 
 
-__all__ = ["AUTO_KINDS", "AutoDecision", "AutoOption", "ChangeRecord", "auto_options", "choose", "window"]
+__all__ = [
+    "AUTO_KINDS", "AUTO_SAMPLES", "AutoDecision", "AutoOption", "ChangeRecord", "auto_options", "choose", "window",
+]  # fmt: skip

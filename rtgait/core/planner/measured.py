@@ -20,8 +20,8 @@ from typing import Literal
 
 import numpy as np
 
-from rtgait.core.analysis.batch import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.footsteps import Footstep, Side, Stride
+from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.support import support_polygon
 from rtgait.core.laws.stepping import (
     StepAdjustment,
