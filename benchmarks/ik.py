@@ -23,7 +23,8 @@ import numpy as np
 
 from rtgait.core.analysis.rollout import rollout
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.robot.ik import IKTargets, WholeBodyIK
+from rtgait.interface.task_targets import IKTargets
+from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
 from rtgait.scenario.scenario import load_scenario
 

@@ -49,7 +49,8 @@ import mujoco
 import numpy as np
 
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.robot.ik import IKTargets, WholeBodyIK
+from rtgait.interface.task_targets import IKTargets
+from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.scenario import load_scenario

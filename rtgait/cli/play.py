@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtgait.cli.common import PROG, RunError, load_robot, robot_walk
+from rtgait.robot.controller_info import robot_info
 from rtgait.scenario.scenario import Scenario, ScenarioError, load_scenario
 
 if TYPE_CHECKING:
@@ -123,8 +124,8 @@ def _live_walk(scenario: Scenario, by_command: bool, robot: RobotModel, level: s
         walk.planner_config(),
         strides,
         walk.sole,
-        robot,
-        dt=sim.control_dt,  # type: ignore[arg-type]
+        robot_info(robot),
+        dt=sim.control_dt,
     )
     options = LoopOptions(changes=() if by_command else walk.changes)
     loop = ClosedLoop(sim, controller, options, keep=KEEP)

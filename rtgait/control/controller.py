@@ -77,8 +77,7 @@ if TYPE_CHECKING:
     import numpy as np
 
     from rtgait.core.laws.stepping import StepAdjustment
-    from rtgait.robot.model import RobotModel
-    from rtgait.sim.measure import FootState, Measurement
+    from rtgait.estimation.state import FootState, Measurement
 
 __all__ = [
     "CONTROLLERS",
@@ -431,7 +430,7 @@ def make_controller(
     planner_config: PlannerConfig,
     strides: Sequence[Stride] | None,
     sole: SoleRect,
-    robot: RobotInfo | RobotModel,
+    robot: RobotInfo,
     *,
     dt: float = 0.001,
     options: ControllerOptions | None = None,
@@ -444,12 +443,15 @@ def make_controller(
             :func:`~rtgait.core.pendulum.loop.controller_config` (the levels differ only by what the loop adds).
         strides: the walk; ``None`` to walk by velocity command.
         sole: the sole rectangle (m), for support polygons, the ZMP split and step adjustment.
-        robot: a :class:`RobotInfo` or a loaded :class:`~rtgait.robot.model.RobotModel`.
+        robot: what the controller knows of the robot (:func:`rtgait.robot.controller_info.robot_info` makes it
+            from a loaded robot model).
         dt: control period (s).
         options: feedback gains and landing handling (:class:`ControllerOptions`).
     """
     options = options or ControllerOptions()
-    info = robot if isinstance(robot, RobotInfo) else RobotInfo.from_robot(robot, sole)
+    if not isinstance(robot, RobotInfo):
+        raise TypeError(f"robot must be a RobotInfo (rtgait.robot.controller_info.robot_info), not {type(robot)}")
+    info = robot
     if info.sole != sole:
         info = dataclasses.replace(info, sole=sole)
     adjust = controller_step_adjustment(options, info) if level == "adaptive" else None

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING
 from rtgait.core.lipm.closed_form import GRAVITY
 
 if TYPE_CHECKING:
-    from rtgait.sim.measure import Measurement
+    from rtgait.estimation.state import Measurement
 
 __all__ = ["ExternalForce", "lean", "shifted_measurement"]
 

@@ -1,7 +1,8 @@
 """The feet's landings in the MuJoCo loop: what a landing does to the plan and to its foot's target
 (:class:`FootLandings`, owned and called every tick by :class:`~rtgait.control.controller.WalkingController`).
 
-Landings come detected by the measurer (:class:`~rtgait.sim.measure.Landing`: side, measured sole pose). Each one is
+Landings come detected by the measurer (:class:`~rtgait.estimation.state.Landing`: side, measured sole pose). Each one
+is
 logged with its kind; in the ``"adaptive"`` level it also acts (``FootLandings.adaptive``), in the others it is only
 logged. Settings (s, m, m/s) are those of :class:`~rtgait.control.settings.ControllerOptions`.
 
@@ -64,7 +65,7 @@ if TYPE_CHECKING:
     from rtgait.control.settings import ControllerOptions
     from rtgait.core.geometry.footsteps import Side
     from rtgait.core.planner.online import OnlinePlanner
-    from rtgait.sim.measure import Landing, Measurement
+    from rtgait.estimation.state import Landing, Measurement
 
 __all__ = ["FootLandings"]
 

@@ -5,19 +5,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 from rtgait.control.foot_control import FootControlGains, FootOffsets
-from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.core.laws.feedback import DcmFeedbackGains
-from rtgait.core.laws.hip_strategy import HipStrategyLimits
 from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
 from rtgait.core.pendulum.loop import DEFAULT_REPLAN_DCM_ERROR
 from rtgait.core.planner.measured import AUTO_MIN_REMAINDER, AUTO_REPLAN_INTERVAL
-from rtgait.robot.ik import IKTargets
-
-if TYPE_CHECKING:
-    from rtgait.robot.model import RobotModel
+from rtgait.interface.robot_info import RobotInfo
+from rtgait.interface.task_targets import IKTargets
 
 __all__ = [
     "ERROR_REPLAN_INTERVAL",
@@ -54,41 +50,6 @@ closer to the plan than without ankle damping."""
 # controller uses: the least time between two, and the shortest phase remainder one is made over (s).
 ERROR_REPLAN_INTERVAL = AUTO_REPLAN_INTERVAL
 ERROR_REPLAN_MIN_REMAINDER = AUTO_MIN_REMAINDER
-
-
-@dataclass(frozen=True)
-class RobotInfo:
-    """What the controllers need to know about the robot (SI units).
-
-    Attributes:
-        mass: (kg).
-        sole: the sole rectangle around the sole frame (m).
-        leg_length: scale of the stride box (m) when ``stepping`` is ``None``: the walking COM height serves
-            (:meth:`from_robot`).
-        stepping: the robot description's ``[stepping]`` limits (:class:`~rtgait.core.laws.stepping.SteppingLimits`),
-            the stride box of step adjustment (:func:`step_limits`); ``None``: none described.
-        lean: the upper body's lean inertia and acceleration limits for the hip strategy
-            (:func:`rtgait.robot.lean.hip_strategy_limits`); ``None``: no hip strategy.
-    """
-
-    mass: float
-    sole: SoleRect
-    leg_length: float
-    stepping: SteppingLimits | None = None
-    lean: HipStrategyLimits | None = None
-
-    @classmethod
-    def from_robot(cls, robot: RobotModel, sole: SoleRect | None = None) -> RobotInfo:
-        """From a loaded robot: its mass, its described sole (or ``sole``), its walking COM height, its
-        ``[stepping]`` limits and its upper body's lean (none when its hips cannot make one)."""
-        from rtgait.robot.lean import hip_strategy_limits
-
-        description = robot.description
-        try:
-            lean = hip_strategy_limits(robot)
-        except ValueError:
-            lean = None
-        return cls(robot.mass, sole or description.sole, description.cog_height, description.stepping, lean)
 
 
 def step_limits(info: RobotInfo, stepping: SteppingLimits | None = None) -> StepAdjustment:
@@ -247,7 +208,7 @@ class ControlTargets(NamedTuple):
         com: COM target ``(x, y, z)`` for the IK (m): the plan's plus the COM correction.
         left_foot, right_foot: sole targets ``(x, y, z, yaw)`` (m, rad), the foot-control heights and the blend of
             a re-anchored foot (``ControllerOptions.anchor_blend``) included.
-        offsets: the foot force control's output (its tilts go to the ankles, :func:`~rtgait.control.foot_control.
+        offsets: the foot force control's output (its tilts go to the ankles, :func:`~rtgait.robot.ankles.
             add_ankle_offsets`; its heights are already in the feet's z).
         zmp_command: the commanded ZMP (m); the planned one in ``"open-loop"``.
         zmp_planned: the planner's ZMP (m).

@@ -44,6 +44,7 @@ import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
 from rtgait.core.geometry.footsteps import mean_heading
+from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.model import RobotModel
 
 __all__ = ["IKErrors", "IKTargets", "IKWeights", "WholeBodyIK"]
@@ -53,23 +54,6 @@ _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 # torso orientation 15:18, pelvis orientation 18:21.
 _N_TASKS = 21
 _dot, _fromiter = np.dot, np.fromiter
-
-
-class IKTargets(NamedTuple):
-    """What the robot must do at one tick (world frame).
-
-    Attributes:
-        cog: COG position ``(x, y, z)`` (m).
-        left_foot: left sole point ``(x, y, z, yaw)`` (m, rad); the sole is level.
-        right_foot: right sole point ``(x, y, z, yaw)`` (m, rad).
-        lean: the upper body's lean, a rotation vector (rad, world frame) applied to the upright torso and pelvis
-            targets (the hip strategy, :mod:`rtgait.core.laws.hip_strategy`); ``None``: upright.
-    """
-
-    cog: np.ndarray | Sequence[float]
-    left_foot: np.ndarray | Sequence[float]
-    right_foot: np.ndarray | Sequence[float]
-    lean: Sequence[float] | None = None
 
 
 class IKErrors(NamedTuple):

@@ -16,8 +16,9 @@ import numpy as np
 from rtgait.core.analysis.rollout import Rollout
 from rtgait.core.planner.config import PlannerConfig, VelocityLimits
 from rtgait.core.planner.online import SAMPLE_FIELDS
+from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.description import RobotError
-from rtgait.robot.ik import IKTargets, WholeBodyIK
+from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import BASE_COLUMNS, RobotModel
 from rtgait.scenario.scenario import Scenario
 

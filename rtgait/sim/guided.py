@@ -35,6 +35,7 @@ from rtgait.control.controller import ControllerOptions, WalkingController, make
 from rtgait.core.laws.guidance import HandGuide
 from rtgait.core.pendulum.loop import Controller
 from rtgait.core.planner.online import OnlinePlanner, VelocityCommand
+from rtgait.robot.controller_info import robot_info
 from rtgait.scenario.scenario import GuidePath, Scenario
 from rtgait.sim.loop import LoopOptions, run_closed_loop
 from rtgait.sim.model import SimModel
@@ -323,7 +324,8 @@ def simulate_guided(
     if path is None:
         raise ValueError(f"scenario {walk.name!r} has no [guide] path")
     level = make_controller(
-        controller, walk.planner_config(), None, walk.sole, sim.robot, dt=sim.control_dt, options=controller_options
+        controller, walk.planner_config(), None, walk.sole, robot_info(sim.robot), dt=sim.control_dt,
+        options=controller_options,
     )
     pull = HandPull(sim, level.planner, path, leash, max_steps=walk.steps, controller=level)
     result = run_closed_loop(sim, level, guided_options(pull, options or LoopOptions()), progress=progress)

@@ -15,7 +15,7 @@ Every control tick (``sim.control_dt``: 1 ms for Talos, 2 ms for G1) of the walk
    the IK's COM and feet targets and the foot force control's ankle tilts;
 4. **IK**: the whole-body IK, warm-started from the previous tick, turns them into joint angles (always one
    Gauss-Newton iteration, so the solution varies smoothly and its finite difference is a clean joint velocity);
-   the ankle tilts are added to the ankle joints (:func:`~rtgait.control.foot_control.add_ankle_offsets`);
+   the ankle tilts are added to the ankle joints (:func:`~rtgait.robot.ankles.add_ankle_offsets`);
 5. those angles and their velocity become the joint references of the PD servos (:mod:`rtgait.sim.actuation`),
    interpolated linearly over the physics substeps of the period, and ``mj_step`` advances the physics by
    ``sim.substeps`` steps, the servo torques recomputed at each.
@@ -50,11 +50,13 @@ from collections.abc import Callable, Sequence
 
 import mujoco
 
-from rtgait.control.controller import ControlEvent, ControllerOptions, RobotInfo, WalkingController
-from rtgait.control.foot_control import FootOffsets, add_ankle_offsets, find_ankle_joints
+from rtgait.control.controller import ControlEvent, ControllerOptions, WalkingController
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.robot.ik import IKTargets, WholeBodyIK
+from rtgait.interface.task_targets import FootOffsets, IKTargets
+from rtgait.robot.ankles import add_ankle_offsets, find_ankle_joints
+from rtgait.robot.controller_info import robot_info
+from rtgait.robot.ik import WholeBodyIK
 from rtgait.sim.actuation import ReferenceInterpolator
 from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Push, Pushes, measure_contacts
 from rtgait.sim.loop_inputs import WalkInputs
@@ -97,7 +99,7 @@ _SUPPORTS = {code: name for name, code in SUPPORT_CODES.items()}
 
 def open_loop_controller(sim: SimModel, planner: OnlinePlanner) -> WalkingController:
     """The ``open-loop`` level around ``planner`` (not started): the plan alone, as the paper assumes."""
-    info = RobotInfo.from_robot(sim.robot)
+    info = robot_info(sim.robot)
     return WalkingController("open-loop", planner, info, sim.control_dt, ControllerOptions())
 
 

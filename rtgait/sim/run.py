@@ -33,6 +33,7 @@ from rtgait.io.sim_files import (
     write_sim_outputs,
     write_sim_replay,
 )
+from rtgait.robot.controller_info import robot_info
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.scenario import Scenario
@@ -221,7 +222,7 @@ def _controller(
     hand its planner and, for a walk by command, the steps after which it stops."""
     strides = walk.strides() if velocity is None else None
     controller = make_controller(
-        level, walk.planner_config(), strides, walk.sole, sim.robot, dt=sim.control_dt, options=options
+        level, walk.planner_config(), strides, walk.sole, robot_info(sim.robot), dt=sim.control_dt, options=options
     )
     if velocity is None:
         return controller, walk.changes, None

@@ -20,7 +20,7 @@ for the state it starts from before integrating it), the same instant as the ZMP
   roll)`` with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` as :mod:`rtgait.sim.measure` does.
 
 The per-foot **contact wrench** and centre of pressure are the controller's own measurement of the tick
-(:class:`~rtgait.sim.measure.Measurement`), which reads the contact forces of the last physics step, i.e. of the
+(:class:`~rtgait.estimation.state.Measurement`), which reads the contact forces of the last physics step, i.e. of the
 state one physics step *before* ``t``: recording them costs nothing (measuring the contacts again at ``t`` would
 cost as much as the controller's whole measurement, a tenth of a tick). They are NaN during the start transition,
 when the controller does not measure yet.
@@ -47,8 +47,8 @@ from rtgait.sim.result import SUPPORT_CODES
 
 if TYPE_CHECKING:
     from rtgait.control.settings import ControlTargets
+    from rtgait.estimation.state import Measurement
     from rtgait.sim.actuation import ReferenceInterpolator
-    from rtgait.sim.measure import Measurement
     from rtgait.sim.model import SimModel
 
 __all__ = ["LEVEL_CODES", "CompleteLog", "TickLog"]

@@ -9,7 +9,8 @@ import pytest
 
 pin = pytest.importorskip("pinocchio")
 
-from rtgait.robot.ik import IKTargets, WholeBodyIK, _yaw_error  # noqa: E402
+from rtgait.interface.task_targets import IKTargets  # noqa: E402
+from rtgait.robot.ik import WholeBodyIK, _yaw_error  # noqa: E402
 from rtgait.robot.model import RobotModel  # noqa: E402
 
 

@@ -6,7 +6,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from rtgait.robot.ik import IKTargets, WholeBodyIK
+from rtgait.interface.task_targets import IKTargets
+from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.lean import hip_strategy_limits, lean_inertia
 from rtgait.robot.model import RobotModel
 

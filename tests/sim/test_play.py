@@ -19,6 +19,7 @@ import pytest
 from rtgait.core.geometry.footsteps import Timing
 from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.walk.walk import VelocityCommand
+from rtgait.robot.controller_info import robot_info
 from rtgait.sim.live import KEYS, CommandLimits, Increments, Pacer, command_after, key_action
 
 RTGAIT = [sys.executable, "-m", "rtgait"]
@@ -241,7 +242,7 @@ def test_the_scene_shows_the_plan_s_footprints_and_the_tick_s_points(talos):
 
     sim = build_sim_model(talos, SimConfig(meshes=False))
     walk = robot_scenario(load_scenario("fig8"), talos)
-    level = make_controller("stabilized", walk.planner_config(), walk.strides(), walk.sole, talos)
+    level = make_controller("stabilized", walk.planner_config(), walk.strides(), walk.sole, robot_info(talos))
     live = LiveWalk(ClosedLoop(sim, level, LoopOptions(start_ramp=0.2, start_hold=0.1), keep=0.0), False, 50.0)
     while live.loop.t < 1.0:  # into step 1's single support
         live.step()

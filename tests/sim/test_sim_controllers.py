@@ -23,7 +23,8 @@ from rtgait.core.geometry.footsteps import SoleRect, Timing
 from rtgait.core.laws.stepping import SteppingLimits
 from rtgait.core.pendulum.loop import controller_config
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
-from rtgait.sim.measure import FootState, Landing, Measurement
+from rtgait.estimation.state import FootState, Landing, Measurement
+from rtgait.robot.controller_info import robot_info
 
 SOLE = SoleRect(front=0.105, back=0.105, inner=0.065, outer=0.065)
 CONFIG = PlannerConfig(
@@ -355,9 +356,10 @@ def test_step_limits_come_from_the_robot_description(talos):
     assert dataclasses.replace(step_limits(info), adapt_timing=True) == adjust
     assert step_limits(info, SteppingLimits()).max_length == 0.35
     # A loaded robot carries its description's table, also through a sole given apart.
-    assert RobotInfo.from_robot(talos).stepping == talos.description.stepping is not None
+    assert robot_info(talos).stepping == talos.description.stepping is not None
     other = SoleRect(0.1, 0.1, 0.06, 0.06)
-    ctl = make_controller("adaptive", CONFIG, None, other, talos, options=ControllerOptions(adapt_timing=True))
+    options = ControllerOptions(adapt_timing=True)
+    ctl = make_controller("adaptive", CONFIG, None, other, robot_info(talos), options=options)
     adjust = ctl.options.step_adjustment
     assert adjust.max_length == talos.description.stepping.max_length and adjust.sole == other
     assert adjust.adapt_timing

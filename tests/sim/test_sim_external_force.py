@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from rtgait.control.external_force import ExternalForce, lean
+from rtgait.robot.controller_info import robot_info
 
 G = 9.81
 
@@ -63,7 +64,7 @@ def pulled(talos, talos_sim, shorten):
     runs = {}
     for told, force in ((False, (15.0, 0.0)), (True, (30.0, 0.0))):
         level = make_controller(
-            "adaptive", walk.planner_config(), walk.strides(), walk.sole, talos, dt=talos_sim.control_dt
+            "adaptive", walk.planner_config(), walk.strides(), walk.sole, robot_info(talos), dt=talos_sim.control_dt
         )
         heights = []
 

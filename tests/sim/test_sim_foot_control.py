@@ -15,12 +15,11 @@ from rtgait.control.foot_control import (
     FootForceControl,
     FootOffsets,
     ZmpSplit,
-    add_ankle_offsets,
-    find_ankle_joints,
     split_zmp,
 )
 from rtgait.core.geometry.footsteps import SoleRect
-from rtgait.sim.measure import FootState
+from rtgait.estimation.state import FootState
+from rtgait.robot.ankles import add_ankle_offsets, find_ankle_joints
 
 SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.05)
 LEFT = (0.0, 0.1, 0.0)

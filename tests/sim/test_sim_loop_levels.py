@@ -16,6 +16,7 @@ pytest.importorskip("pinocchio")
 from rtgait.control.controller import make_controller
 from rtgait.control.level_fade import LEVEL_FADE, fade_weight
 from rtgait.core.pendulum.loop import CONTROLLERS
+from rtgait.robot.controller_info import robot_info
 from rtgait.robot.motion import robot_scenario
 from rtgait.sim.loop import ClosedLoop, LoopOptions
 
@@ -27,7 +28,7 @@ def walk_of(talos, shorten, steps=4):
 
 
 def made(level, walk, talos, dt=0.001):
-    return make_controller(level, walk.planner_config(), walk.strides(), walk.sole, talos, dt=dt)
+    return make_controller(level, walk.planner_config(), walk.strides(), walk.sole, robot_info(talos), dt=dt)
 
 
 @pytest.mark.parametrize(("start", "to"), list(itertools.permutations(CONTROLLERS, 2)))

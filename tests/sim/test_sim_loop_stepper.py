@@ -15,6 +15,7 @@ pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import make_controller
 from rtgait.core.analysis.rollout import ScheduledChange
+from rtgait.robot.controller_info import robot_info
 from rtgait.robot.motion import robot_scenario
 from rtgait.sim.contact import Push
 from rtgait.sim.loop import ClosedLoop, LoopOptions, SimResult, run_closed_loop
@@ -27,7 +28,8 @@ NOT_COMPARED = {"wall_time", "model"}
 def controller(talos, talos_sim, shorten, level="adaptive", steps=3):
     """A controller of ``level`` for fig8 cut to ``steps`` steps (its last one lengthened), as simulate makes it."""
     walk = robot_scenario(shorten("fig8", steps, (ScheduledChange(steps, length=0.12),)), talos)
-    made = make_controller(level, walk.planner_config(), walk.strides(), walk.sole, talos, dt=talos_sim.control_dt)
+    info = robot_info(talos)
+    made = make_controller(level, walk.planner_config(), walk.strides(), walk.sole, info, dt=talos_sim.control_dt)
     return made, walk
 
 
@@ -101,7 +103,8 @@ def test_an_open_ended_walk_by_command_has_bounded_memory(talos, talos_sim):
     from rtgait.scenario.scenario import load_scenario
 
     walk = robot_scenario(load_scenario("fig8"), talos)
-    level = make_controller("adaptive", walk.planner_config(), None, walk.sole, talos, dt=talos_sim.control_dt)
+    info = robot_info(talos)
+    level = make_controller("adaptive", walk.planner_config(), None, walk.sole, info, dt=talos_sim.control_dt)
     level.planner.set_velocity(0.1, 0.0, 0.0)
     with pytest.raises(ValueError, match=r"needs LoopOptions\.stop_after_steps or duration"):
         ClosedLoop(talos_sim, level, QUICK)

@@ -8,7 +8,8 @@ import pytest
 mujoco = pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
-from rtgait.robot.ik import IKTargets, WholeBodyIK  # noqa: E402
+from rtgait.interface.task_targets import IKTargets  # noqa: E402
+from rtgait.robot.ik import WholeBodyIK  # noqa: E402
 from rtgait.sim.loop import measure_contacts  # noqa: E402
 
 
