@@ -26,7 +26,7 @@ from rtgait.core.planner.online import OnlinePlanner
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
-from rtgait.scenario.scenario import load_scenario
+from rtgait.scenario.loading import load_scenario
 
 
 def run(robot_name: str, dt: float, iterations: int, tolerance: float) -> dict:

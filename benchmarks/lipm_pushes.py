@@ -59,7 +59,8 @@ from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.pendulum.loop import CONTROLLERS, DEFAULT_MASS, run_closed_loop
 from rtgait.core.pendulum.plant import Push
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.scenario.scenario import Scenario, load_scenario
+from rtgait.scenario.loading import load_scenario
+from rtgait.scenario.scenario import Scenario
 
 PUSH_DURATION = 0.1
 """Length of every push (s)."""

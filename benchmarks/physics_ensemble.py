@@ -2,7 +2,7 @@
 choice of timestep, contact and servo parameters? (Run on demand, not in tests.)
 
 Each of the paper's cases (fig4, fig6, fig7, fig8; the paper: fig4 loses its balance, the others walk) is walked
-in MuJoCo by :func:`rtgait.sim.run.simulate` under every setting of a fixed, seeded sample of physics settings:
+in MuJoCo by :func:`rtgait.io.sim_run.simulate` under every setting of a fixed, seeded sample of physics settings:
 
 * physics step 1 ms or 0.5 ms (half the settings each; the control period stays the robot's),
 * contact time constant 2-10 ms and damping ratio 1-2 (MuJoCo's ``solref``),
@@ -103,8 +103,8 @@ def _sim(robot_name: str, setting: tuple[tuple[str, float], ...]) -> Any:
 
 def run_one(robot_name: str, controller: str, scenario_name: str, index: int, setting: dict[str, float]) -> dict:
     """Walk one case under one setting (in a worker process); returns its outcome and a few numbers."""
-    from rtgait.scenario.scenario import load_scenario
-    from rtgait.sim.run import mujoco_messages, simulate
+    from rtgait.io.sim_run import mujoco_messages, simulate
+    from rtgait.scenario.loading import load_scenario
 
     robot = _robot(robot_name)
     sim = _sim(robot_name, tuple(sorted(setting.items())))

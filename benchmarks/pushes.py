@@ -175,7 +175,7 @@ def _setup(robot_name: str, scenario_name: str) -> tuple[Any, Any, Any]:
     key = f"{robot_name}|{scenario_name}|{PHYSICS_DT['value']}"
     if key not in _CACHE:
         from rtgait.robot.model import RobotModel
-        from rtgait.scenario.scenario import load_scenario
+        from rtgait.scenario.loading import load_scenario
         from rtgait.sim.model import SimConfig, build_sim_model
 
         robot = RobotModel.load(robot_name)
@@ -194,8 +194,8 @@ def survives(
     """Whether the walk with ``push`` = ``(start, fx, fy)`` (s, N, N; or ``None``) ends at rest without a fall;
     ``options`` are :class:`~rtgait.control.controller.ControllerOptions` fields."""
     from rtgait.control.controller import ControllerOptions
+    from rtgait.io.sim_run import mujoco_messages, simulate
     from rtgait.sim.contact import Push
-    from rtgait.sim.run import mujoco_messages, simulate
 
     robot, sim, scenario = _setup(robot_name, scenario_name)
     pushes = None if push is None else Push(push[0], PUSH_DURATION, (push[1], push[2], 0.0))

@@ -1,6 +1,6 @@
 """Speed of the closed loop in physics: planner + whole-body IK + MuJoCo (run on demand, not in tests).
 
-Walks a built-in scenario (fig8 by default) with the robot in MuJoCo via :func:`rtgait.sim.run.simulate` a few
+Walks a built-in scenario (fig8 by default) with the robot in MuJoCo via :func:`rtgait.io.sim_run.simulate` a few
 times and reports the real-time factor (simulated seconds per wall-clock second) and the wall time per control
 tick; then times the parts of one tick separately on the same walk: the planner's sample, the IK solve, one
 ``mj_step`` (with the IK's joint references replayed; a tick takes ``control_dt / physics_dt`` of them), the
@@ -50,13 +50,13 @@ import numpy as np
 
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.interface.task_targets import IKTargets
+from rtgait.io.sim_run import simulate
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
-from rtgait.scenario.scenario import load_scenario
+from rtgait.scenario.loading import load_scenario
 from rtgait.sim.loop import measure_contacts
 from rtgait.sim.model import SimConfig, build_sim_model
-from rtgait.sim.run import simulate
 
 
 def _step_times(robot: RobotModel, config: SimConfig, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -242,7 +242,7 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
     """One walk of ``--walks`` (a worker's task): its outcome and measures."""
     from rtgait.control.controller import ControllerOptions
     from rtgait.core.walk.walk import CommandClampedWarning
-    from rtgait.sim.run import mujoco_messages
+    from rtgait.io.sim_run import mujoco_messages
 
     robot = RobotModel.load(job["robot"])
     sim_options = job.get("sim_options") or {}

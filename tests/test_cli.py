@@ -15,7 +15,7 @@ import pytest
 from rtgait.cli import plan as plan_command
 from rtgait.cli.main import main
 from rtgait.io.plan_files import plan_files
-from rtgait.scenario.scenario import load_scenario
+from rtgait.scenario.loading import load_scenario
 
 HEAD_LINE = (
     "t,cog_x,cog_y,cog_z,cog_vx,cog_vy,cog_ax,cog_ay,zmp_x,zmp_y,lfoot_x,lfoot_y,lfoot_z,lfoot_yaw,"

@@ -22,7 +22,7 @@ from rtgait.core.analysis.rollout import rollout
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.io.pendulum_run import simulate_pendulum, write_pendulum_outputs
 from rtgait.io.plan_files import write_plan_outputs
-from rtgait.scenario.scenario import load_scenario
+from rtgait.scenario.loading import load_scenario
 from rtgait.viz.figures import DRAW
 from rtgait.viz.pendulum import PendulumRun, draw_pendulum, read_pendulum_run
 from rtgait.viz.run_data import FigureInfo, PlanRun, read_plan_run

@@ -14,7 +14,8 @@ import pytest
 from rtgait.cli.main import main
 from rtgait.core.geometry.footsteps import Footstep, place_footsteps, standing_feet
 from rtgait.scenario.footholds import footstep_plan_text
-from rtgait.scenario.scenario import ScenarioError, load_scenario
+from rtgait.scenario.loading import load_scenario
+from rtgait.scenario.scenario import ScenarioError
 
 HEADER = """name = "free-path"
 connection = "quasi-real-time"

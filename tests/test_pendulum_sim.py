@@ -23,7 +23,7 @@ from rtgait.io.pendulum_run import (
     simulate_pendulum,
     write_pendulum_outputs,
 )
-from rtgait.scenario.scenario import load_scenario
+from rtgait.scenario.loading import load_scenario
 
 
 @pytest.fixture(scope="module")

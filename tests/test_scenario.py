@@ -20,7 +20,8 @@ from rtgait.core.limits import (
     MIN_GRAVITY,
 )
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.scenario.scenario import Scenario, ScenarioError, builtin_scenarios, load_scenario
+from rtgait.scenario.loading import builtin_scenarios, load_scenario
+from rtgait.scenario.scenario import Scenario, ScenarioError
 
 BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "sidestep", "turn")
 

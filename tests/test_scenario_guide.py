@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from rtgait.scenario.scenario import GuidePath, ScenarioError, load_scenario, parse_scenario
+from rtgait.scenario.loading import load_scenario
+from rtgait.scenario.scenario import GuidePath, ScenarioError, parse_scenario
 
 
 def _document(guide: dict) -> dict:

@@ -21,7 +21,7 @@ from rtgait.cli import plan, play, plot, simulate
 from rtgait.cli import sweep as sweep_cli
 from rtgait.cli.common import PROG, RunError, print_error
 from rtgait.outputs import OutputError
-from rtgait.scenario.scenario import builtin_scenarios
+from rtgait.scenario.loading import builtin_scenarios
 
 # A value that starts like a negative number ("-0.1,0,0", "-1e-3", "-inf"); argparse would take it for an option.
 _NEGATIVE_VALUE = re.compile(r"-(\d|\.\d|inf|nan)", re.IGNORECASE)

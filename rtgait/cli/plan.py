@@ -26,7 +26,8 @@ from rtgait.core.planner.online import OnlinePlanner
 from rtgait.io.plan_files import plan_files, plan_report, write_plan_outputs
 from rtgait.outputs import OutputError, check_destination, write_text_atomic
 from rtgait.scenario.footholds import footstep_plan_text
-from rtgait.scenario.scenario import Scenario, ScenarioError, load_scenario
+from rtgait.scenario.loading import load_scenario
+from rtgait.scenario.scenario import Scenario, ScenarioError
 
 PROGRESS_MIN_TICKS = 50_000
 """Below this many ticks a rollout takes well under a second: a progress bar would only flicker."""

@@ -10,7 +10,8 @@ from typing import TYPE_CHECKING, Any
 
 from rtgait.cli.common import PROG, RunError, load_robot, robot_walk
 from rtgait.robot.controller_info import robot_info
-from rtgait.scenario.scenario import Scenario, ScenarioError, load_scenario
+from rtgait.scenario.loading import load_scenario
+from rtgait.scenario.scenario import Scenario, ScenarioError
 
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
@@ -108,11 +109,11 @@ def _live_walk(scenario: Scenario, by_command: bool, robot: RobotModel, level: s
 ]:  # fmt: skip
     """The controller, the closed loop and the live walk of ``scenario`` on ``robot``."""
     from rtgait.control.controller import make_controller
+    from rtgait.io.sim_run import planned_walk
     from rtgait.robot.motion import whole_body_motion
     from rtgait.sim.live import LiveWalk
     from rtgait.sim.loop import ClosedLoop, LoopOptions
     from rtgait.sim.model import build_sim_model
-    from rtgait.sim.run import planned_walk
 
     walk = robot_walk(scenario, robot)
     if not by_command:  # as simulate does: a walk the robot cannot reach is refused before it starts
@@ -144,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
     except DisplayError as error:
         raise RunError(str(error)) from None
     robot = load_robot(args.robot)
-    from rtgait.sim.run import mujoco_messages
+    from rtgait.io.sim_run import mujoco_messages
 
     live, walk = _live_walk(scenario, by_command, robot, args.controller, args.push_force)
     if not args.quiet:

@@ -28,7 +28,8 @@ from rtgait.cli.common import (
 )
 from rtgait.io.plan_files import pendulum_report
 from rtgait.outputs import check_destination, staged_outputs
-from rtgait.scenario.scenario import Scenario, ScenarioError, load_scenario
+from rtgait.scenario.loading import load_scenario
+from rtgait.scenario.scenario import Scenario, ScenarioError
 
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
@@ -178,8 +179,8 @@ def run(args: argparse.Namespace) -> int:
     controller = args.controller or "adaptive"
     velocity, schedule = _velocities(args.velocity)
     try:
+        from rtgait.io.sim_run import mujoco_messages, planned_walk
         from rtgait.robot.motion import whole_body_motion
-        from rtgait.sim.run import mujoco_messages, planned_walk
     except ImportError:
         raise RunError("simulate needs MuJoCo and Pinocchio: pip install 'rtgait[robot,sim]'") from None
     pushes = _check_simulation(args, scenario, velocity, out)
@@ -247,8 +248,8 @@ def _check_periods(control_dt: float | None, physics_dt: float | None) -> None:
 
 def _physics_config(robot: RobotModel, control_dt: float | None, physics_dt: float | None) -> SimConfig:
     """The physics parameters with the periods asked for, checked against the robot's own control period."""
+    from rtgait.io.sim_run import sim_config
     from rtgait.sim.actuation import substeps
-    from rtgait.sim.run import sim_config
 
     config = sim_config(None, control_dt, physics_dt)
     actuation = robot.description.actuation
@@ -334,8 +335,8 @@ def _check_simulation(
 ) -> list[Push]:  # velocity: the first command, enough to tell a walk by command
     """Everything about a simulation that can be checked before loading the robot; returns the pushes."""
     from rtgait.io.sim_files import sim_figure_file
-    from rtgait.io.sim_log import LOG_FILE, parquet_available
-    from rtgait.sim.run import simulated_time
+    from rtgait.io.sim_run import simulated_time
+    from rtgait.sim.log_file import LOG_FILE, parquet_available
 
     run_time = simulated_time(scenario, velocity=velocity)
     check_run_length(run_time, args.physics_dt or 0.001)
@@ -365,8 +366,8 @@ def _physics(
     extra: dict[str, Any],
 ) -> SimResult:
     """Walk ``scenario`` (as ``robot`` walks it: ``walk``) in MuJoCo; a guided walk's outcome goes into ``extra``."""
+    from rtgait.io.sim_run import loop_options, simulate
     from rtgait.sim.model import build_sim_model
-    from rtgait.sim.run import loop_options, simulate
 
     sim = build_sim_model(robot, config)
     if scenario.guide is None or velocity is not None:
@@ -391,7 +392,7 @@ def _write_simulation(
     extra: dict[str, Any],
 ) -> dict[str, Any]:
     """Write the simulation's outputs into a staging folder, then replace the previous ones in ``out`` together."""
-    from rtgait.sim.run import write_sim_outputs
+    from rtgait.io.sim_run import write_sim_outputs
 
     with staged_outputs(out) as staging:
         summary = write_sim_outputs(

@@ -4,7 +4,7 @@ Runs every case of the sweep file ``SPEC`` (:mod:`rtgait.sweep.spec`, ``docs/swe
 this process, batched (:mod:`rtgait.sweep.pendulum`); with ``--physics`` also in MuJoCo, in worker processes
 (``--workers N``, default one per core) or on a Dask cluster (``--scheduler ADDRESS``, or ``local`` for a
 ``LocalCluster``). Writes ``DIR/results.csv``, ``DIR/results.parquet``, ``DIR/sweep.json`` and the map
-``DIR/map.png`` / ``map.pdf`` (:mod:`rtgait.viz.maps`). A sweep run again into the same ``DIR`` continues where it
+``DIR/map.png`` / ``map.pdf`` (:mod:`rtgait.sweep.maps`). A sweep run again into the same ``DIR`` continues where it
 stopped (:mod:`rtgait.sweep.store`).
 
 Bad input (the file, an option, more cases than the limits, an unreachable scheduler) raises ``ValueError`` with one
@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
         if executor is not None:
             executor.close()
     if figures:
-        from rtgait.viz.maps import write_map
+        from rtgait.sweep.maps import write_map
 
         write_map(out)
     if not args.quiet:

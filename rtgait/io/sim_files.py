@@ -1,4 +1,4 @@
-"""The files of a walk in physics: ``sim.csv``, ``sim.parquet`` (the complete log, :mod:`rtgait.io.sim_log`),
+"""The files of a walk in physics: ``sim.csv``, ``sim.parquet`` (the complete log, :mod:`rtgait.sim.log_file`),
 ``summary.json``, the ZMP figure, the 3D replay, and the lines ``rtgait simulate`` prints about them.
 
 Every file is written to a temporary name first and renamed when complete (:mod:`rtgait.outputs`). Times are on the
@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from rtgait.io.sim_log import LOG_FILE, parquet_available, write_sim_log
 from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.robot.model import RobotModel
+from rtgait.sim.log_file import LOG_FILE, parquet_available, write_sim_log
 from rtgait.sim.result import SimResult
 
 __all__ = [
@@ -196,7 +196,7 @@ def write_sim_outputs(
             needs meshcat).
         sole: the replay's footprint rectangle (m): the sole the walk was planned with.
         background: the replay's background, ``"sky"`` or ``"white"``.
-        log: also write ``sim.parquet``, the complete per-tick log (:mod:`rtgait.io.sim_log`, ``docs/logs.md``).
+        log: also write ``sim.parquet``, the complete per-tick log (:mod:`rtgait.sim.log_file`, ``docs/logs.md``).
 
     Returns:
         The summary, also written as ``summary.json``: :meth:`SimResult.summary` (``fell``, ``fall_time``,

@@ -66,7 +66,6 @@ import itertools
 import math
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from rtgait.core.analysis.rollout import ScheduledChange
@@ -112,8 +111,6 @@ __all__ = [
     "GuidePath",
     "Scenario",
     "ScenarioError",
-    "builtin_scenarios",
-    "load_scenario",
     "parse_scenario",
 ]
 
@@ -131,10 +128,9 @@ _LENGTH_BOUNDS = (-MAX_STRIDE, MAX_STRIDE)
 _WIDTH_BOUNDS = (0.0, MAX_STRIDE)
 _MASS_BOUNDS = (1.0, 500.0)  # kg: from a toy biped to the heaviest humanoid built
 
-
-
-
-_FILES = TomlFiles(kind="scenario", folder="scenarios", error=ScenarioError)
+SCENARIO_FILES = TomlFiles(kind="scenario", folder="scenarios", error=ScenarioError)
+"""The scenario TOML files: the built-in ones by name, any other by path; their readers and checks."""
+_FILES = SCENARIO_FILES
 
 
 @dataclass(frozen=True)
@@ -459,23 +455,3 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
 
 
 # ----- finding scenarios ----------------------------------------------------------------------------------------
-
-
-def builtin_scenarios() -> dict[str, str]:
-    """Built-in scenario names mapped to their one-line descriptions."""
-    return {name: load_scenario(name).description for name in _FILES.builtin_names()}
-
-
-def load_scenario(name_or_path: str | Path) -> Scenario:
-    """Load a built-in scenario by name, or any scenario TOML file by path; a file with ``[[footstep]]``
-    entries is a footstep plan (:mod:`rtgait.scenario.footholds`).
-
-    A string that is a built-in name wins over a file of the same name in the current folder; anything that
-    looks like a path (a ``.toml`` suffix, a folder separator, or an existing file) is read as a file.
-    """
-    document = _FILES.load(name_or_path)
-    if "footstep" in document.data:
-        from rtgait.scenario.footholds import parse_footstep_plan  # it builds on this module
-
-        return parse_footstep_plan(document.data, document.source)
-    return parse_scenario(document.data, document.source)

@@ -16,9 +16,9 @@ Modules (import them directly; this package imports nothing, so importing it nee
   :mod:`rtgait.sim.loop_options`, its record, whole or a ring, in :mod:`rtgait.sim.loop_record`, pushes given live
   in :mod:`rtgait.sim.loop_push`; level switches fade in :mod:`rtgait.control.level_fade`);
   :mod:`rtgait.sim.contact`: the per-tick contact record, falls, landings, pushes; :mod:`rtgait.sim.tick_log`: the
-  complete per-tick log (velocities, wrenches, targets), written as ``sim.parquet`` by :mod:`rtgait.io.sim_log`;
+  complete per-tick log (velocities, wrenches, targets), written as ``sim.parquet`` by :mod:`rtgait.sim.log_file`;
   :mod:`rtgait.sim.result`: ``SimResult`` and its measures (ZMP errors, slip, rest).
-* :mod:`rtgait.sim.run`: ``simulate(scenario, robot, controller=...)`` for the CLI; :mod:`rtgait.io.sim_files`
+* :mod:`rtgait.io.sim_run`: ``simulate(scenario, robot, controller=...)`` for the CLI; :mod:`rtgait.io.sim_files`
   (``sim.csv``, ``summary.json``, the replay, the printed summary) and :mod:`rtgait.viz.sim_figure` (``zmp_sim``).
 * :mod:`rtgait.sim.live`: ``rtgait play``, the walk in real time in MuJoCo's viewer driven from the keyboard (the
   viewer, its markers and text in :mod:`rtgait.viz.live_view`).

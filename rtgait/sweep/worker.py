@@ -1,5 +1,5 @@
 """One physics case in a process of its own: ``python -m rtgait.sweep.worker`` reads a job (JSON) on stdin, walks
-it in MuJoCo with :func:`rtgait.sim.run.simulate` and prints the outcome as one JSON line on stdout.
+it in MuJoCo with :func:`rtgait.io.sim_run.simulate` and prints the outcome as one JSON line on stdout.
 
 A job is ``{"document": <base scenario's TOML document>, "values": <axis values>, "robot": NAME, "controller":
 NAME or null}``: the scenario travels whole, so a worker on another machine needs rtgait, not the sweep's files.
@@ -20,14 +20,14 @@ CONTROLLERS = ("open-loop", "stabilized", "adaptive")
 
 
 def simulate_options(controller: str | None) -> dict[str, Any]:
-    """Keyword arguments of :func:`rtgait.sim.run.simulate` for ``controller`` (``None``: its default level)."""
+    """Keyword arguments of :func:`rtgait.io.sim_run.simulate` for ``controller`` (``None``: its default level)."""
     return {} if controller is None else {"controller": controller}
 
 
 def run_job(job: dict[str, Any]) -> dict[str, Any]:
     """Walk one case in physics; its outcome (``fell``, ``tipped``, ``fall_time`` s, ``steps_completed``,
     ``steps_planned``)."""
-    from rtgait.sim.run import mujoco_messages, simulate
+    from rtgait.io.sim_run import mujoco_messages, simulate
     from rtgait.sweep.spec import case_scenario, scenario_from_document
 
     scenario = case_scenario(scenario_from_document(job["document"]), job["values"])

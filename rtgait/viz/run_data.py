@@ -66,7 +66,7 @@ PLAN_CSV = "trajectory.csv"
 SIM_CSV = "sim.csv"
 SIM_PARQUET = "sim.parquet"
 SUMMARY = "summary.json"
-# Columns only the MuJoCo loop writes into its sim.csv (rtgait.sim.run.SIM_CSV_COLUMNS): a run that has them is a
+# Columns only the MuJoCo loop writes into its sim.csv (rtgait.io.sim_run.SIM_CSV_COLUMNS): a run that has them is a
 # simulation of the robot, whose figure is not drawn here.
 _MUJOCO_COLUMNS = ("base_qw", "left_contact")
 

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rtgait.core.geometry.footsteps import SoleRect
-from rtgait.io.sim_log import LOG_FILE, parquet_available, read_sim_log
+from rtgait.sim.log_file import LOG_FILE, parquet_available, read_sim_log
 from rtgait.viz.run_data import SIM_CSV, RunFilesError, read_floats, read_summary, read_table, require_keys
 
 if TYPE_CHECKING:

@@ -20,7 +20,8 @@ from rtgait.core import (
 from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, evaluate_walks
 from rtgait.core.planner.auto import auto_options, window
 from rtgait.io.plan_files import plan_report, summarize
-from rtgait.scenario.scenario import ScenarioError, load_scenario, parse_scenario
+from rtgait.scenario.loading import load_scenario
+from rtgait.scenario.scenario import ScenarioError, parse_scenario
 
 SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.07)
 

@@ -23,7 +23,7 @@ from rtgait.core.pendulum.loop import (
 )
 from rtgait.core.pendulum.plant import DEFAULT_MAX_LEAN, Push
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.scenario.scenario import load_scenario
+from rtgait.scenario.loading import load_scenario
 
 DT = 0.005
 

@@ -11,7 +11,7 @@ from rtgait.core import rollout
 from rtgait.core.analysis.batch import StraightWalk
 from rtgait.core.analysis.preview import PREVIEW_PERIOD, PreviewPlanner, evaluate_preview, preview_gains
 from rtgait.core.planner.sample import SAMPLE_FIELDS
-from rtgait.scenario.scenario import load_scenario
+from rtgait.scenario.loading import load_scenario
 from rtgait.viz.run_data import margin_marker
 
 

@@ -31,7 +31,7 @@ def planned_walk(robot: Any, scenario_name: str = "fig8", **changes: Any) -> Any
     from rtgait.core.analysis.rollout import rollout
     from rtgait.core.planner.online import OnlinePlanner
     from rtgait.robot.motion import robot_scenario
-    from rtgait.scenario.scenario import load_scenario
+    from rtgait.scenario.loading import load_scenario
 
     scenario = dataclasses.replace(robot_scenario(load_scenario(scenario_name), robot), **changes)
     planner = OnlinePlanner(scenario.planner_config(), scenario.strides())

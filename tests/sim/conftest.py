@@ -29,7 +29,7 @@ def talos_sim(talos: Any) -> Any:
 
 def short_scenario(name: str, steps: int, changes: tuple = ()) -> Any:
     """A built-in scenario cut to ``steps`` steps (with ``changes`` instead of its own) and a 1 s settle."""
-    from rtgait.scenario.scenario import load_scenario
+    from rtgait.scenario.loading import load_scenario
 
     scenario = load_scenario(name)
     timing = dataclasses.replace(scenario.timing, settle=1.0)
@@ -46,7 +46,7 @@ def shorten() -> Any:
 def short_walk(talos: Any, talos_sim: Any) -> Any:
     """fig8's timing (quasi-real-time, T_s 0.7 s, T_dbl 0.1 s) for 3 steps of 0.05 m, then a 0.15 m one."""
     from rtgait.core.analysis.rollout import ScheduledChange
-    from rtgait.sim.run import simulate
+    from rtgait.io.sim_run import simulate
 
     scenario = short_scenario("fig8", 4, (ScheduledChange(4, length=0.15),))
     return scenario, simulate(scenario, talos, sim=talos_sim)

@@ -234,7 +234,7 @@ def test_the_scene_shows_the_plan_s_footprints_and_the_tick_s_points(talos):
 
     from rtgait.control.controller import make_controller
     from rtgait.robot.motion import robot_scenario
-    from rtgait.scenario.scenario import load_scenario
+    from rtgait.scenario.loading import load_scenario
     from rtgait.sim.live import LiveWalk
     from rtgait.sim.loop import ClosedLoop, LoopOptions
     from rtgait.sim.model import SimConfig, build_sim_model

@@ -14,12 +14,12 @@ import pytest
 mujoco = pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
+from rtgait.io.sim_run import simulate  # noqa: E402
 from rtgait.robot.description import DEFAULT_NATURAL_FREQUENCY, ActuationSpec, RobotError, load_robot  # noqa: E402
 from rtgait.robot.model import RobotModel  # noqa: E402
 from rtgait.sim.actuation import resolve_actuation, substeps  # noqa: E402
 from rtgait.sim.loop import LoopOptions  # noqa: E402
 from rtgait.sim.model import SETTLE_TIME, SimConfig, build_sim_model  # noqa: E402
-from rtgait.sim.run import simulate  # noqa: E402
 
 TALOS_TEXT = resources.files("rtgait").joinpath("robots", "talos.toml").read_text(encoding="utf-8")
 BASE_TEXT = TALOS_TEXT[: TALOS_TEXT.index("[actuation]")]  # Talos without its own [actuation] table

@@ -18,7 +18,7 @@ from rtgait.sim.result import FALL_MARGIN
 def blended_walk(short_walk, talos, talos_sim):
     """The shared short walk again with ``ControllerOptions(anchor_blend=0.04)`` (off by default)."""
     from rtgait.control.controller import ControllerOptions
-    from rtgait.sim.run import simulate
+    from rtgait.io.sim_run import simulate
 
     scenario, _ = short_walk
     return simulate(scenario, talos, sim=talos_sim, controller_options=ControllerOptions(anchor_blend=0.04))

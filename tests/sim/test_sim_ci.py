@@ -15,10 +15,10 @@ pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import ControllerOptions
 from rtgait.core.pendulum.loop import CONTROLLERS
-from rtgait.scenario.scenario import load_scenario
+from rtgait.io.sim_run import simulate
+from rtgait.scenario.loading import load_scenario
 from rtgait.sim.contact import Push
 from rtgait.sim.loop import LoopOptions
-from rtgait.sim.run import simulate
 
 ROBOTS = ("talos", "g1")
 TILT_LIMIT = 0.1

@@ -67,8 +67,8 @@ def test_unknown_scenario(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
 @pytest.fixture
 def no_physics(monkeypatch: pytest.MonkeyPatch) -> None:
     """Fail the test if a closed loop starts: the input must be refused before."""
+    import rtgait.io.sim_run as run
     import rtgait.sim.guided as guided
-    import rtgait.sim.run as run
 
     def simulated(*args: object, **kwargs: object) -> None:
         raise AssertionError("the simulation started before the input was refused")
@@ -171,7 +171,7 @@ def test_mujoco_warnings_are_collected_instead_of_written_to_the_working_folder(
     import mujoco
     import numpy as np
 
-    from rtgait.sim.run import mujoco_messages
+    from rtgait.io.sim_run import mujoco_messages
 
     monkeypatch.chdir(tmp_path)
     model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body>"

@@ -10,7 +10,8 @@ pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
 from rtgait.robot.motion import robot_scenario
-from rtgait.scenario.scenario import GuidePath, load_scenario
+from rtgait.scenario.loading import load_scenario
+from rtgait.scenario.scenario import GuidePath
 from rtgait.sim.guided import Leash, simulate_guided
 from rtgait.sim.loop import LoopOptions
 

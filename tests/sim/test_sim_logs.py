@@ -25,8 +25,8 @@ import pyarrow.parquet as pq
 from scenario_files import scenario_text
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
-from rtgait.io.sim_log import LOG_FORMAT, log_columns, read_sim_log
-from rtgait.scenario.scenario import load_scenario
+from rtgait.scenario.loading import load_scenario
+from rtgait.sim.log_file import LOG_FORMAT, log_columns, read_sim_log
 from rtgait.viz.sim_figure import sole_extent
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "logs.md"
@@ -36,8 +36,8 @@ PUSH_START, PUSH_DURATION, PUSH_FORCE = 1.0, 0.1, (50.0, 0.0, 0.0)
 @pytest.fixture(scope="module")
 def logged(talos: Any, talos_sim: Any, tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Path]:
     """The short walk in memory, and the folder its outputs were written to."""
+    from rtgait.io.sim_run import simulate, write_sim_outputs
     from rtgait.sim.loop import Push
-    from rtgait.sim.run import simulate, write_sim_outputs
 
     folder = tmp_path_factory.mktemp("logged")
     path = folder / "short.toml"
@@ -313,10 +313,10 @@ def test_without_pyarrow_simulate_says_so_in_one_line_and_writes_the_rest(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     import rtgait.io.sim_files
-    import rtgait.io.sim_log
+    import rtgait.sim.log_file
     from rtgait.cli.main import main
 
-    for module in (rtgait.io.sim_log, rtgait.io.sim_files):
+    for module in (rtgait.sim.log_file, rtgait.io.sim_files):
         monkeypatch.setattr(module, "parquet_available", lambda: False)
     path = tmp_path / "tiny.toml"
     path.write_text(scenario_text(name="tiny", single_support=0.7, double_support=0.1, dt=0.005, steps=1,

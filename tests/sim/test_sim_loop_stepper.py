@@ -100,7 +100,7 @@ def test_a_ring_record_keeps_the_last_ticks_of_the_whole_record(talos, talos_sim
 
 def test_an_open_ended_walk_by_command_has_bounded_memory(talos, talos_sim):
     """No end, no stop: it walks as long as it is stepped, the record stays at its ring's size."""
-    from rtgait.scenario.scenario import load_scenario
+    from rtgait.scenario.loading import load_scenario
 
     walk = robot_scenario(load_scenario("fig8"), talos)
     info = robot_info(talos)

@@ -15,7 +15,7 @@ pytest.importorskip("meshcat")
 import pinocchio as pin
 
 from rtgait.cli.main import main
-from rtgait.sim.run import replay_paths
+from rtgait.io.sim_run import replay_paths
 
 
 def test_replay_configurations_put_the_soles_where_mujoco_had_them(talos, short_walk):

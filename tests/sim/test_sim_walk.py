@@ -15,9 +15,9 @@ pytest.importorskip("pinocchio")
 
 from rtgait.core.analysis.rollout import ScheduledChange, rollout
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.io.sim_run import SIM_CSV_COLUMNS, sim_csv_columns, simulate, write_sim_outputs
 from rtgait.robot.motion import robot_scenario
 from rtgait.sim.loop import LoopOptions, Push, run_closed_loop
-from rtgait.sim.run import SIM_CSV_COLUMNS, sim_csv_columns, simulate, write_sim_outputs
 
 
 def planned(scenario, robot):

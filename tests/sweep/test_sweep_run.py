@@ -148,7 +148,7 @@ def test_dying_cases_are_retried_once_and_hanging_ones_killed(monkeypatch, tmp_p
 
 def test_the_map_is_drawn(spec_file, tmp_path):
     pytest.importorskip("matplotlib")
-    from rtgait.viz.maps import plot_map
+    from rtgait.sweep.maps import plot_map
 
     path = spec_file(SMALL.replace('[0.1, 0.2]', '[0.05, 0.1, 0.2, 0.5]'))
     sweep([str(path), "--out", str(tmp_path / "out"), "--quiet"])

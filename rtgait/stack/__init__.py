@@ -1,0 +1,1 @@
+"""One control tick: estimator -> walking controller -> whole-body IK -> joint command."""
