@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 
 from rtgait.core import OnlinePlanner, Timing, rollout  # noqa: E402
 from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, walk_family  # noqa: E402
-from rtgait.scenario.scenario import load_scenario  # noqa: E402
+from rtgait.scenario.loading import load_scenario  # noqa: E402
 from rtgait.viz.run_data import margin_marker  # noqa: E402
 
 MODES = ("real-time", "quasi-real-time")

@@ -61,7 +61,8 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from rtgait.core.geometry.footsteps import Side
+from rtgait.estimation.feet import FeetFromWrenches
+from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
 from rtgait.estimation.state import FootState, Landing, Measurement
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
@@ -76,12 +77,6 @@ __all__ = [
     "Measurement",
     "SimMeasurer",
 ]
-
-DEFAULT_LANDING_FRACTION = 25.0 / (90.0 * 9.81)
-"""Landing threshold as a fraction of the robot's weight: auto_stabilizer's 25 N on a 90 kg robot (2.8 %)."""
-
-DEFAULT_MIN_UNLOADED_TIME = 0.05
-"""Least time in the air (s) before a load counts as a landing; shorter unloading is a scuff at lift-off."""
 
 _NAN2 = (math.nan, math.nan)
 _new_tuple = tuple.__new__  # a NamedTuple made from a tuple at once, without its generated __new__'s argument parsing
@@ -138,17 +133,14 @@ class SimMeasurer:
         if not weight > 0.0:
             raise ValueError(f"the robot's weight must be > 0 N, got {weight} (mass {self.mass} kg)")
         self.weight = weight
-        self.landing_force = DEFAULT_LANDING_FRACTION * weight if landing_force is None else float(landing_force)
-        self.release_force = 0.5 * self.landing_force if release_force is None else float(release_force)
-        if not 0.0 <= self.release_force <= self.landing_force:
-            raise ValueError(
-                f"release_force must be within [0, landing_force = {self.landing_force:g}] N, got {self.release_force}"
-            )
-        if not (math.isfinite(min_unloaded_time) and min_unloaded_time >= 0.0):
-            raise ValueError(f"min_unloaded_time must be a duration >= 0 s, got {min_unloaded_time}")
-        self.min_unloaded_time = float(min_unloaded_time)
+        landing = DEFAULT_LANDING_FRACTION * weight if landing_force is None else float(landing_force)
+        release = 0.5 * landing if release_force is None else float(release_force)
+        load = LoadHysteresis(landing, release, min_unloaded_time)
+        self.landing_force, self.release_force = load.landing_force, load.release_force
+        self.min_unloaded_time = load.min_unloaded_time
         self.min_force = 1e-3 * weight if min_force is None else float(min_force)
         self.ground_height = float(ground_height)
+        self._feet = FeetFromWrenches(load, self.min_force, self.ground_height)
 
         # geom id -> 1 (left foot), 2 (right foot), -1 (another part of the robot), 0 (the environment).
         root = int(model.body_rootid[self.base_body])
@@ -184,9 +176,7 @@ class SimMeasurer:
 
     def reset(self) -> None:
         """Forget the feet's load states: the next :meth:`measure` takes them as they are, without landings."""
-        self._loaded = [False, False]
-        self._unloaded_since = [-math.inf, -math.inf]
-        self._primed = False
+        self._feet.load.reset()
 
     def measure(
         self,
@@ -271,30 +261,20 @@ class SimMeasurer:
                     rmz += mz
                     right_count += 1
 
-        h = self.ground_height
-        min_force = self.min_force
-        left_foot, left_landing = self._foot(
+        feet = self._feet
+        left_foot, left_landing = feet.foot(
             0, t, lx, ly, lz, lmx, lmy, lmz, left_count, sites_position[self.left_site],
             sites_rotation[self.left_site],
         )  # fmt: skip
-        right_foot, right_landing = self._foot(
+        right_foot, right_landing = feet.foot(
             1, t, rx, ry, rz, rmx, rmy, rmz, right_count, sites_position[self.right_site],
             sites_rotation[self.right_site],
         )  # fmt: skip
         landings = _NO_LANDINGS
         if left_landing is not None or right_landing is not None:
             landings = tuple(landing for landing in (left_landing, right_landing) if landing is not None)
-        self._primed = True
-        # ZMP moments about (0, 0, h): (o - O) x F + tau_o per foot, in the order the feet are summed.
-        zmp_mx = zmp_my = total = 0.0
-        for foot in (left_foot, right_foot):
-            ox, oy, oz, _ = foot.pose
-            fx, fy, fz = foot.force
-            tx, ty, _ = foot.torque
-            zmp_mx += (oy * fz - (oz - h) * fy) + tx
-            zmp_my += ((oz - h) * fx - ox * fz) + ty
-            total += fz
-        zmp = (-zmp_my / total, zmp_mx / total) if total > min_force else _NAN2
+        feet.load.prime()
+        zmp, total = feet.zmp(left_foot, right_foot)
         if not velocities:
             mujoco.mj_subtreeVel(model, data)
         if data is not self._rows_of:  # the base's rows of this data's fixed-size arrays, as views kept
@@ -309,64 +289,3 @@ class SimMeasurer:
             (t, (cx, cy, cz), (vx, vy, vz), (cx + vx / w, cy + vy / w), zmp, total, left_foot, right_foot, landings,
              other),
         )  # fmt: skip
-
-    def _foot(
-        self, index: int, t: float, fx: float, fy: float, fz: float, mx: float, my: float, mz: float, count: int,
-        position: list[float], m: list[float],
-    ) -> tuple[FootState, Landing | None]:
-        """One foot's state from its summed force ``(fx, fy, fz)`` (N) and moment about the world origin (N m), and
-        its sole frame's position and row-major rotation; and its landing at this tick, if it landed."""
-        ox, oy, oz = position
-        # Moment about the sole origin: tau_o = M - o x F.
-        tx = mx - (oy * fz - oz * fy)
-        ty = my - (oz * fx - ox * fz)
-        tz = mz - (ox * fy - oy * fx)
-        # The sole frame's components: R^T v, R row-major (m[3 r + c] = R[r][c]).
-        m0, m1, m2, m3, m4, m5, m6, m7, m8 = m
-        lfz = m2 * fx + m5 * fy + m8 * fz
-        if lfz > self.min_force:
-            ltx = m0 * tx + m3 * ty + m6 * tz
-            lty = m1 * tx + m4 * ty + m7 * tz
-            cx, cy = -lty / lfz, ltx / lfz
-            cop_local = (cx, cy)
-            cop = (ox + m0 * cx + m1 * cy, oy + m3 * cx + m4 * cy)
-        else:
-            cop_local = cop = _NAN2
-        # R = Rz(yaw) Ry(pitch) Rx(roll); the tilt is the angle between the sole normal and the vertical.
-        yaw = math.atan2(m3, m0)
-        # max(-1, min(1, v)) written as the builtins decide it (`b if b < a else a` for min(a, b), `b if b > a
-        # else a` for max: the same result, NaN included), a call each costing more than the trigonometry.
-        sine = -m6 if -m6 < 1.0 else 1.0
-        pitch = math.asin(sine if sine > -1.0 else -1.0)
-        roll = math.atan2(m7, m8)
-        cosine = m8 if m8 < 1.0 else 1.0
-        tilt = math.acos(cosine if cosine > -1.0 else -1.0)
-        loaded = self._update_load(index, fz, t)
-        landing = None
-        if loaded is None:
-            loaded = True
-            side: Side = "left" if index == 0 else "right"
-            landing = _new_tuple(Landing, (t, side, ox, oy, oz, yaw, roll, pitch, fz))
-        foot = _new_tuple(
-            FootState,
-            ((fx, fy, fz), (tx, ty, tz), fz, cop, cop_local, (ox, oy, oz, yaw), roll, pitch, tilt, loaded, count),
-        )
-        return foot, landing
-
-    def _update_load(self, index: int, fz: float, t: float) -> bool | None:
-        """The foot's load state after this tick's force ``fz`` (N); ``None`` for a landing (then loaded)."""
-        loaded = self._loaded[index]
-        if loaded:
-            if fz < self.release_force:
-                self._loaded[index] = False
-                self._unloaded_since[index] = t
-                return False
-            return True
-        if fz > self.landing_force:
-            self._loaded[index] = True
-            if self._primed and t - self._unloaded_since[index] >= self.min_unloaded_time:
-                return None
-            return True
-        if not self._primed:
-            self._unloaded_since[index] = t
-        return False

@@ -25,7 +25,7 @@ from rtgait.core.planner.online import CommandClampedWarning, OnlinePlanner  # n
 from rtgait.robot.description import RobotError, load_robot  # noqa: E402
 from rtgait.robot.model import RobotModel  # noqa: E402
 from rtgait.robot.motion import robot_scenario, whole_body_motion  # noqa: E402
-from rtgait.scenario.scenario import load_scenario  # noqa: E402
+from rtgait.scenario.loading import load_scenario  # noqa: E402
 
 LEG_CLEARANCE = 0.005  # m: the legs' meshes at least this far apart along the walk
 STEPS = 6
