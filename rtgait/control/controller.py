@@ -164,7 +164,7 @@ class WalkingController:
 
     # ----- the tick ------------------------------------------------------------------------------------------------
     def tick(self, t: float, measurement: Measurement) -> ControlTargets:
-        """The IK targets at ``t`` (s) for this tick's measurement (:class:`~rtgait.sim.measure.Measurement`)."""
+        """The IK targets at ``t`` (s) for this tick's measurement (:class:`~rtgait.estimation.state.Measurement`)."""
         external = self.external
         leaning = external.active
         if leaning:  # plan and feed back in the frame of the unpulled pendulum (external_force.py)

@@ -1,2 +1,2 @@
-"""From what the robot senses to the walking state a controller acts on: the estimated state types, wrench, CoP and ZMP
-maths, contact and landing detection."""
+"""From what the robot senses to the walking state a controller acts on: the estimator protocol and the ground-truth
+estimator, the state types, the feet's wrench, CoP and ZMP maths, and load and landing detection."""

@@ -1,55 +1,7 @@
-"""What a walking controller measures on the simulated robot, once per control tick, and the landings of its feet.
+"""What a walking controller measures on the simulated robot with the ground-truth estimator: the simulator's truth
+(:mod:`rtgait.sim.ground_truth`) turned into the walking state (:mod:`rtgait.estimation.ground_truth`) in one call.
 
-:class:`SimMeasurer` turns a MuJoCo state into one immutable :class:`Measurement`: per-foot contact wrench, centre of
-pressure (CoP), pose and load, the ZMP of both feet together, the centre of mass (COM) and its velocity, the
-divergent component of motion (DCM), and the landings detected since the last tick.
-
-**Contact wrench of a foot.** For every active contact between a geom of the foot's body and a geom outside the
-robot (the floor), ``mujoco.mj_contactForce`` gives the force in the contact frame, whose first axis is the normal
-pointing from ``geom1`` to ``geom2``; rotated to the world by the contact frame it is the force on ``geom2``
-(``f_world = frame^T f_contact``), and its negative the force on ``geom1``. With contact points ``p_i`` and forces
-``f_i`` on the foot, the wrench at the sole frame origin ``o`` (the sole point, in the world frame) is
-
-    F = sum f_i,        tau_o = sum (p_i - o) x f_i + t_i                                (N, N m)
-
-with ``t_i`` a contact's torsional and rolling torque, rotated likewise (zero for the condim 3 soles). This is what a
-6-axis force sensor in the ankle would report, moved to the sole point. With MuJoCo's default pyramidal cones, a
-condim 3 contact's force is decoded here as ``mj_contactForce`` does, with the same operations in the same order
-(so to the bit): its four edge forces ``e_0..e_3`` in ``efc_force`` give the normal ``e_0 + e_1 + e_2 + e_3`` and
-the tangential components ``(e_0 - e_1) mu_0`` and ``(e_2 - e_3) mu_1``; other contacts are left to MuJoCo.
-
-**Centre of pressure.** In the sole frame (rotation ``R``, axes x forward, y left, z out of the sole), with
-``f = R^T F`` and ``t = R^T tau_o``, the point of the sole plane about which the moment has no tangential part is
-
-    cop_local = (-t_y / f_z, t_x / f_z),        cop = o + R (cop_local, 0)               (m)
-
-It is NaN when the foot carries less than :attr:`SimMeasurer.min_force`.
-
-**ZMP of both feet.** The point of the ground plane ``z = h`` (``ground_height``) about which the net moment of all
-foot contact forces is vertical: with the moments about ``O = (0, 0, h)``, ``tau_O = sum_feet (o - O) x F + tau_o``,
-
-    zmp = (-tau_O,y / F_z, tau_O,x / F_z)                                                 (m)
-
-which for feet flat on the ground is the force-weighted mean of their CoPs. NaN when no foot carries ``min_force``.
-
-**COM and its velocity** come from MuJoCo, not Pinocchio: ``data.subtree_com`` of the floating base (the robot is
-the base's subtree; the world body holds only the floor) is computed by every ``mj_step`` for free, and
-``mujoco.mj_subtreeVel`` (a fraction of a microsecond) fills ``subtree_linvel`` from the same kinematics. Both then
-belong to exactly the state whose contact forces are read, which a Pinocchio evaluation would only reproduce after
-converting ``qpos``/``qvel`` (the model builder takes the inertias from the URDF for both, so they agree to
-round-off; the tests check it). A real robot has neither and estimates them; that estimator is not modelled.
-The DCM is ``xi = c + c'/w`` with the planner's ``w = sqrt(g / z_c)``, so that it compares with the plan's.
-
-**Which state.** ``mj_step`` computes kinematics, contacts and forces at the state it starts from, then integrates.
-Read right after ``mj_step``, every quantity here belongs to that starting state (time ``data.time - timestep``);
-after ``mj_forward`` to ``data.time``. The caller stamps the measurement with its tick time ``t``.
-
-**Loaded feet and landings.** A foot becomes *loaded* when its vertical force exceeds ``landing_force`` and
-*unloaded* when it falls below ``release_force`` (hysteresis: a foot at the threshold does not chatter). A transition
-from unloaded to loaded after at least ``min_unloaded_time`` in the air is a *landing*, reported once with the
-measured sole pose at that tick (:class:`Landing`). The default threshold is auto_stabilizer's early touch-down
-force, 25 N (``FootStepGenerator.h``, ``contactDetectionThreshold``), scaled to the robot's weight from a 90 kg robot:
-2.8 % of the weight; the release force is half of it. A shorter time in the air is a scuff, not a step.
+This is ``--state truth``: the controller sees what a perfect estimator would give it.
 """
 
 from __future__ import annotations
@@ -59,32 +11,21 @@ from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 import mujoco
-import numpy as np
 
-from rtgait.estimation.feet import FeetFromWrenches
-from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
-from rtgait.estimation.state import FootState, Landing, Measurement
-from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
+from rtgait.estimation.ground_truth import GroundTruthEstimator
+from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME
+from rtgait.estimation.state import Measurement
+from rtgait.sim.ground_truth import GroundTruthReader
+from rtgait.sim.step_snapshot import StepSnapshot
 
-if TYPE_CHECKING:  # the model module is being rewritten: only its attribute names are relied on
+if TYPE_CHECKING:
     from rtgait.sim.model import SimModel
 
-__all__ = [
-    "DEFAULT_LANDING_FRACTION",
-    "DEFAULT_MIN_UNLOADED_TIME",
-    "FootState",
-    "Landing",
-    "Measurement",
-    "SimMeasurer",
-]
-
-_NAN2 = (math.nan, math.nan)
-_new_tuple = tuple.__new__  # a NamedTuple made from a tuple at once, without its generated __new__'s argument parsing
-_NO_LANDINGS: tuple[Landing, ...] = ()
+__all__ = ["DEFAULT_LANDING_FRACTION", "DEFAULT_MIN_UNLOADED_TIME", "SimMeasurer"]
 
 
 class SimMeasurer:
-    """Per-tick measurement of a simulated humanoid (module docstring).
+    """The walking state of a simulated humanoid each tick, from the simulator's truth.
 
     Args:
         model: the compiled MuJoCo model.
@@ -94,15 +35,8 @@ class SimMeasurer:
         left_geoms, right_geoms: geoms of each foot that may touch the environment; default every geom of the body
             that carries the sole site.
         mass: robot mass (kg) for the default thresholds; default the base subtree's mass in the model.
-        landing_force: load at which a foot counts as loaded and, after flight, as landed (N); default
-            :data:`DEFAULT_LANDING_FRACTION` of the weight.
-        release_force: load below which a foot counts as unloaded (N); default half of ``landing_force``.
-        min_unloaded_time: least flight time of a landing (s).
-        min_force: least load (N) for which a CoP or a ZMP is given; default 0.1 % of the weight.
-        ground_height: height of the ground plane of the ZMP (m).
-
-    Stateful only through the feet's load states (:meth:`reset` clears them); :meth:`measure` allocates tuples of
-    Python floats and no numpy array.
+        landing_force, release_force, min_unloaded_time, min_force, ground_height: the estimator's
+            (:class:`~rtgait.estimation.ground_truth.GroundTruthEstimator`).
     """
 
     def __init__(
@@ -122,41 +56,34 @@ class SimMeasurer:
         min_force: float | None = None,
         ground_height: float = 0.0,
     ) -> None:
-        if not (math.isfinite(omega) and omega > 0.0):
-            raise ValueError(f"omega must be > 0 (1/s), got {omega}")
-        self.model = model
-        self.base_body = int(base_body)
-        self.left_site, self.right_site = int(left_site), int(right_site)
-        self.omega = float(omega)
-        self.mass = float(model.body_subtreemass[self.base_body]) if mass is None else float(mass)
+        self.reader = GroundTruthReader(
+            model, base_body=base_body, left_site=left_site, right_site=right_site, left_geoms=left_geoms,
+            right_geoms=right_geoms,
+        )  # fmt: skip
+        self.mass = float(model.body_subtreemass[int(base_body)]) if mass is None else float(mass)
         weight = self.mass * float(-model.opt.gravity[2])
         if not weight > 0.0:
             raise ValueError(f"the robot's weight must be > 0 N, got {weight} (mass {self.mass} kg)")
-        self.weight = weight
-        landing = DEFAULT_LANDING_FRACTION * weight if landing_force is None else float(landing_force)
-        release = 0.5 * landing if release_force is None else float(release_force)
-        load = LoadHysteresis(landing, release, min_unloaded_time)
-        self.landing_force, self.release_force = load.landing_force, load.release_force
-        self.min_unloaded_time = load.min_unloaded_time
-        self.min_force = 1e-3 * weight if min_force is None else float(min_force)
-        self.ground_height = float(ground_height)
-        self._feet = FeetFromWrenches(load, self.min_force, self.ground_height)
+        self.estimator = GroundTruthEstimator(
+            omega, weight, landing_force=landing_force, release_force=release_force,
+            min_unloaded_time=min_unloaded_time, min_force=min_force, ground_height=ground_height,
+        )  # fmt: skip
+        self._read, self._update = self.reader.read, self.estimator.update
 
-        # geom id -> 1 (left foot), 2 (right foot), -1 (another part of the robot), 0 (the environment).
-        root = int(model.body_rootid[self.base_body])
-        owner = [-1 if int(model.body_rootid[b]) == root else 0 for b in model.geom_bodyid.tolist()]
-        for code, site, geoms in ((1, self.left_site, left_geoms), (2, self.right_site, right_geoms)):
-            if geoms is None:
-                body = int(model.site_bodyid[site])
-                geoms = [g for g, b in enumerate(model.geom_bodyid.tolist()) if b == body]
-            for g in geoms:
-                owner[int(g)] = code
-        self._owner = owner
-        self._force = np.zeros(6)  # the one buffer mj_contactForce writes into (contacts not decoded here)
-        self._pyramidal = model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL
-        self._rows_of: mujoco.MjData | None = None
-        self._base_rows: tuple[np.ndarray, np.ndarray] = (self._force, self._force)
-        self.reset()
+    @property
+    def landing_force(self) -> float:
+        """Load at which a foot counts as loaded and, after flight, as landed (N)."""
+        return self.estimator.load.landing_force
+
+    @property
+    def release_force(self) -> float:
+        """Load below which a foot counts as unloaded (N)."""
+        return self.estimator.load.release_force
+
+    @property
+    def omega(self) -> float:
+        """The planner's pendulum frequency (1/s) the DCM is made with."""
+        return self.estimator.omega
 
     @classmethod
     def for_sim(cls, sim: SimModel, omega: float | None = None, **options: float | Iterable[int] | None) -> SimMeasurer:
@@ -176,7 +103,7 @@ class SimMeasurer:
 
     def reset(self) -> None:
         """Forget the feet's load states: the next :meth:`measure` takes them as they are, without landings."""
-        self._feet.load.reset()
+        self.estimator.reset()
 
     def measure(
         self,
@@ -185,107 +112,6 @@ class SimMeasurer:
         snapshot: StepSnapshot | None = None,
         velocities: bool = False,
     ) -> Measurement:
-        """The measurement of ``data`` (see the module docstring for which state that is), stamped ``t`` (s;
-        default ``data.time``); ``snapshot``: its contact and site arrays already read
-        (:func:`~rtgait.sim.step_snapshot.read_snapshot`, of this same state); ``velocities``: whether
-        ``mj_subtreeVel`` has already been run on this state (it is not run again)."""
-        model = self.model
-        t = float(data.time) if t is None else float(t)
-        owner = self._owner
-        # Per foot: force (3) and moment about the world origin (3), summed over its contacts.
-        lx = ly = lz = lmx = lmy = lmz = 0.0
-        rx = ry = rz = rmx = rmy = rmz = 0.0
-        left_count = right_count = other = 0
-        if snapshot is None:
-            snapshot = read_snapshot(data)
-        efc, addresses, positions, geoms, frames, dims, frictions, sites_position, sites_rotation = snapshot
-        if addresses:
-            for i in range(len(addresses)):
-                address = addresses[i]
-                if address < 0:  # within the margin but not active: no force
-                    continue
-                g1, g2 = geoms[i]
-                o1, o2 = owner[g1], owner[g2]
-                if o1 > 0 and o2 == 0:
-                    left, sign = o1 == 1, -1.0  # the force on geom1 is minus the contact force
-                elif o2 > 0 and o1 == 0:
-                    left, sign = o2 == 1, 1.0
-                else:
-                    if (o1 != 0) != (o2 != 0):  # the robot, not through a sole, against the environment
-                        other += 1
-                    continue
-                dim = dims[i]
-                if self._pyramidal and dim == 3:
-                    # mj_contactForce's decoding of a pyramidal cone's four edge forces, in its order of
-                    # operations (its result is bit-identical): normal = their sum, tangent_j = (e_2j - e_2j+1) mu_j;
-                    # no torsional or rolling torque.
-                    mu = frictions[i]
-                    a = 0.0 + efc[address] + efc[address + 1] + efc[address + 2] + efc[address + 3]
-                    b = (efc[address] - efc[address + 1]) * mu[0]
-                    c = (efc[address + 2] - efc[address + 3]) * mu[1]
-                    ta = tb = tc = 0.0
-                elif self._pyramidal and dim == 1:
-                    a, b, c, ta, tb, tc = efc[address], 0.0, 0.0, 0.0, 0.0, 0.0
-                else:  # torsional or rolling friction, or an elliptic cone: MuJoCo decodes it
-                    buffer = self._force
-                    mujoco.mj_contactForce(model, data, i, buffer)
-                    a, b, c, ta, tb, tc = buffer.tolist()
-                f0, f1, f2, f3, f4, f5, f6, f7, f8 = frames[i]
-                fx = sign * (f0 * a + f3 * b + f6 * c)
-                fy = sign * (f1 * a + f4 * b + f7 * c)
-                fz = sign * (f2 * a + f5 * b + f8 * c)
-                px, py, pz = positions[i]
-                # The contact's moment about the world origin p x f, plus its own torque (exactly zero without
-                # torsional or rolling friction: adding it then changes no bit of the sums, which start at +0.0).
-                mx = py * fz - pz * fy
-                my = pz * fx - px * fz
-                mz = px * fy - py * fx
-                if ta != 0.0 or tb != 0.0 or tc != 0.0:
-                    mx = mx + sign * (f0 * ta + f3 * tb + f6 * tc)
-                    my = my + sign * (f1 * ta + f4 * tb + f7 * tc)
-                    mz = mz + sign * (f2 * ta + f5 * tb + f8 * tc)
-                if left:
-                    lx += fx
-                    ly += fy
-                    lz += fz
-                    lmx += mx
-                    lmy += my
-                    lmz += mz
-                    left_count += 1
-                else:
-                    rx += fx
-                    ry += fy
-                    rz += fz
-                    rmx += mx
-                    rmy += my
-                    rmz += mz
-                    right_count += 1
-
-        feet = self._feet
-        left_foot, left_landing = feet.foot(
-            0, t, lx, ly, lz, lmx, lmy, lmz, left_count, sites_position[self.left_site],
-            sites_rotation[self.left_site],
-        )  # fmt: skip
-        right_foot, right_landing = feet.foot(
-            1, t, rx, ry, rz, rmx, rmy, rmz, right_count, sites_position[self.right_site],
-            sites_rotation[self.right_site],
-        )  # fmt: skip
-        landings = _NO_LANDINGS
-        if left_landing is not None or right_landing is not None:
-            landings = tuple(landing for landing in (left_landing, right_landing) if landing is not None)
-        feet.load.prime()
-        zmp, total = feet.zmp(left_foot, right_foot)
-        if not velocities:
-            mujoco.mj_subtreeVel(model, data)
-        if data is not self._rows_of:  # the base's rows of this data's fixed-size arrays, as views kept
-            base = self.base_body
-            self._rows_of, self._base_rows = data, (data.subtree_com[base], data.subtree_linvel[base])
-        com_row, linvel_row = self._base_rows
-        cx, cy, cz = com_row.tolist()
-        vx, vy, vz = linvel_row.tolist()
-        w = self.omega
-        return _new_tuple(
-            Measurement,
-            (t, (cx, cy, cz), (vx, vy, vz), (cx + vx / w, cy + vy / w), zmp, total, left_foot, right_foot, landings,
-             other),
-        )  # fmt: skip
+        """The walking state of ``data``, stamped ``t`` (s; default ``data.time``); ``snapshot`` and ``velocities``
+        as :meth:`~rtgait.sim.ground_truth.GroundTruthReader.read`."""
+        return self._update(None, self._read(data, t, snapshot, velocities))
