@@ -55,7 +55,7 @@ from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.loading import load_scenario
-from rtgait.sim.loop import measure_contacts
+from rtgait.sim.ground_truth import GroundTruthReader
 from rtgait.sim.model import SimConfig, build_sim_model
 
 
@@ -63,10 +63,12 @@ def _step_times(robot: RobotModel, config: SimConfig, targets: np.ndarray) -> tu
     """Wall time of each ``mj_step``, of each contact record and of each controller measurement (s) with
     ``targets`` replayed, one row per control tick, ``substeps`` physics steps each."""
     from rtgait.sim.measure import SimMeasurer
+    from rtgait.sim.step_snapshot import read_snapshot
 
     sim = build_sim_model(robot, config)
     data = sim.new_data()
     measurer = SimMeasurer.for_sim(sim)
+    reader = GroundTruthReader.for_sim(sim).contacts
     clock = time.perf_counter
     steps, contacts, measures = [], np.empty(len(targets)), np.empty(len(targets))
     for k, row in enumerate(targets):
@@ -76,7 +78,7 @@ def _step_times(robot: RobotModel, config: SimConfig, targets: np.ndarray) -> tu
             mujoco.mj_step(sim.model, data)
             steps.append(clock() - began)
         began = clock()
-        measure_contacts(data, sim.left_sole_geom, sim.right_sole_geom)
+        reader.read(data, read_snapshot(data))
         contacts[k] = clock() - began
         began = clock()
         measurer.measure(data, k * sim.control_dt)
@@ -119,13 +121,15 @@ def parts(robot: RobotModel, scenario_name: str, config: SimConfig) -> dict[str,
         "mj_step_us": float(np.median(steps) * 1e6),
         "mj_step_without_noslip_us": float(np.median(plain) * 1e6),
         "mj_step_without_leg_collisions_us": float(np.median(no_legs) * 1e6),
-        "measure_contacts_us": float(np.median(contacts) * 1e6),
+        "contact_reading_us": float(np.median(contacts) * 1e6),
         "controller_measurement_us": float(np.median(measures) * 1e6),
     }
 
 
 # The in-loop breakdown's parts: what each timed callable of ClosedLoop.step is (the rest is the loop's own code).
-IN_LOOP_PARTS = ("ik", "mj_step", "controller", "measurement", "contact_monitor", "tick_log", "servo", "inputs")
+IN_LOOP_PARTS = (
+    "ik", "mj_step", "controller", "estimation", "contact_reading", "contact_monitor", "tick_log", "servo", "inputs",
+)  # fmt: skip
 
 
 def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: Any) -> dict[str, float]:
@@ -151,27 +155,17 @@ def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: A
 
     def init(loop: ClosedLoop, *args: Any, **kwargs: Any) -> None:
         original_init(loop, *args, **kwargs)
-        # The hot tuple binds the callables once: those timed are found by what they are bound to.
-        hot = list(loop._hot)
-        for index, item in enumerate(hot):
-            owner, name = getattr(item, "__self__", None), getattr(item, "__name__", "")
-            part = None
-            if item is mujoco.mj_step:
-                part = "mj_step"
-            elif owner is loop.controller and name == "tick":
-                part = "controller"
-            elif owner is loop.measurer and name == "measure":
-                part = "measurement"
-            elif isinstance(owner, WholeBodyIK) and name == "solve":
-                part = "ik"
-            if part is not None:
-                hot[index] = timed(part, item)
-        loop._hot = tuple(hot)
-        loop.contacts.measure = timed("contact_monitor", loop.contacts.measure)  # type: ignore[method-assign]
+        # The stack and the robot look their parts up at each call: the parts are wrapped where they live.
+        stack, robot = loop.stack, loop.robot
+        stack.ik.solve = timed("ik", stack.ik.solve)  # type: ignore[method-assign]
+        stack.controller.tick = timed("controller", stack.controller.tick)  # type: ignore[method-assign]
+        stack.estimator.update = timed("estimation", stack.estimator.update)  # type: ignore[method-assign]
+        robot.reader.contacts.read = timed("contact_reading", robot.reader.contacts.read)  # type: ignore[method-assign]
+        loop.contacts.record = timed("contact_monitor", loop.contacts.record)  # type: ignore[method-assign]
         if loop.log is not None:
             loop.log.record = timed("tick_log", loop.log.record)  # type: ignore[method-assign]
-        loop._servo.command = timed("servo", loop._servo.command)  # type: ignore[method-assign]
-        loop._servo.apply = timed("servo", loop._servo.apply)  # type: ignore[method-assign]
+        robot.servo.command = timed("servo", robot.servo.command)  # type: ignore[method-assign]
+        robot.servo.apply = timed("servo", robot.servo.apply)  # type: ignore[method-assign]
         loop._walk_inputs = timed("inputs", loop._walk_inputs)
 
     def step(loop: ClosedLoop) -> bool:
@@ -181,12 +175,15 @@ def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: A
         ticks[0] += 1
         return out
 
+    original_mj_step = mujoco.mj_step
     ClosedLoop.__init__, ClosedLoop.step = init, step  # type: ignore[method-assign]
+    mujoco.mj_step = timed("mj_step", original_mj_step)
     try:
         gc.collect()
         simulate(load_scenario(scenario_name), robot, sim=sim, controller=controller)
     finally:
         ClosedLoop.__init__, ClosedLoop.step = original_init, original_step  # type: ignore[method-assign]
+        mujoco.mj_step = original_mj_step
     n = max(ticks[0], 1)
     report = {f"in_loop_{part}_us": spent[part] / n * 1e6 for part in IN_LOOP_PARTS}
     report["in_loop_tick_us"] = spent["tick"] / n * 1e6
@@ -422,7 +419,7 @@ def main() -> None:
         "mj_step_us",
         "mj_step_without_noslip_us",
         "mj_step_without_leg_collisions_us",
-        "measure_contacts_us",
+        "contact_reading_us",
         "controller_measurement_us",
     ):
         print(f"  {key[:-3].replace('_', ' ')}: {report[key]:.1f} us (median)")

@@ -1,12 +1,12 @@
 """The robot's contacts with the world in the closed loop: what is measured of them each control tick, when the
 robot has fallen, tipped over or landed a step, and the external contact forces (pushes) applied to it.
 
-:func:`measure_contacts` reads the vertical forces of the sole-floor contacts and their centre of pressure (the
-measured ZMP) from MuJoCo's constraint forces. :class:`ContactMonitor` keeps the per-tick record of a run: the
-ZMP, the force on each foot, how many corners of each sole box touch, how far each sole is tilted, whether the
-legs touch each other, and it decides when the robot has fallen (:class:`FallLimits`) or tipped over (a loaded
-foot rolled onto an edge of its sole). :class:`Landings` counts the steps whose foot touched down in time.
-:class:`Push` is a force from outside (a hand on the pelvis), applied by :class:`Pushes`.
+:class:`ContactMonitor` keeps the per-tick record of a run: the ZMP (the centre of pressure of the soles' normal
+forces, decoded by :mod:`rtgait.sim.contact_reading`), the force on each foot, how many corners of each sole box
+touch, how far each sole is tilted, whether the legs touch each other, and it decides when the robot has fallen
+(:class:`FallLimits`) or tipped over (a loaded foot rolled onto an edge of its sole). :class:`Landings` counts the
+steps whose foot touched down in time. :class:`Push` is a force from outside (a hand on the pelvis), applied by
+:class:`Pushes`.
 """
 
 from __future__ import annotations
@@ -18,8 +18,9 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from rtgait.sim.contact_reading import ContactSums
 from rtgait.sim.loop_record import row_packer
-from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
+from rtgait.sim.step_snapshot import StepSnapshot
 
 if TYPE_CHECKING:
     from rtgait.sim.model import SimModel
@@ -27,7 +28,7 @@ if TYPE_CHECKING:
 _TIME_TOLERANCE = 1e-9  # s
 _COLUMNS = 15  # ContactMonitor's row (its __init__ says what)
 
-__all__ = ["PUSH_SPEED_LIMIT", "ContactMonitor", "FallLimits", "Landings", "Push", "Pushes", "measure_contacts"]
+__all__ = ["PUSH_SPEED_LIMIT", "ContactMonitor", "FallLimits", "Landings", "Push", "Pushes"]
 
 
 @dataclass(frozen=True)
@@ -57,71 +58,11 @@ class FallLimits:
                 raise ValueError(f"fall limit {name} must be finite and > 0, got {value}")
 
 
-def _measure(
-    efc_force: list[float],
-    addresses: list[int],
-    positions: list[list[float]],
-    geoms: list[list[int]],
-    left_geom: int,
-    right_geom: int,
-) -> tuple[float, float, float, float, int, int, int]:
-    """:func:`measure_contacts` from the contact list's arrays as Python numbers (the contacts' first rows in
-    ``efc_force``, their points and geom pairs), plus the number of active contacts that involve neither sole (leg on
-    leg). Python floats: a handful of contacts costs less as scalar arithmetic than as numpy calls."""
-    fl = fr = sx = sy = 0.0
-    cl = cr = other = 0
-    for a, p, g in zip(addresses, positions, geoms, strict=True):
-        if a < 0:  # inside the collision margin but not active: no force
-            continue
-        if left_geom in g:
-            left = True
-        elif right_geom in g:
-            left = False
-        else:  # the legs' boxes touching each other (frictionless, one row): not a support
-            other += 1
-            continue
-        fz = efc_force[a] + efc_force[a + 1] + efc_force[a + 2] + efc_force[a + 3]
-        sx += p[0] * fz
-        sy += p[1] * fz
-        if left:
-            fl += fz
-            cl += 1
-        else:
-            fr += fz
-            cr += 1
-    return sx, sy, fl, fr, cl, cr, other
-
-
-def measure_contacts(
-    data: mujoco.MjData, left_geom: int, right_geom: int
-) -> tuple[float, float, float, float, int, int]:
-    """Vertical contact forces of the soles on the floor, from the last ``mj_step`` (or ``mj_forward``).
-
-    Returns:
-        ``(sx, sy, f_left, f_right, corners_left, corners_right)``: the sums ``sum(p_x f_z)`` and ``sum(p_y f_z)``
-        over the sole contact points (N m), so that the centre of pressure is ``(sx, sy) / (f_left + f_right)``;
-        the vertical force on each sole (N); and how many corners of each sole box touch the floor.
-
-    The floor is flat, so each contact's normal is vertical and its normal force is the vertical force. With
-    MuJoCo's pyramidal friction cones (the default) a contact of dimension 3 has four edge forces in
-    ``efc_force``, each with a unit normal component, and the normal force is their sum; this equals the first
-    component of ``mujoco.mj_contactForce`` without a call per contact. Contacts between the legs are skipped.
-    """
-    if not data.ncon:
-        return 0.0, 0.0, 0.0, 0.0, 0, 0
-    contacts = data.contact
-    return _measure(
-        data.efc_force.tolist(), contacts.efc_address.tolist(), contacts.pos.tolist(), contacts.geom.tolist(),
-        left_geom, right_geom,
-    )[:6]  # fmt: skip
-
-
 class ContactMonitor:
     """The per-tick contact record of a run, and the fall and tip-over decisions (see the module docstring).
 
     Args:
-        data: the MuJoCo state the run steps (its fixed-size arrays are read through views kept here).
-        left_geom, right_geom: the sole boxes' geom ids.
+        data: the MuJoCo state the run steps (its base's height at the start sets the fall limit).
         left_site, right_site: the sole sites' ids.
         n_ticks: rows to allocate.
         threshold: a foot touches the floor when its vertical force exceeds this (N).
@@ -132,8 +73,6 @@ class ContactMonitor:
     def __init__(
         self,
         data: mujoco.MjData,
-        left_geom: int,
-        right_geom: int,
         left_site: int,
         right_site: int,
         n_ticks: int,
@@ -141,8 +80,6 @@ class ContactMonitor:
         falls: FallLimits,
         dt: float,
     ) -> None:
-        self._data = data
-        self._geoms = (left_geom, right_geom)
         self._sites = (left_site, right_site)
         self.threshold = threshold
         # One row per tick, written at once (one assignment costs less than one per quantity): ZMP x, y (NaN while
@@ -159,19 +96,18 @@ class ContactMonitor:
         self._airborne_ticks = max(1, round(falls.airborne / dt))
         self._airborne = 0
 
-    def measure(self, k: int, t: float, snapshot: StepSnapshot | None = None) -> tuple[float, float, float, float]:
-        """Record tick ``k`` at time ``t`` (s) from the contacts of the last step, which describe the state at ``t``
-        (``snapshot``: those arrays already read, :func:`~rtgait.sim.step_snapshot.read_snapshot`).
+    def record(self, k: int, t: float, sums: ContactSums, snapshot: StepSnapshot) -> tuple[float, float, float, float]:
+        """Record tick ``k`` at time ``t`` (s) from the contacts of the last step, which describe the state at ``t``:
+        ``snapshot`` its arrays (:func:`~rtgait.sim.step_snapshot.read_snapshot`), ``sums`` its contacts decoded
+        (:class:`~rtgait.sim.contact_reading.ContactReader`).
 
         Returns:
             ``(zmp_x, zmp_y, f_left, f_right)``: the measured ZMP (m; NaN while no foot touches the floor) and the
             vertical force on each foot (N).
         """
-        if snapshot is None:
-            snapshot = read_snapshot(self._data)
-        efc_force, addresses, positions, geoms, _, _, _, positions_of_sites, rotations = snapshot
-        left_geom, right_geom = self._geoms
-        sx, sy, fl, fr, cl, cr, other = _measure(efc_force, addresses, positions, geoms, left_geom, right_geom)
+        positions_of_sites, rotations = snapshot.site_positions, snapshot.site_rotations
+        sx, sy, fl, fr = sums.sole_moment_x, sums.sole_moment_y, sums.left_normal, sums.right_normal
+        cl, cr, other = sums.left_corners, sums.right_corners, sums.leg_contacts
         total = fl + fr
         if total > self.threshold:
             x, y = sx / total, sy / total

@@ -37,6 +37,7 @@ import mujoco
 import numpy as np
 
 from rtgait.interface.truth import FootContact, GroundTruth
+from rtgait.sim.contact_reading import ContactReader, ContactSums
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
 if TYPE_CHECKING:  # the model module is being rewritten: only its attribute names are relied on
@@ -54,8 +55,8 @@ class GroundTruthReader:
         model: the compiled MuJoCo model.
         base_body: body id of the floating base (the robot is its subtree).
         left_site, right_site: site ids at the sole frames (x forward, z out of the sole).
-        left_geoms, right_geoms: geoms of each foot that may touch the environment; default every geom of the body
-            that carries the sole site.
+        left_sole_geom, right_sole_geom, left_geoms, right_geoms: the feet's geoms
+            (:class:`~rtgait.sim.contact_reading.ContactReader`).
 
     Stateless but for views of the last ``MjData`` read; :meth:`read` allocates tuples of Python floats and no numpy
     array.
@@ -68,31 +69,28 @@ class GroundTruthReader:
         base_body: int,
         left_site: int,
         right_site: int,
+        left_sole_geom: int = -1,
+        right_sole_geom: int = -1,
         left_geoms: Iterable[int] | None = None,
         right_geoms: Iterable[int] | None = None,
     ) -> None:
         self.model = model
         self.base_body = int(base_body)
         self.left_site, self.right_site = int(left_site), int(right_site)
-        # geom id -> 1 (left foot), 2 (right foot), -1 (another part of the robot), 0 (the environment).
-        root = int(model.body_rootid[self.base_body])
-        owner = [-1 if int(model.body_rootid[b]) == root else 0 for b in model.geom_bodyid.tolist()]
-        for code, site, geoms in ((1, self.left_site, left_geoms), (2, self.right_site, right_geoms)):
-            if geoms is None:
-                body = int(model.site_bodyid[site])
-                geoms = [g for g, b in enumerate(model.geom_bodyid.tolist()) if b == body]
-            for g in geoms:
-                owner[int(g)] = code
-        self._owner = owner
-        self._force = np.zeros(6)  # the one buffer mj_contactForce writes into (contacts not decoded here)
-        self._pyramidal = model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL
+        self.contacts = ContactReader(
+            model, base_body=base_body, left_site=left_site, right_site=right_site, left_sole_geom=left_sole_geom,
+            right_sole_geom=right_sole_geom, left_geoms=left_geoms, right_geoms=right_geoms,
+        )  # fmt: skip
         self._rows_of: mujoco.MjData | None = None
-        self._base_rows: tuple[np.ndarray, np.ndarray] = (self._force, self._force)
+        self._base_rows: tuple[np.ndarray, np.ndarray] = (np.zeros(3), np.zeros(3))
 
     @classmethod
     def for_sim(cls, sim: SimModel) -> GroundTruthReader:
         """The reader of a :class:`~rtgait.sim.model.SimModel`: its base body and sole sites."""
-        return cls(sim.model, base_body=sim.base_body, left_site=sim.left_sole_site, right_site=sim.right_sole_site)
+        return cls(
+            sim.model, base_body=sim.base_body, left_site=sim.left_sole_site, right_site=sim.right_sole_site,
+            left_sole_geom=sim.left_sole_geom, right_sole_geom=sim.right_sole_geom,
+        )  # fmt: skip
 
     def read(
         self,
@@ -100,98 +98,33 @@ class GroundTruthReader:
         t: float | None = None,
         snapshot: StepSnapshot | None = None,
         velocities: bool = False,
+        sums: ContactSums | None = None,
     ) -> GroundTruth:
         """The truth of ``data`` (see the module docstring for which state that is), stamped ``t`` (s; default
         ``data.time``); ``snapshot``: its contact and site arrays already read
         (:func:`~rtgait.sim.step_snapshot.read_snapshot`, of this same state); ``velocities``: whether
-        ``mj_subtreeVel`` has already been run on this state (it is not run again)."""
-        model = self.model
+        ``mj_subtreeVel`` has already been run on this state (it is not run again); ``sums``: its contacts already
+        decoded (:class:`~rtgait.sim.contact_reading.ContactReader`)."""
         t = float(data.time) if t is None else float(t)
-        owner = self._owner
-        # Per foot: force (3) and moment about the world origin (3), summed over its contacts.
-        lx = ly = lz = lmx = lmy = lmz = 0.0
-        rx = ry = rz = rmx = rmy = rmz = 0.0
-        left_count = right_count = other = 0
         if snapshot is None:
             snapshot = read_snapshot(data)
-        efc, addresses, positions, geoms, frames, dims, frictions, sites_position, sites_rotation = snapshot
-        if addresses:
-            for i in range(len(addresses)):
-                address = addresses[i]
-                if address < 0:  # within the margin but not active: no force
-                    continue
-                g1, g2 = geoms[i]
-                o1, o2 = owner[g1], owner[g2]
-                if o1 > 0 and o2 == 0:
-                    left, sign = o1 == 1, -1.0  # the force on geom1 is minus the contact force
-                elif o2 > 0 and o1 == 0:
-                    left, sign = o2 == 1, 1.0
-                else:
-                    if (o1 != 0) != (o2 != 0):  # the robot, not through a sole, against the environment
-                        other += 1
-                    continue
-                dim = dims[i]
-                if self._pyramidal and dim == 3:
-                    # mj_contactForce's decoding of a pyramidal cone's four edge forces, in its order of
-                    # operations (its result is bit-identical): normal = their sum, tangent_j = (e_2j - e_2j+1) mu_j;
-                    # no torsional or rolling torque.
-                    mu = frictions[i]
-                    a = 0.0 + efc[address] + efc[address + 1] + efc[address + 2] + efc[address + 3]
-                    b = (efc[address] - efc[address + 1]) * mu[0]
-                    c = (efc[address + 2] - efc[address + 3]) * mu[1]
-                    ta = tb = tc = 0.0
-                elif self._pyramidal and dim == 1:
-                    a, b, c, ta, tb, tc = efc[address], 0.0, 0.0, 0.0, 0.0, 0.0
-                else:  # torsional or rolling friction, or an elliptic cone: MuJoCo decodes it
-                    buffer = self._force
-                    mujoco.mj_contactForce(model, data, i, buffer)
-                    a, b, c, ta, tb, tc = buffer.tolist()
-                f0, f1, f2, f3, f4, f5, f6, f7, f8 = frames[i]
-                fx = sign * (f0 * a + f3 * b + f6 * c)
-                fy = sign * (f1 * a + f4 * b + f7 * c)
-                fz = sign * (f2 * a + f5 * b + f8 * c)
-                px, py, pz = positions[i]
-                # The contact's moment about the world origin p x f, plus its own torque (exactly zero without
-                # torsional or rolling friction: adding it then changes no bit of the sums, which start at +0.0).
-                mx = py * fz - pz * fy
-                my = pz * fx - px * fz
-                mz = px * fy - py * fx
-                if ta != 0.0 or tb != 0.0 or tc != 0.0:
-                    mx = mx + sign * (f0 * ta + f3 * tb + f6 * tc)
-                    my = my + sign * (f1 * ta + f4 * tb + f7 * tc)
-                    mz = mz + sign * (f2 * ta + f5 * tb + f8 * tc)
-                if left:
-                    lx += fx
-                    ly += fy
-                    lz += fz
-                    lmx += mx
-                    lmy += my
-                    lmz += mz
-                    left_count += 1
-                else:
-                    rx += fx
-                    ry += fy
-                    rz += fz
-                    rmx += mx
-                    rmy += my
-                    rmz += mz
-                    right_count += 1
-
+        if sums is None:
+            sums = self.contacts.read(data, snapshot)
+        sites_position, sites_rotation = snapshot.site_positions, snapshot.site_rotations
         if not velocities:
-            mujoco.mj_subtreeVel(model, data)
+            mujoco.mj_subtreeVel(self.model, data)
         if data is not self._rows_of:  # the base's rows of this data's fixed-size arrays, as views kept
             base = self.base_body
             self._rows_of, self._base_rows = data, (data.subtree_com[base], data.subtree_linvel[base])
         com_row, linvel_row = self._base_rows
         cx, cy, cz = com_row.tolist()
         vx, vy, vz = linvel_row.tolist()
-        left = _new_tuple(
-            FootContact,
-            ((lx, ly, lz), (lmx, lmy, lmz), left_count, sites_position[self.left_site], sites_rotation[self.left_site]),
-        )
-        right = _new_tuple(
-            FootContact,
-            ((rx, ry, rz), (rmx, rmy, rmz), right_count, sites_position[self.right_site],
-             sites_rotation[self.right_site]),
-        )  # fmt: skip
-        return _new_tuple(GroundTruth, (t, (cx, cy, cz), (vx, vy, vz), left, right, other))
+        left = _new_tuple(FootContact, (
+            sums.left_force, sums.left_moment, sums.left_contacts, sites_position[self.left_site],
+            sites_rotation[self.left_site],
+        ))  # fmt: skip
+        right = _new_tuple(FootContact, (
+            sums.right_force, sums.right_moment, sums.right_contacts, sites_position[self.right_site],
+            sites_rotation[self.right_site],
+        ))  # fmt: skip
+        return _new_tuple(GroundTruth, (t, (cx, cy, cz), (vx, vy, vz), left, right, sums.other_contacts))

@@ -1,12 +1,15 @@
-"""The closed loop: measure -> controller -> whole-body IK -> joint servos -> MuJoCo, once per control period.
+"""The closed loop in MuJoCo: the simulated robot (:class:`~rtgait.sim.robot.SimRobot`) and the controller stack
+(:class:`~rtgait.stack.walking_stack.WalkingStack`: estimator -> controller -> whole-body IK -> joint command), once
+per control period.
 
 Every control tick (``sim.control_dt``: 1 ms for Talos, 2 ms for G1) of the walk, at time ``t`` on the walk's clock:
 
-1. **measure** (:class:`~rtgait.sim.measure.SimMeasurer`): per-foot contact wrench, centre of pressure and pose, the
-   ZMP, the COM and its velocity, the DCM, and the landings since the last tick. They are read from the kinematics
-   and contact forces the last physics step computed, i.e. of the state one physics step before ``t``: a real
-   robot's sensors lag by a sample too, and reading them costs no extra ``mj_forward`` (with one physics step a
-   period, its contacts and sites as the last tick's record read them, :mod:`rtgait.sim.step_snapshot`);
+1. **estimate** (:class:`~rtgait.estimation.ground_truth.GroundTruthEstimator` on the simulator's truth,
+   :mod:`rtgait.sim.ground_truth`): per-foot contact wrench, centre of pressure and pose, the ZMP, the COM and its
+   velocity, the DCM, and the landings since the last tick. They are read from the kinematics and contact forces the
+   last physics step computed, i.e. of the state one physics step before ``t``: a real robot's sensors lag by a
+   sample too, and reading them costs no extra ``mj_forward`` (with one physics step a period, its contacts as the
+   last tick's record decoded them, :mod:`rtgait.sim.contact_reading`);
 2. the walk's scheduled inputs (:mod:`rtgait.sim.loop_inputs`): the ``on_tick`` hook, the footstep changes due at
    ``t`` (at their connection mode's deadline, as :func:`rtgait.core.analysis.rollout.rollout` does) and the velocity
    commands due go to the planner; a walk by command is stopped after its steps;
@@ -53,12 +56,11 @@ import mujoco
 from rtgait.control.controller import ControlEvent, ControllerOptions, WalkingController
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.interface.task_targets import FootOffsets, IKTargets
-from rtgait.robot.ankles import add_ankle_offsets, find_ankle_joints
+from rtgait.estimation.ground_truth import GroundTruthEstimator
+from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.ik import WholeBodyIK
-from rtgait.sim.actuation import ReferenceInterpolator
-from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Push, Pushes, measure_contacts
+from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Push, Pushes
 from rtgait.sim.loop_inputs import WalkInputs
 from rtgait.sim.loop_options import (
     LANDING_WINDOW,
@@ -72,11 +74,11 @@ from rtgait.sim.loop_options import (
 from rtgait.sim.loop_push import LivePush
 from rtgait.sim.loop_record import TickRecord, TickValues, row_packer
 from rtgait.sim.loop_result import loop_result
-from rtgait.sim.measure import SimMeasurer
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SUPPORT_CODES, SimResult
-from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
+from rtgait.sim.robot import SimRobot
 from rtgait.sim.tick_log import TickLog
+from rtgait.stack.walking_stack import WalkingStack
 
 __all__ = [
     "LANDING_WINDOW",
@@ -87,12 +89,10 @@ __all__ = [
     "Push",
     "SimResult",
     "TickValues",
-    "measure_contacts",
     "open_loop_controller",
     "run_closed_loop",
 ]
 
-_NO_OFFSETS = FootOffsets()
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 _SUPPORTS = {code: name for name, code in SUPPORT_CODES.items()}
 
@@ -196,23 +196,22 @@ class ClosedLoop:
         self.gravity = float(-model.opt.gravity[2])
         self.threshold = options.contact_threshold * robot.mass * self.gravity
         self.contacts = ContactMonitor(
-            data, sim.left_sole_geom, sim.right_sole_geom, sim.left_sole_site, sim.right_sole_site, capacity,
-            self.threshold, options.falls, dt,
-        )  # fmt: skip
+            data, sim.left_sole_site, sim.right_sole_site, capacity, self.threshold, options.falls, dt
+        )
         self._pushes = Pushes(sim, data, options.pushes)
         self.pushes: list[Push] = list(options.pushes)
         """The pushes of the run: the scheduled ones and those given to :meth:`push`."""
         self._live = LivePush(sim, data, planner.config.cog_height, self.gravity)  # push(), from a live session
-        self.measurer = SimMeasurer.for_sim(sim, omega=planner.w)
+        # The robot behind its interface, and the stack that drives it: the ground-truth estimator reads the
+        # simulator's truth (the DCM with the planner's w, the thresholds scaled to the robot's weight).
+        self.robot = SimRobot(sim, data, q[7:])
+        estimator = GroundTruthEstimator(planner.w, robot.mass * float(-model.opt.gravity[2]))
+        self.stack = WalkingStack(estimator, controller, ik, q)
         self.landings = Landings(max(min(planner.config.timing.double_support, LANDING_WINDOW), dt), self.threshold)
-        ankles = find_ankle_joints(robot)
 
         # ----- loop state ----------------------------------------------------------------------------------------
-        self._q = q
-        self._joints_previous = q[7:].copy()
-        self._servo = ReferenceInterpolator(sim.actuation, q[7:])
         # The complete per-tick record (sim.parquet) of a whole run; a ring run (a live session) keeps none.
-        self.log = TickLog(sim, data, self._servo, capacity, planner.w) if keep is None else None
+        self.log = TickLog(sim, data, self.robot.servo, capacity, planner.w) if keep is None else None
         # The hook, footstep changes, velocity commands and stop of the walk, at their times (loop_inputs.py).
         on_stop = self._follow_walk_end if self._can_grow else None  # steps held longer before the walk had an end
         self._inputs = WalkInputs(planner, options, stop_after, on_stop)
@@ -221,11 +220,12 @@ class ClosedLoop:
         self._events_kept = math.inf if keep is None else keep  # an open-ended run keeps the last `keep` seconds
         # What every tick uses, bound once: a tuple unpacked into locals costs less than a dozen attribute lookups
         # (MuJoCo's arrays of fixed size are views that stay valid).
+        robot_, stack = self.robot, self.stack
         self._hot = (
-            controller.tick, self.measurer.measure, ik.solve, self._servo, self.contacts, self.landings,
-            self._pushes.update, self._live.update, mujoco.mj_step, model, data, data.ctrl, data.qpos,
+            stack.estimate, stack.control, stack.hold, robot_.ground_truth, robot_.write, robot_.first_substep,
+            robot_.substep, self.contacts, self.landings, self._pushes.update, self._live.update, data, data.qpos,
             data.subtree_com[sim.base_body], data.site_xpos, data.actuator_force, sim.left_sole_site,
-            sim.right_sole_site, sim.substeps, ankles, dt, k0, -1 if n_ticks is None else n_ticks,
+            sim.right_sole_site, sim.substeps, dt, k0, -1 if n_ticks is None else n_ticks,
         )  # fmt: skip
         r = self.record
         # The rows of Python numbers are written by struct packing into the arrays' bytes (the same float64s for
@@ -235,7 +235,6 @@ class ClosedLoop:
             r.replay_qpos, r.replay_soles, r.capacity, r.replay_every, r.replay_capacity,
         )  # fmt: skip
         self._over = False
-        self._snapshot: StepSnapshot | None = None  # the last tick's first step's contacts and sites
         self.k = 0
         """Ticks run so far."""
         self.fell, self.fall_time, self.fall_cause = False, None, None
@@ -273,8 +272,8 @@ class ClosedLoop:
         """
         if self._over:
             raise RuntimeError("the closed loop is over (fallen or at its last tick): make its result()")
-        (tick, measure, solve, servo, contacts, landings, pushes, live_push, mj_step, model, data, ctrl, qpos,
-         base_com, site_xpos, actuator_force, left_site, right_site, n_sub, ankles, dt, k0,
+        (estimate, control, hold, ground_truth, write, first_substep, substep, contacts, landings, pushes, live_push,
+         data, qpos, base_com, site_xpos, actuator_force, left_site, right_site, n_sub, dt, k0,
          n_ticks) = self._hot  # fmt: skip
         ((pack_planned, planned_bytes, planned_row), (pack_cog, cog_bytes, cog_row), cog, bases, support, torque,
          commanded, replay_qpos, replay_soles, capacity, replay_every, replay_capacity) = self._rows  # fmt: skip
@@ -294,45 +293,36 @@ class ClosedLoop:
             left_foot, right_foot = self._left_start, self._right_start
             planned_x = command_x = target_cog[0]
             planned_y = command_y = target_cog[1]
-            code, phase, offsets, lean = 0, -1, _NO_OFFSETS, None
+            code, phase = 0, -1
             dcm = dcm_planned = (math.nan, math.nan)
             out = measurement = None  # no controller during the transition
+            made = hold(_new_tuple(IKTargets, (target_cog, left_foot, right_foot, None)))
         else:
-            # One physics step a period: the last tick read the contacts and sites of the state measured now, and
-            # its complete log's record ran mj_subtreeVel on it.
-            last = self._snapshot if n_sub == 1 else None
-            measurement = measure(data, t, last, last is not None and self.log is not None)
+            # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
+            measurement = estimate(None, ground_truth(t, self.log is not None))
             if k == k0:
-                self.controller.start(0.0, measurement)
+                self.stack.start(0.0, measurement)
                 self._inputs.start()
             self._walk_inputs(t, data)
-            out = tick(t, measurement)
+            made = control(t, measurement)
+            out = made.targets
             target_cog = out.com
             left_foot, right_foot = out.left_foot, out.right_foot
             planned_x, planned_y = out.zmp_planned
             command_x, command_y = out.zmp_command
-            code, phase, offsets = SUPPORT_CODES[out.planned_support], out.phase, out.offsets
-            dcm, dcm_planned, lean = measurement.dcm, out.dcm_planned, out.lean
+            code, phase = SUPPORT_CODES[out.planned_support], out.phase
+            dcm, dcm_planned = measurement.dcm, out.dcm_planned
             if out.events:
                 self._log(out.events)
                 if self._can_grow and any(e.kind == "step-adjustment" for e in out.events):
                     self._follow_walk_end()
 
-        targets = _new_tuple(IKTargets, (target_cog, left_foot, right_foot, lean))  # every field: no defaults here
-        q, _ = solve(targets, self._q, max_iterations=1, tolerance=0.0, errors=False)
-        self._q = q
-        # The commanded configuration: the IK's, the ankle tilts added in the record's row itself; the servos keep
-        # the joints' array, so they get a copy of it (the row is overwritten when a ring wraps).
+        # The commanded configuration: the IK's base and the command's joints (the ankle tilts added).
+        command = made.command
         row = commanded[i]
-        row[:] = q
-        if offsets != _NO_OFFSETS:
-            joints = row[7:]
-            add_ankle_offsets(joints, ankles, offsets)
-            joints = joints.copy()
-        else:
-            joints = q[7:]
-        servo.command(joints, (joints - self._joints_previous) / dt)
-        self._joints_previous = joints
+        row[:7] = made.q[:7]
+        row[7:] = command.positions
+        write(command)
 
         # ----- physics: the control period's substeps -----------------------------------------------------------
         base = bases[i]
@@ -341,21 +331,18 @@ class ClosedLoop:
         if replay_row >= 0:
             replay_qpos[replay_row] = qpos
         tau = torque[i]
-        servo.apply(0, ctrl)
-        mj_step(model, data)
-        # mj_step computed the kinematics, contacts and forces of the state it started from: the state at t.
+        # mj_step computes the kinematics, contacts and forces of the state it starts from: the state at t.
+        snapshot, sums = first_substep()
         tau[:] = actuator_force
         if replay_row >= 0:
             replay_soles[replay_row, 0] = site_xpos[left_site]
             replay_soles[replay_row, 1] = site_xpos[right_site]
         cog[i] = base_com
-        snapshot = self._snapshot = read_snapshot(data)
-        zx, zy, fl, fr = contacts.measure(i, t, snapshot)
+        zx, zy, fl, fr = contacts.record(i, t, sums, snapshot)
         if self.log is not None:
             self.log.record(i, left_foot, right_foot, out, measurement, self.controller.level)
         for j in range(1, n_sub):
-            servo.apply(j, ctrl)
-            mj_step(model, data)
+            substep(j)
             tau += actuator_force
         if n_sub > 1:
             tau *= 1.0 / n_sub

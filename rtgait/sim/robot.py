@@ -20,6 +20,7 @@ from rtgait.interface.command import JointCommand
 from rtgait.interface.readings import SensorReadings
 from rtgait.interface.truth import GroundTruth
 from rtgait.sim.actuation import ReferenceInterpolator
+from rtgait.sim.contact_reading import ContactSums
 from rtgait.sim.ground_truth import GroundTruthReader
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
@@ -48,7 +49,8 @@ class SimRobot:
         self.reader = GroundTruthReader.for_sim(sim)
         self.substeps = sim.substeps
         self._model, self._ctrl = sim.model, data.ctrl
-        self._snapshot: StepSnapshot | None = None
+        # The first substep's contacts and sites, decoded once, when they are also the next tick's truth.
+        self._last: tuple[StepSnapshot, ContactSums] | None = None
 
     # ----- RobotInterface ------------------------------------------------------------------------------------------
     def read(self) -> SensorReadings:
@@ -73,19 +75,35 @@ class SimRobot:
 
     # ----- GroundTruthSource ---------------------------------------------------------------------------------------
     def ground_truth(self, t: float | None = None, velocities: bool = False) -> GroundTruth:
-        """The truth of the state the last physics step started from (module :mod:`rtgait.sim.ground_truth`),
-        stamped ``t`` (s; default ``data.time``); ``velocities``: whether ``mj_subtreeVel`` already ran on it."""
-        return self.reader.read(self.data, t, self._snapshot, velocities)
+        """The truth of the state now (:mod:`rtgait.sim.ground_truth`), stamped ``t`` (s; default ``data.time``).
+        With one physics substep a control period, the contacts the last :meth:`substep` decoded are this state's
+        and are not decoded again; ``velocities``: whether ``mj_subtreeVel`` already ran on that state."""
+        last = self._last
+        if last is None:
+            return self.reader.read(self.data, t)
+        return self.reader.read(self.data, t, last[0], velocities, last[1])
+
+    @property
+    def last_contacts(self) -> tuple[StepSnapshot, ContactSums] | None:
+        """The contacts and sites of the state now, as the last :meth:`first_substep` read and decoded them, when
+        that was the period's only substep (``None`` otherwise): what the next :meth:`ground_truth` reads."""
+        return self._last
 
     # ----- physics -------------------------------------------------------------------------------------------------
-    def substep(self, i: int) -> StepSnapshot | None:
+    def substep(self, i: int) -> None:
         """Physics substep ``i`` (0 to ``substeps - 1``) of the control period, the drives at their interpolated
-        references; the first substep's contacts and sites are read once (:mod:`rtgait.sim.step_snapshot`) and
-        returned: the state the step started from, which the next tick's truth reads again when it is the period's
-        only substep."""
+        references."""
         self.servo.apply(i, self._ctrl)
         mujoco.mj_step(self._model, self.data)
-        if i == 0:
-            snapshot = self._snapshot = read_snapshot(self.data) if self.substeps == 1 else None
-            return snapshot if snapshot is not None else read_snapshot(self.data)
-        return None
+        self._last = None
+
+    def first_substep(self) -> tuple[StepSnapshot, ContactSums]:
+        """The control period's first physics substep, and the contacts and sites of the state it started from,
+        read and decoded once (:mod:`rtgait.sim.step_snapshot`, :mod:`rtgait.sim.contact_reading`): the run's
+        contact record reads them, and so does the next tick's truth when this is the period's only substep."""
+        self.servo.apply(0, self._ctrl)
+        mujoco.mj_step(self._model, self.data)
+        snapshot = read_snapshot(self.data)
+        last = (snapshot, self.reader.contacts.read(self.data, snapshot))
+        self._last = last if self.substeps == 1 else None
+        return last

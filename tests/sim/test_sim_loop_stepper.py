@@ -168,8 +168,10 @@ def test_the_measurement_reads_the_contacts_the_last_tick_read_of_the_same_state
     while loop.step():
         if loop.done:
             break
-        kept = loop._snapshot
-        assert kept is not None and read_snapshot(loop.data) == kept
+        assert loop.robot.last_contacts is not None
+        kept, sums = loop.robot.last_contacts
+        assert read_snapshot(loop.data) == kept
+        assert loop.robot.reader.contacts.read(loop.data, kept) == sums
         velocities = loop.data.subtree_linvel.copy()
         mujoco.mj_subtreeVel(talos_sim.model, loop.data)
         assert np.array_equal(loop.data.subtree_linvel, velocities)

@@ -52,7 +52,7 @@ def test_the_simulated_robot_offers_the_robot_interface_and_its_truth(standing):
 
 def test_one_tick_from_readings_to_the_joint_command(standing):
     robot, stack, talos = standing
-    robot.substep(0)  # a physics step: contacts and forces of the start state
+    robot.first_substep()  # a physics step: contacts and forces of the start state
     truth = robot.ground_truth(t=0.0)
     measurement = stack.estimate(robot.read(), truth)
     assert measurement.normal_force == pytest.approx(talos.mass * 9.81, rel=0.05)
@@ -67,6 +67,7 @@ def test_one_tick_from_readings_to_the_joint_command(standing):
     np.testing.assert_allclose(com, out.targets.com, atol=2e-3)
     # Written to the drives, the period's last substep ends at the command's reference.
     robot.write(out.command)
-    for i in range(robot.substeps):
+    robot.first_substep()
+    for i in range(1, robot.substeps):
         robot.substep(i)
     np.testing.assert_array_equal(robot.data.ctrl, robot.servo.lead * out.command.velocities + out.command.positions)

@@ -10,7 +10,8 @@ pytest.importorskip("pinocchio")
 
 from rtgait.interface.task_targets import IKTargets  # noqa: E402
 from rtgait.robot.ik import WholeBodyIK  # noqa: E402
-from rtgait.sim.loop import measure_contacts  # noqa: E402
+from rtgait.sim.ground_truth import GroundTruthReader  # noqa: E402
+from rtgait.sim.step_snapshot import read_snapshot  # noqa: E402
 
 
 def stand(sim, seconds: float, q=None):
@@ -43,9 +44,7 @@ def test_measured_cop_is_the_cog_projection(talos, talos_sim, cog_xy):
     q, errors = ik.solve(target, talos.q_half_sitting, max_iterations=100, tolerance=1e-9)
     assert errors.cog < 1e-6
     data, _ = stand(talos_sim, 1.5, q)
-    sx, sy, f_left, f_right, corners_left, corners_right = measure_contacts(
-        data, talos_sim.left_sole_geom, talos_sim.right_sole_geom
-    )
+    sx, sy, f_left, f_right, corners_left, corners_right = _sole_record(talos_sim, data)
     weight = talos.mass * 9.81
     total = f_left + f_right
     assert total == pytest.approx(weight, rel=2e-3)
@@ -68,7 +67,21 @@ def test_contact_measurement_matches_mj_contact_force(talos_sim):
         world = contact.frame.reshape(3, 3).T @ force[:3]
         sums += (contact.pos[0] * world[2], contact.pos[1] * world[2], world[2])
         per_foot[int(contact.geom2 if contact.geom1 == talos_sim.floor_geom else contact.geom1)] += world[2]
-    sx, sy, f_left, f_right, _, _ = measure_contacts(data, talos_sim.left_sole_geom, talos_sim.right_sole_geom)
+    sx, sy, f_left, f_right, _, _ = _sole_record(talos_sim, data)
     np.testing.assert_allclose((sx, sy, f_left + f_right), sums, rtol=1e-9, atol=1e-9)
+    # The truth's full contact force on each foot: the same vertical forces.
+    decoded = GroundTruthReader.for_sim(talos_sim).contacts.read(data, read_snapshot(data))
+    assert decoded.left_force[2] == pytest.approx(per_foot[talos_sim.left_sole_geom], rel=1e-9)
+    assert decoded.right_force[2] == pytest.approx(per_foot[talos_sim.right_sole_geom], rel=1e-9)
     assert f_left == pytest.approx(per_foot[talos_sim.left_sole_geom], rel=1e-9)
     assert f_right == pytest.approx(per_foot[talos_sim.right_sole_geom], rel=1e-9)
+
+
+def _sole_record(sim, data) -> tuple[float, float, float, float, int, int]:
+    """The contact record's sums of ``data``'s last step: ``sum p_x f_n``, ``sum p_y f_n`` (N m), the normal force
+    on each sole (N) and how many corners of each sole box touch."""
+    sums = GroundTruthReader.for_sim(sim).contacts.read(data, read_snapshot(data))
+    return (
+        sums.sole_moment_x, sums.sole_moment_y, sums.left_normal, sums.right_normal, sums.left_corners,
+        sums.right_corners,
+    )  # fmt: skip
