@@ -68,7 +68,6 @@ from rtgait.sim.loop_options import (
     end_tick,
     minimum_jerk,
     run_length,
-    start_pose,
     timing_headroom,
 )  # fmt: skip
 from rtgait.sim.loop_push import LivePush
@@ -78,6 +77,7 @@ from rtgait.sim.model import SimModel
 from rtgait.sim.result import SUPPORT_CODES, SimResult
 from rtgait.sim.robot import SimRobot
 from rtgait.sim.tick_log import TickLog
+from rtgait.stack.setup import start_pose
 from rtgait.stack.walking_stack import WalkingStack
 
 __all__ = [

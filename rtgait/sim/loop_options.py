@@ -14,7 +14,7 @@ from rtgait.core.planner.online import OnlinePlanner
 from rtgait.sim.contact import FallLimits, Push
 
 __all__ = [
-    "LANDING_WINDOW", "LoopOptions", "end_tick", "minimum_jerk", "run_length", "start_pose", "timing_headroom",
+    "LANDING_WINDOW", "LoopOptions", "end_tick", "minimum_jerk", "run_length", "timing_headroom",
     "walk_length",
 ]  # fmt: skip
 
@@ -123,18 +123,6 @@ def end_tick(end_time: float, options: LoopOptions, k0: int, dt: float) -> int:
     """The tick after which a run whose walk comes to rest at ``end_time`` (s, walk clock) is over: ``options.after``
     later (``k0``: the walk's first tick)."""
     return k0 + math.floor((end_time + options.after) / dt + 1e-9) + 1
-
-
-def start_pose(planner: OnlinePlanner) -> tuple[list[float], list[float], list[float]]:
-    """COG ``(x, y, z)`` and feet ``(x, y, z, yaw)`` at the start of the walk: standing, COG between the feet.
-
-    Read from the first two footprints rather than by sampling, so the planner stays unsampled (an early footstep
-    change is still accepted at its deadline).
-    """
-    first, second = planner.footprints(1)[:2]
-    left, right = (first, second) if first.side == "left" else (second, first)
-    cog = [0.5 * (left.x + right.x), 0.5 * (left.y + right.y), planner.config.cog_height]
-    return cog, [left.x, left.y, 0.0, left.yaw], [right.x, right.y, 0.0, right.yaw]
 
 
 def run_length(

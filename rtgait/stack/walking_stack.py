@@ -40,6 +40,7 @@ class StackOutput(NamedTuple):
     """What one tick of the stack made.
 
     Attributes:
+        measurement: the walking state the controller acted on; ``None`` for a tick that only held IK targets.
         targets: the controller's output (:class:`~rtgait.control.settings.ControlTargets`); ``None`` for a tick
             that only held IK targets (:meth:`WalkingStack.hold`).
         q: the IK's configuration of the reduced model, free flyer first (m, quaternion, rad), shape ``(nq,)``.
@@ -47,6 +48,7 @@ class StackOutput(NamedTuple):
             the ankles.
     """
 
+    measurement: Measurement | None
     targets: ControlTargets | None
     q: np.ndarray
     command: JointCommand
@@ -99,7 +101,7 @@ class WalkingStack:
         of :meth:`tick`)."""
         out = self.controller.tick(t, measurement)
         targets = _new_tuple(IKTargets, (out.com, out.left_foot, out.right_foot, out.lean))
-        return self._command(targets, out, out.offsets)
+        return self._command(targets, measurement, out, out.offsets)
 
     def tick(self, t: float, readings: SensorReadings | None, truth: GroundTruth | None = None) -> StackOutput:
         """One whole tick at ``t`` (s): estimate, control, IK, joint command."""
@@ -107,9 +109,15 @@ class WalkingStack:
 
     def hold(self, targets: IKTargets) -> StackOutput:
         """The joints for IK targets given directly, the controller left out (e.g. a start transition)."""
-        return self._command(targets, None, None)
+        return self._command(targets, None, None, None)
 
-    def _command(self, targets: IKTargets, out: ControlTargets | None, offsets: FootOffsets | None) -> StackOutput:
+    def _command(
+        self,
+        targets: IKTargets,
+        measurement: Measurement | None,
+        out: ControlTargets | None,
+        offsets: FootOffsets | None,
+    ) -> StackOutput:
         q, _ = self.ik.solve(targets, self._q, max_iterations=1, tolerance=0.0, errors=False)
         self._q = q
         joints = q[7:]
@@ -118,4 +126,4 @@ class WalkingStack:
             add_ankle_offsets(joints, self.ankles, offsets)
         velocities = (joints - self._joints_previous) / self.dt
         self._joints_previous = joints
-        return _new_tuple(StackOutput, (out, q, JointCommand(joints, velocities)))
+        return _new_tuple(StackOutput, (measurement, out, q, JointCommand(joints, velocities)))

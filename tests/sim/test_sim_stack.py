@@ -18,8 +18,8 @@ from rtgait.robot.controller_info import robot_info  # noqa: E402
 from rtgait.robot.ik import WholeBodyIK  # noqa: E402
 from rtgait.robot.motion import robot_scenario  # noqa: E402
 from rtgait.scenario import load_scenario  # noqa: E402
-from rtgait.sim.loop_options import start_pose  # noqa: E402
 from rtgait.sim.robot import SimRobot  # noqa: E402
+from rtgait.stack.setup import start_pose  # noqa: E402
 from rtgait.stack.walking_stack import WalkingStack  # noqa: E402
 
 

@@ -1,0 +1,70 @@
+"""A controller stack made for a walk on a robot model: the controller level, its planner, the IK, the estimator,
+and the standing configuration the walk starts from."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from rtgait.control.controller import make_controller
+from rtgait.estimation.ground_truth import GroundTruthEstimator
+from rtgait.interface.task_targets import IKTargets
+from rtgait.robot.controller_info import robot_info
+from rtgait.robot.ik import WholeBodyIK
+from rtgait.stack.walking_stack import WalkingStack
+
+if TYPE_CHECKING:
+    from rtgait.control.settings import ControllerOptions
+    from rtgait.core.pendulum.loop import Controller
+    from rtgait.core.planner.online import OnlinePlanner
+    from rtgait.estimation.estimator import Estimator
+    from rtgait.robot.model import RobotModel
+    from rtgait.scenario.scenario import Scenario
+
+__all__ = ["start_pose", "walking_stack"]
+
+
+def start_pose(planner: OnlinePlanner) -> tuple[list[float], list[float], list[float]]:
+    """COG ``(x, y, z)`` and feet ``(x, y, z, yaw)`` at the start of the walk: standing, COG between the feet.
+
+    Read from the first two footprints rather than by sampling, so the planner stays unsampled (an early footstep
+    change is still accepted at its deadline).
+    """
+    first, second = planner.footprints(1)[:2]
+    left, right = (first, second) if first.side == "left" else (second, first)
+    cog = [0.5 * (left.x + right.x), 0.5 * (left.y + right.y), planner.config.cog_height]
+    return cog, [left.x, left.y, 0.0, left.yaw], [right.x, right.y, 0.0, right.yaw]
+
+
+def walking_stack(
+    robot: RobotModel,
+    walk: Scenario,
+    *,
+    dt: float,
+    level: Controller = "adaptive",
+    options: ControllerOptions | None = None,
+    estimator: Estimator | None = None,
+) -> WalkingStack:
+    """The stack that walks ``walk`` on ``robot`` at control period ``dt`` (s).
+
+    Args:
+        robot: the robot's model.
+        walk: the scenario, made for the robot (:func:`rtgait.robot.motion.robot_scenario` gives it the robot's COG
+            height, sole and step width).
+        dt: the control period (s).
+        level: the controller level (:mod:`rtgait.control.controller`).
+        options: the controller's settings; default :class:`~rtgait.control.settings.ControllerOptions`.
+        estimator: readings -> walking state; default the ground-truth estimator, for a simulator's truth.
+
+    The stack's configuration :attr:`WalkingStack.q` is the walk's standing start: the COG between the first two
+    footprints at the walking height, the soles level (the IK solved from half-sitting). Start the robot there.
+    """
+    controller = make_controller(
+        level, walk.planner_config(), walk.strides(), walk.sole, robot_info(robot), dt=dt, options=options
+    )
+    ik = WholeBodyIK(robot)
+    cog, left, right = start_pose(controller.planner)
+    q, _ = ik.solve(IKTargets(cog, left, right), robot.q_half_sitting, 200, 1e-9)
+    if estimator is None:
+        weight = robot.mass * controller.planner.config.gravity
+        estimator = GroundTruthEstimator(controller.planner.w, weight)
+    return WalkingStack(estimator, controller, ik, q)
