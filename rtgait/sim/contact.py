@@ -77,7 +77,7 @@ def _measure(
             left = True
         elif right_geom in g:
             left = False
-        else:  # the legs' boxes touching each other (frictionless, one row): not a support
+        else:  # the legs' shapes touching each other (frictionless, one row): not a support
             other += 1
             continue
         fz = efc_force[a] + efc_force[a + 1] + efc_force[a + 2] + efc_force[a + 3]

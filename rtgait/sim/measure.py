@@ -64,7 +64,7 @@ import numpy as np
 from rtgait.core.geometry.footsteps import Footstep, Side
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
-if TYPE_CHECKING:  # the model module is being rewritten: only its attribute names are relied on
+if TYPE_CHECKING:  # for type hints only: the measurer reads the model by attribute name
     from rtgait.sim.model import SimModel
 
 __all__ = [

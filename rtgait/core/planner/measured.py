@@ -1,11 +1,10 @@
 """Planning from the robot: the part of the online planner that listens to the measured state.
 
 :class:`~rtgait.core.planner.online.OnlinePlanner` takes these methods from :class:`MeasuredPlanning` (a mixin, so that
-the
-per-tick path stays one object with no indirection): ``observe`` (the measured COG state, and a replan by itself
+the per-tick path stays one object with no indirection): ``observe`` (the measured COG state, and a replan by itself
 when the DCM error grows), ``touchdown`` (re-anchoring on a real foothold), ``replan_now`` (a plan whose free first
-segment is the remainder of the phase under way), the connection from the measured state, and step adjustment
-after a replan. The equations are in ``docs/closed_loop.md``.
+segment is the remainder of the phase under way), the connection from the measured state, and step adjustment after a
+replan. The equations are in ``docs/closed_loop.md``.
 
 The mixin reads and writes the planner's state (the plan under way, the walk, the phase being sampled); it has no
 state of its own and is not meant to be used alone.
