@@ -250,10 +250,9 @@ class MeasuredPlanning:
         With none, ``StepAdjustment.on_failure`` decides: ``"continue"`` takes the landing with the largest margin
         all the same (a capture step) and walks on, ``"stop"`` takes it and stops after that step, ``"keep"`` keeps
         the walk as planned (footprints and timing). A plan made from the measured state is then replaced by the
-        one from the planned state
-        ``planned``, with the new landing: a plan no foot can realise would ask the feedback law to follow it, while
-        from the planned state it asks only for what the ankle can do and the law, saturated at the sole's edge,
-        recovers the rest (at the pendulum level this recovers 5-25 % more impulse than the measured plan).
+        one from the planned state ``planned``, with the new landing: a plan no foot can realise would ask the
+        feedback law to follow it, while from the planned state it asks only for what the ankle can do and the law,
+        saturated at the sole's edge, recovers the rest.
         """
         plan = self._plan
         q = plan.phase0
