@@ -4,16 +4,13 @@ For trying measured-state replanning, DCM feedback and step adjustment without a
 (:class:`~rtgait.core.pendulum.plant.LipmPlant`) is the linear inverted pendulum the planner assumes, so whatever goes
 wrong is the controller's doing (or the pendulum's instability), never a modelling mismatch.
 
-Controller levels (the names the MuJoCo loop uses too):
-
-* ``"open-loop"``: the plant is commanded the planned ZMP; the planner replans from its own plan
-  (``feedback="planned"``), the paper's assumption of perfect tracking.
-* ``"stabilized"``: the commanded ZMP is the DCM feedback law (:class:`~rtgait.core.laws.feedback.DcmFeedback`) on the
-  plant's DCM ``xi = c + c'/w`` against the plan's; the planner still replans from its own plan.
-* ``"adaptive"``: ``"stabilized"`` with the planner of :func:`controller_config`: every plan from the observed COM
-  state (``feedback="measured"``), a replan at once when the DCM error exceeds ``replan_dcm_error``, and step
-  adjustment; the loop calls :meth:`~rtgait.core.planner.online.OnlinePlanner.observe` every tick and
-  :meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown` at every landing.
+Controller levels (the names the MuJoCo loop uses too; the table in ``docs/closed_loop.md``): ``"open-loop"``
+commands the planned ZMP and replans from its own plan (the paper's assumption of perfect tracking);
+``"stabilized"`` commands the DCM feedback law's ZMP (:class:`~rtgait.core.laws.feedback.DcmFeedback`); ``"adaptive"``
+adds the planner of :func:`controller_config` (every plan from the observed COM state, a replan at once beyond
+``replan_dcm_error``, step adjustment), which the loop calls
+:meth:`~rtgait.core.planner.online.OnlinePlanner.observe` every tick and
+:meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown` at every landing.
 
 One tick, from ``t`` to ``t + dt`` (``dt`` the control period, 1 ms by default): measure the plant at ``t`` (and
 ``observe`` it); the planner's sample at ``t`` and its support polygon (the convex hull of the soles on the ground,
