@@ -1,43 +1,30 @@
 """The controller levels of the MuJoCo loop: planner sample -> feedback -> IK targets, once per control tick.
 
-Names and planner settings are those of :mod:`rtgait.core.pendulum.loop` (:func:`~rtgait.core.pendulum.loop.
-controller_config`), the pendulum-level loop:
+The level names and their planner settings are those of the pendulum-level loop (:mod:`rtgait.core.pendulum.loop`,
+:func:`~rtgait.core.pendulum.loop.controller_config`):
 
 * ``"open-loop"``: the plan alone (the paper's assumption): COM and feet targets are the planner's sample.
-* ``"stabilized"``: the DCM law (:class:`~rtgait.core.laws.feedback.DcmFeedback`) on the measured DCM gives a commanded
-ZMP
-  ``p_cmd`` and a COM correction ``d`` (COM admittance ``d' = -A (p_cmd - p_measured) - d / T_c``, added to the planned
-  COM), and foot force control (:mod:`rtgait.control.foot_control`) makes the feet produce ``p_cmd``: split between the
-  feet in contact, each sole's CoP servoed by its ankle, the force difference by the feet's heights.
-* ``"adaptive"``: ``"stabilized"`` with a planner that closes the loop:
-:meth:`~rtgait.core.planner.online.OnlinePlanner.
-  observe` every tick, replanning from the measured state, step adjustment in a stride box sized for the robot
-  (:func:`step_limits`), re-anchoring on the landed feet, and landing detection.
+* ``"stabilized"``: the DCM law (:class:`~rtgait.core.laws.feedback.DcmFeedback`) on the measured DCM gives a
+  commanded ZMP ``p_cmd`` and a COM correction ``d`` (m, added to the planned COM; COM admittance
+  ``d' = -A (p_cmd - p_measured) - d / T_c``), and foot force control (:mod:`rtgait.control.foot_control`) makes the
+  feet produce ``p_cmd``: split between the feet in contact, each sole's CoP servoed by its ankle, the force
+  difference by the feet's heights. When the polygon limits the law's ZMP, the shortfall is asked of the upper
+  body's lean (the hip strategy, :mod:`rtgait.core.laws.hip_strategy`, ``ControllerOptions.hip_strategy``), which
+  returns upright once nothing is asked, also after a switch to ``"open-loop"``.
+* ``"adaptive"``: ``"stabilized"`` with the planner in the loop: every landing is classified and re-anchors the plan
+  on its measured pose (:mod:`rtgait.control.landings`), and a DCM error beyond ``replan_dcm_error`` (25 mm) remakes
+  the plan from the measured state with step adjustment in a stride box sized for the robot
+  (:func:`~rtgait.control.settings.step_limits`). The other levels only log landings.
 
-  *When the measured state enters the plan* (``ControllerOptions.measured_replanning``). ``"on-error"`` (default):
-  when the measured DCM is more than ``replan_dcm_error`` (25 mm) off the plan's, the plan under way is remade from the
-  measured state and the step adjustment may move the next landing; every other plan (the start, the regular
-  double-support replans, the re-anchoring at landings) continues the plan under way, whose COM the stiff servos
-  track with the feedback law's correction. ``"always"``: the core's ``feedback="measured"``, every plan from the
-  measured state. On a stiff position-controlled robot ``"always"`` turns each tick's servo lag into a new plan: the
-  IK's COM target follows the robot instead of holding it, and G1 fell on fig6 (Talos walked either way).
+When the measured state enters the plan (``ControllerOptions.measured_replanning``): ``"on-error"`` (default) only on
+such a DCM error; every other plan (the start, the double-support replans, the re-anchoring at landings) continues
+the plan under way, whose COM the stiff servos track with the law's correction. ``"always"`` makes every plan from the
+measured state (the core's ``feedback="measured"``); on a stiff position-controlled robot the IK's COM target then
+follows each tick's servo lag instead of holding the robot (``docs/design/control.md``).
 
-  *Landings* (:mod:`rtgait.control.landings`, :class:`~rtgait.control.landings.FootLandings`, which the
-  controller owns and calls every tick): every landing is classified (early, on time, late, re-landing, ignored) and
-  re-anchors the plan on its measured pose (:meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown`, an immediate
-  replan); an early one holds its foot where it landed and switches support at once, a late one lowers its foot's
-  target until it finds the ground, and a re-anchored or held foot's IK target is blended to its new pose over
-  ``anchor_blend`` (40 ms). The other levels only log landings.
-
-  *The hip strategy* (both closed levels, :mod:`rtgait.core.laws.hip_strategy`, ``ControllerOptions.hip_strategy``):
-  when
-  the DCM law's ZMP is limited by the support polygon, the shortfall is asked of the upper body's lean (the IK's
-  ``lean`` target), whose rate of angular momentum moves the CMP past the sole; the lean returns upright once nothing
-  is asked, also after a switch to ``"open-loop"``.
-
-  *When no step catches the error, the plan is kept* (:meth:`WalkingController._dcm_error_replan`): no replan for
-  an outward DCM error in single support, and a later step's landing and timing are kept when no candidate for it
-  catches the error (the core's ``on_failure="keep"``).
+When no step catches the error, the plan is kept (:meth:`WalkingController._dcm_error_replan`): no replan for an
+outward DCM error in single support unless step timing adaptation may hold the stance longer, and a later step's
+landing and timing are kept when no candidate for it catches the error (the core's ``on_failure="keep"``).
 
 All on Python floats; the support polygon (numpy) is rebuilt only when the feet in contact move.
 """
@@ -198,8 +185,7 @@ class WalkingController:
             out = self.feedback.update(planned_zmp, (values[21], values[22]), dcm, polygon, None, zmp_measured)
             zmp, com_offset = out.zmp, out.com_offset
             if out.saturated and self.hip is not None:
-                # The law asks more than the sole gives: the rest is asked of the upper body's lean. (Asked only
-                # while the DCM is within 20 mm of the polygon's edge or past it, the lean came too late.)
+                # The law asks more than the sole gives: the rest is asked of the upper body's lean.
                 shortfall = (out.zmp_unsaturated[0] - zmp[0], out.zmp_unsaturated[1] - zmp[1])
             com = (com[0] + com_offset[0], com[1] + com_offset[1], com[2])
             if self.foot is not None:
@@ -355,9 +341,9 @@ class WalkingController:
         before the start, without a jump in the IK's targets.
 
         The planner and its plan go on as they are (no replan at the switch); its settings become the new level's,
-        made from its current ones as :func:`make_controller` makes them (:func:`~rtgait.core.pendulum.loop.
-        controller_config`: measured-state replanning, the DCM-error threshold and step adjustment for
-        ``"adaptive"`` only). What each switch starts, stops or resets:
+        made from its current ones as :func:`make_controller` makes them
+        (:func:`~rtgait.core.pendulum.loop.controller_config`: measured-state replanning, the DCM-error threshold and
+        step adjustment for ``"adaptive"`` only). What each switch starts, stops or resets:
 
         * to a closed level from ``"open-loop"``: a new DCM feedback law and foot force control, from zero state
           (no COM or foot offset, an empty integral), so the targets start from the plan's; the commanded ZMP steps

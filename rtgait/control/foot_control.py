@@ -1,70 +1,54 @@
 """Foot force control for a position-controlled humanoid: the feet realise the commanded ZMP.
 
 After Kajita et al., "Biped walking stabilization based on linear inverted pendulum tracking" (IROS 2010), as
-hrpsys-base's Stabilizer (``rtc/Stabilizer/Stabilizer.cpp``, EEFM) and lipm_walking_controller
-(``src/Stabilizer.cpp``) implement it. A stiff position servo cannot command a torque, but it can move the foot
-against the ground: tilting a loaded sole moves its centre of pressure (CoP), and raising one foot against the
-other moves load between them. Three parts, per control tick:
+hrpsys-base's Stabilizer (EEFM) and lipm_walking_controller implement it: a stiff position servo cannot command a
+torque, but tilting a loaded sole moves its centre of pressure (CoP), and raising one foot against the other moves
+load between them. Three parts, per control tick (world frame, SI units):
 
-**1. Wrench distribution** (:func:`split_zmp`): the commanded ZMP ``p`` is shared between the feet in contact. In
-single support the stance foot takes all of it (its CoP is ``p`` clamped to the sole). In double support, with the
-sole points ``r_L, r_R`` and ``u = r_L - r_R``, the left foot's share of the normal force is the position of ``p``
-along the segment between the sole points,
+**1. Wrench distribution** (:func:`split_zmp`). In single support the stance foot takes the commanded ZMP ``p``
+(clamped to its sole). In double support, with the sole points ``r_L, r_R`` and ``u = r_L - r_R``,
 
     a = clamp(((p - r_R) . u) / |u|^2, 0, 1),        f_L = a f,  f_R = (1 - a) f
 
 and what the segment cannot reach, ``o = p - (r_R + a u)``, is produced by both CoPs alike: ``c_L = r_L + o``,
-``c_R = r_R + o``, each clamped to its sole. Then ``a c_L + (1 - a) c_R = p`` exactly unless a clamp acted
-(``saturated``). This is the simple projection the brief allows instead of lipm_walking_controller's force
-distribution QP (which weighs net-wrench error, ankle torques and the same force ratio); it needs no solver, is
-exact whenever the ZMP is feasible, and gives the QP's ratio.
+``c_R = r_R + o``, each clamped to its sole, so ``a c_L + (1 - a) c_R = p`` unless a clamp acted (``saturated``).
+A projection in place of lipm_walking_controller's force distribution QP: no solver, exact whenever the ZMP is
+feasible, the QP's force ratio.
 
-**2. Ankle damping control of each sole's CoP** (hrpsys ``calcDampingControl``, Kajita 2010 eqs. 14-17). With the
-measured normal force ``f_z``, the measured and desired CoPs in the sole frame, the moment error about the sole
-point is ``dtau_x = f_z (c_y - c_y,d)``, ``dtau_y = -f_z (c_x - c_x,d)`` (N m), and the foot's roll and pitch offsets
-(about the sole frame's x and y axes) obey
+**2. Ankle damping of each sole's CoP** (hrpsys ``calcDampingControl``, Kajita 2010 eqs. 14-17). With the measured
+normal force ``f_z`` and the measured and desired CoPs in the sole frame, the moment error is
+``dtau_x = f_z (c_y - c_y,d)``, ``dtau_y = -f_z (c_x - c_x,d)`` (N m), and the roll and pitch offsets obey
 
     theta' = K dtau - theta / T,        |theta'| <= theta'_max,  |theta| <= theta_max              (3)
 
-With ``tau`` the moment the foot applies to the ground (the negative of the reaction measured here) this is
-hrpsys' form ``theta' = K (tau_d - tau) - theta / T``. Signs: a CoP in front of the desired one gives
-``dtau_y < 0``, the pitch offset decreases, the toe rises and the heel presses: the CoP moves back. A CoP left of
-the desired gives a positive roll, which presses the right edge. The leak ``T`` returns the ankle to the plan when
-the error vanishes; an unloaded (swinging) foot has no torque input and leaks with the shorter ``swing_time_constant``
-so that it lands level.
+This is hrpsys' ``theta' = K (tau_d - tau) - theta / T`` with ``tau`` the moment the foot applies to the ground (the
+negative of the reaction measured here). Signs: a CoP in front of the desired one gives ``dtau_y < 0``, the toe rises
+and the heel presses, the CoP moves back; a CoP left of the desired one gives a positive roll, which presses the
+right edge. The leak ``T`` returns the ankle to the plan; a foot in the air leaks with ``swing_time_constant`` so
+that it lands level.
 
-**3. Foot force-difference control** (Kajita 2010 eq. 18; lipm_walking_controller
-``updateFootForceDifferenceControl``). In double support, with both feet loaded, the heights of the feet references
-are moved apart by ``dz = h_R - h_L`` (m):
+**3. Foot force-difference control** (Kajita 2010 eq. 18). In double support, both feet loaded, the feet's heights
+move apart by ``dz = h_R - h_L`` (m):
 
     dz' = K_f ((f_L - f_R)_d - (f_L - f_R)) - dz / T_f,        h_L = m - dz/2,  h_R = m + dz/2       (4)
 
-with the desired difference ``(2 a - 1)`` times the measured total, and their mean ``m`` leaking to zero. A left
-foot carrying less than desired makes ``dz`` grow: the left reference goes down, the right one up. Outside double
-support each foot's height offset leaks (``T_f`` loaded, ``swing_time_constant`` in the air); each is clamped to
-``max_height``.
+with the desired difference ``(2 a - 1)`` times the measured total and the mean ``m`` leaking to zero. Outside double
+support each height leaks (``T_f`` loaded, ``swing_time_constant`` in the air); each is clamped to ``max_height``.
 
-Gains (SI), defaults and sources:
+Defaults (:class:`FootControlGains`) and sources: ``cop_admittance`` K = 0.01 rad/(N m s), lipm_walking_controller's
+``admittance.cop`` for HRP-4 and HRP-2 (hrpsys' ``1 / eefm_rot_damping_gain``); ``cop_time_constant`` T = 1.5 s and
+``max_tilt`` = 10 degrees, hrpsys ``eefm_rot_time_const`` and ``eefm_rot_compensation_limit``; ``max_tilt_rate`` =
+0.2 rad/s, lipm_walking_controller ``MAX_FDC_RX_VEL``; ``force_difference_admittance`` K_f = 1e-4 m/(N s),
+lipm_walking_controller ``admittance.dfz`` (HRP-4; its clamps, 0.1 and 5e-4, bound the accepted values);
+``force_difference_time_constant`` T_f = 1.5 s, ``max_height`` = 0.025 m and ``swing_time_constant`` = 0.08 s, hrpsys
+``eefm_pos_time_const_support``, ``eefm_pos_compensation_limit`` and ``eefm_pos_time_const_swing``. These are gains
+of 40-60 kg robots with rubber bushes in their feet: tune ``K`` on the robot
+(:data:`rtgait.control.settings.SIM_COP_ADMITTANCE`).
 
-* ``cop_admittance`` K = 0.01 rad/(N m s): lipm_walking_controller's ``admittance.cop`` for HRP-4 and HRP-2
-  (``etc/LIPMWalking.conf.cmake``), which is also hrpsys' ``1 / eefm_rot_damping_gain`` = 1 / 100 N m s/rad.
-  lipm_walking_controller clamps it to 0.1 (``MAX_COP_ADMITTANCE``).
-* ``cop_time_constant`` T = 1.5 s: hrpsys ``eefm_rot_time_const``.
-* ``max_tilt`` = 10 degrees: hrpsys ``eefm_rot_compensation_limit``; ``max_tilt_rate`` = 0.2 rad/s:
-  lipm_walking_controller ``MAX_FDC_RX_VEL`` / ``MAX_FDC_RY_VEL``.
-* ``force_difference_admittance`` K_f = 1e-4 m/(N s): lipm_walking_controller ``admittance.dfz`` (HRP-4; clamp
-  5e-4, ``MAX_DFZ_ADMITTANCE``); hrpsys' ``1 / eefm_pos_damping_gain`` is 1 / 3500 = 2.9e-4.
-* ``force_difference_time_constant`` T_f = 1.5 s: hrpsys ``eefm_pos_time_const_support``.
-* ``max_height`` = 0.025 m per foot: hrpsys ``eefm_pos_compensation_limit``.
-* ``swing_time_constant`` = 0.08 s: hrpsys ``eefm_pos_time_const_swing``.
-
-The gains were tuned for robots of 40-60 kg; ``K`` per N m acts faster on a heavier robot (the same CoP error is a
-larger moment), so tune it on the robot (:mod:`rtgait.control.controller` passes them through).
-
-Output (:class:`FootOffsets`): roll and pitch per foot (rad) and height per foot (m), to add to the feet targets
-before the IK. The IK of :mod:`rtgait.robot.ik` keeps soles level, so the tilts go to the ankle joints after it
-(:func:`rtgait.robot.ankles.find_ankle_joints`, :func:`rtgait.robot.ankles.add_ankle_offsets`); the heights go to the
-feet targets' z.
+Output (:class:`~rtgait.interface.task_targets.FootOffsets`): roll and pitch per foot (rad) and height per foot (m).
+The IK of :mod:`rtgait.robot.ik` keeps soles level, so the tilts go to the ankle joints after it
+(:func:`rtgait.robot.ankles.find_ankle_joints`, :func:`rtgait.robot.ankles.add_ankle_offsets`); the heights go to
+the feet targets' z.
 """
 
 from __future__ import annotations

@@ -1,52 +1,43 @@
 """The feet's landings in the MuJoCo loop: what a landing does to the plan and to its foot's target
 (:class:`FootLandings`, owned and called every tick by :class:`~rtgait.control.controller.WalkingController`).
 
-Landings come detected by the measurer (:class:`~rtgait.estimation.state.Landing`: side, measured sole pose). Each one
-is
-logged with its kind; in the ``"adaptive"`` level it also acts (``FootLandings.adaptive``), in the others it is only
-logged. Settings (s, m, m/s) are those of :class:`~rtgait.control.settings.ControllerOptions`.
+Landings come detected by the measurer (:class:`~rtgait.estimation.state.Landing`: side, measured sole pose). Each is
+logged with its kind; in the ``"adaptive"`` level it also acts. Settings (s, m, m/s) are those of
+:class:`~rtgait.control.settings.ControllerOptions`.
 
-**Classification** of a landing of foot ``i`` at ``t`` (s), the plan's phase ``q`` starting at ``t_q`` and lasting
-``T_q``:
+**Classification** of a landing of foot ``i`` at ``t`` (s), the plan's phase ``q`` starting at ``t_q``, lasting ``T_q``:
 
 * *re-landing*: the foot's last swing already ended on the ground, or the plan has it standing and ``q`` is not the
   phase right after its swing (a bounce, or a standing foot unloaded and loaded again);
-* the plan has the foot swinging: *on time* when ``t_q + T_q - t <= on_time_window`` (80 ms; the swing's height
-  profile ends flat, so a robot whose stance side gives 2 mm lands that early at every step), *early* when
-  ``t - t_q >= early_touchdown_fraction T_q`` (the swing's second half), else *ignored* (a scuff);
-* the swing is over: *late* when the foot was in the air at the swing's end and ``late_grace`` (10 ms, the landing's
-  detection lag) has passed since, else on time.
+* the plan has the foot swinging: *on time* when ``t_q + T_q - t <= on_time_window`` (the swing's height profile ends
+  flat, so a stance side that gives 2 mm makes every landing that early), *early* when
+  ``t - t_q >= early_touchdown_fraction T_q``, else *ignored* (a scuff);
+* the swing is over: *late* when the foot was in the air at the swing's end and ``late_grace`` (the detection lag)
+  has passed since, else on time.
 
-**Re-anchoring.** In ``"adaptive"`` every landing but an ignored one is reported with its measured pose
+**Re-anchoring** (``"adaptive"``): every landing but an ignored one is reported with its measured pose
 (:meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown`: re-anchoring and an immediate replan, after which the
-tick's
-sample is taken again); a re-landing only when it moved ``relanding_tolerance`` (10 mm, heading ``2 x`` that in rad)
+tick's sample is taken again); a re-landing only when it moved ``relanding_tolerance`` (heading: twice that, in rad)
 from where the foot was last anchored. A refused touch-down is logged (``"touchdown-refused"``); the plan stays.
 
 **Heights.** Each foot's target is the plan's ``(x, y, z_plan, yaw)`` with a height offset ``z`` (m) on top:
 
-* a new swing sheds the offset its foot stood at linearly, ``z(t) = z_0 (1 - s)``, ``s = (t - t_lift) / T_swing``;
-* an *early* landing holds the foot where it landed, ``(x_l, y_l, yaw_l)``, until the plan's double support: its
-  target goes on down with the plan, ``max(z_plan + z, z_floor)``, to a floor ``z_floor = z_plan(t_l) + z -
-  late_descent_limit`` (2 cm below where it touched: on a higher ground the foot must not push the robot up); at the
-  hold's end (the plan's double support, where ``z_plan = 0``) the offset keeps the height the target reached,
-  ``z <- max(z, z_floor)``; meanwhile polygon and ZMP split take both feet (the support :meth:`FootLandings.update`
-  gives);
-* a *late* foot's target descends at ``late_descent_speed`` (0.3 m/s) to ``-late_descent_limit``,
-  ``z <- max(z - v dt, -late_descent_limit)`` per tick, while the other foot carries the robot (auto_stabilizer
-  ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset`` -0.02 m; unlike auto_stabilizer the plan is not
-  delayed). Once it lands it stands at the ground's measured height ``z_g = min(0, max(-late_descent_limit, z_l))``:
-  kept as deep as the target went, it would extend the stance leg, lift the body and make the next landing later
-  still. The offset goes there linearly over the single support the foot carries next, ``z = z_land + (z_g -
-  z_land) s``, ``s = (t - t_l) / (t_end - t_l)``.
+* a new swing sheds the offset its foot stood at: ``z(t) = z_0 (1 - s)``, ``s = (t - t_lift) / T_swing``;
+* an *early* landing holds the foot where it landed, ``(x_l, y_l, yaw_l)``, until the plan's double support, its
+  target going on down with the plan to a floor, ``max(z_plan + z, z_floor)``, ``z_floor = z_plan(t_l) + z -
+  late_descent_limit`` (on higher ground the foot must not push the robot up); at the hold's end ``z <- max(z,
+  z_floor)``; meanwhile the polygon and the ZMP split take both feet;
+* a *late* foot's target descends, ``z <- max(z - late_descent_speed dt, -late_descent_limit)`` per tick, while the
+  other foot carries the robot (auto_stabilizer ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset``
+  -0.02 m; the plan is not delayed). Once landed it stands at the ground's measured height ``z_g = min(0,
+  max(-late_descent_limit, z_l))``, reached linearly over the single support it carries next, ``z = z_land + (z_g -
+  z_land) s``, ``s = (t - t_l) / (t_end - t_l)``: kept as deep as the target went, it would extend the stance leg,
+  lift the body and make the next landing later still.
 
-**No step in a loaded foot's target.** A re-anchoring moves the landed foot's target onto its measured pose, a few
-millimetres from where the servos had it, and an early landing's hold starts and ends with a jump of its own; the IK
-gets the foot's target moved from its old pose and rate (the finite difference of the last two IK targets) to the new
-one over ``anchor_blend`` (40 ms) along the planner's own retargeted-swing quintic (:mod:`rtgait.control.target_blend`),
-and so do swing feet re-anchored less than ``anchor_blend`` before the plan's touch-down (the planner's retargeted
-swing takes the others there smoothly over what is left of the swing). The planner, the support polygon and the ZMP
-split have the foot where it was measured at once: only :meth:`FootLandings.ik_targets` blends.
+**Blends.** A re-anchoring moves a landed foot's target by the servo lag, and an early landing's hold starts and
+ends with a jump; with ``anchor_blend`` > 0 the IK's target goes there from its old pose and rate along the planner's
+retargeted-swing quintic (:mod:`rtgait.control.target_blend`). The planner, the support polygon and the ZMP split
+have the foot where it was measured at once: only :meth:`FootLandings.ik_targets` blends.
 
 Python floats and lists of two (left, right) only: the per-tick work is a few comparisons unless a foot lands.
 """
@@ -239,7 +230,7 @@ class FootLandings:
             # foot was higher than planned when the swing ended (a body that rose or rolled, or a lower ground);
             # the measured sole height is the ground's, and keeping the target's own depth instead would extend
             # the stance leg, lift the body and make the next landing later still. The target returns to it over
-            # the single support this foot carries next (a loaded foot's target moved at the descent's speed made
+            # the single support this foot carries next (moved at the descent's speed, a loaded foot's target makes
             # the ankle damping chatter).
             limit = self.options.late_descent_limit
             ground = min(0.0, max(-limit, landing.z))

@@ -29,25 +29,18 @@ __all__ = [
 ]
 
 SIM_COM_ADMITTANCE = 0.5
-"""COM admittance ``A`` of the MuJoCo levels (1/s): the value used on HRP-2Kai with mc_rtc's ZMPCC (mc_rtc PR #16,
-``closed_loop_anchors.md`` 1.2). lipm_walking_controller runs HRP-4 with it off, the feet alone realising the ZMP.
-Talos in MuJoCo, stiff position servos, 6 steps of 0.1 m at 0.7/0.1 s with a 0.1 s push on the pelvis mid single
-support: with ``A = 0`` the measured ZMP strayed 52 mm RMS from the plan and a 25 N s outward push felled it; with
-0.5, 22 mm, and it stood that push and a 40 N s inward one; with 2, 10 mm, but the inward push saturated the COM
-offset (5 cm) and felled it."""
+"""COM admittance ``A`` of the MuJoCo levels (1/s): the value used on HRP-2Kai with mc_rtc's ZMPCC (mc_rtc PR #16).
+lipm_walking_controller runs HRP-4 with it off, the feet alone realising the ZMP (``docs/design/control.md``)."""
 
 SIM_COP_ADMITTANCE = 0.002
 """Ankle damping gain ``K`` of the MuJoCo levels (rad/(N m s)), a fifth of lipm_walking_controller's 0.01 for HRP-4
 (:class:`~rtgait.control.foot_control.FootControlGains`). The CoP loop's rate is ``K`` times the stiffness that turns an
-ankle tilt into a sole moment: on HRP-2 and HRP-4 the rubber bushes of the foot set it, some 10^3 N m/rad; here it is
-the stiff ankle servo (Talos 2.7e5 N m/rad, G1 6e4) in series with MuJoCo's sole contact, some 10^4 N m/rad, so
-0.01 made the loop faster than the 5 ms filter and the tick: the tilts chattered at their rate limit and fig8 fell,
-on Talos and on G1. Measured (``stabilized``, fig6/7/8): 0.001-0.003 walk on both robots, the measured ZMP 2-5 mm
-closer to the plan than without ankle damping."""
+ankle tilt into a sole moment: on HRP-2 and HRP-4 the rubber bushes of the foot set it, some 10^3 N m/rad; here the
+stiff ankle servo in series with MuJoCo's sole contact, some 10^4 N m/rad, so the same ``K`` would make the loop
+faster than the measurement filter and the tick (``docs/design/control.md``)."""
 
 # The core's own thresholds for replans triggered by a DCM error (rtgait.core.planner.measured), under the names the
-# MuJoCo
-# controller uses: the least time between two, and the shortest phase remainder one is made over (s).
+# MuJoCo controller uses: the least time between two, and the shortest phase remainder one is made over (s).
 ERROR_REPLAN_INTERVAL = AUTO_REPLAN_INTERVAL
 ERROR_REPLAN_MIN_REMAINDER = AUTO_MIN_REMAINDER
 
@@ -87,16 +80,14 @@ class ControllerOptions:
         foot: foot force control gains, default its defaults with ``cop_admittance`` = :data:`SIM_COP_ADMITTANCE`;
             ``None`` turns foot force control off.
         measurement_filter: time constant of the first-order low-pass on the measured ZMP and feet loads and CoPs
-            before they are fed back (s); 0: none. MuJoCo's contact forces answer the stiff servos within a tick:
-            fed back raw, they made Talos's ankle tilts chatter to their clamp (ZMP 101 mm RMS from the plan, against
-            22 mm with 5 ms).
+            before they are fed back (s); 0: none. MuJoCo's contact forces answer the stiff servos within a tick,
+            and fed back raw they make the ankle tilts chatter.
         replan_dcm_error: ``"adaptive"``: DCM error that triggers an immediate replan (m).
         step_adjustment: ``"adaptive"``: stride box and limits; default :func:`step_limits` of the robot.
         adapt_timing: ``"adaptive"``: step adjustment may also change the single support of the step it moves
             (:class:`~rtgait.core.laws.stepping.StepAdjustment` ``adapt_timing``, Morisawa et al. 2006): shorten it,
             down to the limits' ``min_single_support``, and, where the limits set ``max_single_support``,
-            lengthen it (a push toward the stance foot's outside, which no landing catches). On by default: on
-            Talos and G1 it raised the pushes survived in 30 of 32 direction and phase pairs (README, "Pushes").
+            lengthen it (a push toward the stance foot's outside, which no landing catches).
         early_touchdown_fraction: a landing counts as an early touch-down from this fraction of the swing on; before,
             it is ignored (a scuff).
         late_descent_speed: how fast a late foot's target goes down (m/s).
@@ -105,45 +96,32 @@ class ControllerOptions:
         on_time_window: a touch-down this little before the plan's (s) is on time, not early: the foot goes on down
             with the plan and support switches with it. The swing's height profile ends flat (2 mm at 70 ms before
             the touch-down, :mod:`rtgait.core.geometry.swing`), so a robot whose stance side gives 2 mm touches that
-            early at
-            every step (G1 does: its body rolls 5-8 mrad toward the swing foot); switching support at each of those
-            touches made G1 fall on fig6 and fig8, while with this window it walks them.
+            early at every step.
         relanding_tolerance: a foot that lands again (after a bounce, or a standing foot unloaded and loaded
             again) is re-anchored only when it moved this far (m; its heading twice this in rad) from where it was
             anchored: a bounce in place would only replan for nothing.
         late_grace: a foot not on the ground when its swing ends counts as late only this long (s) after: the
             landing's detection lags the touch (MuJoCo's soft contact reaches the landing force a few milliseconds
-            after the sole touches; Talos's landings were detected 2-9 ms after the planned touch-down), and a foot
-            lowered for that lag stood its whole stance 1-2 mm below the floor, pressing against the other.
+            after the sole touches), and a foot lowered for that lag would stand its stance below the floor.
         measured_replanning: ``"adaptive"``: when a plan starts from the measured COM state. ``"on-error"``
             (default): only when the measured DCM is more than ``replan_dcm_error`` off the plan's (a disturbance);
             every other plan (the regular double-support replans, the re-anchoring at landings, the start) continues
             the plan under way. ``"always"``: every plan, the core's ``feedback="measured"`` (module docstring).
+        com_reference: ``"adaptive"``, the plan of a DCM-error replan: ``"measured"`` (default) starts it from the
+            measured COM state; ``"planned"`` takes the footsteps the measured state's step adjustment gives and lets
+            the COM go on from where the plan had it, so that the servos keep pulling the robot back.
         anchor_blend: how long (s) a foot's IK target takes to go from where it was to where a re-anchoring (or the
             start or end of an early landing's hold) puts it, from its pose and rate then, along the quintic of the
-            planner's retargeted swing (:func:`rtgait.core.geometry.swing.retargeted_swing`; the minimum-jerk ``10 s^3
-            - 15 s^4 +
-            6 s^5`` of ``s = (t - t_jump) / anchor_blend`` for a target at rest); 0: at once. A landed foot is
-            re-anchored on its measured pose, a few millimetres (and milliradians) from its target; moved in one tick, a
-            loaded foot's target steps and the commanded joint motion has the second difference of that step, an
-            acceleration of ``jump / dt^2`` (3.7 mm in 1 ms: 3700 m/s^2 of the leg). Blended, its peak is ``5.77 jump /
-            anchor_blend^2`` (13 m/s^2 for 3.7 mm in 40 ms) and it is continuous, so the commanded motion's ZMP is too.
-            A swing foot re-anchored on time goes to where it landed along the planner's retargeted swing, smooth, over
-            what is left of the swing; it is blended only when that is shorter than ``anchor_blend`` (on fig6-8 Talos
-            lands 10-40 ms before the plan's touch-down, G1 30-70 ms; the retargeted swing of a landing 1 ms before it
-            moved a loaded foot's target 2 mm in one tick). 40 ms: less than half of Talos's and G1's 0.1 s double
-            support, so the blend of a late landing (10-15 ms into it) is over before that foot carries the robot alone.
-            Only what the IK is asked is blended: the planner, the support polygon and the ZMP split have the foot where
-            it was measured. Off by default (0): it takes the one-tick spikes out of the commanded motion's ZMP (Talos
-            fig8 250 -> 21 mm RMS) without changing Talos's outcomes, but with 40 ms G1's 60 s forward walk at 0.3 m/s
-            walked 0.26 m/s and fell at its end (60.4 s at a 0.5 ms physics step, 61.5 s at 0.25 ms), where without
-            it G1 walks it at 0.30 m/s; why is not known yet.
+            planner's retargeted swing (:mod:`rtgait.control.target_blend`); 0 (default): at once. Moved in one tick,
+            a loaded foot's target steps by ``jump`` and the commanded joint motion has an acceleration of
+            ``jump / dt^2``; blended, its peak is ``5.77 jump / anchor_blend^2`` and continuous. A swing foot
+            re-anchored on time goes to where it landed along the planner's retargeted swing over what is left of
+            the swing; it is blended only when that is shorter than ``anchor_blend``. Only what the IK is asked is
+            blended: the planner, the support polygon and the ZMP split have the foot where it was measured. Why it
+            is off by default: ``docs/design/control.md``.
         hip_strategy: the closed levels lean the upper body when the DCM law asks the feet for a ZMP beyond the
             support polygon (:mod:`rtgait.core.laws.hip_strategy`: the rate of angular momentum moves the CMP beyond the
-            sole), with the robot's lean limits (:attr:`RobotInfo.lean`). On by default: it raised Talos's pushes
-            survived in 12 of 16 direction and phase pairs (lowered them in 4), forward and backward in single
-            support past 60 N s (docs/robots.md, "The hip strategy"); on G1, whose light upper body recovers at most
-            about 1.6 N s, it changes them mostly within the bisection's scatter.
+            sole), with the robot's lean limits (:attr:`RobotInfo.lean`).
         max_lean: the hip strategy's largest lean on each axis (rad); 0.25 (14 degrees) stays inside Talos's and
             G1's hip roll ranges (+-0.52 rad) with the walking's own roll on top.
     """
@@ -208,8 +186,8 @@ class ControlTargets(NamedTuple):
         com: COM target ``(x, y, z)`` for the IK (m): the plan's plus the COM correction.
         left_foot, right_foot: sole targets ``(x, y, z, yaw)`` (m, rad), the foot-control heights and the blend of
             a re-anchored foot (``ControllerOptions.anchor_blend``) included.
-        offsets: the foot force control's output (its tilts go to the ankles, :func:`~rtgait.robot.ankles.
-            add_ankle_offsets`; its heights are already in the feet's z).
+        offsets: the foot force control's output (its tilts go to the ankles,
+            :func:`~rtgait.robot.ankles.add_ankle_offsets`; its heights are already in the feet's z).
         zmp_command: the commanded ZMP (m); the planned one in ``"open-loop"``.
         zmp_planned: the planner's ZMP (m).
         com_offset: the COM correction ``d`` (m).

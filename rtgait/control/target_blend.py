@@ -20,7 +20,7 @@ per tick is ``15/8 |g - o0| dt / T`` and its largest acceleration ``10/sqrt(3) |
 for 3.7 mm over 40 ms). A ``p`` that runs to ``g`` in a few milliseconds (the planner's retargeted swing of a foot
 landed just before the plan's touch-down) is taken in at the blend's pace, ``b`` being ``10 s^3`` at first.
 
-Python floats only; :meth:`FootBlend.apply` runs every tick of a blend (40 per landing at 1 kHz).
+Python floats only; :meth:`FootBlend.apply` runs every tick of a blend (``T / dt`` ticks per landing).
 """
 
 from __future__ import annotations

@@ -113,8 +113,8 @@ def simulate(
             ``stop_after_steps`` in it are replaced by the ones derived from the arguments above.
         control_dt: the control period (s), overriding ``config`` and the robot description's
             ``actuation.control_dt``; with ``sim``, it must be the model's.
-        physics_dt: the physics step (s), overriding ``config``'s (default 1 ms); it must divide the control
-            period; with ``sim``, it must be the model's.
+        physics_dt: the physics step (s), overriding ``config``'s and the robot description's
+            ``actuation.physics_dt``; it must divide the control period; with ``sim``, it must be the model's.
 
     Returns:
         The per-tick record and the outcome.

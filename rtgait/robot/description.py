@@ -1,80 +1,29 @@
 """Robot descriptions: which URDF, which frames are the feet and the torso, how to stand and how to walk.
 
-A robot is described by a small TOML file. The built-in ones ship as package data in ``rtgait/robots/`` and are
-loaded by name (``load_robot("talos")``); any other file is loaded by path. Every key::
+A robot is described by a small TOML file (every key in ``docs/robots.md``, "The description file"). The built-in
+ones ship as package data in ``rtgait/robots/`` and are loaded by name (``load_robot("talos")``); any other file is
+loaded by path. Its tables, in SI units (m, rad, s, kg m^2, N m/rad):
 
-    name = "talos"                       # letters, digits, '.', '_' or '-'
-    description = "one line for listings"
+* ``name``, ``description``; ``[model]``: ``urdf`` (``"example-robot-data:<path>"`` or a file path, relative to the
+  TOML file) and optional ``package_dirs`` for ``package://`` mesh URIs;
+* ``[feet]``: ``left_sole_frame``, ``right_sole_frame`` (URDF links or joints whose origin is on the sole, under the
+  ankle, x forward and z up when standing), optional ``sole_offset`` (left foot's frame; the right foot uses its
+  mirror image, y negated), and ``[feet.sole]``: the sole rectangle ``front``, ``back``, ``inner`` (toward the other
+  foot), ``outer``;
+* ``[walking]``: ``cog_height`` (the planner's constant COG height), ``moving_joints`` (all others stay locked at
+  the posture), ``torso_frame`` (kept upright, heading along the mean yaw of the feet);
+* ``[posture]``: the half-sitting start posture, joint name -> angle (joints not listed are at 0);
+* optional, for the physics layer: ``[gains]`` (``kp``, ``kd``: a number or a table per joint) and ``[actuation]``
+  (periods, natural frequency, damping ratio, armature and ``[[actuation.joints]]`` groups matched by fnmatch
+  patterns, a later group winning); a joint's actuation is resolved key by key: the last matching group that sets
+  it, else ``[gains]``, else a default derived from the URDF by :mod:`rtgait.sim.actuation`;
+* optional: ``[stepping]`` (step adjustment's limits, :class:`~rtgait.core.laws.stepping.SteppingLimits`) and
+  ``[velocity]`` (bounds of walks by velocity command, :class:`~rtgait.core.planner.config.VelocityLimits`).
 
-    [model]
-    urdf = "example-robot-data:talos_data/robots/talos_reduced.urdf"
-    #   either "example-robot-data:<path below example-robot-data's robots/ folder>" or a filesystem path;
-    #   a relative path is resolved against the folder of the TOML file
-    # package_dirs = ["meshes/share"]    # optional: folders that package:// URIs resolve against (relative
-    #                                    # paths as for urdf); default: example-robot-data's share folder
-
-    [feet]
-    left_sole_frame = "left_sole_link"   # URDF link or joint whose origin is on the sole, under the ankle,
-    right_sole_frame = "right_sole_link" # x forward and z up when the robot stands
-    # sole_offset = [0.0, 0.0, -0.035]   # optional, m: from those frames to the sole point, in the frame of the
-    #                                    # left foot; the right foot uses the mirror image (y negated)
-
-    [feet.sole]                          # sole rectangle around the sole point, m
-    front = 0.105
-    back = 0.105
-    inner = 0.065                        # toward the other foot
-    outer = 0.065
-
-    [walking]
-    cog_height = 0.84                    # m above the ground, a little below the half-sitting COG (bent knees)
-    moving_joints = ["leg_left_1_joint", ...]   # joints the walking motion may move; all others stay locked
-    torso_frame = "torso_2_link"         # kept upright, heading along the mean yaw of the feet
-
-    [posture]                            # half-sitting start posture, joint name -> angle (rad or m);
-    leg_left_3_joint = -0.411354         # joints not listed are at 0
-    ...
-
-    [gains]                              # optional, for the physics layer: a number for every joint, or a table
-    kp = 500.0                           # joint name -> value (N m/rad and N m s/rad for revolute joints)
-    kd = 5.0
-
-    [actuation]                          # optional, for the physics layer (docs/robots.md has every key)
-    control_dt = 0.001                   # s: the period at which the controller sends joint references
-    natural_frequency = 10.0             # Hz: target of the derived kp on the inertia the joint carries
-    damping_ratio = 1.0                  # of the derived kd, on the joint's drive and the limb beyond it
-    armature_per_torque = 5e-4           # s^2: default armature per N m of effort limit
-
-    [[actuation.joints]]                 # joints matched by fnmatch patterns; a later group wins
-    match = ["leg_*_joint"]
-    rotor_inertia = 1e-5                 # kg m^2; armature = rotor_inertia * gear_ratio^2 (or give armature)
-    gear_ratio = 100.0                   # also: kp, kd, effort_limit, natural_frequency, damping_ratio
-
-    [stepping]                           # optional: step adjustment's limits (SteppingLimits);
-    max_length = 0.30                    # m, forward and back from the stance foot; every key optional
-    min_width = 0.15                     # m between the foot frames, at least 2 x feet.sole.inner (no crossing)
-    max_width = 0.40                     # m
-    max_swing_speed = 1.0                # m/s, average over the swing
-    min_time_to_touchdown = 0.2          # s: no change closer to touch-down
-    min_single_support = 0.5             # s: the shortest step timing adaptation may make
-    max_single_support = 1.2             # s: the longest (omit it: steps are only shortened)
-
-    [velocity]                           # optional: bounds of walks by velocity command (VelocityLimits)
-    max_step_length = 0.29               # m per step; every key optional
-    max_step_lateral = 0.16              # m of sideways displacement per pair of steps: |vy| <= it / 2T
-    max_step_turn = 0.6                  # rad of heading change per pair of steps: |wz| <= it / 2T
-    min_step_width = 0.15                # m: the narrowest stance a sideways walk closes to, at most the stance
-
-A joint's actuation is resolved key by key: the last matching ``[[actuation.joints]]`` group that sets the key,
-else ``[gains]`` (kp, kd), else a default derived from the URDF by :mod:`rtgait.sim.actuation`.
-
-Every problem with a description raises :class:`RobotError` with one line naming the field. The URDF is read
-with the standard library's XML parser (not Pinocchio) to check frame and joint names, so a description can be
-validated without building the model.
-
-This module holds the description (:class:`RobotDescription`), the document-level parse (:func:`parse_robot`: the
-``[model]``, ``[feet]``, ``[walking]`` and ``[posture]`` tables) and the loaders; the readers and checks of the
-other parts (paths, the URDF's names, ``[gains]``, ``[actuation]``, ``[stepping]``, ``[velocity]``) and
-:class:`RobotError` are in :mod:`rtgait.robot.description_checks`.
+Every problem raises :class:`RobotError` with one line naming the field. The URDF is read with the standard
+library's XML parser (not Pinocchio) to check frame and joint names, so a description can be validated without
+building the model. This module holds :class:`RobotDescription`, the document-level parse (:func:`parse_robot`) and
+the loaders; the readers and checks of the parts are in :mod:`rtgait.robot.description_checks`.
 """
 
 from __future__ import annotations

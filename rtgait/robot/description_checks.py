@@ -228,8 +228,7 @@ def parse_stepping(raw: Any, sole: SoleRect) -> SteppingLimits:
 def parse_velocity(raw: Any, sole: SoleRect) -> VelocityLimits:
     """The ``[velocity]`` table (:class:`~rtgait.core.planner.config.VelocityLimits` checks the values the way
     :class:`~rtgait.core.planner.config.PlannerConfig` does; ``min_step_width`` against the robot's stance is checked
-    when
-    it is applied, :func:`rtgait.robot.motion.robot_scenario`)."""
+    when it is applied, :func:`rtgait.robot.motion.robot_scenario`)."""
     limits = _limits_table(raw, "velocity", VELOCITY_KEYS, VelocityLimits.from_table)
     _soles_apart("velocity.min_step_width", limits.min_step_width, sole)
     return limits

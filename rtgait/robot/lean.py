@@ -10,7 +10,7 @@ centroidal angular momentum of that motion per unit lean rate:
 with ``A_g`` Pinocchio's centroidal momentum matrix (``computeCentroidalMap``) and ``dq`` the least-squares
 solution of those task equations (the IK's own Jacobians at half-sitting, :class:`~rtgait.robot.ik.WholeBodyIK`).
 The COM stays put, so ``dq`` has no linear momentum: only angular momentum, the reaction-wheel effect the
-strategy uses. Talos gives about 4.9 kg m^2 forward and 7.6 sideways, G1 0.9 and 1.4.
+strategy uses (the built-in robots' values: ``docs/robots.md``, "The hip strategy").
 
 The lean's acceleration is bounded by the hip joints that make it: a share of the rated torque (URDF effort
 limit) of the hip joint whose axis is the lean's (the leg joint closest to the pelvis whose axis lies within 40

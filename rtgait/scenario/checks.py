@@ -1,6 +1,5 @@
 """Checks shared by the scenario file loader and the :class:`~rtgait.scenario.scenario.Scenario` dataclass, and the
-error
-they raise: each message is one line naming the field."""
+error they raise: each message is one line naming the field."""
 
 from __future__ import annotations
 

@@ -1,24 +1,7 @@
 """Footstep plans: a walk given as absolute footholds in the world frame, each step with its own timing if wanted.
 
-A footstep plan is a TOML file like a scenario (``name``, ``connection``, ``[robot]``, ``[timing]``) whose walk is a
-list of landings instead of a step length::
-
-    name = "stairs-free-path"
-    connection = "quasi-real-time"
-
-    [robot]                             # as in scenario files
-    cog_height = 0.80
-    [robot.sole]
-    front = 0.13
-    back = 0.10
-    inner = 0.07
-    outer = 0.07
-
-    [timing]                            # as in scenario files; single_support and double_support are the
-    single_support = 0.8                # timing of every step that does not give its own
-    double_support = 0.2
-    dt = 0.005
-    horizon_steps = 3
+A footstep plan is a TOML file like a scenario (``name``, ``connection``, ``[robot]``, ``[timing]``; every key in
+``docs/cli_and_scenarios.md``, "Footstep plans") whose walk is a list of landings instead of a step length::
 
     [walk]
     step_width = 0.19                   # m: the standing feet, side by side at the origin heading +x
@@ -29,22 +12,18 @@ list of landings instead of a step length::
     x = 0.10                            # m, world frame
     y = -0.095
     yaw = 0.0                           # rad, optional (default 0)
-    single_support = 0.8                # s, optional: this step's single support
+    single_support = 0.8                # s, optional: this step's single support (default [timing]'s)
     double_support = 0.2                # s, optional: the double support after it (not on the last step)
 
 The file lists the *steps* only: the standing feet ``F[0], F[1]`` are side by side at the origin, heading +x,
-``walk.step_width`` apart (the planner may start from measured feet instead, ``start(feet=...)``: the walk then
-moves rigidly with them, its strides being relative). The last step is the closing one: the walk ends with the
-ZMP brought between the last two footholds and the COG at rest over that point, whatever they are; they need not
-be side by side (a last stride that leaves the feet apart ends the walk standing apart). The double support after
-the last step is the final one, ``timing.end``, so the last step may not give ``double_support``.
+``walk.step_width`` apart (a planner started from measured feet, ``start(feet=...)``, moves the walk rigidly with
+them, its strides being relative). The last step is the closing one: the walk ends with the ZMP between the last
+two footholds and the COG at rest over that point, whatever they are. The double support after the last step is the
+final one, ``timing.end``, so the last step may not give ``double_support``.
 
-Refused, with the step named in one line (:class:`~rtgait.scenario.scenario.ScenarioError`): two steps of the same side
-in
-a row, a landing out of the robot's reach from its stance foot (farther than
-:data:`~rtgait.core.limits.MAX_STRIDE`, or a turn of a quarter turn or more), feet crossing (the landing on the
-wrong side of the stance foot), NaN or infinite values, and a timing outside the phase limits.
-
+Refused, with the step named in one line (:class:`~rtgait.scenario.scenario.ScenarioError`): two steps of the same
+side in a row, a landing out of reach of its stance foot (farther than :data:`~rtgait.core.limits.MAX_STRIDE`, or a
+turn of a quarter turn or more), feet crossing, NaN or infinite values, and a timing outside the phase limits.
 :func:`footstep_plan_text` writes a walk's footholds back in this format (``rtgait plan --export-footsteps``).
 """
 
@@ -167,8 +146,7 @@ def _toml_string(value: str) -> str:
 def footstep_plan_text(scenario: Scenario, footprints: Sequence[Footstep], name: str | None = None) -> str:
     """A footstep plan (module docstring) of ``scenario``'s robot and timing walking ``footprints`` ``F[0..N+1]``
     (the standing feet first, as :attr:`~rtgait.core.analysis.rollout.Rollout.footprints` holds them); each step keeps
-    its
-    own timing when the scenario has per-step timings. Numbers are written with all their digits (``repr``), so
+    its own timing when the scenario has per-step timings. Numbers are written with all their digits (``repr``), so
     loading the text gives the same footholds."""
     t = scenario.timing
     lines = [f"name = {_toml_string(name or scenario.name)}"]

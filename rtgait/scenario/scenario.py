@@ -1,63 +1,31 @@
 """Walking scenarios: a robot, a timing, a walk and the footstep changes made while walking.
 
-A scenario is a small TOML file. The built-in ones (the paper's Section 5 cases and a few more) ship as package
-data in ``rtgait/scenarios/`` and are loaded by name; any other file is loaded by path::
+A scenario is a small TOML file (every key, its unit and its range in ``docs/cli_and_scenarios.md``, "Scenario
+files"). The built-in ones (the paper's Section 5 cases and a few more) ship as package data in ``rtgait/scenarios/``
+and are loaded by name; any other file is loaded by path. Its parts, in SI units (m, s, rad):
 
-    name = "my-walk"
-    description = "one line shown by `rtgait scenarios`"
-    connection = "real-time"            # or "quasi-real-time", or "auto" (chosen per change)
-    # auto_margin = 0.01                # m, optional with "auto": the ZMP margin a connection must keep
-
-    [robot]
-    cog_height = 0.80                   # m, constant COG height above the ground
-    gravity = 9.81                      # m/s^2, optional
-    mass = 57.0                         # kg, optional: pushes act on it in `rtgait simulate --model lipm`
-
-    [robot.sole]                        # sole rectangle around the foot frame, m
-    front = 0.13
-    back = 0.10
-    inner = 0.07
-    outer = 0.07
-
-    [timing]
-    single_support = 0.8                # s
-    double_support = 0.2                # s
-    dt = 0.005                          # s, control period of the rollout
-    horizon_steps = 3                   # steps covered by each plan
-    # start, end, settle: optional durations (s) of the first/last double support and of the settling phase
-
-    [walk]
-    steps = 10                          # forward steps; one more step then brings the feet side by side
-    step_length = 0.05                  # m
-    step_width = 0.19                   # m, lateral distance between the feet
-    step_height = 0.05                  # m, swing-foot peak height
-    # yaw = 0.0                         # rad, optional turn of every forward step
-    # first_foot = "right"              # optional, the foot that swings first
-
-    [[walk.change]]                     # any number of these
-    step = 5                            # 1-based step whose stride changes
-    length = 0.15                       # m; optional width (m) and yaw (rad) too
-    # only = false                      # true: this step only; false: this step and all later forward steps
-
-    [guide]                             # optional: a hand-guided walk (``rtgait simulate``), see GuidePath
-    forward = 1.0                       # m, straight ahead first
-    turn = 1.57                         # rad, then a turn (positive to the left) ...
-    radius = 1.0                        # m, ... on an arc of this radius
-    after = 0.5                         # m, straight on after the turn, then the person stops
-    speed = 0.15                        # m/s, the person's walking speed
-
-With ``[guide]``, ``rtgait simulate`` ignores the walk's footsteps: a person pulls the robot's hand along that path
-and the hand force sets the steps (:mod:`rtgait.sim.guided`); ``walk.steps`` is then the most steps it may take.
+* ``name``, ``description``, ``connection`` (``"real-time"``, ``"quasi-real-time"`` or ``"auto"``, chosen per change,
+  with an optional ``auto_margin``);
+* ``[robot]``: ``cog_height``, optional ``gravity`` and ``mass`` (the point mass pushes act on in ``rtgait simulate
+  --model lipm``), and ``[robot.sole]``: the sole rectangle ``front``, ``back``, ``inner``, ``outer`` around the foot
+  frame;
+* ``[timing]``: ``single_support``, ``double_support``, ``dt`` (the rollout's control period), ``horizon_steps``
+  (steps covered by each plan), optional ``start``, ``end`` and ``settle`` durations;
+* ``[walk]``: ``steps`` forward steps of ``step_length``, ``step_width`` apart, ``step_height`` high, optional
+  ``yaw`` per step and ``first_foot``; one more step then brings the feet side by side;
+* ``[[walk.change]]``: a new ``length``, ``width`` or ``yaw`` from ``step`` on (or, with ``only = true``, for that
+  step alone), decided while walking;
+* ``[guide]`` (optional): a path along which a person leads the robot by the hand in ``rtgait simulate``
+  (:class:`~rtgait.scenario.guide_path.GuidePath`, :mod:`rtgait.sim.guided`); the walk's footsteps are then ignored
+  and ``walk.steps`` is the most steps the robot may take.
 
 A file with ``[[footstep]]`` entries instead of ``walk.steps`` is a footstep plan, absolute footholds each with its
 own timing if wanted: :func:`load_scenario` hands it to :mod:`rtgait.scenario.footholds`, which returns a
-:class:`Scenario`
-too (``footholds`` set, per-step timings in ``timing.per_step``).
+:class:`Scenario` too (``footholds`` set, per-step timings in ``timing.per_step``).
 
-Every problem with a file raises :class:`ScenarioError` with one line naming the offending field. Sizes and
-physical quantities are bounded by :mod:`rtgait.core.limits` (steps, phase durations and ``w T``, the control
-period and the number of samples it makes, the horizon, COG height, gravity, stride lengths), checked here so that
-the message names the TOML field; two ``[[walk.change]]`` entries for the same step are refused.
+Every problem with a file raises :class:`ScenarioError` with one line naming the offending field. Sizes and physical
+quantities are bounded by :mod:`rtgait.core.limits`, checked here so that the message names the TOML field; two
+``[[walk.change]]`` entries for the same step are refused.
 """
 
 from __future__ import annotations

@@ -1,52 +1,37 @@
 """Joint actuation in physics: per-joint PD servos with torque limits and armature, from the robot description.
 
-The model of one joint's drive, the same as the position-controlled humanoids' joint loops run (and as mc_mujoco
-simulates them):
+The model of one joint's drive, as position-controlled humanoids' joint loops run (and as mc_mujoco simulates them):
 
 * the controller sends a joint reference ``(q_ref, qd_ref)`` every **control period** (``control_dt``: 1 ms for
   Talos, whose ros_control loop runs at 1 kHz; 2 ms for G1, whose low-level SDK loop runs at 500 Hz);
-* the drive applies ``tau = kp (q_ref - q) + kd (qd_ref - qd)``, clipped to the joint's torque limit, at every
-  **physics step** (``physics_dt``, which divides the control period): a drive's current loop is much faster
-  than the controller, so the torque follows the measured state between two references;
-* between two references the drive sees them **interpolated linearly** over the physics substeps (substep ``i``
-  of ``n`` gets ``previous + (i + 1) / n * (new - previous)``), so the reference is continuous instead of a
-  staircase; with one substep per period this is the reference itself;
+* the drive applies ``tau = kp (q_ref - q) + kd (qd_ref - qd)`` (N m), clipped to the joint's torque limit, at every
+  **physics step** (``physics_dt``, which divides the control period);
+* between two references the drive sees them **interpolated linearly** over the physics substeps (substep ``i`` of
+  ``n`` gets ``previous + (i + 1) / n * (new - previous)``);
 * the motor's rotor, seen through the gear of ratio ``N``, adds ``J_rotor N^2`` to the joint's inertia (the
   **armature**).
 
-How it is built in MuJoCo, and why: one *general* actuator per joint with ``gain = kp`` and bias ``-kp q - kd qd``,
-driven with ``ctrl = q_ref + (kd / kp) qd_ref``, and ``forcerange = +-effort limit``. That is the PD above,
-evaluated by MuJoCo itself at the state of each substep. Computing the torque in Python and applying it through
-motor actuators would do the same arithmetic, but the damping would then be explicit: the servos sized for a
-stance leg act on a light swing foot (``kd / inertia`` of 2900 1/s at Talos's ankle, past the ``2 / dt`` that an
-explicit step of 1 ms tolerates) and are stable only with the ``-kd qd`` term integrated implicitly, which
-MuJoCo's ``implicitfast`` integrator does for actuator bias terms (and drops, correctly, while the actuator
-saturates).
+In MuJoCo: one *general* actuator per joint with ``gain = kp`` and bias ``-kp q - kd qd``, driven with
+``ctrl = q_ref + (kd / kp) qd_ref``, ``forcerange = +-effort limit``: the PD above, evaluated by MuJoCo at the state of
+each substep. Its ``-kd qd`` is integrated implicitly by the ``implicitfast`` integrator (and dropped, correctly,
+while the actuator saturates); a torque computed in Python would make the damping explicit, unstable once
+``kd / inertia`` exceeds ``2 / dt`` (a stance-sized servo on a light swing foot).
 
-Defaults derived from the URDF when the description does not give a value (``[actuation]`` in
+Defaults derived from the URDF when the description does not give a value (``[actuation]``,
 :mod:`rtgait.robot.description`):
 
 * **torque limit** = the URDF's ``<limit effort>`` (none when it is missing, 0 or infinite);
-* **armature** = ``armature_per_torque`` x the torque limit (a motor family's rotor inertia per N m times the gear
-  ratio; see :data:`rtgait.robot.actuation_table.DEFAULT_ARMATURE_PER_TORQUE`);
-* **kp** from a target natural frequency ``f`` on the inertia the joint moves: ``kp = (2 pi f)^2 (armature +
-  I_carried)``. ``I_carried`` is the inertia about the joint axis at half-sitting of what the joint carries: for
-  a joint of a leg, the larger of the part beyond it (swing) and the rest of the robot pivoting about it with
-  the foot on the ground (stance, the larger one: 67 kg m^2 for Talos's ankle pitch, against 0.03 for its foot);
-  for any other joint (torso) the part beyond it. So every joint has the target bandwidth where an open-loop
+* **armature** = ``armature_per_torque`` x the torque limit
+  (:data:`rtgait.robot.actuation_table.DEFAULT_ARMATURE_PER_TORQUE`);
+* **kp** = ``(2 pi f)^2 (armature + I_carried)`` for the natural frequency ``f`` (``actuation.natural_frequency``,
+  10 Hz by default), ``I_carried`` the inertia about the joint axis at half-sitting of what the joint carries: for a
+  leg joint the larger of the part beyond it (swing) and the rest of the robot pivoting about it with the foot on
+  the ground (stance); for any other joint the part beyond it. Every joint has the bandwidth where an open-loop
   walking pattern needs it: carrying the robot.
-* **kd** for a damping ratio ``zeta`` of the joint's own drive and limb: ``kd = 2 zeta sqrt(kp (armature +
-  I_distal))``, ``I_distal`` the inertia beyond the joint. A swinging limb is then critically damped (at
-  ``zeta = 1``) and the loaded stance modes lightly (Talos's ankle: 0.04), as in the gain tables of position-
-  controlled humanoids (mc_mujoco's JVRC1: kd 20-50 N m s/rad on kp 3000-6000 N m/rad). Damping the stance
-  inertia critically instead (kd of 4000 N m s/rad at Talos's ankle) makes the ankle torque, which sets the ZMP,
-  answer every velocity error: on the paper's fig6 case (ankles only, every other joint unchanged) the measured
-  ZMP strayed 116 mm RMS from the plan instead of 31 mm.
-
-The natural frequency is the description's (``actuation.natural_frequency``; 10 Hz for Talos and G1 and by
-default). On Talos, measured with the default contact: at 5 Hz the hips are too soft to carry the upper body
-and fig6 falls, fig8 tips (ZMP 110-130 mm RMS from the plan); at 8 Hz fig6/7/8 walk with 47-55 mm; at 10 Hz
-with 40-50 mm.
+* **kd** = ``2 zeta sqrt(kp (armature + I_distal))``, ``I_distal`` the inertia beyond the joint: a swinging limb is
+  critically damped (at ``zeta = 1``), the loaded stance modes lightly, as in the gain tables of position-controlled
+  humanoids (mc_mujoco's JVRC1: kd 20-50 N m s/rad on kp 3000-6000 N m/rad). Damping the stance inertia critically
+  would make the ankle torque, which sets the ZMP, answer every velocity error (``docs/design/simulation.md``).
 """
 
 from __future__ import annotations

@@ -6,8 +6,7 @@
 * **Legs.** Each link of a leg (the chain from the root link to a sole) gets a convex shape: the convex hull of its
   URDF geometry (collision and visual, meshes read from their STL files; links fixed to it included), a MuJoCo
   mesh geom. The hull, not the link's bounding box: a box in the link's frame is much bigger than the link where
-  the link is slanted or tapered (Talos's thigh box reaches 79 mm inward of the hip axis), and Talos's thigh boxes
-  met once the thighs rolled 0.15 rad apart walking sideways, while the URDF's meshes stayed 9 mm apart. The shapes
+  the link is slanted or tapered, and would make the legs touch where their meshes do not. The shapes
   of one leg collide with those of the other leg only, never with their own leg (parent and child links overlap at
   every joint) nor with the floor; a pair that already touches at half-sitting (e.g. the two hip housings under the
   pelvis) is excluded, since nothing could ever separate them. A step that crosses the feet, or a swing foot that
@@ -61,8 +60,8 @@ FLOOR_BITS = (1, 0)
 SOLE_BITS = (0, 1)
 """``(contype, conaffinity)`` of the sole boxes: they touch the floor only."""
 LEG_BITS = {"left": (2, 4), "right": (4, 2)}
-"""``(contype, conaffinity)`` of each leg's boxes: a left box and a right box collide, two boxes of one leg do not."""
-_CLEARANCE = 0.002  # m: boxes closer than this at half-sitting are taken as touching (their pair is excluded)
+"""``(contype, conaffinity)`` of each leg's shapes: a left and a right shape collide, two shapes of one leg do not."""
+_CLEARANCE = 0.002  # m: shapes closer than this at half-sitting are taken as touching (their pair is excluded)
 
 
 # ----- soles and floor ---------------------------------------------------------------------------------------
@@ -169,7 +168,8 @@ def _origin(element: ElementTree.Element) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _shape_points(geometry: ElementTree.Element, urdf: Path, package_dirs: tuple[Path, ...]) -> np.ndarray | None:
-    """Points whose bounding box is the shape's, in the shape's own frame (m); ``None`` if unreadable."""
+    """Points whose convex hull holds the shape (a mesh's vertices, a primitive's bounding box corners), in the
+    shape's own frame (m); ``None`` if unreadable."""
     if geometry.tag == "mesh":
         path = resolve_mesh(geometry.get("filename", ""), urdf, package_dirs)
         if path is None:
@@ -258,7 +258,7 @@ class LegShape:
 
 
 def leg_shapes(robot: RobotModel) -> list[LegShape]:
-    """The box of every leg link with geometry (see the module docstring)."""
+    """The convex shape of every leg link with geometry (see the module docstring)."""
     description = robot.description
     try:
         root = ElementTree.parse(description.urdf).getroot()
@@ -314,7 +314,7 @@ def add_leg_shapes(spec: mujoco.MjSpec, robot: RobotModel) -> list[LegShape]:
 
 
 def touching_pairs(model: mujoco.MjModel, qpos: np.ndarray, shapes: list[LegShape]) -> list[tuple[str, str]]:
-    """The bodies of the left and right leg boxes closer than a couple of millimetres at configuration ``qpos``
+    """The bodies of the left and right leg shapes closer than a couple of millimetres at configuration ``qpos``
     (MuJoCo body names of the compiled ``model``, in which links fixed to their parent have been merged)."""
     data = mujoco.MjData(model)
     data.qpos[:] = qpos

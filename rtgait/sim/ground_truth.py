@@ -2,19 +2,7 @@
 on each sole with the soles' poses, the centre of mass (COM) and its velocity (:class:`~rtgait.interface.truth.
 GroundTruth`); the ground-truth estimator (:mod:`rtgait.estimation.ground_truth`) turns it into the walking state.
 
-**Contact wrench of a foot.** For every active contact between a geom of the foot's body and a geom outside the
-robot (the floor), ``mujoco.mj_contactForce`` gives the force in the contact frame, whose first axis is the normal
-pointing from ``geom1`` to ``geom2``; rotated to the world by the contact frame it is the force on ``geom2``
-(``f_world = frame^T f_contact``), and its negative the force on ``geom1``. With contact points ``p_i`` and forces
-``f_i`` on the foot, the wrench at the sole frame origin ``o`` (the sole point, in the world frame) is
-
-    F = sum f_i,        tau_o = sum (p_i - o) x f_i + t_i                                (N, N m)
-
-with ``t_i`` a contact's torsional and rolling torque, rotated likewise (zero for the condim 3 soles). This is what a
-6-axis force sensor in the ankle would report, moved to the sole point. With MuJoCo's default pyramidal cones, a
-condim 3 contact's force is decoded here as ``mj_contactForce`` does, with the same operations in the same order
-(so to the bit): its four edge forces ``e_0..e_3`` in ``efc_force`` give the normal ``e_0 + e_1 + e_2 + e_3`` and
-the tangential components ``(e_0 - e_1) mu_0`` and ``(e_2 - e_3) mu_1``; other contacts are left to MuJoCo.
+The contacts are decoded by :mod:`rtgait.sim.contact_reading` (the force and moment summed over each foot).
 
 **COM and its velocity** come from MuJoCo, not Pinocchio: ``data.subtree_com`` of the floating base (the robot is
 the base's subtree; the world body holds only the floor) is computed by every ``mj_step`` for free, and
@@ -40,7 +28,7 @@ from rtgait.interface.truth import FootContact, GroundTruth
 from rtgait.sim.contact_reading import ContactReader, ContactSums
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
-if TYPE_CHECKING:  # the model module is being rewritten: only its attribute names are relied on
+if TYPE_CHECKING:
     from rtgait.sim.model import SimModel
 
 __all__ = ["GroundTruthReader"]

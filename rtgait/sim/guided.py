@@ -1,13 +1,12 @@
 """Hand-guided walking in physics (the paper's Section 6): a person leads the robot by the hand.
 
 The person is a point that walks a :class:`~rtgait.scenario.scenario.GuidePath` at constant speed, starting at the
-robot's
-hand when the walk begins. The person's arm is a horizontal spring-damper between that point and the robot's
-hand (:class:`Leash`); its force is applied to the robot every tick through ``data.xfrc_applied`` on the body
-that carries the hand (with the torque that moves it from the hand to the body's centre of mass, where MuJoCo
-applies it), and read back as the wrist sensor. :class:`rtgait.core.laws.guidance.HandGuide` turns that reading into
-the planner's velocity command, one decision per step (quasi-real-time), and once the person has stopped and the
-command is zero the planner is told to stop.
+robot's hand when the walk begins. The person's arm is a horizontal spring-damper between that point and the robot's
+hand (:class:`Leash`); its force is applied to the robot every tick through ``data.xfrc_applied`` on the body that
+carries the hand (with the torque that moves it from the hand to the body's centre of mass, where MuJoCo applies it),
+and read back as the wrist sensor. :class:`rtgait.core.laws.guidance.HandGuide` turns that reading into the planner's
+velocity command, one decision per step (quasi-real-time), and once the person has stopped and the command is zero the
+planner is told to stop.
 
 The torque about the vertical, which the paper's operator gives by twisting the hand, is the person's: a twist
 proportional to how far the robot's heading lags the path's (:attr:`Leash.twist_gain`), applied to the hand's body

@@ -329,8 +329,8 @@ def write_sim_log(result: SimResult, path: str | Path, extra: dict[str, Any] | N
     meta = log_metadata(result, events, extra)
     schema = pa.schema(fields, metadata={"rtgait": json.dumps(meta, allow_nan=False)})
     table = pa.Table.from_arrays(arrays, schema=schema)
-    # Byte-stream split lays each float's bytes out by significance, which zstd compresses a third better than plain
-    # float64 (dictionary encoding would only waste time on them): 12 MB for fig8 on Talos, 14.7 s at 1 kHz.
+    # Byte-stream split lays each float's bytes out by significance, which zstd compresses better than plain float64
+    # (dictionary encoding would only waste time on them); sizes in docs/design/figures_and_replay.md.
     floats = [f.name for f in fields if pa.types.is_floating(f.type)]
     labels = [f.name for f in fields if pa.types.is_dictionary(f.type)]
     pq.write_table(table, str(path), compression="zstd", use_dictionary=labels, use_byte_stream_split=floats)

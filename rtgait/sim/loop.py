@@ -35,8 +35,8 @@ The walk starts from half-sitting, whose COG is higher than the planner's consta
 (:attr:`LoopOptions.start_ramp`, then :attr:`LoopOptions.start_hold` at rest) moves the IK's COG target to the walk's
 start before the planner's clock begins; it runs at negative times on the walk's clock, with no feedback.
 
-``open-loop`` gives the IK the planner's sample unchanged, which is the loop before the controller levels existed
-(the paper's assumption); the levels are described in :mod:`rtgait.control.controller`.
+``open-loop`` gives the IK the planner's sample unchanged (the paper's assumption); the levels are described in
+:mod:`rtgait.control.controller`.
 
 :class:`ClosedLoop` is the loop one tick per :meth:`~ClosedLoop.step`, for callers that act between ticks (a live
 viewer sets the velocity command, pushes, switches the controller level); :func:`run_closed_loop` steps one to the

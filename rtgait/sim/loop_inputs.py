@@ -6,13 +6,11 @@ In this order, at tick time ``t`` (s, walk clock):
 1. the ``LoopOptions.on_tick`` hook, with the MuJoCo state;
 2. the footstep changes (``LoopOptions.changes``) whose connection-mode deadline
    (:meth:`~rtgait.core.planner.online.OnlinePlanner.change_deadline`) has come, ``t >= deadline``, in deadline order,
-   as
-   :func:`rtgait.core.analysis.rollout.rollout` gives them;
+   as :func:`rtgait.core.analysis.rollout.rollout` gives them;
 3. the velocity commands (``LoopOptions.velocity_changes``: ``(t_i, vx, vy, wz)``, m/s and rad/s) whose time has
    come, ``t >= t_i - 1 ns``, until the walk is stopped;
 4. a walk by command is stopped (:meth:`~rtgait.core.planner.online.OnlinePlanner.stop`) once its first open step is
-past
-   ``stop_after_steps``.
+   past ``stop_after_steps``.
 """
 
 from __future__ import annotations

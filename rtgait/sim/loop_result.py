@@ -1,6 +1,6 @@
 """The outcome of a closed-loop run (:class:`rtgait.sim.loop.ClosedLoop`): its record and counts as one
-:class:`~rtgait.sim.result.SimResult` (:func:`loop_result`, behind :meth:`ClosedLoop.result
-<rtgait.sim.loop.ClosedLoop.result>`).
+:class:`~rtgait.sim.result.SimResult` (:func:`loop_result`, behind
+:meth:`ClosedLoop.result <rtgait.sim.loop.ClosedLoop.result>`).
 
 What it states about the walk, as the walk ended up rather than as it was set out:
 

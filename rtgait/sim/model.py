@@ -1,25 +1,20 @@
 """The MuJoCo model of a robot, built at run time from its robot description.
 
-What the importer gets from the URDF and what is changed, and why:
+What the importer gets from the URDF and what is changed (:mod:`rtgait.sim.urdf_import`):
 
-* The URDF's ``package://`` mesh URIs are rewritten to files under the description's ``package_dirs`` (MuJoCo
-  does not know ROS packages), and MuJoCo's URDF extension ``<mujoco><compiler .../></mujoco>`` keeps the paths
-  and the visual meshes, and takes the inertia from the URDF's ``<inertial>`` elements only (as Pinocchio does),
+* ``package://`` mesh URIs are resolved under the description's ``package_dirs``, and MuJoCo's URDF extension keeps
+  the paths and the visual meshes and takes the inertia from the ``<inertial>`` elements only (as Pinocchio does),
   so both see the same mass distribution.
-* Mesh geoms are visual only (no collision): the URDF's collision meshes overlap at the joints (dozens of
-  self-contacts at the start) and a walking foot must touch the floor through its sole, not a mesh. The collision
-  meshes are dropped; what touches what is built by :mod:`rtgait.sim.contact_model`: one box per sole (the
-  described sole rectangle), the only thing that touches the floor, and boxes around the leg links, which collide
-  with the other leg's.
+* Meshes are visual only: the URDF's collision meshes overlap at the joints, and a walking foot must touch the floor
+  through its sole. What touches what is built by :mod:`rtgait.sim.contact_model`: one box per sole (the described
+  sole rectangle), the only thing that touches the floor, and convex shapes of the leg links, which collide with
+  the other leg's.
 * The root link gets a free joint (the URDF has a fixed base).
-* Visual meshes in a format MuJoCo cannot decode (:data:`MESH_FORMATS`; Romeo's COLLADA ``.dae``) are left out, with
-  one :class:`MeshSkippedWarning`; ``<mimic>`` joint couplings are dropped (every joint is locked or has its own
-  servo).
-* Every joint outside ``walking.moving_joints`` is locked at its half-sitting angle (its body is turned by the
-  angle and the joint removed): the whole-body IK treats them the same way, and the model gets fewer degrees of
-  freedom, which makes every physics step cheaper.
-* Each moving joint gets a PD servo limited to its torque limit and its armature (:mod:`rtgait.sim.actuation`),
-  from the description's ``[actuation]`` table or derived from the URDF.
+* Visual meshes MuJoCo cannot decode (:data:`MESH_FORMATS`) are left out with one :class:`MeshSkippedWarning`;
+  ``<mimic>`` couplings are dropped (every joint is locked or has its own servo).
+* Every joint outside ``walking.moving_joints`` is locked at its half-sitting angle, as the whole-body IK treats it:
+  fewer degrees of freedom, cheaper physics steps.
+* Each moving joint gets a PD servo with its torque limit and armature (:mod:`rtgait.sim.actuation`).
 * The ``implicitfast`` integrator: the servo damping is integrated implicitly, which keeps stiff, heavily damped
   servos on light links stable at a millisecond step.
 
@@ -53,21 +48,17 @@ SETTLE_TIME = 0.2
 class SimConfig:
     """Physics parameters of the simulated robot and its floor.
 
-    Why the defaults:
+    Why the defaults (measurements in ``docs/design/simulation.md``):
 
     * ``physics_dt``: the robot description's ``actuation.physics_dt`` (1 ms for Talos, its control period; 0.5 ms
-      for G1, four steps per 2 ms control period), the step at which the robot's outcomes have converged: G1's
-      walks by command fall at 1 ms and walk at 0.5 and 0.25 ms, Talos's walk at 1 and 0.5 ms (``docs/robots.md``).
-      A shorter step costs wall time in proportion.
-    * A contact time constant of 10 ms (10 physics steps at the default step) with critical damping (ratio 1,
-      MuJoCo's default): Talos's soles sink 0.16 mm under its weight, like a thin rubber sole on a hard floor,
-      and settle without ringing. MuJoCo's contact stiffness goes as 1 / (time constant x damping ratio)^2: with
-      that product under about 7 ms the soles sink only tens of micrometres, a foot rolls onto one edge at a time
-      and the body's sideways rocking on its soles is barely damped (open loop, it grows from step to step;
-      README, "Robust, not tuned").
-    * 10 no-slip iterations: they remove the creep of a loaded foot (see :mod:`rtgait.sim.contact_model`; with 2
-      iterations a pushed foot still creeps 0.5 mm in 3 s); the no-slip pass costs about 3 us per step in all
-      (``python benchmarks/sim.py``), most of it independent of the iteration count.
+      for G1, four steps per 2 ms control period), the step at which that robot's outcomes have converged; a
+      shorter step costs wall time in proportion.
+    * A contact time constant of 10 ms with critical damping (ratio 1, MuJoCo's default): the soles sink a fraction
+      of a millimetre under the robot's weight, like a thin rubber sole on a hard floor, and settle without ringing.
+      MuJoCo's contact stiffness goes as 1 / (time constant x damping ratio)^2: much stiffer, a foot rolls onto one
+      edge at a time and the body's sideways rocking on its soles is barely damped.
+    * 10 no-slip iterations: they remove the creep of a loaded foot (:mod:`rtgait.sim.contact_model`); their cost is
+      mostly independent of the iteration count.
     * Friction 1: rubber on a dry floor.
 
     Attributes:
@@ -81,7 +72,7 @@ class SimConfig:
         contact_impedance: MuJoCo's ``solimp[0:2]``, the contact's impedance at zero and at 1 mm penetration.
         sole_thickness: height of the sole contact boxes (m); their bottom face is on the sole point.
         noslip_iterations: iterations of MuJoCo's no-slip solver per step (0: none; the feet then creep).
-        leg_collisions: give the legs boxes that collide with the other leg's.
+        leg_collisions: give the leg links convex shapes that collide with the other leg's.
         gain_scale: factor on every joint's kp and kd (1: the description's or derived gains); for ensembles.
         armature_scale: factor on every joint's armature; for ensembles.
         meshes: keep the visual meshes (for viewing); without them the model builds faster and simulates the same.
@@ -166,8 +157,8 @@ class SimModel:
         left_sole_geom, right_sole_geom: geom ids of the sole contact boxes.
         left_sole_site, right_sole_site: site ids at the sole points (the description's sole frames).
         floor_geom: geom id of the floor plane.
-        leg_geoms: geom ids of the leg boxes, left leg's then right leg's (empty without leg collisions).
-        excluded_leg_pairs: MuJoCo body names of the left and right leg links whose boxes touch at half-sitting and
+        leg_geoms: geom ids of the leg shapes, left leg's then right leg's (empty without leg collisions).
+        excluded_leg_pairs: MuJoCo body names of the left and right leg links whose shapes touch at half-sitting and
             are therefore excluded from colliding.
         qpos_half_sitting: MuJoCo configuration at half-sitting, soles on the floor (m, unit quaternion, rad).
     """

@@ -13,12 +13,11 @@ the walk's start to its planned end, where the measured ZMP must be on the stanc
 * ``vs_commanded_motion``: against the multibody ZMP of the commanded motion, i.e. of the joint references the servos
   were given (the IK's configuration with the ankle offsets of foot force control), from Pinocchio's centroidal
   dynamics with finite differences (:func:`rtgait.robot.dynamics.multibody_check`). The pendulum plan ignores the
-  legs' angular momentum, so even a perfect servo would miss ``vs_plan`` by that much (20-30 mm on Talos,
-  ``docs/robots.md``); what is left of ``vs_commanded_motion`` is the servos' and the contacts' doing. Its
-  accelerations are second differences of the commanded configurations, so a target that steps in one tick makes a
-  spike of ``step / dt^2`` (a 3.7 mm step of a loaded foot: ZMPs 20-30 m away); the controller blends the feet targets
-  its landings move (``ControllerOptions.anchor_blend``); spikes that remain (a replan that moves the COM target, for
-  one) dominate ``rms`` and ``max``, not ``median``. On a run that fell it stops earlier than the other two
+  legs' angular momentum, so even a perfect servo would miss ``vs_plan`` by that much; what is left of
+  ``vs_commanded_motion`` is the servos' and the contacts' doing. Its accelerations are second differences of the
+  commanded configurations, so a target that steps in one tick makes a spike of ``step / dt^2`` (a re-anchored foot,
+  unless ``ControllerOptions.anchor_blend`` blends it; a replan that moves the COM target): spikes dominate ``rms``
+  and ``max``, not ``median``. On a run that fell it stops earlier than the other two
   (:attr:`SimResult.commanded_motion_mask`): at the first tip-over, which is where such a fall began.
 
 **Slip** of a stance foot: a *stance* is a stretch of ticks over which the foot carries at least
@@ -165,7 +164,7 @@ class SimResult:
         torque: the joint torques the servos applied (N m), mean over the tick's physics substeps, shape ``(k, n)``,
             columns in :attr:`joint_names` order; within each joint's torque limit.
         joint_names: the actuated joints, the columns of :attr:`torque`.
-        legs_touch: whether the legs' collision boxes touched each other at the tick, shape ``(k,)``.
+        legs_touch: whether the legs' collision shapes touched each other at the tick, shape ``(k,)``.
         commanded_q: the commanded configuration of the robot's reduced Pinocchio model at each tick (the IK's
             floating base, the servos' joint references), shape ``(k, nq)`` (m, unit quaternion, rad).
         control_dt: the control period, the interval between two ticks (s).
@@ -340,12 +339,8 @@ class SimResult:
 
         A fall that starts with a tip-over starts there: a loaded foot rolls onto a sole edge, which the commanded
         motion (feet flat where the IK has them) does not have, and the IK's targets then chase a robot that turns
-        about that edge. Talos on fig8 pushed 60 N s forward at 4.5 s tipped at 4.60 s and fell at 5.87 s; in
-        between the controller replanned from the measured state 18 times (mostly every 50 ms), its COM offset grew
-        to 18 mm, no foot was loaded for 90 ticks, and the commanded motion's ZMP was 156 mm from the measured one
-        at the median and up to 18 m; the :data:`FALL_MARGIN` cut left 0.8 s of that in (95th percentile 162 mm,
-        against 31 mm up to the tip). A
-        fall without a tip-over keeps that cut; a run that tipped over and did not fall keeps every tick (it stood
+        about that edge (an example in ``docs/design/simulation.md``). A fall without a tip-over keeps the
+        :data:`FALL_MARGIN` cut; a run that tipped over and did not fall keeps every tick (it stood
         again); one that tipped, walked on and fell much later loses the walk after the tip, an under-count. What
         happened before the tip stays in, a replan's step of the COM target included.
         """

@@ -7,8 +7,8 @@
   (:data:`MESH_FORMATS`) left out with one :class:`MeshSkippedWarning`, and MuJoCo's ``<mujoco><compiler/>``
   extension that keeps the paths and visuals and takes the inertia from ``<inertial>`` only;
 * :func:`lock_joint`: a joint replaced by its body turned (or slid) by a fixed angle (rad, or m);
-* :func:`compile_spec`: the spec compiled, MuJoCo's refusal turned into a :class:`~rtgait.robot.description.
-  RobotError` that names the URDF.
+* :func:`compile_spec`: the spec compiled, MuJoCo's refusal turned into a :class:`~rtgait.robot.description.RobotError`
+  that names the URDF.
 
 :func:`resolve_mesh` also serves the leg collision shapes (:mod:`rtgait.sim.contact_model`), which read the
 URDF's meshes themselves.

@@ -2,11 +2,9 @@
 
 Cases that differ only in the numbers a walk is affine in (``change.length``, ``change.width``,
 ``walk.step_length``) form one group: one :class:`~rtgait.core.analysis.walk_family.WalkFamily` (or one preview loop),
-one
-vectorised pass (:mod:`rtgait.core.analysis.batch`, :func:`rtgait.core.analysis.preview.evaluate_preview`). The numbers
-are those
-``rtgait plan`` reports for the same scenario. A base scenario the batch cannot take (a turning walk) is rolled out
-case by case instead, with the same results, slowly.
+one vectorised pass (:mod:`rtgait.core.analysis.batch`, :func:`rtgait.core.analysis.preview.evaluate_preview`). The
+numbers are those ``rtgait plan`` reports for the same scenario. A base scenario the batch cannot take (a turning walk)
+is rolled out case by case instead, with the same results, slowly.
 """
 
 from __future__ import annotations

@@ -6,10 +6,9 @@ from disk with no network access: meshcat's viewer (three.js included) and every
 the colours, a clock shows the replay's time (and the walking phase, when given), and the camera starts framing
 the whole walk.
 
-The page stays light (2.15 MB for Talos' 12.7 s fig8 walk: 0.85 MB of meshcat's viewer, 0.75 MB of meshes,
-0.42 MB of animation): the robot's meshes are shared between the links that use the same or a mirrored mesh,
-simplified to a triangle budget, and packed as 16-bit integers (:mod:`rtgait.viz.replay_meshes`); the animation
-is packed as float32 arrays (:mod:`rtgait.viz.replay_scene`).
+The page stays light (its size: ``docs/design/figures_and_replay.md``): the robot's meshes are shared between the
+links that use the same or a mirrored mesh, simplified to a triangle budget, and packed as 16-bit integers
+(:mod:`rtgait.viz.replay_meshes`); the animation is packed as float32 arrays (:mod:`rtgait.viz.replay_scene`).
 Nothing needs a display or a server: the scene is built in Python and the page is written directly
 (:mod:`rtgait.viz.replay_page`).
 """

@@ -1,14 +1,13 @@
 """The robot's meshes for the HTML replay: read once, shared, simplified and packed small.
 
-A robot's visual meshes used to be most of a replay's bytes: Talos has 47 STL geometries holding 158 856
-triangles, sent one by one as float32 triangle meshes, 4.1 MB of the 6.6 MB page of ``rtgait plan fig8 --robot
-talos --html``. :class:`MeshLibrary` brings them to 0.75 MB:
+A robot's visual meshes, sent one by one as float32 triangle meshes, would be most of a replay's bytes.
+:class:`MeshLibrary` shrinks them:
 
 - **Sharing.** A mesh file used by several links (Talos' right leg and arm reuse the left ones, mirrored by a
-  ``-1`` mesh scale) is read once: 25 distinct files for Talos' 47 geometries. So is a file whose vertices are
-  those of another file, or their mirror image across one axis (a robot whose right parts are separate, mirrored
-  copies of its left ones, as G1's ankles): the geometry that uses it points at the shared mesh with the mirror
-  folded into its fixed transform. The page builds one three.js geometry per shared mesh.
+  ``-1`` mesh scale) is read once. So is a file whose vertices are those of another file, or their mirror image
+  across one axis (a robot whose right parts are separate, mirrored copies of its left ones, as G1's ankles): the
+  geometry that uses it points at the shared mesh with the mirror folded into its fixed transform. The page builds
+  one three.js geometry per shared mesh.
 - **Simplification.** A mesh of more than :data:`MESH_TRIANGLES` triangles is decimated by quadric error
   (trimesh with fast-simplification), which removes first the triangles whose removal moves the surface least:
   the fine tessellation of flat and gently curved areas goes, the silhouette stays.
@@ -21,7 +20,7 @@ talos --html``. :class:`MeshLibrary` brings them to 0.75 MB:
 Only STL files are read here; STL carries no colour, so the geometry's URDF colour is the whole look. Other
 formats (DAE, OBJ) keep their own materials and are left to Pinocchio's meshcat loader by the caller. Without
 trimesh, binary STL is read with numpy; without fast-simplification, meshes are shared and packed but not
-simplified (a warning says so; Talos' fig8 page is then 3.6 MB).
+simplified (a warning says so). Page sizes: ``docs/design/figures_and_replay.md``.
 """
 
 from __future__ import annotations
@@ -43,9 +42,9 @@ __all__ = [
 MESH_TRIANGLES = 1500
 """Default triangle budget per distinct mesh. Why 1500: at whole-body view (the robot about 500 px tall) Talos'
 largest links, the torso (24 072 triangles), hips (13 242) and knees (5 872), keep their outline and their
-machined edges, with smooth normals; at 800 the hips and pelvis show dents, and 3000 adds 0.45 MB to the page for
-a difference seen only in close-ups. Parts already below the budget (fingers, wrists, the arms' meshes) are kept
-whole. Talos: 102 244 triangles in its 25 distinct meshes become 30 710, 0.75 MB in the page."""
+machined edges, with smooth normals; at 800 the hips and pelvis show dents, and a larger budget costs page size for
+a difference seen only in close-ups (``docs/design/figures_and_replay.md``). Parts already below the budget
+(fingers, wrists, the arms' meshes) are kept whole."""
 
 CREASE_ANGLE = np.radians(40.0)
 """Faces meeting at more than this angle (rad) are drawn with a sharp edge between them, others smooth: 40 deg

@@ -15,7 +15,7 @@ world, where the camera orbits.
 Footprints, paths, markers, primitive shapes and meshes other than STL are meshcat commands, recorded here with
 meshcat's own Python classes (no meshcat server is started). STL meshes go through
 :class:`rtgait.viz.replay_meshes.MeshLibrary` to be shared and simplified. The animation is packed as float32
-arrays rather than meshcat's dictionary per keyframe: 0.42 MB instead of 1.6 MB for Talos' 12.7 s fig8 walk.
+arrays rather than meshcat's dictionary per keyframe (sizes: ``docs/design/figures_and_replay.md``).
 """
 
 from __future__ import annotations

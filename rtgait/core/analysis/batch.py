@@ -12,22 +12,19 @@ all a feasibility test or a ranking needs, at a fraction of the cost of the exac
 
 Whole walks (:func:`evaluate_walks`, :func:`evaluate_parameters`): straight walks whose step lengths and widths
 change while walking, rolled out exactly as :func:`rtgait.core.analysis.rollout.rollout` does (``rtgait plan``: sampled
-every
-``dt``, each change handed over at its deadline), give per case the smallest signed ZMP margin
+every ``dt``, each change handed over at its deadline), give per case the smallest signed ZMP margin
 ``min_t signed_margin(zmp(t), polygon(t))`` (m), the time of its first occurrence (s) and the largest
 ``|zmp - zmp_ref|`` per axis in the connecting segments (m), the same numbers as ``summary.json`` to round-off
 (:mod:`rtgait.core.analysis.walk_family` explains how: per timing the walk is affine in its stride lengths and widths,
-and
-per phase the ZMP has a two-vector shape whose extreme over the phase's ticks is a binary search). Cases are
-grouped by everything but those numbers (one :class:`~rtgait.core.analysis.walk_family.WalkFamily` per group, cached),
-each group evaluated in one vectorised pass. The ``"auto"`` connection is evaluated by the rule of
+and per phase the ZMP has a two-vector shape whose extreme over the phase's ticks is a binary search). Cases are grouped
+by everything but those numbers (one :class:`~rtgait.core.analysis.walk_family.WalkFamily` per group, cached), each
+group evaluated in one vectorised pass. The ``"auto"`` connection is evaluated by the rule of
 :mod:`rtgait.core.planner.auto`, its predictions made the same way.
 
 When the smallest margin is reached at several ticks (a walk whose ZMP stays inside has its minimum, the ankle's
 distance to its sole's edge, in every single support), the time reported follows ``rtgait plan``'s rule: the first
 tick within :data:`~rtgait.core.analysis.walk_family.TIE` of the minimum at or after the first change is handed over,
-else
-the first such tick.
+else the first such tick.
 """
 
 from __future__ import annotations
@@ -69,8 +66,7 @@ class StraightWalk:
 
     def shapes(self) -> tuple[ChangeShape, ...]:
         """The changes as :class:`~rtgait.core.analysis.walk_family.ChangeShape` s, each handed over at its mode's
-        deadline
-        (auto: the quasi-real-time one, where its decision is made)."""
+        deadline (auto: the quasi-real-time one, where its decision is made)."""
         mode = self.config.connection
         out = []
         for change in self.changes:
@@ -157,8 +153,8 @@ def _group_key(walk: StraightWalk) -> tuple:
 
 def _evaluate_auto(walk: StraightWalk, shapes: tuple[ChangeShape, ...], theta: np.ndarray) -> BatchResult:
     """Auto walks: each change decided in deadline order by :mod:`rtgait.core.planner.auto`'s rule, its options
-    predicted
-    on the families they make (cases that made the same earlier choices share them), then the walks evaluated."""
+    predicted on the families they make (cases that made the same earlier choices share them), then the walks
+    evaluated."""
 
     config, n = walk.config, walk.steps + 1
     B = len(theta)

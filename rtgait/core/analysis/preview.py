@@ -146,8 +146,7 @@ def reference_at(times: np.ndarray, timeline: Timeline, segments: tuple[np.ndarr
 class PreviewPlanner(WalkQueries):
     """ZMP preview control with the sampling interface of :class:`~rtgait.core.planner.online.OnlinePlanner` (what
     :func:`~rtgait.core.analysis.rollout.rollout` uses): ``start``, ``sample_values``, ``change_step`` (accepted until
-    the
-    step's lift-off), ``change_deadline``, ``contact_feet``, ``footprints``. It makes no plans (``plans`` stays
+    the step's lift-off), ``change_deadline``, ``contact_feet``, ``footprints``. It makes no plans (``plans`` stays
     empty); its samples' ``zmp`` is the realised cart-table ZMP, ``zmp_ref`` the footsteps' reference.
 
     Between two control ticks a sample holds the state of the last one (zero-order hold), so sample at multiples of
@@ -262,8 +261,7 @@ class PreviewPlanner(WalkQueries):
 def evaluate_preview(walk: StraightWalk, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The preview controller on the walks ``walk`` with parameters ``theta`` ``(B, P)`` (the layout of
     :meth:`~rtgait.core.analysis.batch.StraightWalk.parameters`): per case the smallest signed margin of the realised
-    ZMP
-    (m), its time (s; ties broken as ``rtgait plan`` does) and the largest ``|ZMP - p_ref|`` per axis over the walk
+    ZMP (m), its time (s; ties broken as ``rtgait plan`` does) and the largest ``|ZMP - p_ref|`` per axis over the walk
     (m), at the controller's ticks. Changes are decided at the real-time deadline, whatever ``walk``'s connection.
 
     The loop is linear in the footprints, hence in ``theta``: it runs once with one column per parameter, and the

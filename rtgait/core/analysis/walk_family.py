@@ -1,10 +1,9 @@
 """A family of straight walks that differ only in their stride lengths and widths, evaluated many at once.
 
 Fix everything of a rollout (:func:`rtgait.core.analysis.rollout.rollout`) but the numbers: the timing, the control
-period,
-the horizon, the number of steps, which steps change and when each change is handed to the planner. What is left
-are the parameters ``theta = [1, step_length, step_width, change lengths..., change widths...]`` (m), and
-everything the planner computes is affine in them:
+period, the horizon, the number of steps, which steps change and when each change is handed to the planner. What is left
+are the parameters ``theta = [1, step_length, step_width, change lengths..., change widths...]`` (m), and everything the
+planner computes is affine in them:
 
 * the footprints: a straight walk's strides are relative, so ``F[i] = F[i - 1] + (length_i, +-width_i)``;
 * every plan: ``G @ y`` with ``y = [state, anchors]``, the anchors footprints (or midpoints of two) and the state
@@ -21,8 +20,7 @@ itself, exactly. (The structure is checked on the operators; a walk without it i
 (:func:`~rtgait.core.geometry.hull.two_box_hull`), and its minimum over the phase's ticks is, per edge, the maximum of a
 linear function over the fixed points ``(s_t, b_t)``: a binary search on their hull
 (:class:`~rtgait.core.geometry.hull.PointChain`). So a case costs a few dozen vector operations per phase, not one per
-tick.
-Where a phase's minimum is negative (the ZMP leaves the polygon) the exact outside distance is computed at every
+tick. Where a phase's minimum is negative (the ZMP leaves the polygon) the exact outside distance is computed at every
 tick of that phase for those cases.
 """
 

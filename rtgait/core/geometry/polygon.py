@@ -2,8 +2,7 @@
 
 A ZMP can only lie in the convex hull of the contacts. Both the DCM feedback law (:mod:`rtgait.core.laws.feedback`,
 which saturates its command) and the pendulum plant (:mod:`rtgait.core.pendulum.plant`, whose real ZMP is the commanded
-one
-clipped to the feet on the ground) need the point of the polygon nearest to a given one, every control tick, for a
+one clipped to the feet on the ground) need the point of the polygon nearest to a given one, every control tick, for a
 polygon of 4 to 8 vertices that changes only when the contacts do. Hence two forms:
 
 * :class:`ConvexPolygon`: validated once, then queried with Python floats (for so few vertices a float loop is

@@ -23,12 +23,10 @@ Law, per heading axis, at each control tick of period ``dt``:
 * *Lean* while the DCM law is limited by more than ``deadband`` on that axis (its shortfall ``s = p_law - p_cmd``,
   the law's ZMP minus the one the polygon allows): at ``max_acceleration`` (rad/s^2; the hips' torque budget over
   ``I``) toward ``s``. Bang-bang, because what a lean recovers is ``int lam'' e^{-w t} dt`` (below): every tick
-  spent below the limit while the DCM diverges is capacity lost. (Asking the CMP for ``s`` alone, ``lam'' = m g s /
-  I`` by (2), recovered only 65 % of the bound below on the pendulum: the law's shortfall grows only as the DCM
-  runs away.)
+  spent below the limit while the DCM diverges is capacity lost (the shortfall itself grows only as the DCM runs
+  away, so a lean that asks the CMP for ``s`` alone comes too late).
 * *Stop* when nothing more is asked while the lean still moves away from upright: at ``max_acceleration``, so
-  that a push the feet and a step soon answer leans no farther than it needed (without it, a moderate push
-  carried Talos's lean on to ``max_lean``).
+  that a push the feet and a step soon answer leans no farther than it needed.
 * *Return* otherwise: ``lam'' = -w_r^2 lam - 2 w_r lam'``, critically damped at ``return_rate`` ``w_r`` (1/s),
   at most ``return_acceleration``: slow, so that the CMP it costs, ``I w_r^2 lam / (m g)``, stays a few
   millimetres the feet absorb.

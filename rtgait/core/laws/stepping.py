@@ -60,10 +60,10 @@ class StepAdjustment:
         required_margin: ZMP margin a plan must keep to need no adjustment, and that a candidate must reach (m).
         grid: candidates per axis of the stride box (``grid**2`` in all).
         samples: sample times of the free segment at which the margin is checked.
-        on_failure: when no candidate reaches ``required_margin``: ``"continue"`` takes the best one and walks on
-            (the default: at the pendulum level it recovers more, see ``docs/closed_loop.md``), ``"stop"`` takes it
-            and stops the walk after that step (an emergency sequence: capture step, then stop), ``"keep"`` keeps
-            the walk as planned (no landing or timing moves; the plan goes on from the planned state).
+        on_failure: when no candidate reaches ``required_margin``: ``"continue"`` (default) takes the best one and
+            walks on, ``"stop"`` takes it and stops the walk after that step (an emergency sequence: capture step,
+            then stop), ``"keep"`` keeps the walk as planned (no landing or timing moves; the plan goes on from the
+            planned state).
         adapt_timing: also choose the single-support duration of the step being adjusted (Morisawa et al. 2006):
             ``durations`` candidates evenly from the shortest allowed to the nominal one (nominal included), and
             with ``max_single_support`` as many again up to the longest, so ``grid**2 * durations`` (or

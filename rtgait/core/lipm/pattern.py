@@ -31,10 +31,8 @@ map, found without a dense solve):
    c_end`` (position only, eq. 12). A 2 x 2 solve per timing gives ``beta, gamma`` for every column.
 
 Everything is vectorised over a leading batch of timings, so several operators for the same phase kinds (for
-instance candidate first-segment durations) cost little more than one (:meth:`PlanOperator.for_first_durations`).
-Measured for a 3-step horizon (7 segments): a build costs about 33 us once the phase kinds have been seen
-(about 70 us the first time, 120 us for the dense solve this replaces); ten first-segment durations at once
-about 70 us (:func:`plan_operator_matrices`), 90 us as operators.
+instance candidate first-segment durations) cost little more than one (:meth:`PlanOperator.for_first_durations`;
+build costs in ``docs/design/planner.md``).
 """
 
 from __future__ import annotations

@@ -1,77 +1,44 @@
 """The closed loop at the pendulum level: planner, controller and a point-mass plant, tick by tick.
 
-What it is for: trying measured-state replanning, DCM feedback and step adjustment without a robot model. The plant
-is :class:`~rtgait.core.pendulum.plant.LipmPlant`, the same linear inverted pendulum the planner assumes, so whatever
-goes
-wrong here is the controller's doing (or the pendulum's instability), never a modelling mismatch.
+For trying measured-state replanning, DCM feedback and step adjustment without a robot model. The plant
+(:class:`~rtgait.core.pendulum.plant.LipmPlant`) is the linear inverted pendulum the planner assumes, so whatever goes
+wrong is the controller's doing (or the pendulum's instability), never a modelling mismatch.
 
-Controller levels (the names the MuJoCo loop uses too):
+Controller levels (the names the MuJoCo loop uses too; the table in ``docs/closed_loop.md``): ``"open-loop"``
+commands the planned ZMP and replans from its own plan (the paper's assumption of perfect tracking);
+``"stabilized"`` commands the DCM feedback law's ZMP (:class:`~rtgait.core.laws.feedback.DcmFeedback`); ``"adaptive"``
+adds the planner of :func:`controller_config` (every plan from the observed COM state, a replan at once beyond
+``replan_dcm_error``, step adjustment), which the loop calls
+:meth:`~rtgait.core.planner.online.OnlinePlanner.observe` every tick and
+:meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown` at every landing.
 
-* ``"open-loop"``: the plant is commanded the planned ZMP; the planner replans from its own plan
-  (``feedback="planned"``), the paper's assumption of perfect tracking.
-* ``"stabilized"``: the commanded ZMP is the DCM feedback law of :class:`~rtgait.core.laws.feedback.DcmFeedback` on the
-  plant's measured DCM ``xi = c + c'/w`` against the plan's; the planner still replans from its own plan.
-* ``"adaptive"``: ``"stabilized"`` with a planner configured by :func:`controller_config`: ``feedback="measured"``
-  (every plan starts from the observed COM state), ``replan_dcm_error`` (replan at once when the DCM error exceeds
-  it) and ``step_adjustment`` (move the next landing when the plan's ZMP would leave the support polygon). The loop
-  calls :meth:`~rtgait.core.planner.online.OnlinePlanner.observe` every tick with the plant's COM state and
-  :meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown` at every landing with where the foot lands.
+One tick, from ``t`` to ``t + dt`` (``dt`` the control period, 1 ms by default): measure the plant at ``t`` (and
+``observe`` it); the planner's sample at ``t`` and its support polygon (the convex hull of the soles on the ground,
+rebuilt only when their poses change); the fall test; the sample at ``t + dt`` (a landing inside the tick is reported
+by ``touchdown`` first); the commanded ZMP ``p_cmd``; the plant, whose real ZMP is ``p_cmd`` clipped to the polygon,
+held over the tick with the pushes and integrated exactly (:meth:`LipmPlant.step`).
 
-One tick, from ``t`` to ``t + dt`` (``dt`` the control period, 1 ms by default):
+Reference ZMP of a tick. Holding the plan's ``p(t)`` over the tick would act like a delay of ``dt / 2`` and push the
+DCM off the plan by about ``w dt Delta p / 2`` per ZMP transfer ``Delta p``. The loop holds instead the constant ZMP
+that moves the plan's DCM over the tick exactly as ``p(s)`` does: from ``xi' = w (xi - p)``,
 
-1. measure the plant at ``t`` (COM ``c``, velocity ``c'``, DCM); with ``"adaptive"``, ``observe`` it;
-2. the planner's sample at ``t`` (COM, ZMP, DCM, feet, support): the one taken at the previous tick for ``t``, or
-   with ``"adaptive"`` taken again after ``observe`` (which may have replanned); the support polygon is the convex
-   hull of the soles
-   on the ground in that sample: both feet in ``"double"``, the named foot in ``"left"`` / ``"right"``
-   (:func:`~rtgait.core.geometry.support.support_polygon`); it is rebuilt only when those foot poses change;
-3. fallen? (below) then stop;
-4. sample the planner at ``t + dt`` too, for the reference ZMP of the tick (below); a landing inside the tick is
-   counted, and with ``"adaptive"`` reported by ``touchdown`` before that sample makes the double-support replan;
-5. controller: commanded ZMP ``p_cmd``;
-6. plant: the real ZMP is ``p_cmd`` clipped to the support polygon (the nearest point of it: the foot rolls onto
-   that edge), held over the tick with the pushes on the mass, integrated exactly (:meth:`LipmPlant.step`).
+    p_bar = (xi_plan(t + dt) - a xi_plan(t)) / (1 - a),        a = e^{w dt}        (m)
 
-Reference ZMP of a tick. A digital controller holds its command over the tick, while the plan's ZMP ``p(s)`` moves
-within it. Holding ``p(t)`` would act like a delay of ``dt / 2`` and push the plant's DCM off the plan by about
-``w dt Delta p / 2`` per ZMP transfer ``Delta p`` (0.3 mm per 0.19 m sway at 1 ms), which the unstable pendulum then
-amplifies. The loop holds instead the constant ZMP that moves the plan's DCM over the tick exactly as ``p(s)`` does.
-From ``xi' = w (xi - p)``,
+a weighted mean of ``p(s)`` over the tick (weights ``w e^{w (t + dt - s)} / (a - 1)``). Only the convergent component
+``c - c'/w`` then differs from the plan, by ``O(w dt^2 p')``. When the sample at ``t + dt`` comes from a replan from
+the measured state, ``p_bar`` would carry the jump between two plans over ``1 - a``; that tick holds ``p(t)``.
 
-    xi(t + dt) = a xi(t) - w integral_t^{t+dt} e^{w (t + dt - s)} p(s) ds,        a = e^{w dt}
+Commanded ZMP: ``p_bar`` in ``"open-loop"``; otherwise ``p_cmd = p_bar + (1 + k_p / w) e + (k_i / w) I`` with
+``e = xi - xi_plan(t)`` (m), projected onto the support polygon with anti-windup (:mod:`rtgait.core.laws.feedback`).
 
-and a constant ``p_bar`` gives ``xi(t + dt) = a xi(t) + (1 - a) p_bar``, so
+The mass has *fallen* when its COM is farther than ``plant.fall_distance`` (default ``z_c tan 25 deg``) from the
+support polygon (:meth:`LipmPlant.fallen`; :mod:`rtgait.core.pendulum.plant` explains the choice); the run stops
+there. It is *at rest* (``ended_at_rest``) when at the last tick the COM speed is below 1 cm/s and the DCM inside
+the final support polygon (:meth:`LipmPlant.at_rest`). The run ends ``end_margin`` (s) after the walk's planned end
+(re-read every tick: an emergency stop shortens the walk), or at a fall.
 
-    p_bar = (xi_plan(t + dt) - a xi_plan(t)) / (1 - a)
-
-a weighted mean of ``p(s)`` over the tick (weights ``w e^{w (t + dt - s)} / (a - 1)``, positive, summing to 1), m.
-Only the stable, convergent component ``c - c'/w`` then differs from the plan, by ``O(w dt^2 p')`` without growing:
-with the plant started on the plan, ``"open-loop"`` reproduces the planned COM to a few 1e-7 m at 1 ms (the
-pendulum's own check of the planner's closed form) until round-off, amplified by ``e^{w t}``, takes over after
-some 6-8 s: the point-mass pendulum is unstable, and open loop it falls on any walk much longer than that, pushed
-or not. When the sample at ``t + dt`` was made by a replan from the measured state (``"adaptive"``), the two DCMs
-belong to different plans and ``p_bar`` would carry the jump between them divided by ``1 - a ~ -w dt``; that tick
-holds ``p(t)`` instead.
-
-Commanded ZMP. ``"open-loop"``: ``p_cmd = p_bar``. The two others: ``p_cmd = p_bar + (1 + k_p / w) e + (k_i / w) I``
-with ``e = xi - xi_plan(t)`` (m), projected onto the support polygon with anti-windup
-(:mod:`rtgait.core.laws.feedback`); held over the tick it multiplies the DCM error by ``1 - (k_p / w)(a - 1)`` per tick.
-
-Fell. The point mass *fell* when its COM is farther than ``plant.fall_distance`` (default
-``z_c tan 25 deg``, 0.37 m at ``z_c = 0.8 m``) from the support polygon of the feet on the ground at a tick
-(:meth:`LipmPlant.fallen`): past that lean the ground force would need a leg longer than ``1.10 z_c`` and a friction
-coefficient above 0.47 (:mod:`rtgait.core.pendulum.plant` explains the choice). The run stops at the first such tick;
-its
-time is ``fall_time``. *At rest* (``ended_at_rest``): after the last tick the COM speed is below 1 cm/s and the DCM
-is inside the final support polygon (:meth:`LipmPlant.at_rest`), i.e. the mass stops there without a step.
-
-The run ends ``end_margin`` (s) after the walk's planned end (:attr:`OnlinePlanner.end_time`, re-read every tick:
-an emergency stop of the step adjustment shortens the walk), or at a fall.
-
-Cost per tick: one planner sample (two with ``"adaptive"``, plus ``observe``), the feedback law, the plant step and
-the fall test, on Python floats; numpy only for the plant's state and real ZMP (four 2-vectors) and, when the feet
-on the ground change, the support polygon. Measured: 10-20 us per tick in CPython, so fig8 (12.7 s) at 1 ms takes
-0.15-0.25 s, 50-100 times faster than real time.
+Per tick: one planner sample (two with ``"adaptive"``, plus ``observe``), the feedback law, the plant step and the fall
+test on Python floats; numpy only for the plant's state and, when the feet on the ground change, the polygon.
 """
 
 from __future__ import annotations
@@ -202,8 +169,7 @@ def run_closed_loop(
     Args:
         config: the planner's base configuration; the level's is made from it by :func:`controller_config`.
         strides: the walk (:class:`~rtgait.core.geometry.footsteps.Stride` per step, the closing one included), or
-        ``None``
-            for a walk by velocity command (then ``duration`` is needed).
+        ``None`` for a walk by velocity command (then ``duration`` is needed).
         sole: the sole rectangle (m), for the support polygons and the step adjustment.
         controller: ``"open-loop"``, ``"stabilized"`` or ``"adaptive"`` (module docstring).
         mass: of the point mass (kg); only the pushes' effect depends on it.

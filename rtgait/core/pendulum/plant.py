@@ -4,47 +4,34 @@ Model. A mass ``m`` (kg) at constant height ``z_c`` (m) above flat ground; per h
 
     c'' = w^2 (c - p) + f / m,        w = sqrt(g / z_c)
 
-where ``c`` is the COM (m), ``p`` the *real* ZMP (m) and ``f`` an external horizontal force on the mass (N). The real
-ZMP is the commanded one when the feet on the ground can produce it, and otherwise the nearest point of their support
-polygon: a ZMP outside the convex hull of the contacts does not exist, and the closest the feet can come is the
-boundary point nearest to the command (the foot rolls onto that edge or corner).
+with ``c`` the COM (m), ``p`` the *real* ZMP (m) and ``f`` an external horizontal force on the mass (N). The real ZMP
+is the commanded one when the feet on the ground can produce it, otherwise the nearest point of their support
+polygon (the foot rolls onto that edge or corner).
 
-Exact integration. Over one control tick of length ``dt`` the commanded ZMP and the force are held constant (a
-zero-order hold, as a digital controller applies them). With ``p_eff = p - f / (m w^2)`` constant, ``x = c - p_eff``
-obeys the homogeneous pendulum ``x'' = w^2 x``, so
+Exact integration. Over one control tick ``dt`` the commanded ZMP and the force are held (a zero-order hold, as a
+digital controller applies them). With ``p_eff = p - f / (m w^2)`` constant, ``x = c - p_eff`` obeys ``x'' = w^2 x``:
 
     x(dt)  = x(0) cosh(w dt) + x'(0) sinh(w dt) / w
     x'(dt) = x(0) w sinh(w dt) + x'(0) cosh(w dt)
 
-with no discretisation error. :class:`Push` windows that begin or end inside a tick are honoured exactly: the tick
-is split at their boundaries and each piece is integrated in closed form, so the delivered impulse is
-``force * duration`` to round-off whatever the control period.
+:class:`Push` windows that begin or end inside a tick split it at their boundaries, each piece integrated in closed
+form, so the delivered impulse is ``force * duration`` to round-off whatever the control period. The DCM
+``xi = c + c' / w`` obeys ``xi' = w (xi - p) + f / (m w)``: a DCM outside the support polygon cannot be brought back
+without a step.
 
-The divergent component of motion (DCM, or instantaneous capture point) is ``xi = c + c' / w``; it obeys
-``xi' = w (xi - p) + f / (m w)``: the ZMP repels it, which is why a DCM outside the support polygon cannot be brought
-back without a step.
-
-When the point mass has *fallen*. A point mass has no joints to fail, so "fallen" is defined by where the
-pendulum model itself stops describing a walking robot. The ground force that the LIPM needs is
-``m (w^2 (c - p), g)`` (horizontal, vertical): it points from the ZMP to the COM, leaning from the vertical by
-``atan(|c - p| / z_c)``. When the COM is a horizontal distance ``D`` from the support polygon, ``|c - p| >= D``
-whatever the controller does, so the lean is at least ``atan(D / z_c)``. The plant is declared fallen when
+*Fallen.* The ground force the LIPM needs, ``m (w^2 (c - p), g)``, leans from the vertical by ``atan(|c - p| / z_c)``,
+at least ``atan(D / z_c)`` for a COM a horizontal distance ``D`` from the support polygon. The plant has fallen when
 
     D > fall_distance,            default fall_distance = z_c tan(25 degrees) ~ 0.47 z_c
 
-Past that lean the model's assumptions fail on two counts: keeping the COM at ``z_c`` needs a leg longer than
-``z_c / cos(25 deg) = 1.10 z_c`` from the contact (a humanoid stands with its legs close to stretched already), and
-the ground force needs a friction coefficient above ``tan(25 deg) = 0.47`` (rubber soles on a common floor hold
-about 0.5 to 1). Any threshold of this size gives the same verdict at nearly the same time: a diverging pendulum's
-distance grows like ``e^{w t}``, so halving or doubling the threshold moves the fall time by only ``ln 2 / w``
-(0.2 s at ``z_c = 0.8 m``), while a normal walk keeps its COM within a few centimetres of the stance foot. The
-criterion is a state test (has it fallen?), not a prediction: a DCM that has already left every reachable foothold
-is doomed earlier than that; predicting it is :mod:`rtgait.core.laws.capturability`'s job.
+Past that lean the model fails twice: holding the COM at ``z_c`` needs a leg longer than ``z_c / cos(25 deg) = 1.10
+z_c``, and the ground force a friction coefficient above ``tan(25 deg) = 0.47`` (rubber soles on a common floor hold
+about 0.5 to 1). The verdict hardly depends on the threshold: a diverging pendulum's distance grows like ``e^{w t}``,
+so halving or doubling it moves the fall time by ``ln 2 / w`` (0.2 s at ``z_c = 0.8 m``). It is a state test, not a
+prediction (that is :mod:`rtgait.core.laws.capturability`'s job).
 
-At rest. :meth:`LipmPlant.at_rest` holds when the COM speed is below a tolerance (default 1 cm/s) and the DCM is
-inside the support polygon. The second condition is what makes the first meaningful: with the DCM inside, holding the
-ZMP on it keeps the DCM fixed and the COM converges to it without a step (``c - xi`` decays like ``e^{-w t}``); a
-mass that is momentarily still but whose DCM lies outside falls.
+*At rest* (:meth:`LipmPlant.at_rest`): the COM speed below a tolerance (default 1 cm/s) and the DCM inside the support
+polygon; with the DCM inside, a ZMP held on it keeps it fixed and ``c - xi`` decays like ``e^{-w t}``.
 """
 
 from __future__ import annotations

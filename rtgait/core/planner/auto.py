@@ -18,14 +18,11 @@ is accepted until step ``k`` lifts off (the real-time deadline) and decided at o
 Each option is *predicted* with the plan operators: the planner makes, from the plan being executed, the plans it
 would make at the coming double-support starts with the footprints the option gives, and takes the smallest
 half-plane ZMP margin (:func:`~rtgait.core.geometry.halfplanes.halfplane_margin`, against each phase's support polygon)
-at
-:data:`~AUTO_SAMPLES` evenly spaced times over the free first segment of each plan in
-the
-option's *window*: from the first plan that sees the change through ``horizon_steps + 1`` double supports later
-(:func:`window`). The first option, in the order above, whose prediction reaches ``auto_margin`` is taken; if none
-does, the one with the largest prediction (ties: the earliest). With a single change and no other input this
-prediction is exactly what the rollout then walks, which is how the batched evaluation
-(:mod:`rtgait.core.analysis.batch`) reproduces the planner's choice.
+at :data:`~AUTO_SAMPLES` evenly spaced times over the free first segment of each plan in the option's *window*: from the
+first plan that sees the change through ``horizon_steps + 1`` double supports later (:func:`window`). The first option,
+in the order above, whose prediction reaches ``auto_margin`` is taken; if none does, the one with the largest prediction
+(ties: the earliest). With a single change and no other input this prediction is exactly what the rollout then walks,
+which is how the batched evaluation (:mod:`rtgait.core.analysis.batch`) reproduces the planner's choice.
 
 Scheduled changes (:func:`rtgait.core.analysis.rollout.rollout`, ``rtgait plan``) are handed to an auto planner at the
 quasi-real-time deadline (``OnlinePlanner.change_deadline``): the latest moment at which all three options are open.
@@ -142,8 +139,7 @@ def _describe(option: AutoOption, margin: float, why: str) -> str:
 
 class AutoConnection:
     """The auto connection of one :class:`~rtgait.core.planner.online.OnlinePlanner`: decides each change (module
-    docstring)
-    with the planner's own operators, and holds the changes that wait for their step's lift-off."""
+    docstring) with the planner's own operators, and holds the changes that wait for their step's lift-off."""
 
     def __init__(self, planner: OnlinePlanner) -> None:
         if planner.config.connection == "auto" and not planner.config.timing.uniform:

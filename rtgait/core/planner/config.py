@@ -56,9 +56,8 @@ class PlannerConfig:
         feedback: where each new plan starts: ``"planned"`` (the paper's: from the plan being executed) or
             ``"measured"`` (from the state last given to :meth:`~rtgait.core.planner.online.OnlinePlanner.observe`).
         replan_dcm_error: with ``feedback="measured"``, replan at once
-        (:meth:`~rtgait.core.planner.online.OnlinePlanner.
-            replan_now`) when the observed DCM is farther than this from the plan's (m); ``None``: only at
-            double-support starts.
+            (:meth:`~rtgait.core.planner.online.OnlinePlanner.replan_now`) when the observed DCM is farther than this
+            from the plan's (m); ``None``: only at double-support starts.
         step_adjustment: push recovery by stepping (:mod:`rtgait.core.laws.stepping`); ``None`` (default): off.
         auto_margin: with ``connection="auto"``, the ZMP margin (m, signed) a connection's prediction must reach to
             be taken, within [-0.5, 0.5].

@@ -1,11 +1,10 @@
 """Planning from the robot: the part of the online planner that listens to the measured state.
 
 :class:`~rtgait.core.planner.online.OnlinePlanner` takes these methods from :class:`MeasuredPlanning` (a mixin, so that
-the
-per-tick path stays one object with no indirection): ``observe`` (the measured COG state, and a replan by itself
+the per-tick path stays one object with no indirection): ``observe`` (the measured COG state, and a replan by itself
 when the DCM error grows), ``touchdown`` (re-anchoring on a real foothold), ``replan_now`` (a plan whose free first
-segment is the remainder of the phase under way), the connection from the measured state, and step adjustment
-after a replan. The equations are in ``docs/closed_loop.md``.
+segment is the remainder of the phase under way), the connection from the measured state, and step adjustment after a
+replan. The equations are in ``docs/closed_loop.md``.
 
 The mixin reads and writes the planner's state (the plan under way, the walk, the phase being sampled); it has no
 state of its own and is not meant to be used alone.
@@ -251,10 +250,9 @@ class MeasuredPlanning:
         With none, ``StepAdjustment.on_failure`` decides: ``"continue"`` takes the landing with the largest margin
         all the same (a capture step) and walks on, ``"stop"`` takes it and stops after that step, ``"keep"`` keeps
         the walk as planned (footprints and timing). A plan made from the measured state is then replaced by the
-        one from the planned state
-        ``planned``, with the new landing: a plan no foot can realise would ask the feedback law to follow it, while
-        from the planned state it asks only for what the ankle can do and the law, saturated at the sole's edge,
-        recovers the rest (at the pendulum level this recovers 5-25 % more impulse than the measured plan).
+        one from the planned state ``planned``, with the new landing: a plan no foot can realise would ask the
+        feedback law to follow it, while from the planned state it asks only for what the ankle can do and the law,
+        saturated at the sole's edge, recovers the rest.
         """
         plan = self._plan
         q = plan.phase0

@@ -21,10 +21,8 @@ Connection modes (method.md section 5), for a change of step ``k``:
 The walk's footprints, strides, velocity command and deadlines live in :class:`~rtgait.core.walk.walk.Walk`. The
 planner's methods are in four modules: this one makes plans and samples them (the per-tick path,
 :meth:`OnlinePlanner.sample_values`, and the replans it triggers); :mod:`rtgait.core.planner.planner_walk` tells of the
-walk
-and takes the changes; :mod:`rtgait.core.planner.measured` plans from the measured state;
-:mod:`rtgait.core.planner.layouts` builds
-the plan shapes ahead.
+walk and takes the changes; :mod:`rtgait.core.planner.measured` plans from the measured state;
+:mod:`rtgait.core.planner.layouts` builds the plan shapes ahead.
 """
 
 from __future__ import annotations

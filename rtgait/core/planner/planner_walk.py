@@ -2,17 +2,15 @@
 
 :class:`~rtgait.core.planner.online.OnlinePlanner` takes these methods from :class:`PlannerWalk` (a mixin, like
 :class:`~rtgait.core.planner.measured.MeasuredPlanning` and :class:`~rtgait.core.planner.layouts.PlanShapes`): the
-walk's
-queries (:class:`WalkQueries`, which :class:`~rtgait.core.analysis.preview.PreviewPlanner` shares): footprints, phase
-start
-times (absolute, s: the walk's start time :attr:`~PlannerWalk.t0` plus the timeline's),
-change deadlines and the first step still open, all read from the planner's :class:`~rtgait.core.walk.walk.Walk`; and
-the changes (:meth:`~PlannerWalk.change_step`, :meth:`~PlannerWalk.set_strides`, :meth:`~PlannerWalk.set_footsteps`,
-:meth:`~PlannerWalk.set_velocity`, :meth:`~PlannerWalk.stop`), each made on the walk
-(:mod:`rtgait.core.walk.changes`, which checks the deadline), then the planner's state that depends on it is
-refreshed (the cached phase, the plan layouts prepared ahead) and the change is logged
-(:attr:`~rtgait.core.planner.online.OnlinePlanner.change_log`). In auto mode :meth:`~PlannerWalk.change_step` hands the
-change to the auto connection (:mod:`rtgait.core.planner.auto`), which decides it.
+walk's queries (:class:`WalkQueries`, which :class:`~rtgait.core.analysis.preview.PreviewPlanner` shares): footprints,
+phase start times (absolute, s: the walk's start time :attr:`~PlannerWalk.t0` plus the timeline's), change deadlines and
+the first step still open, all read from the planner's :class:`~rtgait.core.walk.walk.Walk`; and the changes
+(:meth:`~PlannerWalk.change_step`, :meth:`~PlannerWalk.set_strides`, :meth:`~PlannerWalk.set_footsteps`,
+:meth:`~PlannerWalk.set_velocity`, :meth:`~PlannerWalk.stop`), each made on the walk (:mod:`rtgait.core.walk.changes`,
+which checks the deadline), then the planner's state that depends on it is refreshed (the cached phase, the plan layouts
+prepared ahead) and the change is logged (:attr:`~rtgait.core.planner.online.OnlinePlanner.change_log`). In auto mode
+:meth:`~PlannerWalk.change_step` hands the change to the auto connection (:mod:`rtgait.core.planner.auto`), which
+decides it.
 
 The per-tick path (:meth:`~rtgait.core.planner.online.OnlinePlanner.sample_values`) reads only
 :attr:`~PlannerWalk.timeline`

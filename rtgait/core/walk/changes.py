@@ -2,11 +2,11 @@
 
 :class:`~rtgait.core.walk.walk.Walk` takes these methods from :class:`WalkChanges` (a mixin, like the online planner's
 :class:`~rtgait.core.planner.measured.MeasuredPlanning`): each validates everything before it changes anything (a
-refused
-change changes nothing), applies the deadline of the walk's connection mode (:meth:`Walk.first_open_step
-<rtgait.core.walk.walk.Walk.first_open_step>`; module docstring of :mod:`rtgait.core.walk.walk`), then recomputes the
-footprints after the first step changed. Strides are relative, so a change of step ``k`` moves ``F[k + 1]`` and
-every later footprint. :meth:`WalkChanges.trial` undoes the changes made inside a block, for predictions.
+refused change changes nothing), applies the deadline of the walk's connection mode
+(:meth:`Walk.first_open_step <rtgait.core.walk.walk.Walk.first_open_step>`; module docstring of
+:mod:`rtgait.core.walk.walk`), then recomputes the footprints after the first step changed. Strides are relative, so a
+change of step ``k`` moves ``F[k + 1]`` and every later footprint. :meth:`WalkChanges.trial` undoes the changes made
+inside a block, for predictions.
 
 Two kinds of change have no deadline, being the controller's answer to a disturbance:
 :meth:`~WalkChanges.move_landing` (step adjustment) and :meth:`~WalkChanges.set_single_support` (step timing
