@@ -56,8 +56,9 @@ from rtgait.core.analysis.rollout import rollout
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
 from rtgait.core.laws.stepping import StepAdjustment
-from rtgait.core.pendulum.loop import CONTROLLERS, DEFAULT_MASS, run_closed_loop
+from rtgait.core.pendulum.loop import DEFAULT_MASS, run_pendulum_loop
 from rtgait.core.pendulum.plant import Push
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.scenario.scenario import Scenario, load_scenario
 
@@ -145,7 +146,7 @@ def survives(
     scenario: Scenario, controller: str, mass: float, dt: float, push: Push | None, adjust: StepAdjustment
 ) -> bool:
     """Whether the walk with ``push`` ends at rest without a fall."""
-    result = run_closed_loop(
+    result = run_pendulum_loop(
         scenario.planner_config(), scenario.strides(), scenario.sole, controller=controller, mass=mass, dt=dt,
         pushes=() if push is None else (push,), changes=scenario.changes, step_adjustment=adjust,
     )  # fmt: skip
@@ -257,7 +258,9 @@ def table(cases: list[dict], early: bool = False) -> str:
 def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    parser.add_argument("--controller", action="append", choices=CONTROLLERS, help="level(s) to test (default all)")
+    parser.add_argument(
+        "--controller", action="append", choices=CONTROLLER_LEVELS, help="level(s) to test (default all)"
+    )
     parser.add_argument("--scenario", default="fig8", help="built-in scenario name or TOML path (default fig8)")
     parser.add_argument("--mass", type=float, default=DEFAULT_MASS, help="point mass in kg (default 57)")
     parser.add_argument("--dt", type=float, default=0.002, help="control period in s (default 0.002)")
@@ -281,7 +284,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         )  # fmt: skip
     except ValueError as error:
         parser.error(str(error))
-    controllers = args.controller or list(CONTROLLERS)
+    controllers = args.controller or list(CONTROLLER_LEVELS)
     phases = args.phase or list(PHASES)
     began = time.perf_counter()
     cases = run(scenario, controllers, phases, args.mass, args.dt, args.tolerance, adjust)

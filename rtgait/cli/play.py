@@ -9,13 +9,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtgait.cli.common import PROG, RunError, load_robot, robot_walk
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.scenario.scenario import Scenario, ScenarioError, load_scenario
 
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
     from rtgait.sim.live import LiveWalk
 
-CONTROLLERS = ("open-loop", "stabilized", "adaptive")
 COMMAND_SCENARIO = "fig8"
 """The built-in scenario whose timing a walk by command takes (T_s 0.7 s, T_dbl 0.1 s, quasi-real-time)."""
 KEEP = 10.0
@@ -46,7 +46,7 @@ def add_parser(commands: Any) -> None:
     )  # fmt: skip
     play.add_argument("--robot", metavar="NAME_OR_FILE", default="talos", help="robot (default talos)")
     play.add_argument(
-        "--controller", choices=CONTROLLERS, default="adaptive", help="controller level to start with (default "
+        "--controller", choices=CONTROLLER_LEVELS, default="adaptive", help="controller level to start with (default "
         "adaptive; Insert switches it while walking)",
     )  # fmt: skip
     play.add_argument(

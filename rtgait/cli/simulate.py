@@ -26,6 +26,7 @@ from rtgait.cli.common import (
     require_extras,
     robot_walk,
 )
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.io.plan_files import pendulum_report
 from rtgait.outputs import check_destination, staged_outputs
 from rtgait.scenario.scenario import Scenario, ScenarioError, load_scenario
@@ -37,8 +38,6 @@ if TYPE_CHECKING:
 
 MODELS = ("mujoco", "lipm")
 """What ``--model`` can simulate: the robot in MuJoCo, or the linear inverted pendulum's point mass."""
-CONTROLLERS = ("open-loop", "stabilized", "adaptive")
-"""The controller levels (``docs/closed_loop.md``)."""
 
 
 def add_parser(commands: Any) -> None:
@@ -63,7 +62,7 @@ def add_parser(commands: Any) -> None:
     )
     simulate.add_argument(
         "--controller",
-        choices=CONTROLLERS,
+        choices=CONTROLLER_LEVELS,
         help="adaptive (default): + replanning from the measured state, re-anchoring on landings, step adjustment "
         "and landing detection; stabilized: the plan + DCM feedback on the measured COM state and foot force control "
         "from the measured wrench of each foot; open-loop: the plan alone (the paper's assumption)",

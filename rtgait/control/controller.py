@@ -1,7 +1,7 @@
 """The controller levels of the MuJoCo loop: planner sample -> feedback -> IK targets, once per control tick.
 
-Names and planner settings are those of :mod:`rtgait.core.pendulum.loop` (:func:`~rtgait.core.pendulum.loop.
-controller_config`), the pendulum-level loop:
+Names and planner settings are those of :mod:`rtgait.core.planner.levels` (:func:`~rtgait.core.planner.levels.
+level_config`), as in the pendulum-level loop:
 
 * ``"open-loop"``: the plan alone (the paper's assumption): COM and feet targets are the planner's sample.
 * ``"stabilized"``: the DCM law (:class:`~rtgait.core.laws.feedback.DcmFeedback`) on the measured DCM gives a commanded
@@ -67,8 +67,8 @@ from rtgait.core.geometry.footsteps import Footstep, Side, SoleRect, Stride, mea
 from rtgait.core.geometry.support import support_polygon
 from rtgait.core.laws.feedback import DcmFeedback
 from rtgait.core.laws.hip_strategy import HipStrategy
-from rtgait.core.pendulum.loop import CONTROLLERS, Controller, controller_config
 from rtgait.core.planner.config import PlannerConfig
+from rtgait.core.planner.levels import ControllerLevel, check_level, level_config
 from rtgait.core.planner.online import OnlinePlanner
 
 if TYPE_CHECKING:
@@ -81,7 +81,6 @@ if TYPE_CHECKING:
     from rtgait.sim.measure import FootState, Measurement
 
 __all__ = [
-    "CONTROLLERS",
     "ERROR_REPLAN_INTERVAL",
     "ERROR_REPLAN_MIN_REMAINDER",
     "SIM_COM_ADMITTANCE",
@@ -105,10 +104,9 @@ class WalkingController:
     """One controller level around an online planner (module docstring). Build with :func:`make_controller`."""
 
     def __init__(
-        self, level: Controller, planner: OnlinePlanner, info: RobotInfo, dt: float, options: ControllerOptions
+        self, level: ControllerLevel, planner: OnlinePlanner, info: RobotInfo, dt: float, options: ControllerOptions
     ) -> None:
-        if level not in CONTROLLERS:
-            raise ValueError(f"level must be one of {', '.join(CONTROLLERS)}, got {level!r}")
+        check_level(level, "level")
         if not (math.isfinite(dt) and dt > 0.0):
             raise ValueError(f"dt must be a control period > 0 s, got {dt}")
         self.level, self.planner, self.info, self.dt, self.options = level, planner, info, float(dt), options
@@ -351,13 +349,13 @@ class WalkingController:
         if self.level != "open-loop":
             self.external.set(force, height)
 
-    def set_level(self, level: Controller) -> None:
+    def set_level(self, level: ControllerLevel) -> None:
         """Switch to controller level ``level`` (``"open-loop"``, ``"stabilized"``, ``"adaptive"``) mid-walk or
         before the start, without a jump in the IK's targets.
 
         The planner and its plan go on as they are (no replan at the switch); its settings become the new level's,
-        made from its current ones as :func:`make_controller` makes them (:func:`~rtgait.core.pendulum.loop.
-        controller_config`: measured-state replanning, the DCM-error threshold and step adjustment for
+        made from its current ones as :func:`make_controller` makes them (:func:`~rtgait.core.planner.levels.
+        level_config`: measured-state replanning, the DCM-error threshold and step adjustment for
         ``"adaptive"`` only). What each switch starts, stops or resets:
 
         * to a closed level from ``"open-loop"``: a new DCM feedback law and foot force control, from zero state
@@ -378,15 +376,14 @@ class WalkingController:
         Raises:
             ValueError: an unknown level.
         """
-        if level not in CONTROLLERS:
-            raise ValueError(f"level must be one of {', '.join(CONTROLLERS)}, got {level!r}")
+        check_level(level, "level")
         if level == self.level:
             return
         from rtgait.control.level_fade import LEVEL_FADE, FeedbackFade, FootFade
 
         options, planner = self.options, self.planner
         adjust = controller_step_adjustment(options, self.info) if level == "adaptive" else None
-        config = controller_config(
+        config = level_config(
             planner.config, level, self.sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
         )
         if level == "adaptive" and options.measured_replanning == "on-error":
@@ -427,7 +424,7 @@ def _lengthens(adjust: StepAdjustment | None) -> bool:
 
 
 def make_controller(
-    level: Controller,
+    level: ControllerLevel,
     planner_config: PlannerConfig,
     strides: Sequence[Stride] | None,
     sole: SoleRect,
@@ -441,7 +438,7 @@ def make_controller(
     Args:
         level: the controller level (module docstring).
         planner_config: the planner's base configuration; the level's is made from it by
-            :func:`~rtgait.core.pendulum.loop.controller_config` (the levels differ only by what the loop adds).
+            :func:`~rtgait.core.planner.levels.level_config` (the levels differ only by what the loop adds).
         strides: the walk; ``None`` to walk by velocity command.
         sole: the sole rectangle (m), for support polygons, the ZMP split and step adjustment.
         robot: a :class:`RobotInfo` or a loaded :class:`~rtgait.robot.model.RobotModel`.
@@ -453,7 +450,7 @@ def make_controller(
     if info.sole != sole:
         info = dataclasses.replace(info, sole=sole)
     adjust = controller_step_adjustment(options, info) if level == "adaptive" else None
-    config = controller_config(
+    config = level_config(
         planner_config, level, sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
     )
     if level == "adaptive" and options.measured_replanning == "on-error":

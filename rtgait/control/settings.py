@@ -12,7 +12,7 @@ from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.core.laws.feedback import DcmFeedbackGains
 from rtgait.core.laws.hip_strategy import HipStrategyLimits
 from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
-from rtgait.core.pendulum.loop import DEFAULT_REPLAN_DCM_ERROR
+from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR
 from rtgait.core.planner.measured import AUTO_MIN_REMAINDER, AUTO_REPLAN_INTERVAL
 from rtgait.robot.ik import IKTargets
 

@@ -22,7 +22,7 @@ import mujoco
 
 from rtgait.control.controller import ControllerOptions, WalkingController, make_controller
 from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
-from rtgait.core.pendulum.loop import CONTROLLERS, Controller
+from rtgait.core.planner.levels import ControllerLevel, check_level
 from rtgait.core.planner.online import OnlinePlanner, VelocityCommand
 from rtgait.io.sim_files import (
     SIM_CSV_COLUMNS,
@@ -36,7 +36,7 @@ from rtgait.io.sim_files import (
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.scenario import Scenario
-from rtgait.sim.loop import LoopOptions, Push, SimResult, run_closed_loop
+from rtgait.sim.loop import LoopOptions, Push, SimResult, run_sim_loop
 from rtgait.sim.model import SimConfig, SimModel, build_sim_model
 
 __all__ = [
@@ -71,7 +71,7 @@ def simulate(
     scenario: Scenario,
     robot: RobotModel | str,
     *,
-    controller: Controller = "adaptive",
+    controller: ControllerLevel = "adaptive",
     controller_options: ControllerOptions | None = None,
     velocity: VelocityCommand | tuple[float, float, float] | Sequence[tuple[float, float, float, float]] | None = None,
     push: Push | Sequence[Push] | None = None,
@@ -124,8 +124,7 @@ def simulate(
             :meth:`Push.check`) or velocity.
         rtgait.robot.description.RobotError: the robot cannot be loaded or built.
     """
-    if controller not in CONTROLLERS:
-        raise ValueError(f"controller must be one of {', '.join(CONTROLLERS)}, got {controller!r}")
+    check_level(controller)
     if not isinstance(robot, RobotModel):
         robot = RobotModel.load(robot)
     walk = robot_scenario(scenario, robot)
@@ -151,7 +150,7 @@ def simulate(
     walk_options = dataclasses.replace(
         base_options, changes=changes, stop_after_steps=stop_after, velocity_changes=schedule
     )
-    return run_closed_loop(sim, level, walk_options, progress=progress)
+    return run_sim_loop(sim, level, walk_options, progress=progress)
 
 
 def _velocity_schedule(
@@ -213,7 +212,7 @@ def _planner(
 def _controller(
     walk: Scenario,
     velocity: VelocityCommand | tuple[float, float, float] | None,
-    level: Controller,
+    level: ControllerLevel,
     sim: SimModel,
     options: ControllerOptions | None,
 ) -> tuple[WalkingController, tuple[ScheduledChange, ...], int | None]:

@@ -18,7 +18,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
 
-from rtgait.core.pendulum.loop import SUPPORT_CODES, ClosedLoopResult
+from rtgait.core.geometry.support import SUPPORT_NAMES
+from rtgait.core.pendulum.loop import ClosedLoopResult
 from rtgait.core.pendulum.plant import Push
 from rtgait.viz.run_data import SIM_CSV, SUMMARY, RunFilesError, read_floats, read_summary, read_table, require_keys
 from rtgait.viz.style import (
@@ -82,9 +83,7 @@ class PendulumRun:
     @classmethod
     def from_result(cls, result: ClosedLoopResult, title: str = "") -> PendulumRun:
         """The record of a closed-loop run in memory."""
-        names = np.empty(len(SUPPORT_CODES), dtype=object)
-        for name, code in SUPPORT_CODES.items():
-            names[code] = name
+        names = np.array(SUPPORT_NAMES, dtype=object)
         return cls(
             times=result.times,
             zmp_planned=result.zmp_planned,

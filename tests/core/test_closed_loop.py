@@ -11,17 +11,12 @@ import pytest
 from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, ZC, W
 
 from rtgait.core.analysis.rollout import rollout
-from rtgait.core.geometry.support import signed_margin, support_polygon
+from rtgait.core.geometry.support import SUPPORT_CODES, signed_margin, support_polygon
 from rtgait.core.laws.capturability import max_capturable_impulse
 from rtgait.core.laws.stepping import StepAdjustment
-from rtgait.core.pendulum.loop import (
-    CONTROLLERS,
-    DEFAULT_REPLAN_DCM_ERROR,
-    SUPPORT_CODES,
-    controller_config,
-    run_closed_loop,
-)
+from rtgait.core.pendulum.loop import run_pendulum_loop
 from rtgait.core.pendulum.plant import DEFAULT_MAX_LEAN, Push
+from rtgait.core.planner.levels import CONTROLLER_LEVELS, DEFAULT_REPLAN_DCM_ERROR, level_config
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.scenario.scenario import load_scenario
 
@@ -29,7 +24,7 @@ DT = 0.005
 
 
 def run(controller: str, pushes=(), dt: float = DT, **options):
-    return run_closed_loop(CONFIG, STRIDES, SOLE, controller=controller, mass=MASS, dt=dt, pushes=pushes, **options)
+    return run_pendulum_loop(CONFIG, STRIDES, SOLE, controller=controller, mass=MASS, dt=dt, pushes=pushes, **options)
 
 
 def mid_single_support() -> tuple[float, np.ndarray, np.ndarray]:
@@ -65,7 +60,7 @@ def fig8_runs():
     scenario = load_scenario("fig8")
     common = dict(mass=MASS, dt=0.001, changes=scenario.changes)
     config, strides, sole = scenario.planner_config(), scenario.strides(), scenario.sole
-    return scenario, {c: run_closed_loop(config, strides, sole, controller=c, **common) for c in CONTROLLERS}
+    return scenario, {c: run_pendulum_loop(config, strides, sole, controller=c, **common) for c in CONTROLLER_LEVELS}
 
 
 def test_open_loop_reproduces_the_plan_until_the_pendulum_diverges(fig8_runs):
@@ -104,7 +99,7 @@ def test_the_loop_walks_the_footprints_and_changes_of_the_rollout(fig8_runs):
     scenario, runs = fig8_runs
     planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
     walked = rollout(planner, scenario.dt, scenario.sole, scenario.changes)
-    for controller in CONTROLLERS:
+    for controller in CONTROLLER_LEVELS:
         footprints = runs[controller].footprints
         assert len(footprints) == len(walked.footprints)
         for ours, theirs in zip(footprints, walked.footprints, strict=True):
@@ -152,7 +147,7 @@ def test_push_beyond_every_capture_bound_topples_every_controller():
         remaining=0.5 * CONFIG.timing.single_support, steps=math.inf,
     )  # fmt: skip
     push = forward_push(t_mid, 1.5 * generous)
-    for controller in CONTROLLERS:
+    for controller in CONTROLLER_LEVELS:
         result = run(controller, [push])
         assert result.fell and not result.ended_at_rest, controller
         assert result.fall_time < t_mid + 2.0
@@ -245,19 +240,19 @@ def test_fell_means_the_com_beyond_the_fall_distance_from_the_support_polygon():
 
 
 # ----- configuration and bookkeeping ------------------------------------------------------------------------------
-def test_controller_config_sets_only_what_the_level_adds():
+def test_level_config_sets_only_what_the_level_adds():
     base = dataclasses.replace(CONFIG, horizon_steps=4, feedback="measured", replan_dcm_error=0.01)
     for level in ("open-loop", "stabilized"):
-        config = controller_config(base, level, SOLE)
+        config = level_config(base, level, SOLE)
         assert (config.feedback, config.replan_dcm_error, config.step_adjustment) == ("planned", None, None)
         assert config.horizon_steps == 4
-    adaptive = controller_config(base, "adaptive", SOLE)
+    adaptive = level_config(base, "adaptive", SOLE)
     assert adaptive.feedback == "measured" and adaptive.replan_dcm_error == DEFAULT_REPLAN_DCM_ERROR
     assert adaptive.step_adjustment == StepAdjustment(sole=SOLE) and adaptive.horizon_steps == 4
     custom = StepAdjustment(sole=SOLE, max_length=0.2)
-    assert controller_config(base, "adaptive", SOLE, step_adjustment=custom).step_adjustment is custom
+    assert level_config(base, "adaptive", SOLE, step_adjustment=custom).step_adjustment is custom
     with pytest.raises(ValueError, match="controller"):
-        controller_config(base, "magic", SOLE)  # type: ignore[arg-type]
+        level_config(base, "magic", SOLE)  # type: ignore[arg-type]
 
 
 def test_arrays_and_summary_are_consistent():
@@ -283,10 +278,10 @@ def test_bad_arguments_are_refused():
     with pytest.raises(ValueError, match="dt"):
         run("stabilized", dt=0.2)  # longer than the 0.1 s double support
     with pytest.raises(ValueError, match="duration"):
-        run_closed_loop(CONFIG, None, SOLE, controller="stabilized")  # a walk by command has no end
+        run_pendulum_loop(CONFIG, None, SOLE, controller="stabilized")  # a walk by command has no end
 
 
 def test_a_walk_by_command_runs_for_the_duration_given():
-    result = run_closed_loop(CONFIG, None, SOLE, controller="adaptive", dt=DT, duration=3.0)
+    result = run_pendulum_loop(CONFIG, None, SOLE, controller="adaptive", dt=DT, duration=3.0)
     assert not result.fell
     assert result.times[-1] == pytest.approx(3.0)

@@ -15,7 +15,7 @@ import pytest
 from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, W
 
 from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits, remainder_options, single_support_options
-from rtgait.core.pendulum.loop import run_closed_loop
+from rtgait.core.pendulum.loop import run_pendulum_loop
 from rtgait.core.pendulum.plant import Push
 from rtgait.core.planner.online import OnlinePlanner
 
@@ -29,7 +29,7 @@ def _loop(adjust: StepAdjustment, impulse: float, dt: float):
     planner.start(0.0)
     t_mid = planner.phase_start(2 * PUSHED_STEP - 1) + 0.5 * CONFIG.timing.single_support
     push = Push(t_mid - 0.05, 0.1, (0.0, impulse / 0.1))  # +y: the left stance foot's outside
-    return run_closed_loop(
+    return run_pendulum_loop(
         CONFIG, STRIDES, SOLE, controller="adaptive", mass=MASS, dt=dt, pushes=[push], step_adjustment=adjust
     )
 

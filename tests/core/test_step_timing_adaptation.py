@@ -20,7 +20,7 @@ from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.support import signed_margin
 from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
 from rtgait.core.laws.stepping import StepAdjustment, choose_step, remainder_options, single_support_options
-from rtgait.core.pendulum.loop import run_closed_loop
+from rtgait.core.pendulum.loop import run_pendulum_loop
 from rtgait.core.pendulum.plant import Push
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
 
@@ -30,7 +30,7 @@ DT = 0.001
 
 
 def _loop(adjust: StepAdjustment, pushes, dt: float):
-    return run_closed_loop(
+    return run_pendulum_loop(
         CONFIG, STRIDES, SOLE, controller="adaptive", mass=MASS, dt=dt, pushes=pushes, step_adjustment=adjust
     )
 

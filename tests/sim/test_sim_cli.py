@@ -73,8 +73,8 @@ def no_physics(monkeypatch: pytest.MonkeyPatch) -> None:
     def simulated(*args: object, **kwargs: object) -> None:
         raise AssertionError("the simulation started before the input was refused")
 
-    monkeypatch.setattr(run, "run_closed_loop", simulated)
-    monkeypatch.setattr(guided, "run_closed_loop", simulated)
+    monkeypatch.setattr(run, "run_sim_loop", simulated)
+    monkeypatch.setattr(guided, "run_sim_loop", simulated)
 
 
 def tall_talos(folder: Path) -> Path:

@@ -12,7 +12,6 @@ pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import (
-    CONTROLLERS,
     ControllerOptions,
     RobotInfo,
     make_controller,
@@ -21,7 +20,7 @@ from rtgait.control.controller import (
 from rtgait.control.foot_control import split_zmp
 from rtgait.core.geometry.footsteps import SoleRect, Timing
 from rtgait.core.laws.stepping import SteppingLimits
-from rtgait.core.pendulum.loop import controller_config
+from rtgait.core.planner.levels import CONTROLLER_LEVELS, level_config
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
 from rtgait.sim.measure import FootState, Landing, Measurement
 
@@ -68,12 +67,12 @@ def controller(level, steps=3, options=EXACT):
 
 
 def reference(steps=3):
-    planner = OnlinePlanner(controller_config(CONFIG, "open-loop", SOLE), straight_walk(CONFIG, steps, 0.1))
+    planner = OnlinePlanner(level_config(CONFIG, "open-loop", SOLE), straight_walk(CONFIG, steps, 0.1))
     planner.start(0.0)
     return planner
 
 
-@pytest.mark.parametrize("level", CONTROLLERS)
+@pytest.mark.parametrize("level", CONTROLLER_LEVELS)
 def test_on_the_plan_every_level_gives_the_plan(level):
     ctl, plan = controller(level, steps=2), reference(steps=2)
     worst = 0.0

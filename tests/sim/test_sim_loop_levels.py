@@ -15,7 +15,7 @@ pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import make_controller
 from rtgait.control.level_fade import LEVEL_FADE, fade_weight
-from rtgait.core.pendulum.loop import CONTROLLERS
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.robot.motion import robot_scenario
 from rtgait.sim.loop import ClosedLoop, LoopOptions
 
@@ -30,7 +30,7 @@ def made(level, walk, talos, dt=0.001):
     return make_controller(level, walk.planner_config(), walk.strides(), walk.sole, talos, dt=dt)
 
 
-@pytest.mark.parametrize(("start", "to"), list(itertools.permutations(CONTROLLERS, 2)))
+@pytest.mark.parametrize(("start", "to"), list(itertools.permutations(CONTROLLER_LEVELS, 2)))
 def test_a_switch_gives_the_settings_make_controller_gives(talos, shorten, start, to):
     walk = walk_of(talos, shorten)
     controller = made(start, walk, talos)
