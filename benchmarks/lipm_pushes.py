@@ -57,9 +57,9 @@ from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.pendulum.loop import DEFAULT_MASS, run_pendulum_loop
-from rtgait.core.pendulum.plant import Push
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.core.push import Push
 from rtgait.scenario.scenario import Scenario, load_scenario
 
 PUSH_DURATION = 0.1

@@ -193,7 +193,7 @@ def survives(
     """Whether the walk with ``push`` = ``(start, fx, fy)`` (s, N, N; or ``None``) ends at rest without a fall;
     ``options`` are :class:`~rtgait.control.controller.ControllerOptions` fields."""
     from rtgait.control.controller import ControllerOptions
-    from rtgait.sim.contact import Push
+    from rtgait.core.push import Push
     from rtgait.sim.run import mujoco_messages, simulate
 
     robot, sim, scenario = _setup(robot_name, scenario_name)

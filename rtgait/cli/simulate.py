@@ -32,8 +32,9 @@ from rtgait.outputs import check_destination, staged_outputs
 from rtgait.scenario.scenario import Scenario, ScenarioError, load_scenario
 
 if TYPE_CHECKING:
+    from rtgait.core.push import Push
     from rtgait.robot.model import RobotModel
-    from rtgait.sim.loop import Push, SimResult
+    from rtgait.sim.loop import SimResult
     from rtgait.sim.model import SimConfig
 
 MODELS = ("mujoco", "lipm")
@@ -146,7 +147,7 @@ def _push_values(texts: Sequence[str], run_time: float) -> list[tuple[float, flo
 
 def _pushes(texts: Sequence[str], run_time: float) -> list[Push]:
     """The ``--push`` options as the MuJoCo loop's pushes (:func:`_push_values`)."""
-    from rtgait.sim.loop import Push
+    from rtgait.core.push import Push
 
     pushes = []
     for start, duration, fx, fy in _push_values(texts, run_time):

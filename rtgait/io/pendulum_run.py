@@ -33,8 +33,8 @@ import numpy as np
 from rtgait.core.geometry.support import SUPPORT_NAMES
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.pendulum.loop import DEFAULT_DT, DEFAULT_MASS, ClosedLoopResult, run_pendulum_loop
-from rtgait.core.pendulum.plant import Push
 from rtgait.core.planner.levels import ControllerLevel, check_level
+from rtgait.core.push import Push
 from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.scenario.scenario import Scenario
 

@@ -55,9 +55,10 @@ from rtgait.control.foot_control import FootOffsets, add_ankle_offsets, find_ank
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.geometry.support import SUPPORT_CODES, SUPPORT_NAMES
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.core.push import Push
 from rtgait.robot.ik import IKTargets, WholeBodyIK
 from rtgait.sim.actuation import ReferenceInterpolator
-from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Push, Pushes, measure_contacts
+from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Pushes, measure_contacts
 from rtgait.sim.loop_inputs import WalkInputs
 from rtgait.sim.loop_options import (
     LANDING_WINDOW,
@@ -82,7 +83,6 @@ __all__ = [
     "ClosedLoop",
     "FallLimits",
     "LoopOptions",
-    "Push",
     "SimResult",
     "TickValues",
     "measure_contacts",

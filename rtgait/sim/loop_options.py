@@ -11,7 +11,8 @@ import mujoco
 from rtgait.core.analysis.rollout import ScheduledChange
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.sim.contact import FallLimits, Push
+from rtgait.core.push import Push
+from rtgait.sim.contact import FallLimits
 
 __all__ = [
     "LANDING_WINDOW", "LoopOptions", "end_tick", "minimum_jerk", "run_length", "start_pose", "timing_headroom",

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep
-from rtgait.sim.contact import Push
+from rtgait.core.push import Push
 
 if TYPE_CHECKING:
     import pinocchio as pin

@@ -24,6 +24,7 @@ from rtgait.control.controller import ControllerOptions, WalkingController, make
 from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
 from rtgait.core.planner.levels import ControllerLevel, check_level
 from rtgait.core.planner.online import OnlinePlanner, VelocityCommand
+from rtgait.core.push import Push
 from rtgait.io.sim_files import (
     SIM_CSV_COLUMNS,
     SIM_FILES,
@@ -36,7 +37,7 @@ from rtgait.io.sim_files import (
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.scenario import Scenario
-from rtgait.sim.loop import LoopOptions, Push, SimResult, run_sim_loop
+from rtgait.sim.loop import LoopOptions, SimResult, run_sim_loop
 from rtgait.sim.model import SimConfig, SimModel, build_sim_model
 
 __all__ = [

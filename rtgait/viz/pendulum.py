@@ -20,7 +20,7 @@ from matplotlib.patches import Rectangle
 
 from rtgait.core.geometry.support import SUPPORT_NAMES
 from rtgait.core.pendulum.loop import ClosedLoopResult
-from rtgait.core.pendulum.plant import Push
+from rtgait.core.push import Push
 from rtgait.viz.run_data import SIM_CSV, SUMMARY, RunFilesError, read_floats, read_summary, read_table, require_keys
 from rtgait.viz.style import (
     COG_COLOR,
@@ -149,7 +149,7 @@ def _legend_extras(run: PendulumRun) -> tuple[list[object], list[str]]:
     labels = ["double support (both feet on the ground)"]
     if run.pushes:
         handles.append(Rectangle((0, 0), 1, 1, color=PUSH_COLOR, alpha=0.35, lw=0))
-        impulses = ", ".join(f"{float(np.hypot(*push.impulse)):.1f} N s at {push.start:.2f} s" for push in run.pushes)
+        impulses = ", ".join(f"{push.impulse_norm:.1f} N s at {push.start:.2f} s" for push in run.pushes)
         labels.append(f"push on the mass ({impulses})")
     if run.step_adjustments:
         handles.append(Line2D([], [], color=_ADJUST_COLOR, lw=1.0, ls="-."))

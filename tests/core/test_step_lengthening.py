@@ -16,8 +16,8 @@ from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, W
 
 from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits, remainder_options, single_support_options
 from rtgait.core.pendulum.loop import run_pendulum_loop
-from rtgait.core.pendulum.plant import Push
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.core.push import Push
 
 LANDING = StepAdjustment(sole=SOLE)
 SHORTER = StepAdjustment(sole=SOLE, adapt_timing=True)

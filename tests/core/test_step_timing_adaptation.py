@@ -21,8 +21,8 @@ from rtgait.core.geometry.support import signed_margin
 from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
 from rtgait.core.laws.stepping import StepAdjustment, choose_step, remainder_options, single_support_options
 from rtgait.core.pendulum.loop import run_pendulum_loop
-from rtgait.core.pendulum.plant import Push
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
+from rtgait.core.push import Push
 
 LANDING = StepAdjustment(sole=SOLE)
 TIMING = StepAdjustment(sole=SOLE, adapt_timing=True)

@@ -15,8 +15,8 @@ pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import ControllerOptions
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
+from rtgait.core.push import Push
 from rtgait.scenario.scenario import load_scenario
-from rtgait.sim.contact import Push
 from rtgait.sim.loop import LoopOptions
 from rtgait.sim.run import simulate
 

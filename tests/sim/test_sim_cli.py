@@ -198,9 +198,9 @@ def test_simulate_writes_nothing_outside_out_and_reports_mujocos_warnings(
     # A 10^12 N shove makes the physics blow up at once: MuJoCo warns (and the robot falls), in a tenth of a second.
     # Such a push is refused as beyond physical sense (test_bad_input_is_one_line_and_no_output): not here, where
     # it is the way to make MuJoCo warn.
-    import rtgait.sim.contact
+    import rtgait.core.push
 
-    monkeypatch.setattr(rtgait.sim.contact, "PUSH_SPEED_LIMIT", float("inf"))
+    monkeypatch.setattr(rtgait.core.push, "PUSH_SPEED_LIMIT", float("inf"))
     args = ["simulate", str(scenario), "--out", "out", "--push", "0.1,0.01,1e12,0", "--no-figures"]
     assert main(args) == 0
     assert "warnings    MuJoCo: Nan, Inf or huge value in QACC" in capsys.readouterr().out

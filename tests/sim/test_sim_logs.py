@@ -36,7 +36,7 @@ PUSH_START, PUSH_DURATION, PUSH_FORCE = 1.0, 0.1, (50.0, 0.0, 0.0)
 @pytest.fixture(scope="module")
 def logged(talos: Any, talos_sim: Any, tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Path]:
     """The short walk in memory, and the folder its outputs were written to."""
-    from rtgait.sim.loop import Push
+    from rtgait.core.push import Push
     from rtgait.sim.run import simulate, write_sim_outputs
 
     folder = tmp_path_factory.mktemp("logged")

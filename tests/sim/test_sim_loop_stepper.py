@@ -15,8 +15,8 @@ pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import make_controller
 from rtgait.core.analysis.rollout import ScheduledChange
+from rtgait.core.push import Push
 from rtgait.robot.motion import robot_scenario
-from rtgait.sim.contact import Push
 from rtgait.sim.loop import ClosedLoop, LoopOptions, SimResult, run_sim_loop
 
 QUICK = LoopOptions(start_ramp=0.5, start_hold=0.3, after=0.3)

@@ -15,8 +15,9 @@ pytest.importorskip("pinocchio")
 
 from rtgait.core.analysis.rollout import ScheduledChange, rollout
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.core.push import Push
 from rtgait.robot.motion import robot_scenario
-from rtgait.sim.loop import LoopOptions, Push, run_sim_loop
+from rtgait.sim.loop import LoopOptions, run_sim_loop
 from rtgait.sim.run import SIM_CSV_COLUMNS, sim_csv_columns, simulate, write_sim_outputs
 
 

@@ -89,11 +89,12 @@ from rtgait.core.geometry.support import SUPPORT_CODES, support_polygon
 from rtgait.core.laws.feedback import DcmFeedback, DcmFeedbackGains
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.limits import MAX_ROLLOUT_TICKS, MIN_DT
-from rtgait.core.pendulum.plant import LipmPlant, Push
+from rtgait.core.pendulum.plant import LipmPlant
 from rtgait.core.pendulum.result import ClosedLoopResult
 from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR, ControllerLevel, check_level, level_config
 from rtgait.core.planner.online import OnlinePlanner, PlanRecord
+from rtgait.core.push import Push
 
 DEFAULT_DT = 0.001
 """Control period (s): 1 kHz, the rate of the MuJoCo loop and of most humanoid controllers."""

@@ -11,9 +11,9 @@ import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.laws.stepping import StepDecision
-from rtgait.core.pendulum.plant import Push
 from rtgait.core.planner.levels import ControllerLevel
 from rtgait.core.planner.online import PlanRecord
+from rtgait.core.push import Push
 
 __all__ = ["ClosedLoopResult"]
 
@@ -169,16 +169,7 @@ class ClosedLoopResult:
             "step_adjustments": self.step_adjustment_count,
             "step_adjustment_log": [_decision_summary(d) for d in self.step_adjustments],
             "ended_at_rest": self.ended_at_rest,
-            "pushes": [
-                {
-                    "start": p.start,
-                    "duration": p.duration,
-                    "force": list(p.force),
-                    "impulse": [float(v) for v in p.impulse],
-                    "impulse_norm": float(math.hypot(*p.impulse)),
-                }
-                for p in self.pushes
-            ],
+            "pushes": [p.summary() for p in self.pushes],
             "zmp_tracking_error_rms": number(self.zmp_tracking_error_rms),
             "zmp_tracking_error_max": number(self.zmp_tracking_error_max),
             "zmp_saturated_ticks": int(self.saturated.sum()),
