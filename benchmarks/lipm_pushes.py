@@ -55,7 +55,7 @@ import numpy as np
 from rtgait.core.analysis.rollout import rollout
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
-from rtgait.core.laws.stepping import StepAdjustment
+from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
 from rtgait.core.pendulum.loop import DEFAULT_MASS, run_pendulum_loop
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.core.planner.online import OnlinePlanner
@@ -115,7 +115,8 @@ def landing_reach(adjust: StepAdjustment, stance: Footstep, direction: np.ndarra
     lateral = -s * direction[0] + c * direction[1]
     side = -1.0 if stance.side == "left" else 1.0  # the landing foot is the other one
     lateral *= side
-    reach = adjust.max_length * abs(along) + max(adjust.min_width * lateral, adjust.max_width * lateral)
+    limits = adjust.limits
+    reach = limits.max_length * abs(along) + max(limits.min_width * lateral, limits.max_width * lateral)
     return max(reach, 0.0)
 
 
@@ -131,13 +132,13 @@ def bounds(
     w = math.sqrt(scenario.gravity / scenario.cog_height)
     common = dict(
         mass=mass, omega=w, r_max=r_max, l_max=l_max, step_time=scenario.timing.step_period,
-        remaining=site.remaining, min_remaining=adjust.min_time_to_touchdown,
+        remaining=site.remaining, min_remaining=adjust.limits.min_time_to_touchdown,
     )  # fmt: skip
     offset = site.dcm - stance.position
     one = float(max_capturable_impulse(offset, u, steps=1, **common))
     many = float(max_capturable_impulse(offset, u, steps=math.inf, **common))
-    shortening = max(scenario.timing.single_support - adjust.min_single_support, 0.0)
-    common["remaining"] = min(site.remaining, max(site.remaining - shortening, adjust.min_time_to_touchdown))
+    shortening = max(scenario.timing.single_support - adjust.limits.min_single_support, 0.0)
+    common["remaining"] = min(site.remaining, max(site.remaining - shortening, adjust.limits.min_time_to_touchdown))
     early = float(max_capturable_impulse(offset, u, steps=1, **common))
     return one, many, early
 
@@ -279,8 +280,8 @@ def main(argv: Sequence[str] | None = None) -> None:
         parser.error("--max-single-support needs --adapt-timing")
     try:
         adjust = StepAdjustment(
-            sole=scenario.sole, grid=args.grid, adapt_timing=args.adapt_timing, durations=args.durations,
-            max_single_support=args.max_single_support,
+            scenario.sole, SteppingLimits(max_single_support=args.max_single_support), grid=args.grid,
+            adapt_timing=args.adapt_timing, durations=args.durations,
         )  # fmt: skip
     except ValueError as error:
         parser.error(str(error))

@@ -253,7 +253,7 @@ class WalkingController:
         if self._only_crossing_catches(values, support, ex, ey) and not _lengthens(adjust):
             events.append(ControlEvent(t, "replan-skipped", support, "outward DCM error in single support"))
             return False
-        if adjust is not None and support in _SIDES and remainder < adjust.min_time_to_touchdown:
+        if adjust is not None and support in _SIDES and remainder < adjust.limits.min_time_to_touchdown:
             adjust = dataclasses.replace(adjust, on_failure="keep")  # the core moves the next step's landing
         replanned = planner.replan_now(t, "dcm-error", feedback="measured", step_adjustment=adjust or False)
         if replanned is not None and self.options.com_reference == "planned":
@@ -420,7 +420,7 @@ def _lengthens(adjust: StepAdjustment | None) -> bool:
     """Whether step adjustment ``adjust`` may give a step a longer single support: then a DCM error toward the
     stance foot's outside has an answer, the stance held longer while the sole's centre of pressure at its outer
     edge brings the DCM back, and the controller replans for it."""
-    return adjust is not None and adjust.adapt_timing and adjust.max_single_support is not None
+    return adjust is not None and adjust.adapt_timing and adjust.limits.max_single_support is not None
 
 
 def make_controller(

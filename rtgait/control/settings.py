@@ -104,7 +104,7 @@ def step_limits(info: RobotInfo, stepping: SteppingLimits | None = None) -> Step
     scale = info.leg_length / 0.8
     min_width = max(0.12 * scale, 2.0 * info.sole.inner + 0.02)
     max_width = max(0.45 * scale, min_width + 0.1)
-    return StepAdjustment(info.sole, max_length=0.35 * scale, min_width=min_width, max_width=max_width)
+    return StepAdjustment(info.sole, SteppingLimits(max_length=0.35 * scale, min_width=min_width, max_width=max_width))
 
 
 def controller_step_adjustment(options: ControllerOptions, info: RobotInfo) -> StepAdjustment:

@@ -13,7 +13,7 @@ from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, ZC, W
 from rtgait.core.analysis.rollout import rollout
 from rtgait.core.geometry.support import SUPPORT_CODES, signed_margin, support_polygon
 from rtgait.core.laws.capturability import max_capturable_impulse
-from rtgait.core.laws.stepping import StepAdjustment
+from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
 from rtgait.core.pendulum.loop import run_pendulum_loop
 from rtgait.core.pendulum.plant import DEFAULT_MAX_LEAN
 from rtgait.core.planner.levels import CONTROLLER_LEVELS, DEFAULT_REPLAN_DCM_ERROR, level_config
@@ -119,9 +119,9 @@ def test_push_inside_one_step_bound_is_recovered_by_stepping():
     t_mid, dcm, ankle = mid_single_support()
     adjust = StepAdjustment(sole=SOLE)  # the adaptive level's default limits
     bound = max_capturable_impulse(
-        dcm - ankle, (1.0, 0.0), mass=MASS, omega=W, r_max=SOLE.front, l_max=adjust.max_length,
+        dcm - ankle, (1.0, 0.0), mass=MASS, omega=W, r_max=SOLE.front, l_max=adjust.limits.max_length,
         step_time=CONFIG.timing.step_period, remaining=0.5 * CONFIG.timing.single_support,
-        min_remaining=adjust.min_time_to_touchdown, steps=1,
+        min_remaining=adjust.limits.min_time_to_touchdown, steps=1,
     )  # fmt: skip
     assert 30.0 < bound < 50.0  # N s: a DCM shift of 0.15-0.25 m for 57 kg
     push = forward_push(t_mid, 0.8 * bound)
@@ -144,7 +144,7 @@ def test_push_beyond_every_capture_bound_topples_every_controller():
     # cannot land before its planned time, nor steps come faster than T_s + T_dbl.
     generous = max_capturable_impulse(
         dcm - ankle, (1.0, 0.0), mass=MASS, omega=W, r_max=math.hypot(SOLE.front, SOLE.inner),
-        l_max=math.hypot(adjust.max_length, adjust.max_width), step_time=CONFIG.timing.step_period,
+        l_max=math.hypot(adjust.limits.max_length, adjust.limits.max_width), step_time=CONFIG.timing.step_period,
         remaining=0.5 * CONFIG.timing.single_support, steps=math.inf,
     )  # fmt: skip
     push = forward_push(t_mid, 1.5 * generous)
@@ -250,7 +250,7 @@ def test_level_config_sets_only_what_the_level_adds():
     adaptive = level_config(base, "adaptive", SOLE)
     assert adaptive.feedback == "measured" and adaptive.replan_dcm_error == DEFAULT_REPLAN_DCM_ERROR
     assert adaptive.step_adjustment == StepAdjustment(sole=SOLE) and adaptive.horizon_steps == 4
-    custom = StepAdjustment(sole=SOLE, max_length=0.2)
+    custom = StepAdjustment(SOLE, SteppingLimits(max_length=0.2))
     assert level_config(base, "adaptive", SOLE, step_adjustment=custom).step_adjustment is custom
     with pytest.raises(ValueError, match="controller"):
         level_config(base, "magic", SOLE)  # type: ignore[arg-type]

@@ -285,10 +285,10 @@ def test_stabilized_logs_landings_without_touching_the_plan():
 
 def test_step_limits_scale_with_the_robot_and_keep_the_soles_apart():
     adjust = step_limits(INFO)
-    assert adjust.max_length == pytest.approx(0.35 * 0.84 / 0.8)
-    assert adjust.min_width >= 2 * SOLE.inner + 0.02 and adjust.max_width > adjust.min_width
+    assert adjust.limits.max_length == pytest.approx(0.35 * 0.84 / 0.8)
+    assert adjust.limits.min_width >= 2 * SOLE.inner + 0.02 and adjust.limits.max_width > adjust.limits.min_width
     small = step_limits(RobotInfo(30.0, SoleRect(0.08, 0.05, 0.04, 0.04), 0.4))
-    assert small.max_length == pytest.approx(0.175) and small.min_width == pytest.approx(0.1)
+    assert small.limits.max_length == pytest.approx(0.175) and small.limits.min_width == pytest.approx(0.1)
     # The core's closed loop ("always"): every plan from the measured state, step adjustment after each.
     timed = dataclasses.replace(adjust, adapt_timing=True)  # ControllerOptions' default adds step timing adaptation
     ctl = controller("adaptive", options=ControllerOptions(measured_replanning="always"))
@@ -304,7 +304,9 @@ def test_step_limits_scale_with_the_robot_and_keep_the_soles_apart():
 
 LENGTHENING = ControllerOptions(
     measurement_filter=0.0, adapt_timing=True,
-    step_adjustment=dataclasses.replace(step_limits(INFO), max_single_support=1.2),
+    step_adjustment=dataclasses.replace(
+        step_limits(INFO), limits=dataclasses.replace(step_limits(INFO).limits, max_single_support=1.2)
+    ),
 )  # fmt: skip
 
 
@@ -349,16 +351,15 @@ def test_step_limits_come_from_the_robot_description(talos):
     info = RobotInfo(90.0, SOLE, 0.84, limits)
     ctl = make_controller("adaptive", CONFIG, straight_walk(CONFIG, 3, 0.1), SOLE, info, dt=DT)
     adjust = ctl.options.step_adjustment
-    assert (adjust.max_length, adjust.min_width, adjust.max_width) == (0.2, 0.16, 0.3)
-    assert (adjust.max_swing_speed, adjust.min_single_support, adjust.adapt_timing) == (0.9, 0.5, True)
+    assert adjust.limits == limits and adjust.adapt_timing
     assert dataclasses.replace(step_limits(info), adapt_timing=True) == adjust
-    assert step_limits(info, SteppingLimits()).max_length == 0.35
+    assert step_limits(info, SteppingLimits()).limits.max_length == 0.35
     # A loaded robot carries its description's table, also through a sole given apart.
     assert RobotInfo.from_robot(talos).stepping == talos.description.stepping is not None
     other = SoleRect(0.1, 0.1, 0.06, 0.06)
     ctl = make_controller("adaptive", CONFIG, None, other, talos, options=ControllerOptions(adapt_timing=True))
     adjust = ctl.options.step_adjustment
-    assert adjust.max_length == talos.description.stepping.max_length and adjust.sole == other
+    assert adjust.limits.max_length == talos.description.stepping.max_length and adjust.sole == other
     assert adjust.adapt_timing
     with pytest.raises(ValueError, match="adapt_timing"):
         ControllerOptions(adapt_timing=1)
