@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtgait.cli.common import PROG, RunError, load_robot, robot_walk
+from rtgait.cli.control_file import controller_settings
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.scenario.scenario import Scenario, ScenarioError, load_scenario
 
@@ -114,6 +115,7 @@ def _live_walk(scenario: Scenario, by_command: bool, robot: RobotModel, level: s
     from rtgait.sim.run import planned_walk
 
     walk = robot_walk(scenario, robot)
+    settings, _ = controller_settings(robot.description, scenario, None, ())  # their [control] tables, as simulate
     if not by_command:  # as simulate does: a walk the robot cannot reach is refused before it starts
         whole_body_motion(robot, planned_walk(scenario, robot))
     sim = build_sim_model(robot)
@@ -125,6 +127,7 @@ def _live_walk(scenario: Scenario, by_command: bool, robot: RobotModel, level: s
         walk.sole,
         robot,
         dt=sim.control_dt,  # type: ignore[arg-type]
+        options=settings,
     )
     options = LoopOptions(changes=() if by_command else walk.changes)
     loop = ClosedLoop(sim, controller, options, keep=KEEP)

@@ -112,7 +112,7 @@ class WalkingController:
         self.level, self.planner, self.info, self.dt, self.options = level, planner, info, float(dt), options
         self.sole = info.sole
         closed = level != "open-loop"
-        self.feedback = DcmFeedback(planner.w, options.gains, dt) if closed else None
+        self.feedback = DcmFeedback(planner.w, options.dcm, dt) if closed else None
         self.foot = FootForceControl(options.foot, dt) if closed and options.foot is not None else None
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         self._last_error_replan = -math.inf
@@ -392,7 +392,7 @@ class WalkingController:
             self.foot_landings.options = options
         planner.config = config
         if self.level == "open-loop":  # up: new laws from zero state (a fade under way goes on around them)
-            feedback = DcmFeedback(planner.w, options.gains, self.dt)
+            feedback = DcmFeedback(planner.w, options.dcm, self.dt)
             foot = FootForceControl(options.foot, self.dt) if options.foot is not None else None
             if isinstance(self.feedback, FeedbackFade):
                 self.feedback.inner = feedback

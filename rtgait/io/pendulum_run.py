@@ -31,9 +31,10 @@ from typing import Any
 import numpy as np
 
 from rtgait.core.geometry.support import SUPPORT_NAMES
+from rtgait.core.laws.feedback import DcmFeedbackGains
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.pendulum.loop import DEFAULT_DT, DEFAULT_MASS, ClosedLoopResult, run_pendulum_loop
-from rtgait.core.planner.levels import ControllerLevel, check_level
+from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR, ControllerLevel, check_level
 from rtgait.core.push import Push
 from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.scenario.scenario import Scenario
@@ -98,6 +99,8 @@ def simulate_pendulum(
     dt: float | None = None,
     progress: Callable[[float], None] | None = None,
     step_adjustment: StepAdjustment | None = None,
+    gains: DcmFeedbackGains | None = None,
+    replan_dcm_error: float = DEFAULT_REPLAN_DCM_ERROR,
 ) -> ClosedLoopResult:
     """Walk ``scenario`` on the point-mass pendulum with the controller level ``controller``.
 
@@ -113,6 +116,9 @@ def simulate_pendulum(
         progress: called now and then with the fraction done.
         step_adjustment: ``"adaptive"``'s step adjustment; default ``StepAdjustment(sole=scenario.sole)`` (a robot's
             ``[stepping]`` limits: ``robot.description.stepping.adjustment(scenario.sole)``).
+        gains: the DCM law's gains (``"stabilized"``, ``"adaptive"``); default
+            :class:`~rtgait.core.laws.feedback.DcmFeedbackGains`.
+        replan_dcm_error: ``"adaptive"``: the DCM error that replans at once (m).
 
     Returns:
         :class:`~rtgait.core.pendulum.loop.ClosedLoopResult`; its :meth:`~ClosedLoopResult.summary` carries the
@@ -132,6 +138,8 @@ def simulate_pendulum(
         pushes=[as_push(p) for p in pushes],
         changes=scenario.changes,
         progress=progress,
+        gains=gains,
+        replan_dcm_error=replan_dcm_error,
         step_adjustment=step_adjustment,
     )
     result.extra["scenario"] = scenario.name

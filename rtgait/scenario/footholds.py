@@ -1,7 +1,7 @@
 """Footstep plans: a walk given as absolute footholds in the world frame, each step with its own timing if wanted.
 
-A footstep plan is a TOML file like a scenario (``name``, ``connection``, ``[robot]``, ``[timing]``) whose walk is a
-list of landings instead of a step length::
+A footstep plan is a TOML file like a scenario (``name``, ``connection``, ``[robot]``, ``[timing]``, ``[control]``)
+whose walk is a list of landings instead of a step length::
 
     name = "stairs-free-path"
     connection = "quasi-real-time"
@@ -121,7 +121,8 @@ def parse_footstep_plan(data: dict[str, Any], source: str = "") -> Scenario:
     """Build the :class:`~rtgait.scenario.scenario.Scenario` of a footstep plan from its parsed TOML ``data`` (module
     docstring)."""
     _FILES.check_keys(
-        data, "", ("name", "connection", "robot", "timing", "walk", "footstep"), ("description", "auto_margin")
+        data, "", ("name", "connection", "robot", "timing", "walk", "footstep"),
+        ("description", "auto_margin", "control"),
     )
     common = parse_common(data)
     walk = _FILES.table(data["walk"], "walk")

@@ -46,6 +46,11 @@ data in ``rtgait/scenarios/`` and are loaded by name; any other file is loaded b
     after = 0.5                         # m, straight on after the turn, then the person stops
     speed = 0.15                        # m/s, the person's walking speed
 
+    [control]                           # optional: the controller's settings for this walk, over the robot's
+    measurement_filter = 0.005          # s; every key and its default: docs/cli_and_scenarios.md
+    [control.dcm]                       # the DCM law's gains
+    k_p = 2.0                           # 1/s
+
 With ``[guide]``, ``rtgait simulate`` ignores the walk's footsteps: a person pulls the robot's hand along that path
 and the hand force sets the steps (:mod:`rtgait.sim.guided`); ``walk.steps`` is then the most steps it may take.
 
@@ -104,7 +109,7 @@ from rtgait.scenario.checks import (
     within,
 )
 from rtgait.scenario.guide_path import GuidePath
-from rtgait.scenario.tomlfile import NumberRule, TomlFiles
+from rtgait.scenario.tomlfile import NumberRule, SettingsPairs, TomlFiles
 
 __all__ = [
     "MAX_WALK_STEPS",
@@ -168,6 +173,9 @@ class Scenario:
             ``step_length`` and ``yaw``. Its strides start from the standing feet (``step_width`` apart at the
             origin), so a different ``step_width`` (a robot's) moves the first stride, never a foothold. Per-step
             timings, if any, are in ``timing.per_step``.
+        control: the ``[control]`` table, the controller's settings for this walk, as read
+            (:data:`~rtgait.scenario.tomlfile.SettingsPairs`): ``rtgait simulate`` applies them over the robot's
+            (:mod:`rtgait.control.control_table`, which checks them).
     """
 
     name: str
@@ -191,6 +199,7 @@ class Scenario:
     mass: float | None = None
     auto_margin: float = 0.01
     footholds: tuple[Footstep, ...] | None = None
+    control: SettingsPairs = ()
 
     def __post_init__(self) -> None:
         # The TOML loader already checks every field with its file path; these checks cover scenarios built in
@@ -221,6 +230,8 @@ class Scenario:
                     f"walk.change[{index}].step must be a step of the walk (1..{self.steps}), got {change.step}"
                 )
         check_distinct_steps([change.step for change in self.changes], "walk.change")
+        if not (isinstance(self.control, tuple) and all(isinstance(p, tuple) and len(p) == 2 for p in self.control)):
+            raise ScenarioError(f"control must be a tuple of (key, value) pairs, got {self.control!r}")
         if self.footholds is not None:
             if len(self.footholds) != self.steps + 1:
                 raise ScenarioError(
@@ -356,7 +367,8 @@ def _parse_guide(raw: Any) -> GuidePath:
 
 def parse_common(data: dict[str, Any]) -> dict[str, Any]:
     """The parts a scenario and a footstep plan (:mod:`rtgait.scenario.footholds`) share: ``name``, ``description``,
-    ``connection``, ``auto_margin``, ``[robot]`` and ``[timing]``, checked, as :class:`Scenario` keywords."""
+    ``connection``, ``auto_margin``, ``[robot]``, ``[timing]`` and ``[control]``, checked (``[control]``'s keys by
+    :mod:`rtgait.control.control_table` when applied), as :class:`Scenario` keywords."""
     name = _FILES.string(data, "name")
     if not _NAME_PATTERN.fullmatch(name):
         raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
@@ -399,10 +411,11 @@ def parse_common(data: dict[str, Any]) -> dict[str, Any]:
     horizon_steps = _FILES.count(
         timing_table["horizon_steps"], "timing.horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY
     )
+    control = _FILES.settings(data["control"], "control") if "control" in data else ()
     return {
         "name": name, "description": description, "connection": connection, "auto_margin": auto_margin,
         "cog_height": cog_height, "gravity": gravity, "mass": mass, "sole": sole, "timing": timing, "dt": dt,
-        "horizon_steps": horizon_steps,
+        "horizon_steps": horizon_steps, "control": control,
     }  # fmt: skip
 
 
@@ -425,7 +438,7 @@ def build_scenario(**fields: Any) -> Scenario:
 def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
     _FILES.check_keys(
-        data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide", "auto_margin")
+        data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide", "auto_margin", "control")
     )
     common = parse_common(data)
     connection = common["connection"]

@@ -20,6 +20,7 @@ from collections.abc import Callable, Iterator, Sequence
 
 import mujoco
 
+from rtgait.control.control_table import control_options
 from rtgait.control.controller import ControllerOptions, WalkingController, make_controller
 from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
 from rtgait.core.planner.levels import ControllerLevel, check_level
@@ -48,6 +49,7 @@ __all__ = [
     "mujoco_messages",
     "planned_walk",
     "replay_paths",
+    "robot_and_scenario_options",
     "sim_config",
     "sim_csv_columns",
     "simulate",
@@ -98,7 +100,9 @@ def simulate(
         controller: ``"adaptive"`` (default: feedback, foot force control, measured-state replanning,
             re-anchoring, step adjustment, landing detection), ``"stabilized"`` (feedback and foot force control)
             or ``"open-loop"`` (the plan alone, the paper's assumption); :mod:`rtgait.control.controller`.
-        controller_options: the levels' gains and landing handling (default :class:`ControllerOptions`).
+        controller_options: the levels' gains and landing handling; default :class:`ControllerOptions` with the
+            ``[control]`` tables of the robot description and then of the scenario applied
+            (:func:`robot_and_scenario_options`).
         velocity: walk by velocity command ``(vx, vy, wz)`` (m/s, m/s, rad/s) instead of the scenario's footsteps:
             ``scenario.steps`` steps, then a closing step; the scenario's changes do not apply. A sequence of
             ``(t, vx, vy, wz)`` changes the command at each time ``t`` (s, walk clock; the first at ``t <= 0`` is the
@@ -122,7 +126,7 @@ def simulate(
     Raises:
         ValueError: ``sim`` was built for another robot or with other periods, a physics step longer than the
             control period or not dividing it, an unknown controller, or a bad push (beyond physical sense:
-            :meth:`Push.check`) or velocity.
+            :meth:`Push.check`) or velocity, a ``[control]`` key or value the settings refuse.
         rtgait.robot.description.RobotError: the robot cannot be loaded or built.
     """
     check_level(controller)
@@ -132,6 +136,8 @@ def simulate(
     base_options = loop_options(push, options)
     for each in base_options.pushes:
         each.check(robot.mass, walk.cog_height, walk.gravity)
+    if controller_options is None:
+        controller_options = robot_and_scenario_options(robot, scenario)
     if sim is None:
         sim = build_sim_model(robot, sim_config(config, control_dt, physics_dt))
     elif sim.robot is not robot:
@@ -152,6 +158,20 @@ def simulate(
         base_options, changes=changes, stop_after_steps=stop_after, velocity_changes=schedule
     )
     return run_sim_loop(sim, level, walk_options, progress=progress)
+
+
+def robot_and_scenario_options(
+    robot: RobotModel, scenario: Scenario, base: ControllerOptions | None = None
+) -> ControllerOptions:
+    """``base`` (default :class:`ControllerOptions`) with the ``[control]`` table of ``robot``'s description and
+    then the one of ``scenario`` applied (:func:`rtgait.control.control_table.control_options`).
+
+    Raises:
+        rtgait.control.control_table.ControlSettingsError: a key or value the settings refuse.
+    """
+    return control_options(
+        (f"robot {robot.name}", robot.description.control), (f"scenario {scenario.name}", scenario.control), base=base
+    )
 
 
 def _velocity_schedule(

@@ -114,7 +114,7 @@ def test_a_dcm_error_shifts_the_zmp_ahead_and_pulls_the_com_target_back(axis):
     sign = math.copysign(1.0, error[axis])
     # The law: p_cmd = p_ref + (1 + k_p / w) e, so the ZMP goes out along the error; the COM admittance moves the COM
     # target against it (a COM accelerated backward moves the ZMP forward, p = c - c''/w^2).
-    gains = ctl.options.gains
+    gains = ctl.options.dcm
     expected = (1.0 + gains.k_p / ctl.planner.w) * error[axis]
     assert sign * (out.zmp_command[axis] - values[9 + axis]) >= abs(expected)
     assert sign * out.com_offset[axis] < -1e-4

@@ -93,7 +93,7 @@ def test_the_offsets_fade_out_and_talos_walks_through_every_level(talos, talos_s
     # the COM offset is one tick of the admittance d' = -A (p_cmd - p_measured), |d| <= A dt |p_cmd - p_measured|,
     # the ZMP error under 0.4 m on these feet.
     k1 = at["stabilized"]
-    admittance = controller.options.gains.com_admittance
+    admittance = controller.options.dcm.com_admittance
     assert 0.0 < np.hypot(*targets[k1].com_offset) <= admittance * talos_sim.control_dt * 0.4
     assert np.abs(np.array(targets[k1].offsets)).max() < 1e-4
     assert np.hypot(*targets[at["adaptive"] - 1].com_offset) > np.hypot(*targets[k1].com_offset)
