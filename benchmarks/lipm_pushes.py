@@ -55,10 +55,11 @@ import numpy as np
 from rtgait.core.analysis.rollout import rollout
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
-from rtgait.core.laws.stepping import StepAdjustment
-from rtgait.core.pendulum.loop import CONTROLLERS, DEFAULT_MASS, run_closed_loop
-from rtgait.core.pendulum.plant import Push
+from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
+from rtgait.core.pendulum.loop import DEFAULT_MASS, run_pendulum_loop
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.core.push import Push
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario
 
@@ -115,7 +116,8 @@ def landing_reach(adjust: StepAdjustment, stance: Footstep, direction: np.ndarra
     lateral = -s * direction[0] + c * direction[1]
     side = -1.0 if stance.side == "left" else 1.0  # the landing foot is the other one
     lateral *= side
-    reach = adjust.max_length * abs(along) + max(adjust.min_width * lateral, adjust.max_width * lateral)
+    limits = adjust.limits
+    reach = limits.max_length * abs(along) + max(limits.min_width * lateral, limits.max_width * lateral)
     return max(reach, 0.0)
 
 
@@ -131,13 +133,13 @@ def bounds(
     w = math.sqrt(scenario.gravity / scenario.cog_height)
     common = dict(
         mass=mass, omega=w, r_max=r_max, l_max=l_max, step_time=scenario.timing.step_period,
-        remaining=site.remaining, min_remaining=adjust.min_time_to_touchdown,
+        remaining=site.remaining, min_remaining=adjust.limits.min_time_to_touchdown,
     )  # fmt: skip
     offset = site.dcm - stance.position
     one = float(max_capturable_impulse(offset, u, steps=1, **common))
     many = float(max_capturable_impulse(offset, u, steps=math.inf, **common))
-    shortening = max(scenario.timing.single_support - adjust.min_single_support, 0.0)
-    common["remaining"] = min(site.remaining, max(site.remaining - shortening, adjust.min_time_to_touchdown))
+    shortening = max(scenario.timing.single_support - adjust.limits.min_single_support, 0.0)
+    common["remaining"] = min(site.remaining, max(site.remaining - shortening, adjust.limits.min_time_to_touchdown))
     early = float(max_capturable_impulse(offset, u, steps=1, **common))
     return one, many, early
 
@@ -146,7 +148,7 @@ def survives(
     scenario: Scenario, controller: str, mass: float, dt: float, push: Push | None, adjust: StepAdjustment
 ) -> bool:
     """Whether the walk with ``push`` ends at rest without a fall."""
-    result = run_closed_loop(
+    result = run_pendulum_loop(
         scenario.planner_config(), scenario.strides(), scenario.sole, controller=controller, mass=mass, dt=dt,
         pushes=() if push is None else (push,), changes=scenario.changes, step_adjustment=adjust,
     )  # fmt: skip
@@ -258,7 +260,9 @@ def table(cases: list[dict], early: bool = False) -> str:
 def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    parser.add_argument("--controller", action="append", choices=CONTROLLERS, help="level(s) to test (default all)")
+    parser.add_argument(
+        "--controller", action="append", choices=CONTROLLER_LEVELS, help="level(s) to test (default all)"
+    )
     parser.add_argument("--scenario", default="fig8", help="built-in scenario name or TOML path (default fig8)")
     parser.add_argument("--mass", type=float, default=DEFAULT_MASS, help="point mass in kg (default 57)")
     parser.add_argument("--dt", type=float, default=0.002, help="control period in s (default 0.002)")
@@ -277,12 +281,12 @@ def main(argv: Sequence[str] | None = None) -> None:
         parser.error("--max-single-support needs --adapt-timing")
     try:
         adjust = StepAdjustment(
-            sole=scenario.sole, grid=args.grid, adapt_timing=args.adapt_timing, durations=args.durations,
-            max_single_support=args.max_single_support,
+            scenario.sole, SteppingLimits(max_single_support=args.max_single_support), grid=args.grid,
+            adapt_timing=args.adapt_timing, durations=args.durations,
         )  # fmt: skip
     except ValueError as error:
         parser.error(str(error))
-    controllers = args.controller or list(CONTROLLERS)
+    controllers = args.controller or list(CONTROLLER_LEVELS)
     phases = args.phase or list(PHASES)
     began = time.perf_counter()
     cases = run(scenario, controllers, phases, args.mass, args.dt, args.tolerance, adjust)

@@ -65,7 +65,6 @@ from typing import Any
 PUSH_DURATION = 0.1
 """Length of every push (s)."""
 PHASES = ("single", "double")
-CONTROLLERS = ("open-loop", "stabilized", "adaptive")
 START_DCM_SHIFT = 0.1
 """The bisection's first impulse moves the DCM by this much (m): ``m w`` times it (N s)."""
 MAX_DOUBLINGS = 5
@@ -194,8 +193,8 @@ def survives(
     """Whether the walk with ``push`` = ``(start, fx, fy)`` (s, N, N; or ``None``) ends at rest without a fall;
     ``options`` are :class:`~rtgait.control.controller.ControllerOptions` fields."""
     from rtgait.control.controller import ControllerOptions
+    from rtgait.core.push import Push
     from rtgait.io.sim_run import mujoco_messages, simulate
-    from rtgait.sim.contact import Push
 
     robot, sim, scenario = _setup(robot_name, scenario_name)
     pushes = None if push is None else Push(push[0], PUSH_DURATION, (push[1], push[2], 0.0))
@@ -419,9 +418,11 @@ def print_bounds(
 
 
 def main(argv: Sequence[str] | None = None) -> None:
+    from rtgait.core.planner.levels import CONTROLLER_LEVELS
+
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robot", default="talos", help="built-in robot or description file (default talos)")
-    parser.add_argument("--controller", action="append", choices=CONTROLLERS, help="level(s) (default adaptive)")
+    parser.add_argument("--controller", action="append", choices=CONTROLLER_LEVELS, help="level(s) (default adaptive)")
     parser.add_argument("--json", action="store_true", help="print the JSON document instead of the table")
     parser.add_argument("--scenario", default="fig8", help="built-in scenario or TOML file (default fig8)")
     parser.add_argument("--phase", action="append", choices=PHASES, help="push instant(s) (default both)")

@@ -14,7 +14,7 @@ import pytest
 
 from rtgait.core.geometry.footsteps import Timing
 from rtgait.core.pendulum.loop import DEFAULT_DT
-from rtgait.core.pendulum.plant import Push
+from rtgait.core.push import Push
 from rtgait.io.pendulum_run import (
     DEFAULT_MASS,
     PENDULUM_CSV_COLUMNS,
@@ -79,8 +79,8 @@ def test_outputs_csv_and_summary(short_walk, tmp_path):
     assert summary["scenario"] == "fig8-short" and summary["note"] == "test"
     assert summary["fell"] is False and summary["ended_at_rest"] is True
     (entry,) = summary["pushes"]
-    assert entry["start"] == 2.7 and entry["duration"] == 0.1 and entry["force"] == [60.0, 0.0]
-    assert entry["impulse"] == pytest.approx([6.0, 0.0], rel=1e-12)
+    assert entry["start"] == 2.7 and entry["duration"] == 0.1 and entry["force"] == [60.0, 0.0, 0.0]
+    assert entry["impulse"] == pytest.approx([6.0, 0.0, 0.0], rel=1e-12)
     assert summary["rows"] == result.ticks and summary["files"] == ["sim.csv", "summary.json"]
 
     with open(tmp_path / "out" / "sim.csv", encoding="utf-8", newline="") as stream:

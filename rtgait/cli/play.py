@@ -9,6 +9,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtgait.cli.common import PROG, RunError, load_robot, robot_walk
+from rtgait.cli.control_file import controller_settings
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.robot.controller_info import robot_info
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
@@ -17,7 +19,6 @@ if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
     from rtgait.sim.live import LiveWalk
 
-CONTROLLERS = ("open-loop", "stabilized", "adaptive")
 COMMAND_SCENARIO = "fig8"
 """The built-in scenario whose timing a walk by command takes (T_s 0.7 s, T_dbl 0.1 s, quasi-real-time)."""
 KEEP = 10.0
@@ -48,7 +49,7 @@ def add_parser(commands: Any) -> None:
     )  # fmt: skip
     play.add_argument("--robot", metavar="NAME_OR_FILE", default="talos", help="robot (default talos)")
     play.add_argument(
-        "--controller", choices=CONTROLLERS, default="adaptive", help="controller level to start with (default "
+        "--controller", choices=CONTROLLER_LEVELS, default="adaptive", help="controller level to start with (default "
         "adaptive; Insert switches it while walking)",
     )  # fmt: skip
     play.add_argument(
@@ -116,6 +117,7 @@ def _live_walk(scenario: Scenario, by_command: bool, robot: RobotModel, level: s
     from rtgait.sim.model import build_sim_model
 
     walk = robot_walk(scenario, robot)
+    settings, _ = controller_settings(robot.description, scenario, None, ())  # their [control] tables, as simulate
     if not by_command:  # as simulate does: a walk the robot cannot reach is refused before it starts
         whole_body_motion(robot, planned_walk(scenario, robot))
     sim = build_sim_model(robot)
@@ -127,6 +129,7 @@ def _live_walk(scenario: Scenario, by_command: bool, robot: RobotModel, level: s
         walk.sole,
         robot_info(robot),
         dt=sim.control_dt,
+        options=settings,
     )
     options = LoopOptions(changes=() if by_command else walk.changes)
     loop = ClosedLoop(sim, controller, options, keep=KEEP)

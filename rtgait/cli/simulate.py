@@ -26,20 +26,22 @@ from rtgait.cli.common import (
     require_extras,
     robot_walk,
 )
+from rtgait.cli.control_file import controller_settings, read_control_file
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.io.plan_files import pendulum_report
 from rtgait.outputs import check_destination, staged_outputs
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
 
 if TYPE_CHECKING:
+    from rtgait.control.settings import ControllerOptions
+    from rtgait.core.push import Push
     from rtgait.robot.model import RobotModel
-    from rtgait.sim.loop import Push, SimResult
+    from rtgait.sim.loop import SimResult
     from rtgait.sim.model import SimConfig
 
 MODELS = ("mujoco", "lipm")
 """What ``--model`` can simulate: the robot in MuJoCo, or the linear inverted pendulum's point mass."""
-CONTROLLERS = ("open-loop", "stabilized", "adaptive")
-"""The controller levels (``docs/closed_loop.md``)."""
 
 
 def add_parser(commands: Any) -> None:
@@ -64,10 +66,16 @@ def add_parser(commands: Any) -> None:
     )
     simulate.add_argument(
         "--controller",
-        choices=CONTROLLERS,
+        choices=CONTROLLER_LEVELS,
         help="adaptive (default): + replanning from the measured state, re-anchoring on landings, step adjustment "
         "and landing detection; stabilized: the plan + DCM feedback on the measured COM state and foot force control "
         "from the measured wrench of each foot; open-loop: the plan alone (the paper's assumption)",
+    )
+    simulate.add_argument(
+        "--control",
+        metavar="FILE",
+        help="the controller's settings from the [control] table of a TOML file (gains, filters, landing handling: "
+        "docs/cli_and_scenarios.md), over the robot description's and the scenario's own [control] tables",
     )
     simulate.add_argument(
         "--robot",
@@ -148,7 +156,7 @@ def _push_values(texts: Sequence[str], run_time: float) -> list[tuple[float, flo
 
 def _pushes(texts: Sequence[str], run_time: float) -> list[Push]:
     """The ``--push`` options as the MuJoCo loop's pushes (:func:`_push_values`)."""
-    from rtgait.sim.loop import Push
+    from rtgait.core.push import Push
 
     pushes = []
     for start, duration, fx, fy in _push_values(texts, run_time):
@@ -170,8 +178,9 @@ def run(args: argparse.Namespace) -> int:
         raise ScenarioError(STABILIZER_REMOVED)
     scenario = load_scenario(args.scenario)
     out: Path = args.out if args.out is not None else Path("out") / f"{scenario.name}-sim"
+    control_pairs = read_control_file(args.control)
     if args.model == "lipm":
-        return _simulate_pendulum(args, scenario, out)
+        return _simulate_pendulum(args, scenario, out, control_pairs)
     if args.mass is not None:
         raise ScenarioError("--mass is for --model lipm (the robot's mass is its model's)")
     _check_periods(args.control_dt, args.physics_dt)
@@ -186,6 +195,7 @@ def run(args: argparse.Namespace) -> int:
     pushes = _check_simulation(args, scenario, velocity, out)
     robot = load_robot(args.robot)
     walk = robot_walk(scenario, robot)
+    options, chosen = controller_settings(robot.description, scenario, args.control, control_pairs)
     config = _physics_config(robot, args.control_dt, args.physics_dt)
     for push in pushes:
         try:
@@ -198,8 +208,12 @@ def run(args: argparse.Namespace) -> int:
     show = not args.quiet and sys.stderr.isatty()
     progress = progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
     extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection, "walk": _walk_facts(walk)}
+    if chosen:
+        extra["control"] = chosen
     with mujoco_messages() as messages:  # else MuJoCo appends them to MUJOCO_LOG.TXT in the working folder
-        result = _physics(scenario, walk, robot, config, controller, schedule or velocity, pushes, progress, extra)
+        result = _physics(
+            scenario, walk, robot, config, controller, options, schedule or velocity, pushes, progress, extra
+        )
     extra["mujoco_warnings"] = messages
     if show:
         sys.stderr.write("\r\033[K")
@@ -272,8 +286,9 @@ def _walk_facts(walk: Scenario) -> dict[str, Any]:
     }
 
 
-def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) -> int:
-    """``simulate --model lipm``: the walk on the point-mass pendulum at the controller level asked for."""
+def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path, control_pairs: Any) -> int:
+    """``simulate --model lipm``: the walk on the point-mass pendulum at the controller level asked for, with the
+    DCM law's gains and ``replan_dcm_error`` of the ``[control]`` tables (the rest acts on a robot only)."""
     from rtgait.io.pendulum_run import PENDULUM_FILES, simulate_pendulum, write_pendulum_outputs
     from rtgait.viz.run_data import PENDULUM_FIGURE, figure_file
 
@@ -284,11 +299,14 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) 
         raise ScenarioError(f"{scenario.name} is led by the hand ([guide]): that needs --model mujoco")
     mass = args.mass
     stepping = None
+    description = None
     if args.robot is not None:
         robot = load_robot(args.robot)
         scenario = robot_walk(scenario, robot)
         mass = robot.mass if mass is None else mass
-        stepping = robot.description.stepping  # the robot's step limits ([stepping]), if it has them
+        description = robot.description
+        stepping = description.stepping  # the robot's step limits ([stepping]), if it has them
+    options, chosen = controller_settings(description, scenario, args.control, control_pairs)
     if mass is not None and not (math.isfinite(mass) and 1.0 <= mass <= 500.0):
         raise ScenarioError(f"--mass must be within [1, 500] kg, got {mass}")
     dt = 0.001 if args.control_dt is None else args.control_dt
@@ -307,13 +325,16 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path) 
     try:
         adjust = None if stepping is None else stepping.adjustment(scenario.sole)
         result = simulate_pendulum(
-            scenario, controller, pushes, mass=mass, dt=dt, progress=progress, step_adjustment=adjust
-        )
+            scenario, controller, pushes, mass=mass, dt=dt, progress=progress, step_adjustment=adjust,
+            gains=options.dcm, replan_dcm_error=options.replan_dcm_error,
+        )  # fmt: skip
     except ValueError as error:  # a push beyond physical sense, caught by the plant
         raise ScenarioError(f"--push: {error}") from None
     if show:
         sys.stderr.write("\r\033[K")
-    extra = {"scenario": scenario.name, "connection": scenario.connection}
+    extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection}
+    if chosen:
+        extra["control"] = chosen
     with staged_outputs(out) as staging:
         summary = write_pendulum_outputs(result, staging.folder, extra)
         for name in summary["files"]:
@@ -360,6 +381,7 @@ def _physics(
     robot: RobotModel,
     config: SimConfig,
     controller: str,
+    options: ControllerOptions,
     velocity: tuple[float, ...] | list[tuple[float, ...]] | None,
     pushes: list[Push],
     progress: Callable[[float], None] | None,
@@ -371,13 +393,15 @@ def _physics(
 
     sim = build_sim_model(robot, config)
     if scenario.guide is None or velocity is not None:
-        return simulate(scenario, robot, controller=controller, velocity=velocity, push=pushes or None, sim=sim,
-                        progress=progress)  # type: ignore[arg-type]  # fmt: skip
+        return simulate(scenario, robot, controller=controller, controller_options=options, velocity=velocity,
+                        push=pushes or None, sim=sim, progress=progress)  # type: ignore[arg-type]  # fmt: skip
     # Led by the hand: the outcome (where the person led the robot) goes into the summary too.
     from rtgait.sim.guided import simulate_guided
 
-    options = loop_options(pushes or None)
-    result, led = simulate_guided(sim, walk, options, controller=controller, progress=progress)  # type: ignore[arg-type]
+    loop = loop_options(pushes or None)
+    result, led = simulate_guided(
+        sim, walk, loop, controller=controller, controller_options=options, progress=progress  # type: ignore[arg-type]
+    )
     extra["guide"] = {**asdict(led), "base_error": led.base_error}
     return result
 

@@ -24,10 +24,10 @@ from pathlib import Path
 from typing import Any
 
 from rtgait.cli.common import RunError
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.outputs import check_destination, write_text_atomic
 from rtgait.sweep.spec import MAX_PHYSICS_CASES, SweepError, SweepSpec, case_id, load_spec
 from rtgait.sweep.store import CSV_FILE, JOURNAL, PARQUET_FILE, ResultStore
-from rtgait.sweep.worker import CONTROLLERS
 
 DEFAULT_TIMEOUT = 900.0
 """Seconds one physics case may take before it is killed."""
@@ -50,7 +50,7 @@ def add_parser(subparsers: Any) -> None:
     sweep.add_argument("--out", metavar="DIR", type=_folder, help="output folder (default: out/<SPEC's name>)")
     sweep.add_argument("--physics", action="store_true", help="also walk every case in MuJoCo")
     sweep.add_argument("--robot", metavar="NAME_OR_FILE", help="robot for --physics (default talos)")
-    sweep.add_argument("--controller", metavar="C", choices=CONTROLLERS, help="controller level for --physics")
+    sweep.add_argument("--controller", metavar="C", choices=CONTROLLER_LEVELS, help="controller level for --physics")
     sweep.add_argument("--workers", metavar="N", type=int, help="physics cases at a time (default: one per core)")
     sweep.add_argument("--scheduler", metavar="ADDRESS", help="run physics cases on this Dask scheduler ('local': a "
                        "LocalCluster of --workers processes)")  # fmt: skip

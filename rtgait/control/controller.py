@@ -1,7 +1,7 @@
 """The controller levels of the MuJoCo loop: planner sample -> feedback -> IK targets, once per control tick.
 
-The level names and their planner settings are those of the pendulum-level loop (:mod:`rtgait.core.pendulum.loop`,
-:func:`~rtgait.core.pendulum.loop.controller_config`):
+Names and planner settings are those of :mod:`rtgait.core.planner.levels` (:func:`~rtgait.core.planner.levels.
+level_config`), as in the pendulum-level loop:
 
 * ``"open-loop"``: the plan alone (the paper's assumption): COM and feet targets are the planner's sample.
 * ``"stabilized"``: the DCM law (:class:`~rtgait.core.laws.feedback.DcmFeedback`) on the measured DCM gives a
@@ -54,8 +54,8 @@ from rtgait.core.geometry.footsteps import Footstep, Side, SoleRect, Stride, mea
 from rtgait.core.geometry.support import support_polygon
 from rtgait.core.laws.feedback import DcmFeedback
 from rtgait.core.laws.hip_strategy import HipStrategy
-from rtgait.core.pendulum.loop import CONTROLLERS, Controller, controller_config
 from rtgait.core.planner.config import PlannerConfig
+from rtgait.core.planner.levels import ControllerLevel, check_level, level_config
 from rtgait.core.planner.online import OnlinePlanner
 
 if TYPE_CHECKING:
@@ -67,7 +67,6 @@ if TYPE_CHECKING:
     from rtgait.estimation.state import FootState, Measurement
 
 __all__ = [
-    "CONTROLLERS",
     "ERROR_REPLAN_INTERVAL",
     "ERROR_REPLAN_MIN_REMAINDER",
     "SIM_COM_ADMITTANCE",
@@ -91,16 +90,15 @@ class WalkingController:
     """One controller level around an online planner (module docstring). Build with :func:`make_controller`."""
 
     def __init__(
-        self, level: Controller, planner: OnlinePlanner, info: RobotInfo, dt: float, options: ControllerOptions
+        self, level: ControllerLevel, planner: OnlinePlanner, info: RobotInfo, dt: float, options: ControllerOptions
     ) -> None:
-        if level not in CONTROLLERS:
-            raise ValueError(f"level must be one of {', '.join(CONTROLLERS)}, got {level!r}")
+        check_level(level, "level")
         if not (math.isfinite(dt) and dt > 0.0):
             raise ValueError(f"dt must be a control period > 0 s, got {dt}")
         self.level, self.planner, self.info, self.dt, self.options = level, planner, info, float(dt), options
         self.sole = info.sole
         closed = level != "open-loop"
-        self.feedback = DcmFeedback(planner.w, options.gains, dt) if closed else None
+        self.feedback = DcmFeedback(planner.w, options.dcm, dt) if closed else None
         self.foot = FootForceControl(options.foot, dt) if closed and options.foot is not None else None
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         self._last_error_replan = -math.inf
@@ -240,7 +238,7 @@ class WalkingController:
         if self._only_crossing_catches(values, support, ex, ey) and not _lengthens(adjust):
             events.append(ControlEvent(t, "replan-skipped", support, "outward DCM error in single support"))
             return False
-        if adjust is not None and support in _SIDES and remainder < adjust.min_time_to_touchdown:
+        if adjust is not None and support in _SIDES and remainder < adjust.limits.min_time_to_touchdown:
             adjust = dataclasses.replace(adjust, on_failure="keep")  # the core moves the next step's landing
         replanned = planner.replan_now(t, "dcm-error", feedback="measured", step_adjustment=adjust or False)
         if replanned is not None and self.options.com_reference == "planned":
@@ -336,14 +334,14 @@ class WalkingController:
         if self.level != "open-loop":
             self.external.set(force, height)
 
-    def set_level(self, level: Controller) -> None:
+    def set_level(self, level: ControllerLevel) -> None:
         """Switch to controller level ``level`` (``"open-loop"``, ``"stabilized"``, ``"adaptive"``) mid-walk or
         before the start, without a jump in the IK's targets.
 
         The planner and its plan go on as they are (no replan at the switch); its settings become the new level's,
-        made from its current ones as :func:`make_controller` makes them
-        (:func:`~rtgait.core.pendulum.loop.controller_config`: measured-state replanning, the DCM-error threshold and
-        step adjustment for ``"adaptive"`` only). What each switch starts, stops or resets:
+        made from its current ones as :func:`make_controller` makes them (:func:`~rtgait.core.planner.levels.
+        level_config`: measured-state replanning, the DCM-error threshold and step adjustment for
+        ``"adaptive"`` only). What each switch starts, stops or resets:
 
         * to a closed level from ``"open-loop"``: a new DCM feedback law and foot force control, from zero state
           (no COM or foot offset, an empty integral), so the targets start from the plan's; the commanded ZMP steps
@@ -363,15 +361,14 @@ class WalkingController:
         Raises:
             ValueError: an unknown level.
         """
-        if level not in CONTROLLERS:
-            raise ValueError(f"level must be one of {', '.join(CONTROLLERS)}, got {level!r}")
+        check_level(level, "level")
         if level == self.level:
             return
         from rtgait.control.level_fade import LEVEL_FADE, FeedbackFade, FootFade
 
         options, planner = self.options, self.planner
         adjust = controller_step_adjustment(options, self.info) if level == "adaptive" else None
-        config = controller_config(
+        config = level_config(
             planner.config, level, self.sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
         )
         if level == "adaptive" and options.measured_replanning == "on-error":
@@ -380,7 +377,7 @@ class WalkingController:
             self.foot_landings.options = options
         planner.config = config
         if self.level == "open-loop":  # up: new laws from zero state (a fade under way goes on around them)
-            feedback = DcmFeedback(planner.w, options.gains, self.dt)
+            feedback = DcmFeedback(planner.w, options.dcm, self.dt)
             foot = FootForceControl(options.foot, self.dt) if options.foot is not None else None
             if isinstance(self.feedback, FeedbackFade):
                 self.feedback.inner = feedback
@@ -408,11 +405,11 @@ def _lengthens(adjust: StepAdjustment | None) -> bool:
     """Whether step adjustment ``adjust`` may give a step a longer single support: then a DCM error toward the
     stance foot's outside has an answer, the stance held longer while the sole's centre of pressure at its outer
     edge brings the DCM back, and the controller replans for it."""
-    return adjust is not None and adjust.adapt_timing and adjust.max_single_support is not None
+    return adjust is not None and adjust.adapt_timing and adjust.limits.max_single_support is not None
 
 
 def make_controller(
-    level: Controller,
+    level: ControllerLevel,
     planner_config: PlannerConfig,
     strides: Sequence[Stride] | None,
     sole: SoleRect,
@@ -426,7 +423,7 @@ def make_controller(
     Args:
         level: the controller level (module docstring).
         planner_config: the planner's base configuration; the level's is made from it by
-            :func:`~rtgait.core.pendulum.loop.controller_config` (the levels differ only by what the loop adds).
+            :func:`~rtgait.core.planner.levels.level_config` (the levels differ only by what the loop adds).
         strides: the walk; ``None`` to walk by velocity command.
         sole: the sole rectangle (m), for support polygons, the ZMP split and step adjustment.
         robot: what the controller knows of the robot (:func:`rtgait.robot.controller_info.robot_info` makes it
@@ -441,7 +438,7 @@ def make_controller(
     if info.sole != sole:
         info = dataclasses.replace(info, sole=sole)
     adjust = controller_step_adjustment(options, info) if level == "adaptive" else None
-    config = controller_config(
+    config = level_config(
         planner_config, level, sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
     )
     if level == "adaptive" and options.measured_replanning == "on-error":

@@ -116,7 +116,8 @@ class FootControlGains:
         for field in fields(self):
             low, high = ranges[field.name]
             value = getattr(self, field.name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and low <= value <= high):
+            number = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+            if not (number and low <= value <= high):
                 raise ValueError(f"FootControlGains.{field.name} must be within [{low:g}, {high:g}], got {value!r}")
 
 

@@ -10,7 +10,7 @@ from typing import NamedTuple
 from rtgait.control.foot_control import FootControlGains, FootOffsets
 from rtgait.core.laws.feedback import DcmFeedbackGains
 from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
-from rtgait.core.pendulum.loop import DEFAULT_REPLAN_DCM_ERROR
+from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR
 from rtgait.core.planner.measured import AUTO_MIN_REMAINDER, AUTO_REPLAN_INTERVAL
 from rtgait.interface.robot_info import RobotInfo
 from rtgait.interface.task_targets import IKTargets
@@ -58,7 +58,7 @@ def step_limits(info: RobotInfo, stepping: SteppingLimits | None = None) -> Step
     scale = info.leg_length / 0.8
     min_width = max(0.12 * scale, 2.0 * info.sole.inner + 0.02)
     max_width = max(0.45 * scale, min_width + 0.1)
-    return StepAdjustment(info.sole, max_length=0.35 * scale, min_width=min_width, max_width=max_width)
+    return StepAdjustment(info.sole, SteppingLimits(max_length=0.35 * scale, min_width=min_width, max_width=max_width))
 
 
 def controller_step_adjustment(options: ControllerOptions, info: RobotInfo) -> StepAdjustment:
@@ -72,10 +72,12 @@ def controller_step_adjustment(options: ControllerOptions, info: RobotInfo) -> S
 
 @dataclass(frozen=True)
 class ControllerOptions:
-    """Settings of the ``"stabilized"`` and ``"adaptive"`` levels.
+    """Settings of the ``"stabilized"`` and ``"adaptive"`` levels: the one home of the controller's gains and options.
+    Files set them through ``[control]`` tables (:mod:`rtgait.control.control_table`; every key with its default,
+    unit, range and source: ``docs/cli_and_scenarios.md``, "Controller settings").
 
     Attributes:
-        gains: DCM law and COM admittance; default the core law's gains with ``com_admittance`` =
+        dcm: the DCM law's gains and the COM admittance; default the core law's gains with ``com_admittance`` =
             :data:`SIM_COM_ADMITTANCE`.
         foot: foot force control gains, default its defaults with ``cop_admittance`` = :data:`SIM_COP_ADMITTANCE`;
             ``None`` turns foot force control off.
@@ -126,7 +128,7 @@ class ControllerOptions:
             G1's hip roll ranges (+-0.52 rad) with the walking's own roll on top.
     """
 
-    gains: DcmFeedbackGains = field(default_factory=lambda: DcmFeedbackGains(com_admittance=SIM_COM_ADMITTANCE))
+    dcm: DcmFeedbackGains = field(default_factory=lambda: DcmFeedbackGains(com_admittance=SIM_COM_ADMITTANCE))
     foot: FootControlGains | None = field(default_factory=lambda: FootControlGains(cop_admittance=SIM_COP_ADMITTANCE))
     measurement_filter: float = 0.005
     replan_dcm_error: float = DEFAULT_REPLAN_DCM_ERROR
@@ -145,24 +147,45 @@ class ControllerOptions:
     max_lean: float = 0.25
 
     def __post_init__(self) -> None:
-        names = ("measurement_filter", "late_descent_speed", "late_descent_limit", "late_grace", "on_time_window",
-                 "relanding_tolerance", "anchor_blend")  # fmt: skip
-        for name in names:
+        if not isinstance(self.dcm, DcmFeedbackGains):
+            raise ValueError(f"ControllerOptions.dcm must be a DcmFeedbackGains, got {type(self.dcm).__name__}")
+        if self.foot is not None and not isinstance(self.foot, FootControlGains):
+            raise ValueError(f"ControllerOptions.foot must be a FootControlGains or None, got {self.foot!r}")
+        if self.step_adjustment is not None and not isinstance(self.step_adjustment, StepAdjustment):
+            raise ValueError(f"ControllerOptions.step_adjustment must be a StepAdjustment or None, got "
+                             f"{type(self.step_adjustment).__name__}")  # fmt: skip
+        for name, (low, high, unit) in _RANGES.items():
             value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 <= value <= 10.0):
-                raise ValueError(f"ControllerOptions.{name} must be within [0, 10], got {value}")
-        if self.com_reference not in ("measured", "planned"):
-            raise ValueError(f"com_reference must be 'measured' or 'planned', got {self.com_reference!r}")
-        if self.measured_replanning not in ("on-error", "always"):
-            raise ValueError(f"measured_replanning must be 'on-error' or 'always', got {self.measured_replanning!r}")
-        if not isinstance(self.adapt_timing, bool):
-            raise ValueError(f"adapt_timing must be true or false, got {self.adapt_timing!r}")
-        if not isinstance(self.hip_strategy, bool):
-            raise ValueError(f"hip_strategy must be true or false, got {self.hip_strategy!r}")
-        if not (math.isfinite(self.max_lean) and 0.0 < self.max_lean <= 0.6):
-            raise ValueError(f"ControllerOptions.max_lean must be within (0, 0.6] rad, got {self.max_lean}")
-        if not 0.0 <= self.early_touchdown_fraction <= 1.0:
-            raise ValueError(f"early_touchdown_fraction must be within [0, 1], got {self.early_touchdown_fraction}")
+            number = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+            low_ok = number and (value > low if name in _OPEN_BELOW else value >= low)
+            if not (low_ok and value <= high):
+                interval = f"{'(' if name in _OPEN_BELOW else '['}{low:g}, {high:g}]"
+                raise ValueError(f"ControllerOptions.{name} must be a number within {interval} {unit}, got {value!r}")
+            object.__setattr__(self, name, float(value))  # a TOML integer as the float it stands for
+        for name, choices in _CHOICES.items():
+            if getattr(self, name) not in choices:
+                allowed = " or ".join(repr(choice) for choice in choices)
+                raise ValueError(f"ControllerOptions.{name} must be {allowed}, got {getattr(self, name)!r}")
+        for name in ("adapt_timing", "hip_strategy"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"ControllerOptions.{name} must be true or false, got {getattr(self, name)!r}")
+
+
+# The numbers of ControllerOptions: (lowest, highest, unit); the lowest itself is allowed unless in _OPEN_BELOW.
+_RANGES = {
+    "measurement_filter": (0.0, 10.0, "s"),
+    "replan_dcm_error": (1e-4, 1.0, "m"),
+    "early_touchdown_fraction": (0.0, 1.0, "of the swing"),
+    "late_descent_speed": (0.0, 10.0, "m/s"),
+    "late_descent_limit": (0.0, 10.0, "m"),
+    "late_grace": (0.0, 10.0, "s"),
+    "on_time_window": (0.0, 10.0, "s"),
+    "relanding_tolerance": (0.0, 10.0, "m"),
+    "anchor_blend": (0.0, 10.0, "s"),
+    "max_lean": (0.0, 0.6, "rad"),
+}
+_OPEN_BELOW = ("max_lean",)
+_CHOICES = {"measured_replanning": ("on-error", "always"), "com_reference": ("measured", "planned")}
 
 
 class ControlEvent(NamedTuple):

@@ -30,22 +30,16 @@ from typing import Any
 
 import numpy as np
 
+from rtgait.core.geometry.support import SUPPORT_NAMES
+from rtgait.core.laws.feedback import DcmFeedbackGains
 from rtgait.core.laws.stepping import StepAdjustment
-from rtgait.core.pendulum.loop import (
-    CONTROLLERS,
-    DEFAULT_DT,
-    DEFAULT_MASS,
-    SUPPORT_CODES,
-    ClosedLoopResult,
-    Controller,
-    run_closed_loop,
-)
-from rtgait.core.pendulum.plant import Push
+from rtgait.core.pendulum.loop import DEFAULT_DT, DEFAULT_MASS, ClosedLoopResult, run_pendulum_loop
+from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR, ControllerLevel, check_level
+from rtgait.core.push import Push
 from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.scenario.scenario import Scenario
 
 __all__ = [
-    "CONTROLLERS",
     "DEFAULT_MASS",
     "PENDULUM_CSV_COLUMNS",
     "PENDULUM_FILES",
@@ -71,7 +65,6 @@ PushLike = Push | tuple[float, float, float, float]
 ``--push``)."""
 
 _FLOAT_FORMAT = "%.10g"  # as the other CSV files: sub-micrometre for positions within 100 m
-_SUPPORT_NAMES = {code: name for name, code in SUPPORT_CODES.items()}
 
 
 def as_push(push: PushLike) -> Push:
@@ -100,12 +93,14 @@ def scenario_mass(scenario: Scenario, mass: float | None = None) -> float:
 
 def simulate_pendulum(
     scenario: Scenario,
-    controller: Controller = "adaptive",
+    controller: ControllerLevel = "adaptive",
     pushes: Iterable[PushLike] = (),
     mass: float | None = None,
     dt: float | None = None,
     progress: Callable[[float], None] | None = None,
     step_adjustment: StepAdjustment | None = None,
+    gains: DcmFeedbackGains | None = None,
+    replan_dcm_error: float = DEFAULT_REPLAN_DCM_ERROR,
 ) -> ClosedLoopResult:
     """Walk ``scenario`` on the point-mass pendulum with the controller level ``controller``.
 
@@ -121,6 +116,9 @@ def simulate_pendulum(
         progress: called now and then with the fraction done.
         step_adjustment: ``"adaptive"``'s step adjustment; default ``StepAdjustment(sole=scenario.sole)`` (a robot's
             ``[stepping]`` limits: ``robot.description.stepping.adjustment(scenario.sole)``).
+        gains: the DCM law's gains (``"stabilized"``, ``"adaptive"``); default
+            :class:`~rtgait.core.laws.feedback.DcmFeedbackGains`.
+        replan_dcm_error: ``"adaptive"``: the DCM error that replans at once (m).
 
     Returns:
         :class:`~rtgait.core.pendulum.loop.ClosedLoopResult`; its :meth:`~ClosedLoopResult.summary` carries the
@@ -129,9 +127,8 @@ def simulate_pendulum(
     Raises:
         ValueError: an unknown controller, a bad push, mass or period.
     """
-    if controller not in CONTROLLERS:
-        raise ValueError(f"controller must be one of {', '.join(CONTROLLERS)}, got {controller!r}")
-    result = run_closed_loop(
+    check_level(controller)
+    result = run_pendulum_loop(
         scenario.planner_config(),
         scenario.strides(),
         scenario.sole,
@@ -141,6 +138,8 @@ def simulate_pendulum(
         pushes=[as_push(p) for p in pushes],
         changes=scenario.changes,
         progress=progress,
+        gains=gains,
+        replan_dcm_error=replan_dcm_error,
         step_adjustment=step_adjustment,
     )
     result.extra["scenario"] = scenario.name
@@ -156,7 +155,7 @@ def _write_csv(result: ClosedLoopResult, path: Path) -> None:
     )  # fmt: skip
     # Vectorised formatting: a Python loop over every value would dominate a long run.
     text = np.char.mod(_FLOAT_FORMAT, numeric)
-    support = np.array([_SUPPORT_NAMES[int(code)] for code in result.support], dtype=object)
+    support = np.array([SUPPORT_NAMES[int(code)] for code in result.support], dtype=object)
     phase = result.phase.astype(str)
     saturated = result.saturated.astype(int).astype(str)
     table = np.column_stack([text.astype(object), support, phase, saturated])

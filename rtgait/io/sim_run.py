@@ -20,10 +20,12 @@ from collections.abc import Callable, Iterator, Sequence
 
 import mujoco
 
+from rtgait.control.control_table import control_options
 from rtgait.control.controller import ControllerOptions, WalkingController, make_controller
 from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
-from rtgait.core.pendulum.loop import CONTROLLERS, Controller
+from rtgait.core.planner.levels import ControllerLevel, check_level
 from rtgait.core.planner.online import OnlinePlanner, VelocityCommand
+from rtgait.core.push import Push
 from rtgait.io.sim_files import (
     SIM_CSV_COLUMNS,
     SIM_FILES,
@@ -37,7 +39,7 @@ from rtgait.robot.controller_info import robot_info
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.scenario import Scenario
-from rtgait.sim.loop import LoopOptions, Push, SimResult, run_closed_loop
+from rtgait.sim.loop import LoopOptions, SimResult, run_sim_loop
 from rtgait.sim.model import SimConfig, SimModel, build_sim_model
 
 __all__ = [
@@ -48,6 +50,7 @@ __all__ = [
     "mujoco_messages",
     "planned_walk",
     "replay_paths",
+    "robot_and_scenario_options",
     "sim_config",
     "sim_csv_columns",
     "simulate",
@@ -72,7 +75,7 @@ def simulate(
     scenario: Scenario,
     robot: RobotModel | str,
     *,
-    controller: Controller = "adaptive",
+    controller: ControllerLevel = "adaptive",
     controller_options: ControllerOptions | None = None,
     velocity: VelocityCommand | tuple[float, float, float] | Sequence[tuple[float, float, float, float]] | None = None,
     push: Push | Sequence[Push] | None = None,
@@ -98,7 +101,9 @@ def simulate(
         controller: ``"adaptive"`` (default: feedback, foot force control, measured-state replanning,
             re-anchoring, step adjustment, landing detection), ``"stabilized"`` (feedback and foot force control)
             or ``"open-loop"`` (the plan alone, the paper's assumption); :mod:`rtgait.control.controller`.
-        controller_options: the levels' gains and landing handling (default :class:`ControllerOptions`).
+        controller_options: the levels' gains and landing handling; default :class:`ControllerOptions` with the
+            ``[control]`` tables of the robot description and then of the scenario applied
+            (:func:`robot_and_scenario_options`).
         velocity: walk by velocity command ``(vx, vy, wz)`` (m/s, m/s, rad/s) instead of the scenario's footsteps:
             ``scenario.steps`` steps, then a closing step; the scenario's changes do not apply. A sequence of
             ``(t, vx, vy, wz)`` changes the command at each time ``t`` (s, walk clock; the first at ``t <= 0`` is the
@@ -122,17 +127,18 @@ def simulate(
     Raises:
         ValueError: ``sim`` was built for another robot or with other periods, a physics step longer than the
             control period or not dividing it, an unknown controller, or a bad push (beyond physical sense:
-            :meth:`Push.check`) or velocity.
+            :meth:`Push.check`) or velocity, a ``[control]`` key or value the settings refuse.
         rtgait.robot.description.RobotError: the robot cannot be loaded or built.
     """
-    if controller not in CONTROLLERS:
-        raise ValueError(f"controller must be one of {', '.join(CONTROLLERS)}, got {controller!r}")
+    check_level(controller)
     if not isinstance(robot, RobotModel):
         robot = RobotModel.load(robot)
     walk = robot_scenario(scenario, robot)
     base_options = loop_options(push, options)
     for each in base_options.pushes:
         each.check(robot.mass, walk.cog_height, walk.gravity)
+    if controller_options is None:
+        controller_options = robot_and_scenario_options(robot, scenario)
     if sim is None:
         sim = build_sim_model(robot, sim_config(config, control_dt, physics_dt))
     elif sim.robot is not robot:
@@ -152,7 +158,21 @@ def simulate(
     walk_options = dataclasses.replace(
         base_options, changes=changes, stop_after_steps=stop_after, velocity_changes=schedule
     )
-    return run_closed_loop(sim, level, walk_options, progress=progress)
+    return run_sim_loop(sim, level, walk_options, progress=progress)
+
+
+def robot_and_scenario_options(
+    robot: RobotModel, scenario: Scenario, base: ControllerOptions | None = None
+) -> ControllerOptions:
+    """``base`` (default :class:`ControllerOptions`) with the ``[control]`` table of ``robot``'s description and
+    then the one of ``scenario`` applied (:func:`rtgait.control.control_table.control_options`).
+
+    Raises:
+        rtgait.control.control_table.ControlSettingsError: a key or value the settings refuse.
+    """
+    return control_options(
+        (f"robot {robot.name}", robot.description.control), (f"scenario {scenario.name}", scenario.control), base=base
+    )
 
 
 def _velocity_schedule(
@@ -214,7 +234,7 @@ def _planner(
 def _controller(
     walk: Scenario,
     velocity: VelocityCommand | tuple[float, float, float] | None,
-    level: Controller,
+    level: ControllerLevel,
     sim: SimModel,
     options: ControllerOptions | None,
 ) -> tuple[WalkingController, tuple[ScheduledChange, ...], int | None]:

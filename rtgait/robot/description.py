@@ -59,7 +59,7 @@ from rtgait.robot.description_checks import (
     resolve_path,
     resolve_urdf,
 )
-from rtgait.scenario.tomlfile import is_finite_number
+from rtgait.scenario.tomlfile import SettingsPairs, is_finite_number
 
 __all__ = [
     "DEFAULT_NATURAL_FREQUENCY",
@@ -106,6 +106,9 @@ class RobotDescription:
             (:class:`~rtgait.core.planner.config.VelocityLimits`, applied to the planner's config of every walk of this
             robot by :func:`rtgait.robot.motion.robot_scenario`); ``None`` when the description has none (then the
             :class:`~rtgait.core.planner.config.PlannerConfig` defaults apply).
+        control: the ``[control]`` table, the controller's settings for this robot, as read
+            (:data:`~rtgait.scenario.tomlfile.SettingsPairs`; :mod:`rtgait.control.control_table` checks and applies
+            them, a scenario's own over them).
         source: where the description came from (``"builtin"`` or a file path); informative only.
     """
 
@@ -126,6 +129,7 @@ class RobotDescription:
     actuation: ActuationSpec = field(default_factory=ActuationSpec)
     stepping: SteppingLimits | None = None
     velocity: VelocityLimits | None = None
+    control: SettingsPairs = ()
     source: str = field(default="", compare=False)
 
     def posture_angle(self, joint: str) -> float:
@@ -167,7 +171,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         data,
         "",
         ("name", "model", "feet", "walking", "posture"),
-        ("description", "gains", "actuation", "stepping", "velocity"),
+        ("description", "gains", "actuation", "stepping", "velocity", "control"),
     )
     name = FILES.string(data, "name", non_empty=True)
     if not _NAME_PATTERN.fullmatch(name):
@@ -252,6 +256,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
     actuation = parse_actuation(data["actuation"], names) if "actuation" in data else ActuationSpec()
     stepping = parse_stepping(data["stepping"], sole) if "stepping" in data else None
     velocity = parse_velocity(data["velocity"], sole) if "velocity" in data else None
+    control = FILES.settings(data["control"], "control") if "control" in data else ()
 
     return RobotDescription(
         name=name,
@@ -271,6 +276,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         actuation=actuation,
         stepping=stepping,
         velocity=velocity,
+        control=control,
         source=source,
     )
 

@@ -100,7 +100,8 @@ def parse_footstep_plan(data: dict[str, Any], source: str = "") -> Scenario:
     """Build the :class:`~rtgait.scenario.scenario.Scenario` of a footstep plan from its parsed TOML ``data`` (module
     docstring)."""
     _FILES.check_keys(
-        data, "", ("name", "connection", "robot", "timing", "walk", "footstep"), ("description", "auto_margin")
+        data, "", ("name", "connection", "robot", "timing", "walk", "footstep"),
+        ("description", "auto_margin", "control"),
     )
     common = parse_common(data)
     walk = _FILES.table(data["walk"], "walk")

@@ -17,7 +17,9 @@ and are loaded by name; any other file is loaded by path. Its parts, in SI units
   step alone), decided while walking;
 * ``[guide]`` (optional): a path along which a person leads the robot by the hand in ``rtgait simulate``
   (:class:`~rtgait.scenario.guide_path.GuidePath`, :mod:`rtgait.sim.guided`); the walk's footsteps are then ignored
-  and ``walk.steps`` is the most steps the robot may take.
+  and ``walk.steps`` is the most steps the robot may take;
+* ``[control]`` (optional): the controller's settings for this walk (``docs/cli_and_scenarios.md``, "Controller
+  settings"), applied over the robot description's.
 
 A file with ``[[footstep]]`` entries instead of ``walk.steps`` is a footstep plan, absolute footholds each with its
 own timing if wanted: :func:`load_scenario` hands it to :mod:`rtgait.scenario.footholds`, which returns a
@@ -71,7 +73,7 @@ from rtgait.scenario.checks import (
     within,
 )
 from rtgait.scenario.guide_path import GuidePath
-from rtgait.scenario.tomlfile import NumberRule, TomlFiles
+from rtgait.scenario.tomlfile import NumberRule, SettingsPairs, TomlFiles
 
 __all__ = [
     "MAX_WALK_STEPS",
@@ -132,6 +134,9 @@ class Scenario:
             ``step_length`` and ``yaw``. Its strides start from the standing feet (``step_width`` apart at the
             origin), so a different ``step_width`` (a robot's) moves the first stride, never a foothold. Per-step
             timings, if any, are in ``timing.per_step``.
+        control: the ``[control]`` table, the controller's settings for this walk, as read
+            (:data:`~rtgait.scenario.tomlfile.SettingsPairs`): ``rtgait simulate`` applies them over the robot's
+            (:mod:`rtgait.control.control_table`, which checks them).
     """
 
     name: str
@@ -155,6 +160,7 @@ class Scenario:
     mass: float | None = None
     auto_margin: float = 0.01
     footholds: tuple[Footstep, ...] | None = None
+    control: SettingsPairs = ()
 
     def __post_init__(self) -> None:
         # The TOML loader already checks every field with its file path; these checks cover scenarios built in
@@ -185,6 +191,8 @@ class Scenario:
                     f"walk.change[{index}].step must be a step of the walk (1..{self.steps}), got {change.step}"
                 )
         check_distinct_steps([change.step for change in self.changes], "walk.change")
+        if not (isinstance(self.control, tuple) and all(isinstance(p, tuple) and len(p) == 2 for p in self.control)):
+            raise ScenarioError(f"control must be a tuple of (key, value) pairs, got {self.control!r}")
         if self.footholds is not None:
             if len(self.footholds) != self.steps + 1:
                 raise ScenarioError(
@@ -320,7 +328,8 @@ def _parse_guide(raw: Any) -> GuidePath:
 
 def parse_common(data: dict[str, Any]) -> dict[str, Any]:
     """The parts a scenario and a footstep plan (:mod:`rtgait.scenario.footholds`) share: ``name``, ``description``,
-    ``connection``, ``auto_margin``, ``[robot]`` and ``[timing]``, checked, as :class:`Scenario` keywords."""
+    ``connection``, ``auto_margin``, ``[robot]``, ``[timing]`` and ``[control]``, checked (``[control]``'s keys by
+    :mod:`rtgait.control.control_table` when applied), as :class:`Scenario` keywords."""
     name = _FILES.string(data, "name")
     if not _NAME_PATTERN.fullmatch(name):
         raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
@@ -363,10 +372,11 @@ def parse_common(data: dict[str, Any]) -> dict[str, Any]:
     horizon_steps = _FILES.count(
         timing_table["horizon_steps"], "timing.horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY
     )
+    control = _FILES.settings(data["control"], "control") if "control" in data else ()
     return {
         "name": name, "description": description, "connection": connection, "auto_margin": auto_margin,
         "cog_height": cog_height, "gravity": gravity, "mass": mass, "sole": sole, "timing": timing, "dt": dt,
-        "horizon_steps": horizon_steps,
+        "horizon_steps": horizon_steps, "control": control,
     }  # fmt: skip
 
 
@@ -389,7 +399,7 @@ def build_scenario(**fields: Any) -> Scenario:
 def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
     _FILES.check_keys(
-        data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide", "auto_margin")
+        data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide", "auto_margin", "control")
     )
     common = parse_common(data)
     connection = common["connection"]

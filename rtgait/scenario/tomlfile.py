@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     else:  # pragma: no cover - exercised only on Python 3.10
         from importlib.abc import Traversable
 
-__all__ = ["NumberRule", "TomlDocument", "TomlFiles", "is_finite_number"]
+__all__ = ["NumberRule", "SettingsPairs", "TomlDocument", "TomlFiles", "is_finite_number"]
 
 NumberRule = Literal["any", "> 0", ">= 0", "|x| < pi/2"]
 """What :meth:`TomlFiles.number` requires of a finite number besides being finite."""
@@ -41,6 +41,11 @@ _NUMBER_RULES: dict[str, tuple[str, Callable[[float], bool]]] = {
     ">= 0": ("a number >= 0", lambda x: x >= 0.0),
     "|x| < pi/2": ("a number strictly between -pi/2 and pi/2", lambda x: abs(x) < math.pi / 2),
 }
+
+
+SettingsPairs = tuple[tuple[str, "bool | int | float | str"], ...]
+"""A table of settings as read (:meth:`TomlFiles.settings`): its ``(key, value)`` pairs in file order, a subtable's keys
+dotted (``("dcm.k_p", 2.0)``); frozen, so that a frozen description holding it stays comparable and hashable."""
 
 
 def is_finite_number(value: Any) -> bool:
@@ -115,6 +120,20 @@ class TomlFiles:
             if key not in data:
                 raise self.error(f"missing required key {prefix}{key}")
 
+    def settings(self, data: Any, where: str) -> SettingsPairs:
+        """The table ``where`` (e.g. ``control``) as :data:`SettingsPairs`, after checking that each value is a
+        number, true or false, a string or a subtable of those; what the keys mean is for the code that applies
+        them to check."""
+        pairs: list[tuple[str, bool | int | float | str]] = []
+        for key, value in self.table(data, where).items():
+            if isinstance(value, dict):
+                pairs.extend((f"{key}.{sub}", item) for sub, item in self.settings(value, f"{where}.{key}"))
+            elif isinstance(value, (bool, int, float, str)):
+                pairs.append((key, value))
+            else:
+                raise self.error(f"{where}.{key} must be a number, true or false, a string or a table, got {value!r}")
+        return tuple(pairs)
+
     def string(self, data: dict[str, Any], key: str, where: str = "", *, non_empty: bool = False) -> str:
         """The string ``data[key]`` of the table ``where`` (empty: the document); ``non_empty`` rejects ``""``."""
         value = data[key]
@@ -188,6 +207,12 @@ class TomlFiles:
             raise self.error(
                 f"unknown {self.kind} {text_arg!r}: built-in {self.kind}s are {known} (or give a .toml path)"
             )
+        return self.load_file(name_or_path)
+
+    def load_file(self, path: str | Path) -> TomlDocument:
+        """Read and parse the TOML file at ``path``, whatever its name; the fields are not checked."""
+        text_arg = str(path)
+        path = Path(path)
         try:
             text = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as error:

@@ -11,7 +11,7 @@ Modules (import them directly; this package imports nothing, so importing it nee
   landings); :mod:`rtgait.control.foot_control`: ankle damping and foot force-difference control.
 * :mod:`rtgait.control.controller` (settings in :mod:`rtgait.control.settings`): the levels ``open-loop``,
   ``stabilized`` and ``adaptive``.
-* :mod:`rtgait.sim.loop`: ``run_closed_loop(sim, controller)``, measure -> controller -> IK -> servos -> physics,
+* :mod:`rtgait.sim.loop`: ``run_sim_loop(sim, controller)``, measure -> controller -> IK -> servos -> physics,
   and ``ClosedLoop``, the same one tick per ``step()`` for callers that act between ticks (its settings in
   :mod:`rtgait.sim.loop_options`, its record, whole or a ring, in :mod:`rtgait.sim.loop_record`, pushes given live
   in :mod:`rtgait.sim.loop_push`; level switches fade in :mod:`rtgait.control.level_fade`);

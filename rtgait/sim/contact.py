@@ -1,11 +1,11 @@
 """The robot's contacts with the world in the closed loop: what is measured of them each control tick, when the
 robot has fallen, tipped over or landed a step, and the external contact forces (pushes) applied to it.
 
-:class:`ContactMonitor` keeps the per-tick record of a run: the ZMP (the centre of pressure of the soles' normal
-forces, decoded by :mod:`rtgait.sim.contact_reading`), the force on each foot, how many corners of each sole box
-touch, how far each sole is tilted, whether the legs touch each other, and it decides when the robot has fallen
-(:class:`FallLimits`) or tipped over (a loaded foot rolled onto an edge of its sole). :class:`Landings` counts the
-steps whose foot touched down in time. :class:`Push` is a force from outside (a hand on the pelvis), applied by
+:class:`ContactMonitor` keeps the per-tick record of a run: the ZMP (the centre of pressure of the soles' normal forces,
+decoded by :mod:`rtgait.sim.contact_reading`), the force on each foot, how many corners of each sole box touch, how far
+each sole is tilted, whether the legs touch each other, and it decides when the robot has fallen (:class:`FallLimits`)
+or tipped over (a loaded foot rolled onto an edge of its sole). :class:`Landings` counts the steps whose foot touched
+down in time. :class:`~rtgait.core.push.Push` is a force from outside (a hand on the pelvis), applied by
 :class:`Pushes`.
 """
 
@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from rtgait.core.push import Push
 from rtgait.sim.contact_reading import ContactSums
 from rtgait.sim.loop_record import row_packer
 from rtgait.sim.step_snapshot import StepSnapshot
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
 _TIME_TOLERANCE = 1e-9  # s
 _COLUMNS = 15  # ContactMonitor's row (its __init__ says what)
 
-__all__ = ["PUSH_SPEED_LIMIT", "ContactMonitor", "FallLimits", "Landings", "Push", "Pushes"]
+__all__ = ["ContactMonitor", "FallLimits", "Landings", "Pushes"]
 
 
 @dataclass(frozen=True)
@@ -221,76 +222,6 @@ class Landings:
             elif t >= self._pending[1]:
                 self._pending = None
                 self.missed += 1
-
-
-PUSH_SPEED_LIMIT = 10.0
-"""Largest push accepted, as the change of COM speed ``|J| / m`` it would give the free robot, in units of
-``sqrt(g z_c)`` (the pendulum plant's limit, :data:`rtgait.core.pendulum.plant.PUSH_SPEED_LIMIT`): some twenty times
-what any
-number of steps could recover, so it refuses only physical nonsense (a unit error, a collision), never a push worth
-simulating. 2.6 kN s for Talos (90 kg, COM 0.84 m high), 0.84 kN s for G1."""
-
-
-@dataclass(frozen=True)
-class Push:
-    """An external force on a body of the robot, constant over a time window (e.g. a push at the pelvis).
-
-    Attributes:
-        start: when it begins (s, on the walk's clock: 0 when the walk starts, negative during the start
-            transition).
-        duration: how long it lasts (s); the impulse is ``force * duration`` (N s).
-        force: world-frame force ``(fx, fy, fz)`` (N), applied at the body's centre of mass.
-        body: MuJoCo body name; ``None`` for the floating base.
-    """
-
-    start: float
-    duration: float
-    force: tuple[float, float, float]
-    body: str | None = None
-
-    def __post_init__(self) -> None:
-        if not math.isfinite(self.start):
-            raise ValueError(f"push start must be a finite time in s, got {self.start}")
-        if not (math.isfinite(self.duration) and self.duration > 0.0):
-            raise ValueError(f"push duration must be > 0 s, got {self.duration}")
-        if len(self.force) != 3 or not all(math.isfinite(f) for f in self.force):
-            raise ValueError(f"push force must be three finite numbers (fx, fy, fz) in N, got {self.force!r}")
-
-    @property
-    def impulse(self) -> tuple[float, float, float]:
-        """``force * duration`` (N s)."""
-        return (self.force[0] * self.duration, self.force[1] * self.duration, self.force[2] * self.duration)
-
-    @property
-    def impulse_norm(self) -> float:
-        """Size of the impulse (N s)."""
-        return math.hypot(*self.impulse)
-
-    def check(self, mass: float, cog_height: float, gravity: float = 9.81) -> None:
-        """Refuse a push beyond physical sense for a robot of ``mass`` (kg) walking with its COM ``cog_height`` (m)
-        high (:data:`PUSH_SPEED_LIMIT`).
-
-        Raises:
-            ValueError: naming the impulse and the limit.
-        """
-        limit = PUSH_SPEED_LIMIT * mass * math.sqrt(gravity * cog_height)
-        if self.impulse_norm > limit:
-            raise ValueError(
-                f"push impulse {self.impulse_norm:.4g} N s exceeds {limit:.4g} N s, a change of COM speed of "
-                f"{PUSH_SPEED_LIMIT:g} sqrt(g z_c) for this {mass:.1f} kg robot: check the units (N, s)"
-            )
-
-    def summary(self) -> dict[str, object]:
-        """JSON-ready: ``start``, ``duration`` (s), ``force`` (N), ``impulse`` (N s), ``impulse_norm`` (N s),
-        ``body``."""
-        return {
-            "start": self.start,
-            "duration": self.duration,
-            "force": list(self.force),
-            "impulse": list(self.impulse),
-            "impulse_norm": self.impulse_norm,
-            "body": self.body,
-        }
 
 
 class Pushes:

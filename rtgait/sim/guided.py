@@ -32,11 +32,11 @@ import pinocchio as pin
 
 from rtgait.control.controller import ControllerOptions, WalkingController, make_controller
 from rtgait.core.laws.guidance import HandGuide
-from rtgait.core.pendulum.loop import Controller
+from rtgait.core.planner.levels import ControllerLevel
 from rtgait.core.planner.online import OnlinePlanner, VelocityCommand
 from rtgait.robot.controller_info import robot_info
 from rtgait.scenario.scenario import GuidePath, Scenario
-from rtgait.sim.loop import LoopOptions, run_closed_loop
+from rtgait.sim.loop import LoopOptions, run_sim_loop
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SimResult
 
@@ -294,7 +294,7 @@ def simulate_guided(
     walk: Scenario,
     options: LoopOptions | None = None,
     *,
-    controller: Controller = "adaptive",
+    controller: ControllerLevel = "adaptive",
     controller_options: ControllerOptions | None = None,
     path: GuidePath | None = None,
     leash: Leash | None = None,
@@ -327,5 +327,5 @@ def simulate_guided(
         options=controller_options,
     )
     pull = HandPull(sim, level.planner, path, leash, max_steps=walk.steps, controller=level)
-    result = run_closed_loop(sim, level, guided_options(pull, options or LoopOptions()), progress=progress)
+    result = run_sim_loop(sim, level, guided_options(pull, options or LoopOptions()), progress=progress)
     return result, pull.outcome(result.base_position[-1])

@@ -24,7 +24,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rtgait.core.pendulum.loop import CONTROLLERS
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.core.walk.walk import VelocityCommand
 
 if TYPE_CHECKING:
@@ -286,7 +286,7 @@ class LiveWalk:
             loop.push((self.push_force * fx, self.push_force * fy, 0.0), self.push_duration)
             self._say(f"push {self.push_force:.0f} N for {self.push_duration:g} s")
         elif action == "level":
-            levels = list(CONTROLLERS)
+            levels = list(CONTROLLER_LEVELS)
             level = levels[(levels.index(loop.controller.level) + 1) % len(levels)]
             loop.controller.set_level(level)
             self.levels.append(level)

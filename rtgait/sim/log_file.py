@@ -24,7 +24,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rtgait import __version__
-from rtgait.core.pendulum.loop import CONTROLLERS
+from rtgait.core.geometry.support import SUPPORT_NAMES
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 
 if TYPE_CHECKING:
     from rtgait.core.geometry.footsteps import SoleRect
@@ -48,7 +49,6 @@ LOG_FORMAT = "rtgait-sim-log/1"
 """``format`` in the file's metadata: the layout of this module, version 1."""
 
 _SIDES = ("left", "right")
-_SUPPORTS = ("double", "left", "right")  # rtgait.sim.result.SUPPORT_CODES, by code
 _XYZ = ("x", "y", "z")
 
 
@@ -98,7 +98,7 @@ def log_columns(joint_names: Sequence[str]) -> list[LogColumn]:
         LogColumn("phase", "", "the planner's phase (0 standing start, odd single supports); -1 in the transition"),
         LogColumn("support_planned", "", "the plan's support: double, left or right"),
         LogColumn("support_control", "", "the support the controller acts on (after early or late landings)"),
-        LogColumn("controller", "", f"controller level: {', '.join(CONTROLLERS)}"),
+        LogColumn("controller", "", f"controller level: {', '.join(CONTROLLER_LEVELS)}"),
         LogColumn("events", "", "what happened at this tick, 'kind:side' joined by ';' (the events table)"),
         *_vector("zmp", "m", "measured ZMP (centre of pressure of the sole contacts), at t; NaN in the air", "xy"),
         *_vector("zmp_planned", "m", "the planner's ZMP (in the transition: the COM target's projection)", "xy"),
@@ -236,7 +236,7 @@ def _columns(result: SimResult, events: list[dict[str, Any]]) -> dict[str, np.nd
     """Every column's values (:func:`log_columns` order)."""
     log = result.log
     if log is None:
-        raise ValueError("the result has no tick log (it was not made by rtgait.sim.loop.run_closed_loop)")
+        raise ValueError("the result has no tick log (it was not made by rtgait.sim.loop.run_sim_loop)")
     n = len(result.times)
     linear, angular = log.base_velocity(result.base_position, result.cog)
     dcm = result.cog[:, 0:2] + log.cog_velocity[:, 0:2] / log.omega
@@ -244,9 +244,9 @@ def _columns(result: SimResult, events: list[dict[str, Any]]) -> dict[str, np.nd
         "t": result.times,
         "tick": np.arange(n, dtype=np.int64),
         "phase": log.phase,
-        "support_planned": np.array(_SUPPORTS, dtype=object)[result.support],
-        "support_control": np.array(_SUPPORTS, dtype=object)[log.support_control],
-        "controller": np.array(CONTROLLERS, dtype=object)[log.level],
+        "support_planned": np.array(SUPPORT_NAMES, dtype=object)[result.support],
+        "support_control": np.array(SUPPORT_NAMES, dtype=object)[log.support_control],
+        "controller": np.array(CONTROLLER_LEVELS, dtype=object)[log.level],
         "events": _event_column(events, n),
     }
 

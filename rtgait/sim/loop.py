@@ -39,7 +39,7 @@ start before the planner's clock begins; it runs at negative times on the walk's
 :mod:`rtgait.control.controller`.
 
 :class:`ClosedLoop` is the loop one tick per :meth:`~ClosedLoop.step`, for callers that act between ticks (a live
-viewer sets the velocity command, pushes, switches the controller level); :func:`run_closed_loop` steps one to the
+viewer sets the velocity command, pushes, switches the controller level); :func:`run_sim_loop` steps one to the
 walk's end. The record (:mod:`rtgait.sim.loop_record`) is the whole run, or for an open-ended run a ring of its last
 seconds, so that its memory stays bounded however long it lasts; :meth:`ClosedLoop.result` makes it a
 :class:`SimResult` with the walk's outcome (:mod:`rtgait.sim.loop_result`).
@@ -55,12 +55,14 @@ import mujoco
 
 from rtgait.control.controller import ControlEvent, ControllerOptions, WalkingController
 from rtgait.core.geometry.footsteps import Footstep
+from rtgait.core.geometry.support import SUPPORT_CODES, SUPPORT_NAMES
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.core.push import Push
 from rtgait.estimation.ground_truth import GroundTruthEstimator
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.ik import WholeBodyIK
-from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Push, Pushes
+from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Pushes
 from rtgait.sim.loop_inputs import WalkInputs
 from rtgait.sim.loop_options import (
     LANDING_WINDOW,
@@ -74,7 +76,7 @@ from rtgait.sim.loop_push import LivePush
 from rtgait.sim.loop_record import TickRecord, TickValues, row_packer
 from rtgait.sim.loop_result import loop_result
 from rtgait.sim.model import SimModel
-from rtgait.sim.result import SUPPORT_CODES, SimResult
+from rtgait.sim.result import SimResult
 from rtgait.sim.robot import SimRobot
 from rtgait.sim.tick_log import TickLog
 from rtgait.stack.setup import start_pose
@@ -82,19 +84,16 @@ from rtgait.stack.walking_stack import WalkingStack
 
 __all__ = [
     "LANDING_WINDOW",
-    "SUPPORT_CODES",
     "ClosedLoop",
     "FallLimits",
     "LoopOptions",
-    "Push",
     "SimResult",
     "TickValues",
     "open_loop_controller",
-    "run_closed_loop",
+    "run_sim_loop",
 ]
 
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
-_SUPPORTS = {code: name for name, code in SUPPORT_CODES.items()}
 
 
 def open_loop_controller(sim: SimModel, planner: OnlinePlanner) -> WalkingController:
@@ -104,23 +103,23 @@ def open_loop_controller(sim: SimModel, planner: OnlinePlanner) -> WalkingContro
 
 
 class ClosedLoop:
-    """The closed loop of :func:`run_closed_loop`, one control tick per :meth:`step` (see the module docstring).
+    """The closed loop of :func:`run_sim_loop`, one control tick per :meth:`step` (see the module docstring).
 
     Drive it by hand (``while loop.step(): ...``, e.g. a live viewer changing the velocity command, pushing or
-    switching the controller level between ticks) or through :func:`run_closed_loop`; :meth:`result` makes the
+    switching the controller level between ticks) or through :func:`run_sim_loop`; :meth:`result` makes the
     :class:`SimResult` of the ticks recorded so far. After a step, :attr:`last` holds that tick's values (time,
     phase, planned, commanded and measured ZMP, measured and planned DCM, the IK's COG and feet targets),
     :meth:`footprints` the plan's footprints, :attr:`base_position` and :attr:`steps_completed` the outcome so far.
 
     Args:
-        sim, controller, options, ik, data: as :func:`run_closed_loop`.
+        sim, controller, options, ik, data: as :func:`run_sim_loop`.
         keep: how much to record: ``None`` (default) the whole run, whose length must then be known in advance (a
             walk of footsteps, ``stop_after_steps`` or ``duration``); a time (s) keeps a ring of the last
             ``keep`` seconds (at least one tick: ``keep=0`` records only the last tick), and a walk by command may
             then have no end (:attr:`n_ticks` is ``None``; it runs until the caller stops stepping).
 
     Raises:
-        ValueError: as :func:`run_closed_loop`; a negative ``keep``.
+        ValueError: as :func:`run_sim_loop`; a negative ``keep``.
     """
 
     def __init__(
@@ -417,7 +416,7 @@ class ClosedLoop:
         row = (max(self.k, 1) - 1) % self.record.capacity
         p = self.record.planned[row].tolist()
         return TickValues(
-            self.t, self.phase, _SUPPORTS[int(self.record.support[row])], (p[0], p[1]), (p[2], p[3]),
+            self.t, self.phase, SUPPORT_NAMES[int(self.record.support[row])], (p[0], p[1]), (p[2], p[3]),
             self.zmp_measured, (p[4], p[5]), (p[6], p[7]), tuple(self.cog_target), self.left_foot, self.right_foot,
         )  # fmt: skip
 
@@ -453,7 +452,7 @@ class ClosedLoop:
         return loop_result(self, wall_time, self._n_steps, self._walk_end)
 
 
-def run_closed_loop(
+def run_sim_loop(
     sim: SimModel,
     controller: WalkingController | OnlinePlanner,
     options: LoopOptions | None = None,

@@ -11,7 +11,8 @@ import mujoco
 from rtgait.core.analysis.rollout import ScheduledChange
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.sim.contact import FallLimits, Push
+from rtgait.core.push import Push
+from rtgait.sim.contact import FallLimits
 
 __all__ = [
     "LANDING_WINDOW", "LoopOptions", "end_tick", "minimum_jerk", "run_length", "timing_headroom",
@@ -114,9 +115,9 @@ def timing_headroom(adjust: StepAdjustment | None, n_steps: int, single_support:
     """Ticks a walk of ``n_steps`` steps of ``single_support`` s may outgrow its planned length by when step timing
     adaptation (``adjust``) holds stances longer: every step held to ``max_single_support``. 0 when no step can be
     lengthened."""
-    if adjust is None or not adjust.adapt_timing or adjust.max_single_support is None:
+    if adjust is None or not adjust.adapt_timing or adjust.limits.max_single_support is None:
         return 0
-    return math.ceil(n_steps * max(0.0, adjust.max_single_support - single_support) / dt)
+    return math.ceil(n_steps * max(0.0, adjust.limits.max_single_support - single_support) / dt)
 
 
 def end_tick(end_time: float, options: LoopOptions, k0: int, dt: float) -> int:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import mujoco
 
-from rtgait.sim.contact import Push
+from rtgait.core.push import Push
 
 if TYPE_CHECKING:
     from rtgait.sim.model import SimModel

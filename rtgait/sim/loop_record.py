@@ -2,7 +2,7 @@
 of its last ticks for an open-ended run whose memory must stay bounded.
 
 The arrays are allocated once; the loop writes tick ``k`` into row ``k mod capacity`` in place, so a tick allocates
-nothing here. With ``capacity`` at least the walk's length (:func:`rtgait.sim.loop.run_closed_loop`) row ``k`` is tick
+nothing here. With ``capacity`` at least the walk's length (:func:`rtgait.sim.loop.run_sim_loop`) row ``k`` is tick
 ``k`` and the ring never wraps. In a ring that has wrapped, the oldest rows have been overwritten: after ``n``
 ticks, rows hold ticks ``n - capacity .. n - 1``, and :meth:`TickRecord.arrange` puts them back in tick order.
 
@@ -11,7 +11,7 @@ ring of their own, large enough for every such tick of a window of ``capacity`` 
 
 Row layouts: ``planned`` is (planned ZMP x, y, commanded ZMP x, y, measured DCM x, y, planned DCM x, y) (m);
 ``base`` is MuJoCo's ``qpos[0:7]`` (x, y, z, qw, qx, qy, qz); ``support`` holds
-:data:`rtgait.sim.result.SUPPORT_CODES`.
+:data:`rtgait.core.geometry.support.SUPPORT_CODES`.
 """
 
 from __future__ import annotations

@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep
-from rtgait.sim.contact import Push
+from rtgait.core.push import Push
 
 if TYPE_CHECKING:
     import pinocchio as pin
@@ -45,10 +45,7 @@ if TYPE_CHECKING:
     from rtgait.core.laws.stepping import StepDecision
     from rtgait.sim.tick_log import CompleteLog
 
-__all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SUPPORT_CODES", "SimResult", "Stance", "stances"]
-
-SUPPORT_CODES = {"double": 0, "left": 1, "right": 2}
-"""Planned support per tick in :attr:`SimResult.support`: 0 double, 1 left foot only, 2 right foot only."""
+__all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SimResult", "Stance", "stances"]
 
 STANCE_FRACTION = 0.1
 """A foot is a stance foot, for the slip measure, while it carries at least this fraction of the weight: a foot
@@ -160,7 +157,8 @@ class SimResult:
         corners: corners of each sole box touching the floor (0 to 4), shape ``(k, 2)``.
         sole_tilt: angle between each sole's normal and the vertical (rad), shape ``(k, 2)``.
         sole_pose: each sole's ground pose ``(x, y, yaw)`` (m, rad), shape ``(k, 2, 3)``.
-        support: planned support per tick, codes :data:`SUPPORT_CODES` (the start transition is double).
+        support: planned support per tick, codes :data:`~rtgait.core.geometry.support.SUPPORT_CODES` (the start
+            transition is double).
         torque: the joint torques the servos applied (N m), mean over the tick's physics substeps, shape ``(k, n)``,
             columns in :attr:`joint_names` order; within each joint's torque limit.
         joint_names: the actuated joints, the columns of :attr:`torque`.
@@ -183,7 +181,7 @@ class SimResult:
         wall_time: wall-clock time of the loop (s), the planner, controller, IK and physics.
         robot: the robot's name.
         mass: its mass (kg).
-        controller: the controller level (:data:`rtgait.control.controller.CONTROLLERS`).
+        controller: the controller level (:data:`rtgait.core.planner.levels.CONTROLLER_LEVELS`).
         pushes: the external pushes of the run.
         events: what the controller logged (landings, re-anchoring, step adjustments, replans).
         step_adjustments: the planner's step adjustments, in order.

@@ -41,9 +41,9 @@ import mujoco
 import numpy as np
 
 from rtgait.core.geometry.footsteps import SoleRect
-from rtgait.core.pendulum.loop import CONTROLLERS
+from rtgait.core.geometry.support import SUPPORT_CODES
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.sim.loop_record import row_packer
-from rtgait.sim.result import SUPPORT_CODES
 
 if TYPE_CHECKING:
     from rtgait.control.settings import ControlTargets
@@ -53,9 +53,9 @@ if TYPE_CHECKING:
 
 __all__ = ["LEVEL_CODES", "CompleteLog", "TickLog"]
 
-LEVEL_CODES = {level: code for code, level in enumerate(CONTROLLERS)}
+LEVEL_CODES = {level: code for code, level in enumerate(CONTROLLER_LEVELS)}
 """Controller level per tick in :attr:`CompleteLog.level`: its index in
-:data:`rtgait.core.pendulum.loop.CONTROLLERS`."""
+:data:`rtgait.core.planner.levels.CONTROLLER_LEVELS`."""
 
 # The per-tick scalars, packed into one row of a float64 table with one ``struct`` call (a numpy assignment from a
 # tuple of Python floats costs several times more): COM velocity (3), base spatial velocity (6), IK sole targets
@@ -96,7 +96,8 @@ class CompleteLog:
         cog_velocity_planned: the plan's COM velocity (m/s), shape ``(k, 2)``; NaN during the start transition.
         phase: the planner's phase index (0: the standing start, odd: single supports), -1 during the start
             transition, shape ``(k,)``.
-        support_control: the support the controller acts on, codes :data:`~rtgait.sim.result.SUPPORT_CODES`,
+        support_control: the support the controller acts on, codes
+            :data:`~rtgait.core.geometry.support.SUPPORT_CODES`,
             shape ``(k,)``; double during the start transition.
         level: the controller level, codes :data:`LEVEL_CODES`, shape ``(k,)``.
         sole: the robot's sole rectangle around the sole frame (m).

@@ -15,8 +15,6 @@ from typing import Any
 
 CASE_ERROR = 3
 """Exit code of a case that failed for a reason of its own (retrying it would fail the same way)."""
-CONTROLLERS = ("open-loop", "stabilized", "adaptive")
-"""Controller levels (:data:`rtgait.core.pendulum.loop.CONTROLLERS`)."""
 
 
 def simulate_options(controller: str | None) -> dict[str, Any]:

@@ -18,8 +18,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
 
-from rtgait.core.pendulum.loop import SUPPORT_CODES, ClosedLoopResult
-from rtgait.core.pendulum.plant import Push
+from rtgait.core.geometry.support import SUPPORT_NAMES
+from rtgait.core.pendulum.loop import ClosedLoopResult
+from rtgait.core.push import Push
 from rtgait.viz.run_data import SIM_CSV, SUMMARY, RunFilesError, read_floats, read_summary, read_table, require_keys
 from rtgait.viz.style import (
     COG_COLOR,
@@ -82,9 +83,7 @@ class PendulumRun:
     @classmethod
     def from_result(cls, result: ClosedLoopResult, title: str = "") -> PendulumRun:
         """The record of a closed-loop run in memory."""
-        names = np.empty(len(SUPPORT_CODES), dtype=object)
-        for name, code in SUPPORT_CODES.items():
-            names[code] = name
+        names = np.array(SUPPORT_NAMES, dtype=object)
         return cls(
             times=result.times,
             zmp_planned=result.zmp_planned,
@@ -150,7 +149,7 @@ def _legend_extras(run: PendulumRun) -> tuple[list[object], list[str]]:
     labels = ["double support (both feet on the ground)"]
     if run.pushes:
         handles.append(Rectangle((0, 0), 1, 1, color=PUSH_COLOR, alpha=0.35, lw=0))
-        impulses = ", ".join(f"{float(np.hypot(*push.impulse)):.1f} N s at {push.start:.2f} s" for push in run.pushes)
+        impulses = ", ".join(f"{push.impulse_norm:.1f} N s at {push.start:.2f} s" for push in run.pushes)
         labels.append(f"push on the mass ({impulses})")
     if run.step_adjustments:
         handles.append(Line2D([], [], color=_ADJUST_COLOR, lw=1.0, ls="-."))

@@ -116,7 +116,8 @@ class ZmpSimRun:
 
 
 def _stance(support: np.ndarray) -> np.ndarray:
-    """Which soles (left, right) a support code (:data:`~rtgait.sim.result.SUPPORT_CODES`) stands on, ``(k, 2)``."""
+    """Which soles (left, right) a support code (:data:`~rtgait.core.geometry.support.SUPPORT_CODES`) stands on,
+    ``(k, 2)``."""
     support = np.asarray(support)
     return np.column_stack([support != 2, support != 1])
 

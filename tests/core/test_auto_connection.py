@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import ast
+import inspect
 from dataclasses import replace
 
 import numpy as np
@@ -18,6 +20,7 @@ from rtgait.core import (
     straight_walk,
 )
 from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, evaluate_walks
+from rtgait.core.planner import auto
 from rtgait.core.planner.auto import auto_options, window
 from rtgait.io.plan_files import plan_report, summarize
 from rtgait.scenario.loading import load_scenario
@@ -91,6 +94,34 @@ def test_defers_when_neither_deadline_allows():
     times = np.arange(planner.latest_time + 0.005, planner.end_time, 0.005)
     margins = np.array([planner.zmp_margin(planner.sample(t), SOLE) for t in times])
     assert margins.min() > 0.0
+
+
+def test_a_newer_wish_for_a_held_step_replaces_it():
+    """A small change held for step 5's lift-off, then a large one for the same step before the quasi-real-time
+    deadline: the large one is applied at once and the held one never is."""
+    planner = auto_planner(0.8, 0.2, length=0.11)
+    walk_to(planner, 3.0)
+    planner.change_step(5, length=0.12, through=10)
+    assert planner.change_log[-1].connection == "real-time"
+    planner.change_step(5, length=0.2, through=10)
+    assert planner.change_log[-1].connection == "quasi-real-time"
+    expected = planner.footprints()[6].x
+    walk_to(planner, lift_off(planner, 5) + 0.01)
+    assert planner.footprints()[6].x == pytest.approx(expected) == pytest.approx(0.11 * 4 + 0.2)
+
+
+def test_the_auto_connection_touches_nothing_private_of_its_planner():
+    """It reads its planner through :class:`AutoPlanner` and changes only the walk, through the walk's methods."""
+    tree = ast.parse(inspect.getsource(auto))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__"):
+            owner = node.value
+            assert isinstance(owner, ast.Name) and owner.id == "self", ast.unparse(node)
+        if isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for target in targets:
+                if isinstance(target, ast.Attribute):
+                    assert ast.unparse(target.value) == "self", ast.unparse(target)
 
 
 def test_too_late_after_lift_off():

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect, Timing, place_step
-from rtgait.core.laws.stepping import StepAdjustment
+from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
 
 SOLE = SoleRect(0.13, 0.10, 0.07, 0.07)
@@ -295,7 +295,7 @@ def test_a_push_no_step_can_catch_takes_the_best_capture_step(on_failure):
 
 
 def test_step_adjustment_respects_the_stride_box():
-    adjust = StepAdjustment(SOLE, max_length=0.2, min_width=0.15, max_width=0.3)
+    adjust = StepAdjustment(SOLE, SteppingLimits(max_length=0.2, min_width=0.15, max_width=0.3))
     p, _ = _pushed((0.4, -0.2), adjust)
     decision = p.step_adjustments[-1]
     stance = p.footprints()[decision.step]

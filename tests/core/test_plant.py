@@ -13,14 +13,8 @@ from rtgait.core.geometry.footsteps import Footstep, SoleRect
 from rtgait.core.geometry.polygon import clip_to_polygon
 from rtgait.core.geometry.support import signed_margin, support_polygon
 from rtgait.core.lipm.closed_form import GRAVITY
-from rtgait.core.pendulum.plant import (
-    DEFAULT_MAX_LEAN,
-    PUSH_SPEED_LIMIT,
-    LipmPlant,
-    Push,
-    push_force,
-    push_impulse,
-)
+from rtgait.core.pendulum.plant import DEFAULT_MAX_LEAN, LipmPlant, push_force, push_impulse
+from rtgait.core.push import PUSH_SPEED_LIMIT, Push
 
 ZC, MASS = 0.8, 50.0
 W = math.sqrt(GRAVITY / ZC)
@@ -125,7 +119,7 @@ def test_push_starting_and_ending_mid_tick_delivers_its_exact_impulse():
     push = Push(start=0.1234, duration=0.0567, force=(120.0, -45.0))
     pushed = LipmPlant(ZC, MASS, cog=(0.01, 0.0), cog_vel=(0.2, 0.05), pushes=[push])
     free = LipmPlant(ZC, MASS, cog=(0.01, 0.0), cog_vel=(0.2, 0.05))
-    force, T = np.array(push.force), push.duration
+    force, T = np.array(push.force[:2]), push.duration
     d_end = force * (math.cosh(W * T) - 1.0) / (MASS * W**2)
     v_end = force * math.sinh(W * T) / (MASS * W)
     checked = 0
@@ -164,8 +158,8 @@ def test_push_force_and_impulse_helpers():
     np.testing.assert_array_equal(push_force(pushes, 0.65), [0.0, 0.0])
     dt = 0.003  # not a divisor of any boundary: most ticks overlap a push only partly
     total = sum(push_impulse(pushes, k * dt, (k + 1) * dt) for k in range(400))
-    np.testing.assert_allclose(total, pushes[0].impulse + pushes[1].impulse, rtol=1e-12)
-    np.testing.assert_allclose(pushes[1].impulse, [0.0, -0.4], rtol=1e-12)
+    np.testing.assert_allclose(total, np.add(pushes[0].impulse, pushes[1].impulse)[:2], rtol=1e-12)
+    np.testing.assert_allclose(pushes[1].impulse, [0.0, -0.4, 0.0], rtol=1e-12)
 
 
 def test_push_validation():
@@ -174,11 +168,18 @@ def test_push_validation():
         dict(start=0.0, duration=0.0, force=(1.0, 0.0)),
         dict(start=0.0, duration=-0.1, force=(1.0, 0.0)),
         dict(start=0.0, duration=0.1, force=(1.0, math.inf)),
-        dict(start=0.0, duration=0.1, force=(1.0, 0.0, 0.0)),
+        dict(start=0.0, duration=0.1, force=(1.0,)),
+        dict(start=0.0, duration=0.1, force=(1.0, 0.0, 0.0, 0.0)),
+        dict(start=0.0, duration=0.1, force=(1.0, 0.0), body=""),
     ]:
         with pytest.raises(ValueError, match="push"):
             Push(**bad)
+    assert Push(0.0, 0.1, (1, 2)).force == (1.0, 2.0, 0.0)  # a horizontal force: fz = 0
     plant = LipmPlant(ZC, MASS)
+    with pytest.raises(ValueError, match="horizontal"):
+        plant.add_push(Push(0.0, 0.1, (1.0, 0.0, 5.0)))
+    with pytest.raises(ValueError, match="only body"):
+        plant.add_push(Push(0.0, 0.1, (1.0, 0.0), body="pelvis"))
     limit = PUSH_SPEED_LIMIT * MASS * math.sqrt(GRAVITY * ZC)
     assert plant.max_impulse == pytest.approx(limit)
     plant.add_push(Push(0.0, 0.5, (0.99 * limit / 0.5, 0.0)))

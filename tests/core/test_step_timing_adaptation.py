@@ -19,10 +19,16 @@ from rtgait.core.geometry.footsteps import Timing
 from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.support import signed_margin
 from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
-from rtgait.core.laws.stepping import StepAdjustment, choose_step, remainder_options, single_support_options
-from rtgait.core.pendulum.loop import run_closed_loop
-from rtgait.core.pendulum.plant import Push
+from rtgait.core.laws.stepping import (
+    StepAdjustment,
+    SteppingLimits,
+    choose_step,
+    remainder_options,
+    single_support_options,
+)
+from rtgait.core.pendulum.loop import run_pendulum_loop
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
+from rtgait.core.push import Push
 
 LANDING = StepAdjustment(sole=SOLE)
 TIMING = StepAdjustment(sole=SOLE, adapt_timing=True)
@@ -30,7 +36,7 @@ DT = 0.001
 
 
 def _loop(adjust: StepAdjustment, pushes, dt: float):
-    return run_closed_loop(
+    return run_pendulum_loop(
         CONFIG, STRIDES, SOLE, controller="adaptive", mass=MASS, dt=dt, pushes=pushes, step_adjustment=adjust
     )
 
@@ -52,10 +58,10 @@ def test_a_push_no_landing_alone_catches_is_caught_by_stepping_sooner(dt):
     u = np.array([0.0, -1.0])  # toward the swinging right foot: it can step out to 0.45 m from the stance foot
     reach = reach_along(SOLE.corners(stance), stance.position, u)
     remaining = 0.5 * CONFIG.timing.single_support
-    common = dict(mass=MASS, omega=W, r_max=reach, l_max=LANDING.max_width, step_time=CONFIG.timing.step_period,
-                  min_remaining=LANDING.min_time_to_touchdown, steps=1)  # fmt: skip
+    common = dict(mass=MASS, omega=W, r_max=reach, l_max=LANDING.limits.max_width, step_time=CONFIG.timing.step_period,
+                  min_remaining=LANDING.limits.min_time_to_touchdown, steps=1)  # fmt: skip
     nominal_bound = max_capturable_impulse(dcm - stance.position, u, remaining=remaining, **common)
-    earliest = max(TIMING.min_time_to_touchdown, TIMING.min_single_support - remaining)
+    earliest = max(TIMING.limits.min_time_to_touchdown, TIMING.limits.min_single_support - remaining)
     early_bound = max_capturable_impulse(dcm - stance.position, u, remaining=earliest, **common)
     impulse = 34.0  # N s
     assert nominal_bound < impulse < early_bound, (nominal_bound, early_bound)
@@ -108,12 +114,12 @@ def test_the_retimed_plan_starts_at_the_measured_state_obeys_the_pendulum_and_la
     k = decision.step
     assert k == 3 and not decision.emergency
     assert decision.nominal_single_support == 0.7
-    assert TIMING.min_single_support <= decision.single_support < 0.7 - 1e-3
+    assert TIMING.limits.min_single_support <= decision.single_support < 0.7 - 1e-3
     # The chosen timing is the step's timing now: phases from its touch-down on moved sooner.
     assert planner.timeline.duration(2 * k - 1) == pytest.approx(decision.single_support, abs=1e-12)
     touchdown = planner.phase_start(2 * k)
     assert touchdown == pytest.approx(planner.phase_start(2 * k - 1) + decision.single_support, abs=1e-12)
-    assert touchdown - t >= TIMING.min_time_to_touchdown - 1e-9
+    assert touchdown - t >= TIMING.limits.min_time_to_touchdown - 1e-9
     # It starts exactly at the measured state, the ZMP continuous in position and velocity.
     after = planner.sample(t)
     assert after.cog[:2] == pytest.approx(cog, abs=1e-12)
@@ -151,7 +157,7 @@ def test_without_a_shorter_timing_on_offer_the_decisions_are_those_of_landings_a
     t_mid, _, _ = _mid_single_support()
     push = Push(t_mid - 0.05, 0.1, (0.0, -300.0))
     off = _loop(LANDING, [push], 0.005)
-    none_shorter = _loop(StepAdjustment(sole=SOLE, adapt_timing=True, min_single_support=0.7), [push], 0.005)
+    none_shorter = _loop(StepAdjustment(SOLE, SteppingLimits(min_single_support=0.7), adapt_timing=True), [push], 0.005)
     assert off.step_adjustments == none_shorter.step_adjustments and len(off.step_adjustments) >= 2
     assert np.array_equal(off.cog, none_shorter.cog)
 
@@ -177,7 +183,7 @@ def test_the_batched_choice_is_the_direct_evaluation_of_every_candidate(required
     pairs = []
     for i in range(3):
         for c, point in enumerate(candidates):
-            if math.dist(point, swing_from) <= adjust.max_swing_speed * time_left[i]:
+            if math.dist(point, swing_from) <= adjust.limits.max_swing_speed * time_left[i]:
                 delta = point - nominal
                 m = halfplane_margin(zmp[i] + gain[i][:, None] * delta, *halfplanes).min()
                 pairs.append((delta @ delta + (adjust.time_cost * change[i]) ** 2, i, c, m))
@@ -194,7 +200,7 @@ def test_the_batched_choice_is_the_direct_evaluation_of_every_candidate(required
 
 
 def test_candidate_timings_stay_within_the_limits():
-    adjust = StepAdjustment(sole=SOLE, adapt_timing=True, durations=4, min_single_support=0.4)
+    adjust = StepAdjustment(SOLE, SteppingLimits(min_single_support=0.4), adapt_timing=True, durations=4)
     assert single_support_options(adjust, 0.7) == pytest.approx((0.4, 0.5, 0.6))
     assert single_support_options(adjust, 0.4) is None
     # 0.35 s into a 0.7 s single support: touch-down no sooner than 0.2 s from now (nor a 0.4 s single support).
@@ -231,8 +237,8 @@ def test_the_auto_connection_keeps_its_uniform_timing():
 
 @pytest.mark.parametrize(
     ("options", "match"),
-    [({"durations": 1}, "durations"), ({"min_single_support": 0.0}, "min_single_support"),
-     ({"time_cost": -1.0}, "time_cost"), ({"adapt_timing": 1}, "adapt_timing")],
+    [({"durations": 1}, "durations"), ({"limits": SteppingLimits}, "limits"), ({"time_cost": -1.0}, "time_cost"),
+     ({"adapt_timing": 1}, "adapt_timing"), ({"required_margin": -0.1}, "required_margin")],
 )  # fmt: skip
 def test_bad_timing_settings_are_refused_naming_the_key(options, match):
     with pytest.raises(ValueError, match=f"step_adjustment.{match}"):

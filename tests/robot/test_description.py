@@ -195,7 +195,7 @@ def test_step_limits_come_from_the_stepping_table():
     for robot in (talos, g1):
         assert robot.stepping.min_width > 2.0 * robot.sole.inner
     adjust = talos.stepping.adjustment(talos.sole, adapt_timing=True)
-    assert adjust.sole == talos.sole and adjust.max_length == 0.29 and adjust.min_single_support == 0.5
+    assert adjust.sole == talos.sole and adjust.limits.max_length == 0.29 and adjust.limits.min_single_support == 0.5
     assert adjust.adapt_timing
 
 

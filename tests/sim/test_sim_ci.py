@@ -14,10 +14,10 @@ pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import ControllerOptions
-from rtgait.core.pendulum.loop import CONTROLLERS
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
+from rtgait.core.push import Push
 from rtgait.io.sim_run import simulate
 from rtgait.scenario.loading import load_scenario
-from rtgait.sim.contact import Push
 from rtgait.sim.loop import LoopOptions
 
 ROBOTS = ("talos", "g1")
@@ -123,7 +123,7 @@ def test_bad_input_is_refused_before_any_physics(robots):
         simulate(scenario, model, sim=sim, push=Push(1.0, 0.1, (1e6, 0.0, 0.0)))  # 10^5 N s on 90 kg
     with pytest.raises(ValueError, match="longer than the control period"):
         simulate(scenario, model, control_dt=0.001, physics_dt=0.002)
-    assert set(CONTROLLERS) == {"open-loop", "stabilized", "adaptive"}
+    assert set(CONTROLLER_LEVELS) == {"open-loop", "stabilized", "adaptive"}
 
 
 def test_talos_walks_sideways_without_its_body_rising(robots):

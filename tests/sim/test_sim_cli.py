@@ -73,8 +73,8 @@ def no_physics(monkeypatch: pytest.MonkeyPatch) -> None:
     def simulated(*args: object, **kwargs: object) -> None:
         raise AssertionError("the simulation started before the input was refused")
 
-    monkeypatch.setattr(run, "run_closed_loop", simulated)
-    monkeypatch.setattr(guided, "run_closed_loop", simulated)
+    monkeypatch.setattr(run, "run_sim_loop", simulated)
+    monkeypatch.setattr(guided, "run_sim_loop", simulated)
 
 
 def tall_talos(folder: Path) -> Path:
@@ -198,9 +198,9 @@ def test_simulate_writes_nothing_outside_out_and_reports_mujocos_warnings(
     # A 10^12 N shove makes the physics blow up at once: MuJoCo warns (and the robot falls), in a tenth of a second.
     # Such a push is refused as beyond physical sense (test_bad_input_is_one_line_and_no_output): not here, where
     # it is the way to make MuJoCo warn.
-    import rtgait.sim.contact
+    import rtgait.core.push
 
-    monkeypatch.setattr(rtgait.sim.contact, "PUSH_SPEED_LIMIT", float("inf"))
+    monkeypatch.setattr(rtgait.core.push, "PUSH_SPEED_LIMIT", float("inf"))
     args = ["simulate", str(scenario), "--out", "out", "--push", "0.1,0.01,1e12,0", "--no-figures"]
     assert main(args) == 0
     assert "warnings    MuJoCo: Nan, Inf or huge value in QACC" in capsys.readouterr().out
@@ -278,3 +278,43 @@ def test_zmp_sim_in_any_format_on_the_walks_clock_with_its_error_measures(
     with open(out / "sim.csv", encoding="utf-8") as stream:
         rows = list(csv.DictReader(stream))
     assert float(rows[0]["t"]) == pytest.approx(-1.5) and min(abs(float(r["t"])) for r in rows) < 1e-9
+
+
+class _LoopStartedError(Exception):
+    """The closed loop was about to start: the test has what it came for."""
+
+
+def test_the_control_tables_reach_the_walking_controller(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, write_scenario
+) -> None:
+    """robot < scenario < --control, key by key, into the controller the MuJoCo loop runs."""
+    import rtgait.sim.run as run
+
+    started = []
+
+    def start(sim: object, controller: object, *args: object, **kwargs: object) -> None:
+        started.append(controller)
+        raise _LoopStartedError
+
+    monkeypatch.setattr(run, "run_sim_loop", start)
+    talos = (Path(__file__).parents[2] / "rtgait" / "robots" / "talos.toml").read_text(encoding="utf-8")
+    robot = tmp_path / "robot.toml"
+    robot.write_text(talos + "\n[control]\nlate_grace = 0.02\n[control.dcm]\nk_p = 1.0\nk_i = 0.5\n", "utf-8")
+    scenario = write_scenario(name="tuned", connection="quasi-real-time", single_support=0.7, double_support=0.1,
+                              steps=2, step_length=0.08, short_ends=True)  # fmt: skip
+    scenario.write_text(scenario.read_text("utf-8") + "[control.dcm]\nk_p = 2.5\n[control.foot]\nmax_height = 0.02\n")
+    control = tmp_path / "gains.toml"
+    control.write_text("[control.dcm]\nk_p = 4.0\n", "utf-8")
+    args = ["simulate", str(scenario), "--robot", str(robot), "--no-figures", "--out", str(tmp_path / "out")]
+    for extra, k_p in (([], 2.5), (["--control", str(control)], 4.0)):
+        with pytest.raises(_LoopStartedError):
+            main([*args, *extra])
+        controller = started.pop()
+        assert controller.feedback.gains.k_p == k_p and controller.feedback.gains.k_i == 0.5
+        assert controller.foot.gains.max_height == 0.02 and controller.options.late_grace == 0.02
+    # The library's simulate() applies the robot's and the scenario's tables too (a sweep's worker calls it).
+    from rtgait.scenario.loading import load_scenario
+
+    with pytest.raises(_LoopStartedError):
+        run.simulate(load_scenario(scenario), str(robot))
+    assert started.pop().feedback.gains.k_p == 2.5

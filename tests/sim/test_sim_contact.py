@@ -14,7 +14,7 @@ from rtgait.core.geometry.footsteps import Stride  # noqa: E402
 from rtgait.core.planner.online import OnlinePlanner  # noqa: E402
 from rtgait.io.sim_run import simulate  # noqa: E402
 from rtgait.robot.motion import robot_scenario  # noqa: E402
-from rtgait.sim.loop import LoopOptions, run_closed_loop  # noqa: E402
+from rtgait.sim.loop import LoopOptions, run_sim_loop  # noqa: E402
 from rtgait.sim.model import SimConfig, build_sim_model  # noqa: E402
 
 
@@ -48,7 +48,7 @@ def test_a_step_onto_the_other_foot_makes_the_legs_collide(talos, talos_sim, sho
 
     def walk(width: float):
         planner = OnlinePlanner(config, [Stride(0.0, width), Stride(0.0, config.step_width)])
-        return run_closed_loop(talos_sim, planner, options)
+        return run_sim_loop(talos_sim, planner, options)
 
     normal = walk(config.step_width)
     assert not normal.legs_touched and not normal.fell

@@ -12,7 +12,6 @@ pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import (
-    CONTROLLERS,
     ControllerOptions,
     RobotInfo,
     make_controller,
@@ -21,7 +20,7 @@ from rtgait.control.controller import (
 from rtgait.control.foot_control import split_zmp
 from rtgait.core.geometry.footsteps import SoleRect, Timing
 from rtgait.core.laws.stepping import SteppingLimits
-from rtgait.core.pendulum.loop import controller_config
+from rtgait.core.planner.levels import CONTROLLER_LEVELS, level_config
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
 from rtgait.estimation.state import FootState, Landing, Measurement
 from rtgait.robot.controller_info import robot_info
@@ -69,12 +68,12 @@ def controller(level, steps=3, options=EXACT):
 
 
 def reference(steps=3):
-    planner = OnlinePlanner(controller_config(CONFIG, "open-loop", SOLE), straight_walk(CONFIG, steps, 0.1))
+    planner = OnlinePlanner(level_config(CONFIG, "open-loop", SOLE), straight_walk(CONFIG, steps, 0.1))
     planner.start(0.0)
     return planner
 
 
-@pytest.mark.parametrize("level", CONTROLLERS)
+@pytest.mark.parametrize("level", CONTROLLER_LEVELS)
 def test_on_the_plan_every_level_gives_the_plan(level):
     ctl, plan = controller(level, steps=2), reference(steps=2)
     worst = 0.0
@@ -116,7 +115,7 @@ def test_a_dcm_error_shifts_the_zmp_ahead_and_pulls_the_com_target_back(axis):
     sign = math.copysign(1.0, error[axis])
     # The law: p_cmd = p_ref + (1 + k_p / w) e, so the ZMP goes out along the error; the COM admittance moves the COM
     # target against it (a COM accelerated backward moves the ZMP forward, p = c - c''/w^2).
-    gains = ctl.options.gains
+    gains = ctl.options.dcm
     expected = (1.0 + gains.k_p / ctl.planner.w) * error[axis]
     assert sign * (out.zmp_command[axis] - values[9 + axis]) >= abs(expected)
     assert sign * out.com_offset[axis] < -1e-4
@@ -287,10 +286,10 @@ def test_stabilized_logs_landings_without_touching_the_plan():
 
 def test_step_limits_scale_with_the_robot_and_keep_the_soles_apart():
     adjust = step_limits(INFO)
-    assert adjust.max_length == pytest.approx(0.35 * 0.84 / 0.8)
-    assert adjust.min_width >= 2 * SOLE.inner + 0.02 and adjust.max_width > adjust.min_width
+    assert adjust.limits.max_length == pytest.approx(0.35 * 0.84 / 0.8)
+    assert adjust.limits.min_width >= 2 * SOLE.inner + 0.02 and adjust.limits.max_width > adjust.limits.min_width
     small = step_limits(RobotInfo(30.0, SoleRect(0.08, 0.05, 0.04, 0.04), 0.4))
-    assert small.max_length == pytest.approx(0.175) and small.min_width == pytest.approx(0.1)
+    assert small.limits.max_length == pytest.approx(0.175) and small.limits.min_width == pytest.approx(0.1)
     # The core's closed loop ("always"): every plan from the measured state, step adjustment after each.
     timed = dataclasses.replace(adjust, adapt_timing=True)  # ControllerOptions' default adds step timing adaptation
     ctl = controller("adaptive", options=ControllerOptions(measured_replanning="always"))
@@ -306,7 +305,9 @@ def test_step_limits_scale_with_the_robot_and_keep_the_soles_apart():
 
 LENGTHENING = ControllerOptions(
     measurement_filter=0.0, adapt_timing=True,
-    step_adjustment=dataclasses.replace(step_limits(INFO), max_single_support=1.2),
+    step_adjustment=dataclasses.replace(
+        step_limits(INFO), limits=dataclasses.replace(step_limits(INFO).limits, max_single_support=1.2)
+    ),
 )  # fmt: skip
 
 
@@ -351,17 +352,16 @@ def test_step_limits_come_from_the_robot_description(talos):
     info = RobotInfo(90.0, SOLE, 0.84, limits)
     ctl = make_controller("adaptive", CONFIG, straight_walk(CONFIG, 3, 0.1), SOLE, info, dt=DT)
     adjust = ctl.options.step_adjustment
-    assert (adjust.max_length, adjust.min_width, adjust.max_width) == (0.2, 0.16, 0.3)
-    assert (adjust.max_swing_speed, adjust.min_single_support, adjust.adapt_timing) == (0.9, 0.5, True)
+    assert adjust.limits == limits and adjust.adapt_timing
     assert dataclasses.replace(step_limits(info), adapt_timing=True) == adjust
-    assert step_limits(info, SteppingLimits()).max_length == 0.35
+    assert step_limits(info, SteppingLimits()).limits.max_length == 0.35
     # A loaded robot carries its description's table, also through a sole given apart.
     assert robot_info(talos).stepping == talos.description.stepping is not None
     other = SoleRect(0.1, 0.1, 0.06, 0.06)
     options = ControllerOptions(adapt_timing=True)
     ctl = make_controller("adaptive", CONFIG, None, other, robot_info(talos), options=options)
     adjust = ctl.options.step_adjustment
-    assert adjust.max_length == talos.description.stepping.max_length and adjust.sole == other
+    assert adjust.limits.max_length == talos.description.stepping.max_length and adjust.sole == other
     assert adjust.adapt_timing
     with pytest.raises(ValueError, match="adapt_timing"):
         ControllerOptions(adapt_timing=1)

@@ -57,7 +57,7 @@ def pulled(talos, talos_sim, shorten):
     pytest.importorskip("mujoco")
     from rtgait.control.controller import make_controller
     from rtgait.robot.motion import robot_scenario
-    from rtgait.sim.loop import LoopOptions, run_closed_loop
+    from rtgait.sim.loop import LoopOptions, run_sim_loop
 
     walk = robot_scenario(shorten("fig8", 4), talos)
     base = talos_sim.base_body
@@ -75,7 +75,7 @@ def pulled(talos, talos_sim, shorten):
             if told:
                 level.set_external_force(force, height)
 
-        result = run_closed_loop(talos_sim, level, LoopOptions(on_tick=pull))
+        result = run_sim_loop(talos_sim, level, LoopOptions(on_tick=pull))
         runs[told] = (result, float(np.mean(heights)) * force[0] / (talos.mass * G))  # the pull's ZMP shift (m)
     return runs
 

@@ -36,8 +36,8 @@ PUSH_START, PUSH_DURATION, PUSH_FORCE = 1.0, 0.1, (50.0, 0.0, 0.0)
 @pytest.fixture(scope="module")
 def logged(talos: Any, talos_sim: Any, tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Path]:
     """The short walk in memory, and the folder its outputs were written to."""
+    from rtgait.core.push import Push
     from rtgait.io.sim_run import simulate, write_sim_outputs
-    from rtgait.sim.loop import Push
 
     folder = tmp_path_factory.mktemp("logged")
     path = folder / "short.toml"

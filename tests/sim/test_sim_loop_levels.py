@@ -15,7 +15,7 @@ pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import make_controller
 from rtgait.control.level_fade import LEVEL_FADE, fade_weight
-from rtgait.core.pendulum.loop import CONTROLLERS
+from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.motion import robot_scenario
 from rtgait.sim.loop import ClosedLoop, LoopOptions
@@ -31,7 +31,7 @@ def made(level, walk, talos, dt=0.001):
     return make_controller(level, walk.planner_config(), walk.strides(), walk.sole, robot_info(talos), dt=dt)
 
 
-@pytest.mark.parametrize(("start", "to"), list(itertools.permutations(CONTROLLERS, 2)))
+@pytest.mark.parametrize(("start", "to"), list(itertools.permutations(CONTROLLER_LEVELS, 2)))
 def test_a_switch_gives_the_settings_make_controller_gives(talos, shorten, start, to):
     walk = walk_of(talos, shorten)
     controller = made(start, walk, talos)
@@ -94,7 +94,7 @@ def test_the_offsets_fade_out_and_talos_walks_through_every_level(talos, talos_s
     # the COM offset is one tick of the admittance d' = -A (p_cmd - p_measured), |d| <= A dt |p_cmd - p_measured|,
     # the ZMP error under 0.4 m on these feet.
     k1 = at["stabilized"]
-    admittance = controller.options.gains.com_admittance
+    admittance = controller.options.dcm.com_admittance
     assert 0.0 < np.hypot(*targets[k1].com_offset) <= admittance * talos_sim.control_dt * 0.4
     assert np.abs(np.array(targets[k1].offsets)).max() < 1e-4
     assert np.hypot(*targets[at["adaptive"] - 1].com_offset) > np.hypot(*targets[k1].com_offset)

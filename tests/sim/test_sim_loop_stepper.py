@@ -1,5 +1,5 @@
 """The closed loop as a stepper (:class:`rtgait.sim.loop.ClosedLoop`): stepped by hand it gives exactly what
-``run_closed_loop`` gives; a ring record keeps the last ticks of the whole record, bounded however long the run;
+``run_sim_loop`` gives; a ring record keeps the last ticks of the whole record, bounded however long the run;
 a push given while walking acts for its duration even when the applied forces are cleared between ticks."""
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import make_controller
 from rtgait.core.analysis.rollout import ScheduledChange
+from rtgait.core.push import Push
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.motion import robot_scenario
-from rtgait.sim.contact import Push
-from rtgait.sim.loop import ClosedLoop, LoopOptions, SimResult, run_closed_loop
+from rtgait.sim.loop import ClosedLoop, LoopOptions, SimResult, run_sim_loop
 
 QUICK = LoopOptions(start_ramp=0.5, start_hold=0.3, after=0.3)
 # Fields that are not the run's outcome: the clock, and the Pinocchio model (an object, the same one each time).
@@ -46,11 +46,11 @@ def assert_same(a: SimResult, b: SimResult) -> None:
             assert repr(x) == repr(y), field.name
 
 
-def test_the_stepper_driven_by_hand_gives_run_closed_loop_s_result(talos, talos_sim, shorten):
+def test_the_stepper_driven_by_hand_gives_run_sim_loop_s_result(talos, talos_sim, shorten):
     """A short Talos walk with a footstep change and a push: array for array the same."""
     level, walk = controller(talos, talos_sim, shorten)
     options = dataclasses.replace(QUICK, changes=walk.changes, pushes=(Push(1.2, 0.1, (0.0, 40.0, 0.0)),))
-    whole = run_closed_loop(talos_sim, level, options)
+    whole = run_sim_loop(talos_sim, level, options)
     assert not whole.fell and whole.steps_completed == whole.steps_planned >= 3
     assert whole.events and whole.replans > 1, "the walk exercised the adaptive level"
 
@@ -77,7 +77,7 @@ def test_the_stepper_driven_by_hand_gives_run_closed_loop_s_result(talos, talos_
 def test_a_ring_record_keeps_the_last_ticks_of_the_whole_record(talos, talos_sim, shorten):
     """keep=0.5 s: the result is the last 500 ticks of the whole record (and the replay frames among them)."""
     level, _ = controller(talos, talos_sim, shorten, level="stabilized", steps=2)
-    whole = run_closed_loop(talos_sim, level, QUICK)
+    whole = run_sim_loop(talos_sim, level, QUICK)
     level, _ = controller(talos, talos_sim, shorten, level="stabilized", steps=2)
     loop = ClosedLoop(talos_sim, level, QUICK, keep=0.5)
     while not loop.done:

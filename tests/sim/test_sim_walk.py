@@ -15,9 +15,10 @@ pytest.importorskip("pinocchio")
 
 from rtgait.core.analysis.rollout import ScheduledChange, rollout
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.core.push import Push
 from rtgait.io.sim_run import SIM_CSV_COLUMNS, sim_csv_columns, simulate, write_sim_outputs
 from rtgait.robot.motion import robot_scenario
-from rtgait.sim.loop import LoopOptions, Push, run_closed_loop
+from rtgait.sim.loop import LoopOptions, run_sim_loop
 
 
 def planned(scenario, robot):
@@ -150,4 +151,4 @@ def test_bad_input(talos, talos_sim, shorten):
         simulate(shorten("fig8", 1), talos, sim=talos_sim, push=Push(0.1, 0.1, (1.0, 0.0, 0.0), body="nope"))
     planner = OnlinePlanner(robot_scenario(shorten("fig8", 1), talos).planner_config(), None)
     with pytest.raises(ValueError, match="stop_after_steps"):
-        run_closed_loop(talos_sim, planner)
+        run_sim_loop(talos_sim, planner)

@@ -11,6 +11,13 @@ from scipy.spatial import ConvexHull
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
 
+SUPPORT_CODES = {"double": 0, "left": 1, "right": 2}
+"""The planner's support (which feet are on the ground: both, the left one, the right one) as the integer code that
+per-tick records store (the pendulum's and the MuJoCo loop's results, their logs)."""
+
+SUPPORT_NAMES = tuple(sorted(SUPPORT_CODES, key=SUPPORT_CODES.__getitem__))
+"""The support of each code of :data:`SUPPORT_CODES`, by code."""
+
 
 def support_polygon(feet: list[Footstep], sole: SoleRect) -> np.ndarray:
     """Counter-clockwise vertices ``(k, 2)`` (m) of the convex hull of the soles of the feet in contact."""

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -46,86 +46,6 @@ ON_FAILURE = ("continue", "stop", "keep")
 """What step adjustment does when no candidate reaches the required margin (:class:`StepAdjustment`)."""
 
 
-@dataclass(frozen=True)
-class StepAdjustment:
-    """Limits and preferences of step adjustment (``PlannerConfig(step_adjustment=...)``).
-
-    Attributes:
-        sole: the sole rectangle, for the support polygons (m).
-        max_length: forward and backward reach of a landing from the stance foot, along its heading (m).
-        min_width, max_width: least and largest lateral distance from the stance foot to the landing (m): the
-            feet never cross.
-        max_swing_speed: largest average horizontal speed of the swing foot over the time left (m/s).
-        min_time_to_touchdown: no landing changes closer than this to touch-down (s).
-        required_margin: ZMP margin a plan must keep to need no adjustment, and that a candidate must reach (m).
-        grid: candidates per axis of the stride box (``grid**2`` in all).
-        samples: sample times of the free segment at which the margin is checked.
-        on_failure: when no candidate reaches ``required_margin``: ``"continue"`` (default) takes the best one and
-            walks on, ``"stop"`` takes it and stops the walk after that step (an emergency sequence: capture step,
-            then stop), ``"keep"`` keeps the walk as planned (no landing or timing moves; the plan goes on from the
-            planned state).
-        adapt_timing: also choose the single-support duration of the step being adjusted (Morisawa et al. 2006):
-            ``durations`` candidates evenly from the shortest allowed to the nominal one (nominal included), and
-            with ``max_single_support`` as many again up to the longest, so ``grid**2 * durations`` (or
-            ``grid**2 * (2 durations - 1)``) candidates in all. Off by default (the decisions are then those of
-            landings alone). Not with ``connection="auto"`` (it needs one timing for every step): ignored there.
-        durations: candidate single-support durations per decision on each side of the nominal one, nominal
-            included (2..16).
-        min_single_support: shortest single support a step may be given (s). A swinging foot also never lands
-            sooner than ``min_time_to_touchdown`` from the decision.
-        max_single_support: longest single support a step may be given (s), or ``None`` (the default): steps are
-            only shortened. A longer single support is how the ankle catches a push toward the stance foot's
-            outside, which no landing can (the swing foot lands on the other side): the centre of pressure at the
-            sole's outer edge has longer to bring the DCM back before the weight moves to the other foot.
-        time_cost: how many metres of landing departure one second of timing change weighs (m/s): the departure
-            is ``|delta|^2 + (time_cost * dT)^2``. 0.5 m/s, about a walking speed: shortening a step by ``dT``
-            moves the body about as much as landing ``0.5 dT`` elsewhere.
-    """
-
-    sole: SoleRect
-    max_length: float = 0.35
-    min_width: float = 0.12
-    max_width: float = 0.45
-    max_swing_speed: float = 1.5
-    min_time_to_touchdown: float = 0.2
-    required_margin: float = 0.005
-    grid: int = 32
-    samples: int = 16
-    on_failure: str = "continue"
-    adapt_timing: bool = False
-    durations: int = 4
-    min_single_support: float = 0.4
-    time_cost: float = 0.5
-    max_single_support: float | None = None
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.sole, SoleRect):
-            raise ValueError("step_adjustment.sole must be a SoleRect")
-        for name, high in (("max_length", 2.0), ("min_width", 2.0), ("max_width", 2.0), ("max_swing_speed", 20.0)):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 < value <= high):
-                raise ValueError(f"step_adjustment.{name} must be within (0, {high:g}], got {value}")
-        if self.min_width >= self.max_width:
-            raise ValueError(f"step_adjustment.min_width ({self.min_width}) must be < max_width ({self.max_width})")
-        for name in ("min_time_to_touchdown", "required_margin"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 <= value <= 1.0):
-                raise ValueError(f"step_adjustment.{name} must be within [0, 1], got {value}")
-        if self.on_failure not in ON_FAILURE:
-            raise ValueError(f"step_adjustment.on_failure must be one of {ON_FAILURE}, got {self.on_failure!r}")
-        if not isinstance(self.adapt_timing, bool):
-            raise ValueError(f"step_adjustment.adapt_timing must be true or false, got {self.adapt_timing!r}")
-        for name, low, high in (("min_single_support", 0.05, 5.0), ("time_cost", 0.0, 100.0)):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and low <= value <= high):
-                raise ValueError(f"step_adjustment.{name} must be within [{low:g}, {high:g}], got {value!r}")
-        _check_longest(self.max_single_support, self.min_single_support, "step_adjustment")
-        for name, low, high in (("grid", 2, 200), ("samples", 2, 200), ("durations", 2, 16)):
-            value = getattr(self, name)
-            if not (isinstance(value, int) and not isinstance(value, bool) and low <= value <= high):
-                raise ValueError(f"step_adjustment.{name} must be an integer in {low}..{high}, got {value!r}")
-
-
 STEPPING_KEYS = (
     "max_length", "min_width", "max_width", "max_swing_speed", "min_time_to_touchdown", "min_single_support",
     "max_single_support",
@@ -139,17 +59,21 @@ class SteppingLimits:
     """What a robot's legs allow step adjustment (a robot description's ``[stepping]`` table; SI units).
 
     Attributes:
-        max_length: forward and backward reach of a landing from the stance foot (m).
+        max_length: forward and backward reach of a landing from the stance foot, along its heading (m).
         min_width: least lateral distance between the two foot frames (m): the feet never cross, and with soles
             ``inner`` wide toward each other their inner edges stay ``min_width - 2 inner`` apart.
         max_width: largest lateral distance between the foot frames (m).
-        max_swing_speed: largest average horizontal speed of the swing foot (m/s).
+        max_swing_speed: largest average horizontal speed of the swing foot over the time left (m/s).
         min_time_to_touchdown: no landing or timing changes closer than this to touch-down (s).
-        min_single_support: shortest single support step timing adaptation may give a step (s).
-        max_single_support: longest single support step timing adaptation may give a step (s), or ``None``: it
-            only shortens steps.
+        min_single_support: shortest single support step timing adaptation may give a step (s). A swinging foot
+            also never lands sooner than ``min_time_to_touchdown`` from the decision.
+        max_single_support: longest single support step timing adaptation may give a step (s), or ``None`` (the
+            default): steps are only shortened. A longer single support is how the ankle catches a push toward the
+            stance foot's outside, which no landing can (the swing foot lands on the other side): the centre of
+            pressure at the sole's outer edge has longer to bring the DCM back before the weight moves to the other
+            foot.
 
-    The defaults are :class:`StepAdjustment`'s (an HRP-2-like robot, COM 0.8 m high).
+    The defaults suit an HRP-2-like robot, COM 0.8 m high.
     """
 
     max_length: float = 0.35
@@ -185,7 +109,64 @@ class SteppingLimits:
 
     def adjustment(self, sole: SoleRect, **options) -> StepAdjustment:
         """The :class:`StepAdjustment` with these limits for ``sole`` (its other settings from ``options``)."""
-        return StepAdjustment(sole, **{name: getattr(self, name) for name in STEPPING_KEYS}, **options)
+        return StepAdjustment(sole, self, **options)
+
+
+@dataclass(frozen=True)
+class StepAdjustment:
+    """Limits and preferences of step adjustment (``PlannerConfig(step_adjustment=...)``).
+
+    Attributes:
+        sole: the sole rectangle, for the support polygons (m).
+        limits: what the legs allow: the stride box, the swing speed, the last moment a landing may change and the
+            single-support durations timing adaptation may give (:class:`SteppingLimits`).
+        required_margin: ZMP margin a plan must keep to need no adjustment, and that a candidate must reach (m).
+        grid: candidates per axis of the stride box (``grid**2`` in all).
+        samples: sample times of the free segment at which the margin is checked.
+        on_failure: when no candidate reaches ``required_margin``: ``"continue"`` takes the best one and walks on
+            (the default: at the pendulum level it recovers more, see ``docs/closed_loop.md``), ``"stop"`` takes it
+            and stops the walk after that step (an emergency sequence: capture step, then stop), ``"keep"`` keeps
+            the walk as planned (no landing or timing moves; the plan goes on from the planned state).
+        adapt_timing: also choose the single-support duration of the step being adjusted (Morisawa et al. 2006):
+            ``durations`` candidates evenly from the shortest allowed to the nominal one (nominal included), and
+            with ``limits.max_single_support`` as many again up to the longest, so ``grid**2 * durations`` (or
+            ``grid**2 * (2 durations - 1)``) candidates in all. Off by default (the decisions are then those of
+            landings alone). Not with ``connection="auto"`` (it needs one timing for every step): ignored there.
+        durations: candidate single-support durations per decision on each side of the nominal one, nominal
+            included (2..16).
+        time_cost: how many metres of landing departure one second of timing change weighs (m/s): the departure
+            is ``|delta|^2 + (time_cost * dT)^2``. 0.5 m/s, about a walking speed: shortening a step by ``dT``
+            moves the body about as much as landing ``0.5 dT`` elsewhere.
+    """
+
+    sole: SoleRect
+    limits: SteppingLimits = field(default_factory=SteppingLimits)
+    required_margin: float = 0.005
+    grid: int = 32
+    samples: int = 16
+    on_failure: str = "continue"
+    adapt_timing: bool = False
+    durations: int = 4
+    time_cost: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.sole, SoleRect):
+            raise ValueError("step_adjustment.sole must be a SoleRect")
+        if not isinstance(self.limits, SteppingLimits):
+            raise ValueError(f"step_adjustment.limits must be a SteppingLimits, got {type(self.limits).__name__}")
+        if not (math.isfinite(self.required_margin) and 0.0 <= self.required_margin <= 1.0):
+            raise ValueError(f"step_adjustment.required_margin must be within [0, 1], got {self.required_margin}")
+        if self.on_failure not in ON_FAILURE:
+            raise ValueError(f"step_adjustment.on_failure must be one of {ON_FAILURE}, got {self.on_failure!r}")
+        if not isinstance(self.adapt_timing, bool):
+            raise ValueError(f"step_adjustment.adapt_timing must be true or false, got {self.adapt_timing!r}")
+        value = self.time_cost
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and 0.0 <= value <= 100.0):
+            raise ValueError(f"step_adjustment.time_cost must be within [0, 100], got {value!r}")
+        for name, low, high in (("grid", 2, 200), ("samples", 2, 200), ("durations", 2, 16)):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and low <= value <= high):
+                raise ValueError(f"step_adjustment.{name} must be an integer in {low}..{high}, got {value!r}")
 
 
 def _check_longest(longest: float | None, shortest: float, prefix: str) -> None:
@@ -236,7 +217,8 @@ def candidate_landings(adjust: StepAdjustment, stance: Footstep, nominal: Footst
     """Grid of landing points ``(grid**2, 2)`` (m) in the stride box around ``stance``, oriented along the mean
     heading of the stance and the nominal landing (as :func:`~rtgait.core.geometry.footsteps.place_step` measures a
     stride)."""
-    local = _stride_box_grid(adjust.max_length, adjust.min_width, adjust.max_width, adjust.grid, nominal.side)
+    limits = adjust.limits
+    local = _stride_box_grid(limits.max_length, limits.min_width, limits.max_width, adjust.grid, nominal.side)
     heading = mean_heading(stance.yaw, nominal.yaw)
     c, s = math.cos(heading), math.sin(heading)
     return local @ np.array([[c, s], [-s, c]]) + np.array([stance.x, stance.y])
@@ -285,7 +267,7 @@ def choose_step(
     Returns ``None`` when no candidate can be reached in time.
     """
     distance = np.hypot(candidates[:, 0] - swing_from[0], candidates[:, 1] - swing_from[1])
-    reachable = distance[None, :] <= adjust.max_swing_speed * np.asarray(time_left)[:, None]  # (D, C)
+    reachable = distance[None, :] <= adjust.limits.max_swing_speed * np.asarray(time_left)[:, None]  # (D, C)
     if not reachable.any():
         return None
     delta = candidates - np.asarray(nominal)
@@ -329,15 +311,17 @@ def single_support_options(adjust: StepAdjustment, nominal: float) -> tuple[floa
     evenly spaced from ``min_single_support`` to the nominal one and, with ``max_single_support``, as many from the
     nominal one to it; the nominal one left out (it is the plan as made); rounded to 1 ns (they key the operator
     cache). ``None`` if the step can neither be shortened nor lengthened."""
-    return _both_sides(adjust, adjust.min_single_support, nominal, adjust.max_single_support)
+    limits = adjust.limits
+    return _both_sides(adjust, limits.min_single_support, nominal, limits.max_single_support)
 
 
 def remainder_options(adjust: StepAdjustment, elapsed: float, remainder: float) -> tuple[float, ...] | None:
     """Candidate rests (s) of a single support ``elapsed`` s old with ``remainder`` s to go: from the latest of
     ``min_time_to_touchdown`` and ``min_single_support - elapsed`` up to the nominal rest and, with
     ``max_single_support``, on to ``max_single_support - elapsed``, as in :func:`single_support_options`."""
-    low = max(adjust.min_time_to_touchdown, adjust.min_single_support - elapsed)
-    high = None if adjust.max_single_support is None else adjust.max_single_support - elapsed
+    limits = adjust.limits
+    low = max(limits.min_time_to_touchdown, limits.min_single_support - elapsed)
+    high = None if limits.max_single_support is None else limits.max_single_support - elapsed
     return _both_sides(adjust, low, remainder, high)
 
 
@@ -418,7 +402,7 @@ def propose_landing(
     kind = walk.timeline.kind(q)
     k = (q + 1) // 2 if kind == "single" else q // 2 + 1
     touchdown = phase_start(2 * k)
-    if kind == "single" and touchdown - t < adjust.min_time_to_touchdown:
+    if kind == "single" and touchdown - t < adjust.limits.min_time_to_touchdown:
         k += 1
         touchdown = phase_start(2 * k)
     n = walk.n_steps

@@ -4,13 +4,12 @@ For trying measured-state replanning, DCM feedback and step adjustment without a
 (:class:`~rtgait.core.pendulum.plant.LipmPlant`) is the linear inverted pendulum the planner assumes, so whatever goes
 wrong is the controller's doing (or the pendulum's instability), never a modelling mismatch.
 
-Controller levels (the names the MuJoCo loop uses too; the table in ``docs/closed_loop.md``): ``"open-loop"``
-commands the planned ZMP and replans from its own plan (the paper's assumption of perfect tracking);
-``"stabilized"`` commands the DCM feedback law's ZMP (:class:`~rtgait.core.laws.feedback.DcmFeedback`); ``"adaptive"``
-adds the planner of :func:`controller_config` (every plan from the observed COM state, a replan at once beyond
-``replan_dcm_error``, step adjustment), which the loop calls
-:meth:`~rtgait.core.planner.online.OnlinePlanner.observe` every tick and
-:meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown` at every landing.
+Controller levels (the names the MuJoCo loop uses too; the table in ``docs/closed_loop.md``): ``"open-loop"`` commands
+the planned ZMP and replans from its own plan (the paper's assumption of perfect tracking); ``"stabilized"`` commands
+the DCM feedback law's ZMP (:class:`~rtgait.core.laws.feedback.DcmFeedback`); ``"adaptive"`` adds the planner of
+:func:`~rtgait.core.planner.levels.level_config` (every plan from the observed COM state, a replan at once beyond
+``replan_dcm_error``, step adjustment), which the loop calls :meth:`~rtgait.core.planner.online.OnlinePlanner.observe`
+every tick and :meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown` at every landing.
 
 One tick, from ``t`` to ``t + dt`` (``dt`` the control period, 1 ms by default): measure the plant at ``t`` (and
 ``observe`` it); the planner's sample at ``t`` and its support polygon (the convex hull of the soles on the ground,
@@ -43,7 +42,6 @@ test on Python floats; numpy only for the plant's state and, when the feet on th
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -52,27 +50,22 @@ import numpy as np
 
 from rtgait.core.analysis.rollout import ScheduledChange
 from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride
-from rtgait.core.geometry.support import support_polygon
+from rtgait.core.geometry.support import SUPPORT_CODES, support_polygon
 from rtgait.core.laws.feedback import DcmFeedback, DcmFeedbackGains
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.limits import MAX_ROLLOUT_TICKS, MIN_DT
-from rtgait.core.pendulum.plant import LipmPlant, Push
-from rtgait.core.pendulum.result import CONTROLLERS, SUPPORT_CODES, ClosedLoopResult, Controller
+from rtgait.core.pendulum.plant import LipmPlant
+from rtgait.core.pendulum.result import ClosedLoopResult
 from rtgait.core.planner.config import PlannerConfig
+from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR, ControllerLevel, check_level, level_config
 from rtgait.core.planner.online import OnlinePlanner, PlanRecord
+from rtgait.core.push import Push
 
 DEFAULT_DT = 0.001
 """Control period (s): 1 kHz, the rate of the MuJoCo loop and of most humanoid controllers."""
 
 DEFAULT_MASS = 57.0
 """Mass of the point mass (kg) when none is given: an HRP-2-like humanoid (58 kg with batteries)."""
-
-DEFAULT_REPLAN_DCM_ERROR = 0.025
-"""DCM error (m) beyond which the ``"adaptive"`` planner replans at once from the measured state.
-
-The DCM feedback alone keeps the error of an unpushed walk at a few millimetres (round-off and the tick's hold), so
-25 mm means a disturbance; it is some 20 % of the sole's half length (0.115 m for the HRP-2-like sole), early enough
-for a step adjustment to still have most of a swing to act on."""
 
 DEFAULT_END_MARGIN = 0.5
 """Time (s) the loop runs past the walk's planned end, so that a mass still moving then is seen falling or not."""
@@ -84,34 +77,6 @@ _COLUMNS = (
     "zmp_reference_x", "zmp_reference_y", "zmp_command_x", "zmp_command_y", "zmp_real_x", "zmp_real_y",
     "cog_x", "cog_y", "cog_vx", "cog_vy", "support", "phase", "saturated",
 )  # fmt: skip
-
-
-def controller_config(
-    base: PlannerConfig,
-    controller: Controller,
-    sole: SoleRect,
-    *,
-    replan_dcm_error: float = DEFAULT_REPLAN_DCM_ERROR,
-    step_adjustment: StepAdjustment | None = None,
-) -> PlannerConfig:
-    """The planner configuration of a controller level, made from ``base`` with :func:`dataclasses.replace`.
-
-    ``"open-loop"`` and ``"stabilized"``: ``feedback="planned"``, no DCM-error replanning, no step adjustment
-    (whatever ``base`` says: the levels must differ only by what the loop adds). ``"adaptive"``:
-    ``feedback="measured"``, ``replan_dcm_error`` (m) and ``step_adjustment`` (default: ``StepAdjustment(sole=sole)``
-    with its default limits: landings within 0.35 m forward or back and 0.12-0.45 m sideways of the stance foot,
-    swing at most 1.5 m/s on average, no change in the last 0.2 s before touch-down).
-    """
-    _check_controller(controller)
-    if controller != "adaptive":
-        return dataclasses.replace(base, feedback="planned", replan_dcm_error=None, step_adjustment=None)
-    adjust = step_adjustment if step_adjustment is not None else StepAdjustment(sole=sole)
-    return dataclasses.replace(base, feedback="measured", replan_dcm_error=replan_dcm_error, step_adjustment=adjust)
-
-
-def _check_controller(controller: str) -> None:
-    if controller not in CONTROLLERS:
-        raise ValueError(f"controller must be one of {', '.join(CONTROLLERS)}, got {controller!r}")
 
 
 class _SupportCache:
@@ -146,12 +111,12 @@ class _SupportCache:
         return self.polygon
 
 
-def run_closed_loop(
+def run_pendulum_loop(
     config: PlannerConfig,
     strides: Sequence[Stride] | None,
     sole: SoleRect,
     *,
-    controller: Controller = "adaptive",
+    controller: ControllerLevel = "adaptive",
     mass: float = DEFAULT_MASS,
     dt: float = DEFAULT_DT,
     pushes: Iterable[Push] = (),
@@ -167,7 +132,8 @@ def run_closed_loop(
     """Walk ``strides`` with the planner, the controller ``controller`` and a point-mass plant, from t = 0.
 
     Args:
-        config: the planner's base configuration; the level's is made from it by :func:`controller_config`.
+        config: the planner's base configuration; the level's is made from it by
+            :func:`~rtgait.core.planner.levels.level_config`.
         strides: the walk (:class:`~rtgait.core.geometry.footsteps.Stride` per step, the closing one included), or
         ``None`` for a walk by velocity command (then ``duration`` is needed).
         sole: the sole rectangle (m), for the support polygons and the step adjustment.
@@ -178,7 +144,8 @@ def run_closed_loop(
         changes: footstep changes, each handed to the planner at its connection mode's deadline (as
             :func:`~rtgait.core.analysis.rollout.rollout` does).
         gains: of the DCM feedback (``"stabilized"``, ``"adaptive"``); default :class:`DcmFeedbackGains`.
-        replan_dcm_error, step_adjustment: the ``"adaptive"`` planner's settings (:func:`controller_config`).
+        replan_dcm_error, step_adjustment: the ``"adaptive"`` planner's settings
+            (:func:`~rtgait.core.planner.levels.level_config`).
         fall_distance: COM distance from the support polygon at which the mass counts as fallen (m); default the
             plant's, ``z_c tan 25 deg``.
         duration: run this long (s) instead of until ``end_margin`` after the walk's end.
@@ -188,7 +155,7 @@ def run_closed_loop(
     Returns:
         :class:`ClosedLoopResult`.
     """
-    _check_controller(controller)
+    check_level(controller)
     if not (math.isfinite(dt) and dt >= MIN_DT):
         raise ValueError(f"dt must be a finite period >= {MIN_DT:g} s, got {dt}")
     shortest = min(config.timing.single_support, config.timing.double_support, config.timing.start, config.timing.end)
@@ -199,7 +166,7 @@ def run_closed_loop(
     if duration is not None and not (math.isfinite(duration) and duration >= 0.0):
         raise ValueError(f"duration must be a finite time >= 0 s, got {duration}")
     planner = OnlinePlanner(
-        controller_config(config, controller, sole, replan_dcm_error=replan_dcm_error, step_adjustment=step_adjustment),
+        level_config(config, controller, sole, replan_dcm_error=replan_dcm_error, step_adjustment=step_adjustment),
         strides,
     )
     adaptive = controller == "adaptive"
@@ -351,15 +318,4 @@ def run_closed_loop(
     )
 
 
-__all__ = [
-    "CONTROLLERS",
-    "DEFAULT_DT",
-    "DEFAULT_END_MARGIN",
-    "DEFAULT_MASS",
-    "DEFAULT_REPLAN_DCM_ERROR",
-    "SUPPORT_CODES",
-    "ClosedLoopResult",
-    "Controller",
-    "controller_config",
-    "run_closed_loop",
-]
+__all__ = ["DEFAULT_DT", "DEFAULT_END_MARGIN", "DEFAULT_MASS", "ClosedLoopResult", "run_pendulum_loop"]

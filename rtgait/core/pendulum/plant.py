@@ -14,10 +14,10 @@ digital controller applies them). With ``p_eff = p - f / (m w^2)`` constant, ``x
     x(dt)  = x(0) cosh(w dt) + x'(0) sinh(w dt) / w
     x'(dt) = x(0) w sinh(w dt) + x'(0) cosh(w dt)
 
-:class:`Push` windows that begin or end inside a tick split it at their boundaries, each piece integrated in closed
-form, so the delivered impulse is ``force * duration`` to round-off whatever the control period. The DCM
-``xi = c + c' / w`` obeys ``xi' = w (xi - p) + f / (m w)``: a DCM outside the support polygon cannot be brought back
-without a step.
+:class:`~rtgait.core.push.Push` windows that begin or end inside a tick split it at their boundaries, each piece
+integrated in closed form, so the delivered impulse is ``force * duration`` to round-off whatever the control period.
+The DCM ``xi = c + c' / w`` obeys ``xi' = w (xi - p) + f / (m w)``: a DCM outside the support polygon cannot be brought
+back without a step.
 
 *Fallen.* The ground force the LIPM needs, ``m (w^2 (c - p), g)``, leans from the vertical by ``atan(|c - p| / z_c)``,
 at least ``atan(D / z_c)`` for a COM a horizontal distance ``D`` from the support polygon. The plant has fallen when
@@ -39,13 +39,13 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
 from rtgait.core.geometry.polygon import ConvexPolygon, vertex_list
 from rtgait.core.geometry.support import signed_margin
 from rtgait.core.lipm.closed_form import GRAVITY, omega
+from rtgait.core.push import PUSH_SPEED_LIMIT, Push, max_push_impulse
 
 DEFAULT_MAX_LEAN = math.radians(25.0)
 """Lean of the ground force from the vertical beyond which the point mass counts as fallen (rad); module docstring."""
@@ -53,16 +53,6 @@ DEFAULT_MAX_LEAN = math.radians(25.0)
 DEFAULT_REST_SPEED = 0.01
 """COM speed below which the pendulum may count as at rest (m/s): 1-10 % of walking speeds (0.1-1 m/s); with it the
 COM is within ``speed / w`` (3 mm at ``z_c = 0.8 m``) of its DCM."""
-
-PUSH_SPEED_LIMIT = 10.0
-"""Largest push accepted by a plant, as the COM velocity change ``|J| / m`` in units of ``sqrt(g z_c)``.
-
-A push of impulse ``J`` moves the DCM by ``|J| / (m w)``, which is ``PUSH_SPEED_LIMIT * z_c`` at the limit. The
-largest DCM offset from which any number of steps can still recover is below about ``0.5 z_c`` for a humanoid (a step
-shorter than its leg), so the limit is some twenty times beyond any recoverable push: it rejects physical nonsense
-(a collision, a unit error such as N for N s or kg for g) and never a push worth simulating. For a 90 kg robot with
-``z_c = 0.8 m`` it is 2.5 kN s, i.e. a change of speed of 28 m/s."""
-
 
 def _floats2(name: str, value: Sequence[float] | np.ndarray) -> tuple[float, float]:
     """``value`` as two finite floats, else a ValueError naming ``name``."""
@@ -74,45 +64,6 @@ def _floats2(name: str, value: Sequence[float] | np.ndarray) -> tuple[float, flo
     if not (math.isfinite(a) and math.isfinite(b)):
         raise ValueError(f"{name} must be finite, got ({a}, {b})")
     return a, b
-
-
-@dataclass(frozen=True)
-class Push:
-    """A horizontal force on the mass, constant over the window ``[start, start + duration)``.
-
-    Attributes:
-        start: when it begins (s, on the plant's clock).
-        duration: how long it lasts (s), > 0.
-        force: ``(fx, fy)`` world-frame horizontal force (N).
-
-    Only finiteness and ``duration > 0`` are checked here; the size is checked against a plant's mass and height
-    when the push is given to it (:data:`PUSH_SPEED_LIMIT`). A push is a brief event; a sustained force (a hand
-    pulling the robot along, wind) belongs in the ``force`` argument of :meth:`LipmPlant.step`, which has no size
-    limit.
-    """
-
-    start: float
-    duration: float
-    force: tuple[float, float]
-
-    def __post_init__(self) -> None:
-        if not math.isfinite(self.start):
-            raise ValueError(f"push start must be a finite time in s, got {self.start}")
-        if not (math.isfinite(self.duration) and self.duration > 0.0):
-            raise ValueError(f"push duration must be a finite time > 0 s, got {self.duration}")
-        object.__setattr__(self, "start", float(self.start))
-        object.__setattr__(self, "duration", float(self.duration))
-        object.__setattr__(self, "force", _floats2("push force (N)", self.force))
-
-    @property
-    def end(self) -> float:
-        """When it stops (s); the window is half-open, the force is zero from this instant on."""
-        return self.start + self.duration
-
-    @property
-    def impulse(self) -> np.ndarray:
-        """``force * duration`` (N s), shape ``(2,)``."""
-        return np.array(self.force) * self.duration
 
 
 def push_force(pushes: Iterable[Push], t: float) -> np.ndarray:
@@ -296,7 +247,7 @@ class LipmPlant:
     @property
     def max_impulse(self) -> float:
         """Largest push impulse accepted (N s): ``PUSH_SPEED_LIMIT * m * sqrt(g z_c)``."""
-        return PUSH_SPEED_LIMIT * self._m * math.sqrt(self._g * self._zc)
+        return max_push_impulse(self._m, self._zc, self._g)
 
     def _check_impulse(self, jx: float, jy: float, what: str) -> None:
         size = math.hypot(jx, jy)
@@ -309,12 +260,16 @@ class LipmPlant:
     def add_push(self, push: Push) -> None:
         """Schedule ``push``; it is applied by :meth:`step` over exactly its window.
 
-        Raises ValueError if its impulse exceeds :attr:`max_impulse` (see :data:`PUSH_SPEED_LIMIT`).
+        Raises ValueError if it is not horizontal (a mass at constant height has no vertical motion), names a body
+        (the mass is the only one), or its impulse exceeds :attr:`max_impulse` (:meth:`Push.check`).
         """
         if not isinstance(push, Push):
             raise ValueError(f"expected a Push, got {type(push).__name__}")
-        jx, jy = push.force[0] * push.duration, push.force[1] * push.duration
-        self._check_impulse(jx, jy, "push impulse")
+        if push.force[2] != 0.0:
+            raise ValueError(f"the pendulum takes horizontal pushes only (fz = 0 N), got force {push.force}")
+        if push.body is not None:
+            raise ValueError(f"the pendulum's only body is its mass: a push's body must be None, got {push.body!r}")
+        push.check(self._m, self._zc, self._g)
         self._pushes.append(push)
         self._pushes.sort(key=lambda p: p.start)
         self._live = 0

@@ -1,27 +1,21 @@
-"""The outcome of a pendulum-level closed-loop run (:func:`rtgait.core.pendulum.loop.run_closed_loop`): the per-tick
+"""The outcome of a pendulum-level closed-loop run (:func:`rtgait.core.pendulum.loop.run_pendulum_loop`): the per-tick
 record, the planner's record, and the summary written to ``summary.json``."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.laws.stepping import StepDecision
-from rtgait.core.pendulum.plant import Push
+from rtgait.core.planner.levels import ControllerLevel
 from rtgait.core.planner.online import PlanRecord
+from rtgait.core.push import Push
 
-__all__ = ["CONTROLLERS", "SUPPORT_CODES", "ClosedLoopResult", "Controller"]
-
-Controller = Literal["open-loop", "stabilized", "adaptive"]
-CONTROLLERS: tuple[Controller, ...] = ("open-loop", "stabilized", "adaptive")
-"""The controller levels, from the plan alone to the whole closed loop (module docstring)."""
-
-SUPPORT_CODES = {"double": 0, "left": 1, "right": 2}
-"""Per-tick support codes of :attr:`ClosedLoopResult.support` (as :data:`rtgait.sim.loop.SUPPORT_CODES`)."""
+__all__ = ["ClosedLoopResult"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,12 +35,12 @@ class ClosedLoopResult:
         cog: the plant's COM (m), ``(k, 2)``.
         cog_vel: the plant's COM velocity (m/s), ``(k, 2)``.
         dcm: the plant's DCM (m), ``(k, 2)``.
-        support: the planned support, :data:`SUPPORT_CODES`, ``(k,)``.
+        support: the planned support, :data:`~rtgait.core.geometry.support.SUPPORT_CODES`, ``(k,)``.
         phase: the planner's phase index, ``(k,)``.
         saturated: whether the ZMP the controller wanted lay outside the support polygon, ``(k,)``: the feedback law's
             (projected by :class:`DcmFeedback` itself, whose command is then on the boundary) or, open loop, the
             command's (clipped by the plant).
-        controller: the level run (:data:`CONTROLLERS`).
+        controller: the level run (:data:`~rtgait.core.planner.levels.CONTROLLER_LEVELS`).
         mass: of the point mass (kg).
         dt: control period (s).
         omega: the pendulum's ``w = sqrt(g / z_c)`` (1/s).
@@ -78,7 +72,7 @@ class ClosedLoopResult:
     support: np.ndarray
     phase: np.ndarray
     saturated: np.ndarray
-    controller: Controller
+    controller: ControllerLevel
     mass: float
     dt: float
     omega: float
@@ -175,16 +169,7 @@ class ClosedLoopResult:
             "step_adjustments": self.step_adjustment_count,
             "step_adjustment_log": [_decision_summary(d) for d in self.step_adjustments],
             "ended_at_rest": self.ended_at_rest,
-            "pushes": [
-                {
-                    "start": p.start,
-                    "duration": p.duration,
-                    "force": list(p.force),
-                    "impulse": [float(v) for v in p.impulse],
-                    "impulse_norm": float(math.hypot(*p.impulse)),
-                }
-                for p in self.pushes
-            ],
+            "pushes": [p.summary() for p in self.pushes],
             "zmp_tracking_error_rms": number(self.zmp_tracking_error_rms),
             "zmp_tracking_error_max": number(self.zmp_tracking_error_max),
             "zmp_saturated_ticks": int(self.saturated.sum()),

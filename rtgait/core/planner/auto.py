@@ -31,7 +31,7 @@ quasi-real-time deadline (``OnlinePlanner.change_deadline``): the latest moment 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, NamedTuple, Protocol
 
 import numpy as np
 
@@ -39,7 +39,9 @@ from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.support import support_polygon
 
 if TYPE_CHECKING:
-    from rtgait.core.planner.online import OnlinePlanner
+    from rtgait.core.planner.active_plan import PlanLayout
+    from rtgait.core.planner.config import PlannerConfig
+    from rtgait.core.walk.walk import Walk
 
 AUTO_SAMPLES = 33
 """Samples per free segment at which the auto connection predicts a plan's ZMP margin (both ends included)."""
@@ -137,11 +139,41 @@ def _describe(option: AutoOption, margin: float, why: str) -> str:
     return f"{option.kind}{where}: predicted ZMP margin {margin * 1e3:+.1f} mm {why}"
 
 
-class AutoConnection:
-    """The auto connection of one :class:`~rtgait.core.planner.online.OnlinePlanner`: decides each change (module
-    docstring) with the planner's own operators, and holds the changes that wait for their step's lift-off."""
+class AutoPlanner(Protocol):
+    """What the auto connection reads of its planner (:class:`~rtgait.core.planner.online.OnlinePlanner`): its
+    settings, its walk (changed through the walk's own methods) and the plan it would make at a phase's start."""
 
-    def __init__(self, planner: OnlinePlanner) -> None:
+    config: PlannerConfig
+    w: float
+
+    @property
+    def walk(self) -> Walk: ...
+
+    @property
+    def started(self) -> bool: ...
+
+    @property
+    def latest_time(self) -> float: ...
+
+    @property
+    def next_replan_phase(self) -> int | None: ...
+
+    def phase_start(self, q: int) -> float: ...
+
+    def state_at_phase_start(self, q: int) -> np.ndarray | list[float]: ...
+
+    def layout_for_replan(self, q: int) -> PlanLayout: ...
+
+
+class AutoConnection:
+    """The auto connection of one planner: decides each change (module docstring) with the planner's own
+    operators, and holds the changes that wait for their step's lift-off.
+
+    It changes the planner's walk (:attr:`AutoPlanner.walk`) and nothing else of it: the planner logs the
+    :class:`ChangeRecord` that :meth:`change` returns and asks :attr:`next_commit` when to call :meth:`commit`.
+    """
+
+    def __init__(self, planner: AutoPlanner) -> None:
         if planner.config.connection == "auto" and not planner.config.timing.uniform:
             # Its predictions assume one timing for every step (the windows of later plans): refuse, not guess.
             raise ValueError("connection 'auto' needs one timing for every step: per-step timings are not supported")
@@ -149,25 +181,36 @@ class AutoConnection:
         self.held: dict[int, tuple[float, AutoOption, dict[str, float | None]]] = {}
 
     def clear(self) -> None:
+        """Forget the changes held (the walk is replaced)."""
         self.held.clear()
 
-    def change(self, step: int, values: dict[str, float | None], through: int | None) -> None:
+    @property
+    def next_commit(self) -> float:
+        """When the next held change is to be applied (s), ``inf`` when none is held."""
+        return min((entry[0] for entry in self.held.values()), default=math.inf)
+
+    def change(
+        self, step: int, values: dict[str, float | None], through: int | None
+    ) -> tuple[int | None, ChangeRecord]:
         """Decide and carry out one change: predict each option, take the first that keeps the margin (else the
-        best), apply it now or hold it until the step lifts off."""
+        best), apply it to the walk now or hold it until the step lifts off.
+
+        Returns:
+            The step whose stride the change sets (``None``: it changed nothing, there is nothing to refresh or
+            log) and the record of the decision, for the planner to refresh what depends on the walk and log it.
+        """
         planner = self.planner
         walk = planner.walk
         last = step if through is None else through
         with walk.trial():  # every check of a plain change first: a refused change changes nothing
             walk.change_step(step, **values, through=through)
-        q = planner._next_replan_phase
+        q = planner.next_replan_phase
         if not planner.started or q is None:
             # Before the walk starts every plan is still to be made; after its last replan none is left to choose.
             first = walk.change_step(step, **values, through=through)
             kind, why = ("quasi-real-time", "before the walk starts") if not planner.started else ("real-time",
                                                                                                    "no replan left")
-            planner._changed(first, ChangeRecord(planner.latest_time, step, kind, step, last, planner.latest_time,
-                                                 (), why))  # fmt: skip
-            return
+            return first, ChangeRecord(planner.latest_time, step, kind, step, last, planner.latest_time, (), why)
         self.held.pop(step, None)  # a newer wish for the same step replaces the one held
         options = auto_options(step, last, q, walk.n_steps, planner.config.horizon_steps)
         predicted: list[float] = []
@@ -183,30 +226,30 @@ class AutoConnection:
         else:
             commit = planner.phase_start(option.commit_phase)
             self.held[step] = (commit, option, values)
-            planner._commit_time = min(planner._commit_time, commit)
         weighed = tuple((o.kind, o.step, m) for o, m in decision.predicted)
         record = ChangeRecord(planner.latest_time, step, option.kind, option.step, option.through, commit, weighed,
                               decision.reason)  # fmt: skip
-        planner._changed(option.step, record)
+        return option.step, record
 
-    def commit(self, t: float) -> float:
-        """Apply the held changes whose step lifts off by ``t`` (s), before anything is sampled at ``t``; returns
-        the next commit time (``inf``: none held)."""
+    def commit(self, t: float) -> bool:
+        """Apply to the walk the held changes whose step lifts off by ``t`` (s), before anything is sampled at
+        ``t``; returns whether any was (the walk under the phase being sampled may then have moved)."""
+        applied = False
         for step, (when, option, values) in sorted(self.held.items()):
             if when <= t:
                 del self.held[step]
                 self.planner.walk.change_step(option.step, **values, through=option.through)
-                self.planner._phase = None
-        return min((entry[0] for entry in self.held.values()), default=math.inf)
+                applied = True
+        return applied
 
     def predict(self, option: AutoOption, values: dict[str, float | None]) -> float:
         """The smallest half-plane ZMP margin (m) of the free segments of the plans in ``option``'s window, made
         from the plan being executed with the footprints the option gives (held changes are not included)."""
         planner = self.planner
-        walk, sole, q0 = planner.walk, planner.config.sole, planner._next_replan_phase
+        walk, sole, q0 = planner.walk, planner.config.sole, planner.next_replan_phase
         assert sole is not None and q0 is not None
         first, last = option.window
-        state = list(planner._state_at_phase_start(q0))
+        state = list(planner.state_at_phase_start(q0))
         margin = math.inf
         with walk.trial():
             applied = False
@@ -227,5 +270,6 @@ class AutoConnection:
 
 
 __all__ = [
-    "AUTO_KINDS", "AUTO_SAMPLES", "AutoDecision", "AutoOption", "ChangeRecord", "auto_options", "choose", "window",
+    "AUTO_KINDS", "AUTO_SAMPLES", "AutoConnection", "AutoDecision", "AutoOption", "AutoPlanner", "ChangeRecord",
+    "auto_options", "choose", "window",
 ]  # fmt: skip

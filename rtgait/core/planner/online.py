@@ -186,8 +186,14 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
         self._prepared = None
         self._prepare_layouts(0)
 
-    def _state_at_phase_start(self, q: int) -> np.ndarray | list[float]:
-        """``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]`` at the start of phase ``q`` (m, m/s).
+    @property
+    def next_replan_phase(self) -> int | None:
+        """The phase whose start makes the next regular plan (a double support), ``None`` when no replan is left."""
+        return self._next_replan_phase
+
+    def state_at_phase_start(self, q: int) -> np.ndarray | list[float]:
+        """``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]`` at the start of phase ``q`` (m, m/s): where a plan made
+        then starts from.
 
         The state comes from the plan being executed; the ZMP is its left limit (the end of the segment before).
         """
@@ -228,7 +234,7 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
         n = self.n_steps
         # Prepared in start() (and again whenever the walk's length or timing changes): a lookup, not a build.
         layout = self._layout_at.pop(q, None) or self._layout(q, self._plan_span(q))
-        state = self._state_at_phase_start(q)
+        state = self.state_at_phase_start(q)
         t_start = self._next_replan_time
         planned = None
         if self.config.feedback == "measured":
@@ -289,7 +295,9 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
     def sample_values(self, t: float) -> tuple[list[float], str, int]:
         """As :meth:`sample` but returns plain floats in :data:`SAMPLE_FIELDS` order (for tight loops)."""
         if t >= self._commit_time:
-            self._commit_time = self._auto.commit(t)
+            if self._auto.commit(t):
+                self._phase = None  # the swing target of the phase being sampled may have moved
+            self._commit_time = self._auto.next_commit
         if t >= self._next_replan_time:
             if t == math.inf:
                 raise ValueError("t must be finite, got inf")

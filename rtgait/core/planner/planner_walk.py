@@ -137,7 +137,9 @@ class PlannerWalk(WalkQueries):
         (:mod:`rtgait.core.planner.auto`): applied now, deferred to a later step, or held until step ``step`` lifts off.
         """
         if self.config.connection == "auto":
-            self._auto.change(step, {"length": length, "width": width, "turn": turn}, through)
+            first, record = self._auto.change(step, {"length": length, "width": width, "turn": turn}, through)
+            self._commit_time = self._auto.next_commit
+            self._changed(first, record)
             return
         self._changed(self._walk.change_step(step, length=length, width=width, turn=turn, through=through))
 

@@ -24,14 +24,13 @@ import itertools
 import math
 import warnings
 from collections.abc import Iterator, Sequence
-from typing import TYPE_CHECKING
+from typing import TypeVar
 
 from rtgait.core.geometry.footsteps import Footstep, Stride, Timeline, stride_between
 from rtgait.core.limits import MAX_STEPS
 from rtgait.core.walk.velocity_command import VelocityCommand, warn_if_clamped
 
-if TYPE_CHECKING:
-    from rtgait.core.walk.walk import Walk
+_Changes = TypeVar("_Changes", bound="WalkChanges")  # the walk the mixin is part of
 
 
 class StepChangeTooLateError(ValueError):
@@ -48,7 +47,7 @@ class WalkChanges:
 
     # ----- undo, and the deadlines' checks -----------------------------------------------------------------
     @contextlib.contextmanager
-    def trial(self) -> Iterator[Walk]:
+    def trial(self: _Changes) -> Iterator[_Changes]:
         """Changes made inside the block are undone when it ends: for predicting what a change would do."""
         saved = (list(self._strides), list(self._prints), self.base, self.finite, self.command, self.stopping)
         timeline, standing, step_timings = self._timeline, self.standing, self._step_timings
