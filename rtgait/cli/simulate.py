@@ -27,6 +27,7 @@ from rtgait.cli.common import (
     robot_walk,
 )
 from rtgait.io.plan_files import pendulum_report
+from rtgait.io.walk_title import velocity_commands, velocity_facts, walk_title
 from rtgait.outputs import check_destination, staged_outputs
 from rtgait.scenario.scenario import Scenario, ScenarioError, load_scenario
 
@@ -197,6 +198,9 @@ def run(args: argparse.Namespace) -> int:
     show = not args.quiet and sys.stderr.isatty()
     progress = progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
     extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection, "walk": _walk_facts(walk)}
+    commands = schedule or ([(0.0, *velocity)] if velocity is not None else [])
+    if commands:  # a walk by velocity command: its commands, for the summary's and the figures' titles
+        extra["velocity"] = velocity_facts(commands)
     with mujoco_messages() as messages:  # else MuJoCo appends them to MUJOCO_LOG.TXT in the working folder
         result = _physics(scenario, walk, robot, config, controller, schedule or velocity, pushes, progress, extra)
     extra["mujoco_warnings"] = messages
@@ -393,10 +397,12 @@ def _write_simulation(
     """Write the simulation's outputs into a staging folder, then replace the previous ones in ``out`` together."""
     from rtgait.sim.run import write_sim_outputs
 
+    commands = velocity_commands(extra)
     with staged_outputs(out) as staging:
         summary = write_sim_outputs(
             result, staging.folder, figure=not args.no_figures, figure_format=args.figure_format,
-            title=f"{scenario.name} ({scenario.connection})", extra=extra, replay=robot if args.html else None,
+            title=walk_title(scenario.name, scenario.connection, commands), extra=extra,
+            replay=robot if args.html else None,
             sole=walk.sole,  # the sole the walk was planned with
             background=args.replay_background,
         )  # fmt: skip

@@ -66,6 +66,61 @@ def test_translating_body_zmp_follows_the_pendulum(talos):
     np.testing.assert_allclose(check.angular_zmp_offset, 0.0, atol=1e-9)
 
 
+def test_differences_do_not_span_a_break(talos):
+    # Constant velocities on either side of a jump of every coordinate at tick 7: differentiated in two pieces, both
+    # are exact; the ticks beside the jump use one-sided differences. Across it, the jump reads as an acceleration.
+    model = talos.model
+    dt = 0.01
+    velocity = np.zeros(model.nv)
+    velocity[:6] = [0.3, -0.1, 0.05, 0.2, -0.4, 0.7]
+    velocity[6:] = np.linspace(-0.2, 0.2, model.nv - 6)
+    jumped = pin.integrate(model, talos.q_half_sitting, np.full(model.nv, 0.004))
+    starts = [talos.q_half_sitting] * 7 + [jumped] * 13
+    q = np.array([pin.integrate(model, start, velocity * k * dt) for k, start in enumerate(starts)])
+    v, a = finite_differences(model, q, dt, breaks=[7])
+    np.testing.assert_allclose(v, np.tile(velocity, (20, 1)), atol=1e-9)
+    np.testing.assert_allclose(a, 0.0, atol=1e-6)
+    across = finite_differences(model, q, dt)[1]
+    assert np.abs(across[6:8]).max() > 0.5 * 0.004 / dt**2
+    # Pieces of two ticks have one-sided velocities and no acceleration; of one tick, neither.
+    v, a = finite_differences(model, q, dt, breaks=[2, 4, 5, 7])
+    np.testing.assert_allclose(v[[0, 1, 2, 3, 5, 6]], np.tile(velocity, (6, 1)), atol=1e-9)
+    assert np.isnan(a[:7]).all() and np.isnan(v[4]).all()
+    np.testing.assert_allclose(a[7:], 0.0, atol=1e-6)
+    with pytest.raises(ValueError, match=r"breaks must be ticks within \[1, 19\]"):
+        finite_differences(model, q, dt, breaks=[0])
+
+
+def test_a_jump_between_pieces_leaves_the_pendulum_zmp_as_it_was(talos):
+    # The translating body again, moved 4 mm sideways at once at tick 400 (a reference re-anchored): split there, its
+    # ZMP is the closed form's on both sides (within a millimetre at the two one-sided ticks); across the
+    # jump, the second differences put it metres away.
+    dt = 0.002
+    times = np.arange(800) * dt
+    w = 2.0 * np.pi * np.array([0.5, 0.8, 1.1])
+    amplitude = np.array([0.05, 0.04, 0.01])
+    shift = amplitude * np.sin(w * times[:, None])
+    q = np.tile(talos.q_half_sitting, (len(times), 1))
+    q[:, :3] += shift
+    q[400:, 1] += 0.004
+    check = multibody_check(talos.model, times, q, breaks=[400])
+    cog = talos.cog_half_sitting + shift
+    acc = -amplitude * w**2 * np.sin(w * times[:, None])
+    expected = cog[:, :2] - cog[:, 2:3] * acc[:, :2] / (GRAVITY + acc[:, 2:3])
+    expected[400:, 1] += 0.004
+    inner = np.r_[1:399, 401:799]
+    np.testing.assert_allclose(check.zmp[inner], expected[inner], atol=1e-5)
+    np.testing.assert_allclose(check.zmp[[399, 400]], expected[[399, 400]], atol=1e-3)
+    spiked = multibody_check(talos.model, times, q).zmp
+    assert np.abs(spiked[[399, 400], 1] - expected[[399, 400], 1]).min() > 1.0
+    np.testing.assert_array_equal(spiked[inner[(inner < 398) | (inner > 401)]],
+                                  check.zmp[inner[(inner < 398) | (inner > 401)]])  # fmt: skip
+    # A piece of one tick has no acceleration, so no force nor ZMP; its COG is known.
+    lone = multibody_check(talos.model, times, q, breaks=[400, 401])
+    assert np.isnan(lone.zmp[400]).all() and np.isnan(lone.vertical_force[400])
+    np.testing.assert_allclose(lone.cog[400], cog[400] + [0.0, 0.004, 0.0], atol=1e-12)
+
+
 def test_walking_zmp_stays_close_to_the_plan(talos, talos_fig8, talos_fig8_motion):
     check = check_motion(talos_fig8_motion, talos_fig8)
     error_x, error_y = check.zmp_error_max
