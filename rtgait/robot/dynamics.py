@@ -5,7 +5,8 @@ also changes its angular momentum about the COG (legs swinging, pelvis turning),
 the pendulum's. This module measures that on the trajectory the IK produced:
 
 * velocities and accelerations by central finite differences on the configuration manifold (``pin.difference``,
-  so the free-flyer's orientation is differentiated correctly);
+  so the free-flyer's orientation is differentiated correctly), never across the ticks where a caller says the
+  trajectory jumps (``breaks``: a jump has no acceleration, its second difference ``J / dt^2`` is the sampling's);
 * centroidal momentum ``h_G = (M c', L)`` and its rate ``(M c'', L')`` at the COG, by Pinocchio's
   ``computeCentroidalMomentumTimeVariation``;
 * the ZMP on the ground plane z = 0 from the total contact wrench. With the ground reaction force
