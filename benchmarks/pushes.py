@@ -375,8 +375,9 @@ def plot(cases: list[dict[str, Any]], settings: dict[str, Any], path: Path) -> P
             ax.plot([math.radians(a) for a in angles], [bound[a] for a in angles], ls="--", lw=1.0, color="k",
                     label="in-place bound (sole + lean)")  # fmt: skip
         ax.set_ylim(0.0, 1.1 * top)
+        resolution = f"within {settings['tolerance_Ns']:g} N s"
         ax.set_title(f"{phase} support (step {site['step']}, {site['stance_side']} foot stance)\n"
-                     f"largest impulse survived [N s], within {settings['tolerance_Ns']:g} N s", fontsize=9)  # fmt: skip
+                     f"largest impulse survived [N s], {resolution}", fontsize=9)  # fmt: skip
         # Only the directions pushed are named: the lines between them join measurements, they are none.
         measured = sorted({c["direction_deg"] for c in rows})
         ax.set_xticks([math.radians(a) for a in measured])
