@@ -374,14 +374,17 @@ def plot(cases: list[dict[str, Any]], settings: dict[str, Any], path: Path) -> P
             ax.plot([math.radians(a) for a in angles], [bound[a] for a in angles], ls="--", lw=1.0, color="k",
                     label="in-place bound (sole + lean)")  # fmt: skip
         ax.set_ylim(0.0, 1.1 * top)
+        resolution = f"within {settings['tolerance_Ns']:g} N s"
         ax.set_title(f"{phase} support (step {site['step']}, {site['stance_side']} foot stance)\n"
-                     "largest impulse survived [N s]", fontsize=9)  # fmt: skip
-        ax.set_xticks([math.radians(a) for a in range(0, 360, 45)])
+                     f"largest impulse survived [N s], {resolution}", fontsize=9)  # fmt: skip
+        # Only the directions pushed are named: the lines between them join measurements, they are none.
+        measured = sorted({c["direction_deg"] for c in rows})
+        ax.set_xticks([math.radians(a) for a in measured])
         # The world's directions, named relative to the stance foot as in the table (fwd-out: forward and outward).
         named = Site(**site)
         short = {"forward": "fwd", "backward": "back", "outward": "out", "inward": "in"}
         labels = []
-        for a in range(0, 360, 45):
+        for a in measured:
             name = direction_name(named, a)
             labels.append("-".join(short.get(part, part) for part in name.split("-")))
         ax.set_xticklabels(labels, fontsize=8)

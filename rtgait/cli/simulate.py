@@ -32,6 +32,7 @@ from rtgait.io.plan_files import pendulum_report
 from rtgait.outputs import check_destination, staged_outputs
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
+from rtgait.viz.walk_title import velocity_commands, velocity_facts, walk_title
 
 if TYPE_CHECKING:
     from rtgait.control.settings import ControllerOptions
@@ -210,6 +211,9 @@ def run(args: argparse.Namespace) -> int:
     extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection, "walk": _walk_facts(walk)}
     if chosen:
         extra["control"] = chosen
+    commands = schedule or ([(0.0, *velocity)] if velocity is not None else [])
+    if commands:  # a walk by velocity command: its commands, for the summary's and the figures' titles
+        extra["velocity"] = velocity_facts(commands)
     with mujoco_messages() as messages:  # else MuJoCo appends them to MUJOCO_LOG.TXT in the working folder
         result = _physics(
             scenario, walk, robot, config, controller, options, schedule or velocity, pushes, progress, extra
@@ -418,10 +422,12 @@ def _write_simulation(
     """Write the simulation's outputs into a staging folder, then replace the previous ones in ``out`` together."""
     from rtgait.io.sim_run import write_sim_outputs
 
+    commands = velocity_commands(extra)
     with staged_outputs(out) as staging:
         summary = write_sim_outputs(
             result, staging.folder, figure=not args.no_figures, figure_format=args.figure_format,
-            title=f"{scenario.name} ({scenario.connection})", extra=extra, replay=robot if args.html else None,
+            title=walk_title(scenario.name, scenario.connection, commands), extra=extra,
+            replay=robot if args.html else None,
             sole=walk.sole,  # the sole the walk was planned with
             background=args.replay_background,
         )  # fmt: skip

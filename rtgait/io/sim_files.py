@@ -18,6 +18,7 @@ from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.robot.model import RobotModel
 from rtgait.sim.log_file import LOG_FILE, parquet_available, write_sim_log
 from rtgait.sim.result import SimResult
+from rtgait.viz.walk_title import velocity_commands, walk_title
 
 __all__ = [
     "SIM_CSV_COLUMNS",
@@ -234,6 +235,18 @@ def _mm(value: float | None) -> str:
     return "n/a" if value is None else f"{value * 1e3:.1f} mm"
 
 
+def _spread(stats: dict[str, Any]) -> str:
+    """An error measure of the summary as median, 95th percentile and RMS: the first two are the typical and the
+    worse ticks, the RMS also weighs the few worst."""
+    return f"median {_mm(stats['median'])}, 95th percentile {_mm(stats['p95'])}, RMS {_mm(stats['rms'])}"
+
+
+def _left_out(stats: dict[str, Any]) -> str:
+    """What the commanded-motion measure left out, if anything (:mod:`rtgait.sim.commanded_motion`)."""
+    count = stats.get("reanchored_ticks", 0)
+    return f" ({count} ticks of re-anchored swings left out)" if count else ""
+
+
 def sim_report(summary: dict[str, Any], out: Path) -> str:
     """The lines ``rtgait simulate`` prints for a MuJoCo run written to ``out``: the walk and where its settings
     came from, the outcome, the ZMP errors, slip and steps, speed, MuJoCo's warnings if any, the outputs."""
@@ -247,9 +260,11 @@ def sim_report(summary: dict[str, Any], out: Path) -> str:
     if "guide" in summary:
         outcome += f"; led by the hand, the base ended {summary['guide']['base_error']:.3f} m from its goal"
     control, physics = summary["control_dt"] * 1e3, summary["physics_dt"] * 1e3
+    title = walk_title(summary["scenario"], summary["connection"], velocity_commands(summary))
     lines = [
-        f"scenario    {summary['scenario']} ({summary['connection']}) on {summary['robot']} in MuJoCo, "
-        f"{summary['controller']}, control period {control:g} ms, physics step {physics:g} ms",
+        f"scenario    {title}",
+        f"robot       {summary['robot']} in MuJoCo, {summary['controller']}, control period {control:g} ms, physics "
+        f"step {physics:g} ms",
     ]
     walk = summary.get("walk")
     if walk:
@@ -265,9 +280,9 @@ def sim_report(summary: dict[str, Any], out: Path) -> str:
         f"walked      {summary['distance_walked']:.3f} m; {summary['missed_landings']} missed landing(s), "
         f"{summary['step_adjustments']} step adjustment(s), stance-foot slip at most "
         f"{summary['foot_slip_max'] * 1e3:.1f} mm",
-        f"ZMP         measured vs planned in single support: RMS {_mm(errors['vs_plan']['rms'])}; vs the multibody "
-        f"ZMP of the commanded motion: RMS {_mm(errors['vs_commanded_motion']['rms'])}, median "
-        f"{_mm(errors['vs_commanded_motion']['median'])}",
+        f"ZMP         measured, in single support, vs the plan: {_spread(errors['vs_plan'])}",
+        f"            vs the multibody ZMP of the commanded motion: {_spread(errors['vs_commanded_motion'])}"
+        + _left_out(errors["vs_commanded_motion"]),
     ]
     if pushes:
         lines.append("pushes      " + ", ".join(f"{p['impulse_norm']:.1f} N s at {p['start']:.2f} s" for p in pushes))

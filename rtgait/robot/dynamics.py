@@ -5,7 +5,8 @@ also changes its angular momentum about the COG (legs swinging, pelvis turning),
 the pendulum's. This module measures that on the trajectory the IK produced:
 
 * velocities and accelerations by central finite differences on the configuration manifold (``pin.difference``,
-  so the free-flyer's orientation is differentiated correctly);
+  so the free-flyer's orientation is differentiated correctly), never across the ticks where a caller says the
+  trajectory jumps (``breaks``: a jump has no acceleration, its second difference ``J / dt^2`` is the sampling's);
 * centroidal momentum ``h_G = (M c', L)`` and its rate ``(M c'', L')`` at the COG, by Pinocchio's
   ``computeCentroidalMomentumTimeVariation``;
 * the ZMP on the ground plane z = 0 from the total contact wrench. With the ground reaction force
@@ -15,6 +16,7 @@ the pendulum's. This module measures that on the trajectory the IK produced:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -73,7 +75,9 @@ class MultibodyCheck:
         return np.column_stack([-rate[:, 1], rate[:, 0]]) / self.vertical_force[:, None]
 
 
-def finite_differences(model: pin.Model, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+def finite_differences(
+    model: pin.Model, q: np.ndarray, dt: float, breaks: Sequence[int] = ()
+) -> tuple[np.ndarray, np.ndarray]:
     """Velocities and accelerations of a configuration trajectory sampled every ``dt`` (s).
 
     Central differences on the configuration manifold: ``v_k = (q_{k+1} - q_{k-1}) / (2 dt)`` and
@@ -81,10 +85,17 @@ def finite_differences(model: pin.Model, q: np.ndarray, dt: float) -> tuple[np.n
     velocity is in its local frame, as Pinocchio expects). The first and last velocities are one-sided; the
     first and last accelerations repeat their neighbours'.
 
+    A trajectory that jumps (a reference moved at once) has no acceleration at the jump: the second difference
+    across a jump ``J`` is ``J / dt^2``, a value of the sampling, not of a motion. ``breaks`` are the ticks ``k`` at
+    which the trajectory may jump between ``q_{k-1}`` and ``q_k``: no difference spans them, and each piece between
+    two breaks is differentiated as a trajectory of its own (its ends as above). A piece of two ticks has one-sided
+    velocities and no acceleration (NaN), one of a single tick neither.
+
     Args:
         model: the model ``q`` belongs to.
         q: configurations, shape ``(k, nq)``, ``k >= 3``.
         dt: sampling period (s).
+        breaks: ticks where a piece starts, each within ``[1, k - 1]``; ``()`` for one smooth trajectory.
 
     Returns:
         ``v`` and ``a``, each of shape ``(k, nv)`` (m/s and rad/s; m/s^2 and rad/s^2).
@@ -94,17 +105,31 @@ def finite_differences(model: pin.Model, q: np.ndarray, dt: float) -> tuple[np.n
         raise ValueError(f"q must have shape (k >= 3, {model.nq}), got {q.shape}")
     if not (np.isfinite(dt) and dt > 0.0):
         raise ValueError(f"dt must be a period > 0 s, got {dt}")
+    starts = sorted({int(k) for k in breaks})
+    if starts and not 1 <= starts[0] <= starts[-1] <= len(q) - 1:
+        raise ValueError(f"breaks must be ticks within [1, {len(q) - 1}], got {starts[0]} to {starts[-1]}")
     # Steps between consecutive samples; everything else is arithmetic on them.
     steps = np.array([pin.difference(model, q[k], q[k + 1]) for k in range(len(q) - 1)])
-    v = np.empty((len(q), model.nv))
-    v[1:-1] = (steps[:-1] + steps[1:]) / (2.0 * dt)
+    v = np.full((len(q), model.nv), np.nan)
+    a = np.full_like(v, np.nan)
+    for begin, end in zip([0, *starts], [*starts, len(q)], strict=True):
+        _differentiate(steps[begin : end - 1], dt, v[begin:end], a[begin:end])
+    return v, a
+
+
+def _differentiate(steps: np.ndarray, dt: float, v: np.ndarray, a: np.ndarray) -> None:
+    """Fill the velocities ``v`` and accelerations ``a`` of one smooth piece from its ``len(v) - 1`` steps
+    (:func:`finite_differences`); a piece too short for them leaves NaN."""
+    if len(steps) == 0:
+        return
     v[0] = steps[0] / dt
     v[-1] = steps[-1] / dt
-    a = np.empty_like(v)
+    if len(steps) < 2:
+        return
+    v[1:-1] = (steps[:-1] + steps[1:]) / (2.0 * dt)
     a[1:-1] = (steps[1:] - steps[:-1]) / (dt * dt)
     a[0] = a[1]
     a[-1] = a[-2]
-    return v, a
 
 
 def multibody_check(
@@ -112,6 +137,7 @@ def multibody_check(
     times: np.ndarray,
     q: np.ndarray,
     planned_zmp: np.ndarray | None = None,
+    breaks: Sequence[int] = (),
 ) -> MultibodyCheck:
     """Centroidal momentum, its rate and the multibody ZMP of a joint trajectory.
 
@@ -120,6 +146,8 @@ def multibody_check(
         times: uniformly spaced tick times (s), shape ``(k,)``.
         q: configurations, shape ``(k, nq)``.
         planned_zmp: optional planned ZMP (m), shape ``(k, 2)``, to compare with.
+        breaks: ticks where ``q`` may jump (:func:`finite_differences`); the momentum of a tick without a
+            velocity, and its rate, the force and the ZMP of one without an acceleration, are NaN.
     """
     times = np.asarray(times, dtype=float)
     if times.ndim != 1 or len(times) < 3:
@@ -131,7 +159,11 @@ def multibody_check(
         planned_zmp = np.asarray(planned_zmp, dtype=float)
         if planned_zmp.shape != (len(times), 2):
             raise ValueError(f"planned_zmp must have shape ({len(times)}, 2), got {planned_zmp.shape}")
-    v, a = finite_differences(model, q, dt)
+    v, a = finite_differences(model, q, dt, breaks)
+    moving = np.isfinite(v[:, 0])
+    accelerating = np.isfinite(a[:, 0])
+    v[~moving] = 0.0  # computed as if at rest, for the COG, then NaN
+    a[~accelerating] = 0.0
     data = model.createData()
     mass = pin.computeTotalMass(model)
     gravity = -float(model.gravity.linear[2])
@@ -147,6 +179,9 @@ def multibody_check(
         momentum[k] = data.hg.angular
         rate[k] = data.dhg.angular
         force[k] = data.dhg.linear
+    momentum[~moving] = np.nan
+    rate[~accelerating] = np.nan
+    force[~accelerating] = np.nan
     cog_acc = force / mass
     force[:, 2] += mass * gravity
     # Moment of the contact wrench about the origin: tau = c x f + L'.

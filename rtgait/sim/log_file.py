@@ -103,7 +103,10 @@ def log_columns(joint_names: Sequence[str]) -> list[LogColumn]:
         *_vector("zmp", "m", "measured ZMP (centre of pressure of the sole contacts), at t; NaN in the air", "xy"),
         *_vector("zmp_planned", "m", "the planner's ZMP (in the transition: the COM target's projection)", "xy"),
         *_vector("zmp_command", "m", "ZMP asked of the feet (the DCM law's; the plan's in open-loop)", "xy"),
-        *_vector("zmp_motion", "m", "multibody ZMP of the commanded motion (Pinocchio); NaN off the ground", "xy"),
+        *_vector(
+            "zmp_motion", "m", "multibody ZMP of the commanded motion (Pinocchio; not differentiated across a "
+            "retargeting); NaN off the ground and over re-anchored swings", "xy"
+        ),
         *_vector("cog", "m", "measured COM, at t"),
         *_vector("cog_planned", "m", "the IK's COM target: the plan's COM plus the controller's correction"),
         *_vector("cog_offset", "m", "the controller's COM correction (added to the plan's COM)", "xy"),

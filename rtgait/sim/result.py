@@ -12,12 +12,12 @@ the walk's start to its planned end, where the measured ZMP must be on the stanc
   ``open-loop``).
 * ``vs_commanded_motion``: against the multibody ZMP of the commanded motion, i.e. of the joint references the servos
   were given (the IK's configuration with the ankle offsets of foot force control), from Pinocchio's centroidal
-  dynamics with finite differences (:func:`rtgait.robot.dynamics.multibody_check`). The pendulum plan ignores the
-  legs' angular momentum, so even a perfect servo would miss ``vs_plan`` by that much; what is left of
-  ``vs_commanded_motion`` is the servos' and the contacts' doing. Its accelerations are second differences of the
-  commanded configurations, so a target that steps in one tick makes a spike of ``step / dt^2`` (a re-anchored foot,
-  unless ``ControllerOptions.anchor_blend`` blends it; a replan that moves the COM target): spikes dominate ``rms``
-  and ``max``, not ``median``. On a run that fell it stops earlier than the other two
+  dynamics with finite differences (:mod:`rtgait.sim.commanded_motion`). The pendulum plan ignores the legs' angular
+  momentum, so even a perfect servo would miss ``vs_plan`` by that much (20-30 mm on Talos, ``docs/robots.md``);
+  what is left of ``vs_commanded_motion`` is the servos' and the contacts' doing. Where the controller moves its
+  targets at once (its events: landings, re-anchoring, replans, step adjustments) the motion is differentiated on
+  either side, not across the jump, and the ticks of a swing re-anchored before the plan's double support are left
+  out (``reanchored_ticks``). On a run that fell it stops earlier than the other two
   (:attr:`SimResult.commanded_motion_mask`): at the first tip-over, which is where such a fall began.
 
 **Slip** of a stance foot: a *stance* is a stretch of ticks over which the foot carries at least
@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep
+from rtgait.core.geometry.support import SUPPORT_CODES
 from rtgait.core.push import Push
 
 if TYPE_CHECKING:
@@ -111,14 +112,13 @@ def _decision(decision: StepDecision) -> dict[str, Any]:
     }
 
 
-def _error_stats(measured: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> dict[str, float | None]:
-    """RMS, median, 95th percentile and largest distance (m), and the RMS per axis, of ``measured - reference``
-    over ``mask``. The median tells a steady offset from a few spikes, which dominate the RMS of the multibody ZMP
-    of the commanded motion: its accelerations are second differences, and each replan or re-anchoring that moves a
-    target makes one."""
+def _error_stats(measured: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> dict[str, float | int | None]:
+    """RMS, median, 95th percentile and largest distance (m), the RMS per axis, of ``measured - reference`` over
+    ``mask`` where both are known, and the number of ``ticks`` that makes. The median and the 95th percentile tell a
+    steady error from a few large ones, which the RMS and the largest mix in."""
     mask = mask & np.isfinite(measured[:, 0]) & np.isfinite(reference[:, 0])
     if not mask.any():
-        return dict.fromkeys(("rms", "median", "p95", "max", "rms_x", "rms_y"))
+        return {**dict.fromkeys(("rms", "median", "p95", "max", "rms_x", "rms_y")), "ticks": 0}
     error = measured[mask] - reference[mask]
     distance = np.hypot(*error.T)
     return {
@@ -128,6 +128,7 @@ def _error_stats(measured: np.ndarray, reference: np.ndarray, mask: np.ndarray) 
         "max": float(np.max(distance)),
         "rms_x": float(np.sqrt(np.mean(error[:, 0] ** 2))),
         "rms_y": float(np.sqrt(np.mean(error[:, 1] ** 2))),
+        "ticks": int(mask.sum()),
     }
 
 
@@ -340,7 +341,7 @@ class SimResult:
         about that edge (an example in ``docs/design/simulation.md``). A fall without a tip-over keeps the
         :data:`FALL_MARGIN` cut; a run that tipped over and did not fall keeps every tick (it stood
         again); one that tipped, walked on and fell much later loses the walk after the tip, an under-count. What
-        happened before the tip stays in, a replan's step of the COM target included.
+        happened before the tip stays in.
         """
         mask = self.single_support_mask
         if self.fell and self.tip_time is not None:
@@ -359,31 +360,49 @@ class SimResult:
         value = _error_stats(self.zmp, self.zmp_planned, self.single_support_mask)["max"]
         return math.nan if value is None else value
 
+    @property
+    def swinging(self) -> np.ndarray:
+        """Whether the plan has each foot (left, right) swinging at the tick, shape ``(k, 2)``."""
+        return np.column_stack([self.support == SUPPORT_CODES["right"], self.support == SUPPORT_CODES["left"]])
+
+    @functools.cached_property
+    def reanchored_swings(self) -> np.ndarray:
+        """The ticks from each touch-down that re-anchored a swinging foot to the plan's next double support, where
+        the commanded motion is the reference catching up with the foot (:mod:`rtgait.sim.commanded_motion`), shape
+        ``(k,)``."""
+        from rtgait.sim.commanded_motion import reanchoring_mask
+
+        return reanchoring_mask(self.times, self.swinging, self.events, self.control_dt)
+
     @functools.cached_property
     def zmp_commanded_motion(self) -> np.ndarray:
-        """The multibody ZMP of the commanded motion (m), shape ``(k, 2)`` (module docstring); NaN without a model
-        or with fewer than 3 ticks."""
+        """The multibody ZMP of the commanded motion (m), shape ``(k, 2)``, differentiated between the controller's
+        retargeting ticks, NaN over :attr:`reanchored_swings` and off the ground (:mod:`rtgait.sim.commanded_motion`);
+        NaN without a model or with fewer than 3 ticks."""
         if self.model is None or len(self.times) < 3:
             return np.full((len(self.times), 2), math.nan)
-        from rtgait.robot.dynamics import multibody_check
+        from rtgait.sim.commanded_motion import commanded_motion_zmp
 
-        times = self.run_start + np.arange(len(self.times)) * self.control_dt  # exactly uniform
-        check = multibody_check(self.model, times, self.commanded_q)
-        zmp = np.array(check.zmp)
-        # A ZMP needs the feet pressed on the ground: NaN where the motion's vertical force is not near the weight.
-        weight = self.mass * self.gravity
-        zmp[~(np.abs(check.vertical_force - weight) < 0.9 * weight)] = math.nan
-        return zmp
+        return commanded_motion_zmp(
+            self.model, self.commanded_q, self.times, self.control_dt, self.swinging, self.events,
+            self.mass * self.gravity,
+        )  # fmt: skip
 
-    def zmp_errors(self) -> dict[str, dict[str, float | None]]:
+    def zmp_errors(self) -> dict[str, dict[str, float | int | None]]:
         """The three ZMP error measures of the module docstring: ``vs_plan``, ``vs_command`` and
-        ``vs_commanded_motion``, each ``rms``, ``median``, ``p95``, ``max``, ``rms_x``, ``rms_y`` (m) over the planned
-        single supports (:attr:`single_support_mask`; ``vs_commanded_motion`` over :attr:`commanded_motion_mask`)."""
+        ``vs_commanded_motion``, each ``rms``, ``median``, ``p95``, ``max``, ``rms_x``, ``rms_y`` (m) and the number of
+        ``ticks`` compared over the planned single supports (:attr:`single_support_mask`; ``vs_commanded_motion``
+        over :attr:`commanded_motion_mask`, which also gives ``reanchored_ticks``, those of its ticks left out as
+        :attr:`reanchored_swings`)."""
         mask = self.single_support_mask
+        motion = self.commanded_motion_mask
         return {
             "vs_plan": _error_stats(self.zmp, self.zmp_planned, mask),
             "vs_command": _error_stats(self.zmp, self.zmp_command, mask),
-            "vs_commanded_motion": _error_stats(self.zmp, self.zmp_commanded_motion, self.commanded_motion_mask),
+            "vs_commanded_motion": {
+                **_error_stats(self.zmp, self.zmp_commanded_motion, motion),
+                "reanchored_ticks": int((motion & self.reanchored_swings).sum()),
+            },
         }
 
     def summary(self) -> dict[str, Any]:

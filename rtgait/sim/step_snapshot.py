@@ -1,10 +1,11 @@
 """The contacts and sites one physics step left in ``mujoco.MjData``, read once as Python numbers.
 
-Two readers of a control tick look at the same arrays of the same state: the contact record right after the
-tick's first physics step (:class:`~rtgait.sim.contact.ContactMonitor`) and, when the period has that one step only,
-the controller's measurement at the start of the next tick (:class:`~rtgait.sim.measure.SimMeasurer`), which reads
-what the last step computed. Reading MuJoCo's arrays is most of what either costs (each field of the contact list is
-a new numpy view, and a few dozen numbers become Python floats), so :func:`read_snapshot` reads them once for both.
+A control tick reads the arrays of the state its first physics step started from: the contact record
+(:class:`~rtgait.sim.contact.ContactMonitor`) right after that step and, when the period has that one step only, the
+simulator's truth at the start of the next tick (:class:`~rtgait.sim.ground_truth.GroundTruthReader`). Reading
+MuJoCo's arrays is much of what either costs (each field of the contact list is a new numpy view, and a few dozen
+numbers become Python floats), so :func:`read_snapshot` reads them once for both
+(:meth:`rtgait.sim.robot.SimRobot.first_substep`).
 
 A snapshot describes the state the step started from (MuJoCo computes the contacts, their forces and the site
 poses before it integrates); it stays true only while nothing steps, resets or re-runs the forward dynamics of that

@@ -26,6 +26,7 @@ import numpy as np
 from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.sim.log_file import LOG_FILE, parquet_available, read_sim_log
 from rtgait.viz.run_data import SIM_CSV, RunFilesError, read_floats, read_summary, read_table, require_keys
+from rtgait.viz.walk_title import velocity_commands, walk_title
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -57,12 +58,12 @@ class ZmpSimRun:
         stance: which soles the plan stands on (left, right), ``(k, 2)``.
         sole_pose: the measured soles' ``(x, y, yaw)`` (m, rad), ``(k, 2, 3)``, or ``None`` (no sole edges drawn).
         sole: the sole rectangle (m), or ``None``.
-        pushes: ``(start, duration)`` of each push (s).
+        pushes: ``(start, duration, impulse)`` of each push (s, s, N s: the impulse's magnitude).
         tip_time, fall_time: when a loaded foot tipped over and when the robot fell (s), or ``None``.
         fall_cause: why it fell, or ``None``.
         steps_completed, steps_planned: touch-downs completed and steps of the walk.
         rms: RMS distance of the measured ZMP from the plan in single support (m), NaN without one.
-        robot, controller, title: the robot's name, the controller level, the title's prefix.
+        robot, controller, title: the robot's name, the controller level, the title's first line (what was walked).
     """
 
     times: np.ndarray
@@ -76,7 +77,7 @@ class ZmpSimRun:
     stance: np.ndarray
     sole_pose: np.ndarray | None
     sole: SoleRect | None
-    pushes: tuple[tuple[float, float], ...]
+    pushes: tuple[tuple[float, float, float], ...]
     tip_time: float | None
     fall_time: float | None
     fall_cause: str | None
@@ -102,7 +103,7 @@ class ZmpSimRun:
             stance=_stance(result.support),
             sole_pose=result.sole_pose,
             sole=None if result.log is None else result.log.sole,
-            pushes=tuple((p.start, p.duration) for p in result.pushes),
+            pushes=tuple((p.start, p.duration, p.impulse_norm) for p in result.pushes),
             tip_time=result.tip_time,
             fall_time=result.fall_time if result.fell else None,
             fall_cause=result.fall_cause,
@@ -177,7 +178,7 @@ def draw_zmp_sim(run: ZmpSimRun) -> Figure:
             ax.axvspan(t[0], 0.0, color=_TRANSITION_COLOR, lw=0, zorder=0)
         for start, end in runs(run.double, t):  # the measured ZMP moves between the feet there
             ax.axvspan(start, end, color=DOUBLE_COLOR, alpha=0.6, lw=0, zorder=0)
-        for start, duration in run.pushes:
+        for start, duration, _ in run.pushes:
             ax.axvspan(start, start + duration, color=PUSH_COLOR, alpha=0.35, lw=0, zorder=1)
         if run.tip_time is not None:
             ax.axvline(run.tip_time, color="tab:purple", lw=1.2, ls="--")
@@ -198,7 +199,7 @@ def draw_zmp_sim(run: ZmpSimRun) -> Figure:
             ax.plot(t, run.zmp_command[:, axis], color=_COMMAND_COLOR, lw=0.8, label="commanded ZMP (feedback)")
         ax.plot(t, run.zmp[:, axis], color=ZMP_COLOR, lw=0.8, label="measured ZMP (contact CoP)")
         ax.plot(t, run.cog[:, axis], color=COG_COLOR, lw=0.8, ls="--", label="measured COG")
-        ax.set_ylabel(f"{'xy'[axis]} [m]")
+        ax.set_ylabel(f"{'xy'[axis]} (world) [m]")
         clean_ticks(ax)
 
     ax = axes[2]
@@ -219,7 +220,7 @@ def draw_zmp_sim(run: ZmpSimRun) -> Figure:
     labels += [run.double_label, "start transition (from half-sitting)"]
     if run.pushes:
         handles.append(Patch(color=PUSH_COLOR, alpha=0.35, lw=0))
-        labels.append("push")
+        labels.append("push " + ", ".join(f"{impulse:.0f} N s at {start:.2f} s" for start, _, impulse in run.pushes))
     if run.tip_time is not None:
         handles.append(Line2D([], [], color="tab:purple", lw=1.2, ls="--"))
         labels.append(f"a foot tipped over ({run.tip_time:.2f} s)")
@@ -236,8 +237,9 @@ def draw_zmp_sim(run: ZmpSimRun) -> Figure:
         outcome += f", a foot tipped over at {run.tip_time:.2f} s"
     if np.isfinite(run.rms):
         outcome += f"; ZMP {run.rms * 1e3:.0f} mm RMS from the plan in single support"
-    head = f"{run.title}: " if run.title else ""
-    axes[0].set_title(f"{head}{run.robot} in MuJoCo, {run.controller}\n{outcome}", fontsize=10)
+    robot = f"{run.robot} in MuJoCo, {run.controller}"
+    title = f"{run.title}\n{robot}: {outcome}" if run.title else f"{robot}\n{outcome}"
+    axes[0].set_title(title, fontsize=10)
     return figure
 
 
@@ -275,14 +277,16 @@ def _title(facts: dict[str, Any]) -> str:
     if facts.get("title"):
         return str(facts["title"])
     scenario, connection = facts.get("scenario"), facts.get("connection")
-    return f"{scenario} ({connection})" if scenario and connection else (scenario or "")
+    return walk_title(scenario, connection, velocity_commands(facts)) if scenario and connection else (scenario or "")
 
 
 def _outcome(facts: dict[str, Any]) -> dict[str, Any]:
     """The outcome entries of a summary or a log's metadata, as :class:`ZmpSimRun` fields."""
     rms = facts.get("zmp_tracking_error_rms")
     return {
-        "pushes": tuple((float(p["start"]), float(p["duration"])) for p in facts.get("pushes", [])),
+        "pushes": tuple(
+            (float(p["start"]), float(p["duration"]), float(p["impulse_norm"])) for p in facts.get("pushes", [])
+        ),
         "tip_time": facts.get("tip_time"),
         "fall_time": facts.get("fall_time") if facts.get("fall") or facts.get("fell") else None,
         "fall_cause": facts.get("fall_cause"),

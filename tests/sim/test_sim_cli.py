@@ -12,6 +12,7 @@ pytest.importorskip("mujoco")
 pytest.importorskip("pinocchio")
 
 from rtgait.cli.main import main
+from rtgait.viz.sim_figure import read_zmp_sim_run
 
 
 def test_simulate_writes_csv_summary_and_figure(
@@ -217,13 +218,20 @@ def test_a_negative_velocity_command_walks_backward(
                               dt=0.005, steps=2, step_length=0.08, short_ends=True)  # fmt: skip
     out = tmp_path / "sim"
     assert main(["simulate", str(scenario), "--velocity", "-0.1,0,0", "--out", str(out), "--no-figures"]) == 0
-    assert "walked 3 of 3 steps without falling" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "walked 3 of 3 steps without falling" in printed
+    # It says it is a velocity walk, with its command: in the printed summary, and in the title the log keeps for
+    # the figure and the replay (rtgait plot draws the figure from it).
+    title = "velocity walk 0.1 m/s backward (back's timing, quasi-real-time)"
+    assert printed.startswith(f"scenario    {title}\n")
+    assert read_zmp_sim_run(out).title == title
     with open(out / "sim.csv", encoding="utf-8") as stream:
         rows = list(csv.DictReader(stream))
     # 0.1 m/s over 0.8 s steps: two 8 cm steps backward, then the feet close.
     assert float(rows[-1]["base_x"]) - float(rows[0]["base_x"]) == pytest.approx(-0.16, abs=0.04)
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     assert summary["mujoco_warnings"] == []
+    assert summary["velocity"] == [{"t": 0.0, "vx": -0.1, "vy": 0.0, "wz": 0.0}]
 
 
 # ----- the controller levels and the periods ----------------------------------------------------------------------
@@ -266,6 +274,7 @@ def test_zmp_sim_in_any_format_on_the_walks_clock_with_its_error_measures(
     assert main([*argv, "--push", "1.0,0.1,50,0"]) == 0
     printed = capsys.readouterr().out
     assert "stabilized" in printed and "from the robot description" in printed and "5.0 N s at 1.00 s" in printed
+    assert printed.startswith("scenario    short (quasi-real-time)\nrobot       talos in MuJoCo, stabilized")
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     assert summary["files"] == ["sim.csv", "sim.parquet", "summary.json", "zmp_sim.svg"]
     assert ElementTree.parse(out / "zmp_sim.svg").getroot().tag == "{http://www.w3.org/2000/svg}svg"
@@ -275,6 +284,13 @@ def test_zmp_sim_in_any_format_on_the_walks_clock_with_its_error_measures(
     assert summary["controller"] == "stabilized" and summary["walk"]["step_width"] == pytest.approx(0.17, abs=1e-3)
     for key in ("missed_landings", "step_adjustments", "foot_slip_max", "fall_cause", "steps_planned"):
         assert key in summary
+    # Each ZMP error measure printed as its median, 95th percentile and RMS, as summary.json has them (mm).
+    motion = "vs the multibody ZMP of the commanded motion"
+    for label, name in (("vs the plan", "vs_plan"), (motion, "vs_commanded_motion")):
+        stats = summary["zmp_error"][name]
+        mm = {key: f"{stats[key] * 1e3:.1f} mm" for key in ("median", "p95", "rms")}
+        assert f"{label}: median {mm['median']}, 95th percentile {mm['p95']}, RMS {mm['rms']}" in printed
+        assert stats["median"] <= stats["p95"] <= stats["max"] and stats["ticks"] > 100
     with open(out / "sim.csv", encoding="utf-8") as stream:
         rows = list(csv.DictReader(stream))
     assert float(rows[0]["t"]) == pytest.approx(-1.5) and min(abs(float(r["t"])) for r in rows) < 1e-9
@@ -288,7 +304,7 @@ def test_the_control_tables_reach_the_walking_controller(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, write_scenario
 ) -> None:
     """robot < scenario < --control, key by key, into the controller the MuJoCo loop runs."""
-    import rtgait.sim.run as run
+    import rtgait.io.sim_run as run
 
     started = []
 
