@@ -62,6 +62,8 @@ from rtgait.core.walk.phases import PhaseInfo, SwingRetarget, phase_info
 from rtgait.core.walk.velocity_command import CommandClampedWarning, StepLimits, VelocityCommand
 from rtgait.core.walk.walk import Walk
 
+_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
+
 
 class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
     """Walking pattern generator that replans at every double-support start and can change steps on the fly.
@@ -286,7 +288,7 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
     def sample(self, t: float) -> GaitSample:
         """COG (pos, vel, acc), ZMP, reference ZMP, feet poses, DCM and support at absolute time ``t`` (s)."""
         values, support, phase = self.sample_values(t)
-        return GaitSample(t, np.array(values), support, phase)
+        return GaitSample(t, np.fromiter(values, float, len(values)), support, phase)
 
     def sample_values(self, t: float) -> tuple[SampleValues, str, int]:
         """As :meth:`sample` but returns the values as a :class:`SampleValues` of plain floats, read by field (for
@@ -345,8 +347,7 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
             left, right = (phase.feet, swing) if phase.support == "left" else (swing, phase.feet)
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw = left
             rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = right
-        # In field order (a tuple display and _make: as fast as filling a list; _make checks the count).
-        values = SampleValues._make((
+        values = _new_tuple(SampleValues, (  # in field order
             cog_x, cog_y, self.config.cog_height, cog_vx, cog_vy, 0.0, cog_ax, cog_ay, 0.0,
             zmp_x, zmp_y, zmp_ref_x, zmp_ref_y,
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw, rfoot_x, rfoot_y, rfoot_z, rfoot_yaw,
