@@ -3,8 +3,9 @@
 A sample is read by name in both of its forms:
 
 * :class:`SampleValues`: the 23 floats of one instant as a named tuple, what
-  :meth:`~rtgait.core.planner.online.OnlinePlanner.sample_values` returns every control tick. A tuple is made as fast
-  as a list, and a field read (``values.dcm_x``) is a C-level item getter;
+  :meth:`~rtgait.core.planner.online.OnlinePlanner.sample_values` returns every control tick: made in one step from
+  the values, read by field (``values.dcm_x``) through a C-level item getter, and still a tuple for code that
+  unpacks it or makes an array of it;
 * :class:`GaitSample`: the same values as a numpy vector with the time, support and phase, what
   :meth:`~rtgait.core.planner.online.OnlinePlanner.sample` returns; its properties give each quantity as an array.
 
