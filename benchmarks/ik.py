@@ -23,6 +23,7 @@ import numpy as np
 
 from rtgait.core.analysis.rollout import rollout
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.core.planner.sample import SampleColumns
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
@@ -39,16 +40,18 @@ def run(robot_name: str, dt: float, iterations: int, tolerance: float) -> dict:
         sole=robot.description.sole,
     )
     walk = rollout(OnlinePlanner(scenario.planner_config(), scenario.strides()), dt, scenario.sole, scenario.changes)
-    rows = walk.values.tolist()
+    cogs = walk.values[:, SampleColumns.cog].tolist()
+    lefts = walk.values[:, SampleColumns.left_foot].tolist()
+    rights = walk.values[:, SampleColumns.right_foot].tolist()
+    rows = [IKTargets(cog, left, right) for cog, left, right in zip(cogs, lefts, rights, strict=True)]
     ik = WholeBodyIK(robot, max_iterations=iterations, tolerance=tolerance)
-    q, _ = ik.solve(IKTargets(rows[0][0:3], rows[0][13:17], rows[0][17:21]), robot.q_half_sitting, 200)
+    q, _ = ik.solve(rows[0], robot.q_half_sitting, 200)
     ticks = np.empty(len(rows) - 1)
     used = np.empty(len(rows) - 1, dtype=int)
     worst = np.zeros(6)
     clock = time.perf_counter
     gc.collect()
-    for k, row in enumerate(rows[1:]):
-        targets = IKTargets(row[0:3], row[13:17], row[17:21])
+    for k, targets in enumerate(rows[1:]):
         start = clock()
         q, errors = ik.solve(targets, q)
         ticks[k] = clock() - start

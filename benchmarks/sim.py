@@ -102,11 +102,12 @@ def parts(robot: RobotModel, scenario_name: str, config: SimConfig) -> dict[str,
         samples[k] = clock() - began
         rows.append(values)
     ik = WholeBodyIK(robot)
-    q, _ = ik.solve(IKTargets(rows[0][0:3], rows[0][13:17], rows[0][17:21]), robot.q_half_sitting, 200, 1e-9)
+    first = rows[0]
+    q, _ = ik.solve(IKTargets(first.cog, first.left_foot, first.right_foot), robot.q_half_sitting, 200, 1e-9)
     solves, targets = np.empty(n), np.empty((n, len(sim.joint_names)))
     for k, row in enumerate(rows):
         began = clock()
-        q, _ = ik.solve(IKTargets(row[0:3], row[13:17], row[17:21]), q, max_iterations=1, tolerance=0.0)
+        q, _ = ik.solve(IKTargets(row.cog, row.left_foot, row.right_foot), q, max_iterations=1, tolerance=0.0)
         solves[k] = clock() - began
         targets[k] = q[7:]
     steps, contacts, measures = _step_times(robot, config, targets)

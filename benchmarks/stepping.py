@@ -62,10 +62,10 @@ def tick_cost(grid: int) -> dict:
         polygon = polygons.get(phase)
         if polygon is None:  # once per phase, as a loop caches it
             polygon = polygons[phase] = support_polygon(planner.contact_feet(phase), SOLE)
-        feedback.update((values[9], values[10]), (values[21], values[22]), dcm, polygon, DT)
+        feedback.update((values.zmp_x, values.zmp_y), (values.dcm_x, values.dcm_y), dcm, polygon, DT)
         cost[k] = clock() - began
         # The robot follows the plan (the benchmark times the loop, not a disturbance).
-        cog, vel, dcm = (values[0], values[1]), (values[3], values[4]), (values[21], values[22])
+        cog, vel, dcm = (values.cog_x, values.cog_y), (values.cog_vx, values.cog_vy), (values.dcm_x, values.dcm_y)
     us = cost / 1e3
     return {"median": float(np.median(us)), "p99": float(np.percentile(us, 99)), "ticks": n}
 
@@ -76,11 +76,11 @@ def _pushed_planner(config: PlannerConfig, push: tuple[float, float]) -> tuple[O
     t_push = planner.phase_start(5) + 0.25
     t = 0.0
     while t < t_push:
-        s = planner.sample_values(t)[0]
-        planner.observe(t, s[0:2], s[3:5])
+        s, _, _ = planner.sample_values(t)
+        planner.observe(t, (s.cog_x, s.cog_y), (s.cog_vx, s.cog_vy))
         t += DT
-    s = planner.sample_values(t)[0]
-    planner.observe(t, s[0:2], (s[3] + push[0], s[4] + push[1]))
+    s, _, _ = planner.sample_values(t)
+    planner.observe(t, (s.cog_x, s.cog_y), (s.cog_vx + push[0], s.cog_vy + push[1]))
     return planner, t
 
 

@@ -57,6 +57,7 @@ from rtgait.core.laws.hip_strategy import HipStrategy
 from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.levels import ControllerLevel, check_level, level_config
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.core.planner.sample import SampleValues
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -169,8 +170,8 @@ class WalkingController:
         values, planned_support, q, left, right, support = self._landings_update(t, m, values, support, q, events)
         self._planner_events(t, events)
 
-        planned_zmp = (values[9], values[10])
-        com = (values[0], values[1], values[2])
+        planned_zmp = (values.zmp_x, values.zmp_y)
+        com = (values.cog_x, values.cog_y, values.cog_z)
         offsets = _NO_OFFSETS
         zmp, com_offset = planned_zmp, (0.0, 0.0)
         shortfall = (0.0, 0.0)
@@ -180,7 +181,7 @@ class WalkingController:
             # The DCM with the planner's w (the measurer's may differ), so that it compares with the plan's.
             w = planner.w
             dcm = (m.com[0] + m.com_vel[0] / w, m.com[1] + m.com_vel[1] / w)
-            out = self.feedback.update(planned_zmp, (values[21], values[22]), dcm, polygon, None, zmp_measured)
+            out = self.feedback.update(planned_zmp, (values.dcm_x, values.dcm_y), dcm, polygon, None, zmp_measured)
             zmp, com_offset = out.zmp, out.com_offset
             if out.saturated and self.hip is not None:
                 # The law asks more than the sole gives: the rest is asked of the upper body's lean.
@@ -202,11 +203,11 @@ class WalkingController:
         left, right = self._landings_ik(t, left, right)
         return _new_tuple(ControlTargets, (
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
-            planned_support, (values[21], values[22]), lean,
+            planned_support, (values.dcm_x, values.dcm_y), lean,
         ))  # fmt: skip
 
     def _dcm_error_replan(
-        self, t: float, m: Measurement, values: list[float], support: str, q: int, events: list[ControlEvent]
+        self, t: float, m: Measurement, values: SampleValues, support: str, q: int, events: list[ControlEvent]
     ) -> bool:
         """``"on-error"``: replan from the measured state when the measured DCM is more than ``replan_dcm_error`` off
         the plan's, as the core's ``observe`` does with ``feedback="measured"`` (at most every
@@ -225,8 +226,8 @@ class WalkingController:
         foot can still go toward the capture point."""
         threshold = self.options.replan_dcm_error
         w = self.planner.w
-        ex = m.com[0] + m.com_vel[0] / w - values[21]
-        ey = m.com[1] + m.com_vel[1] / w - values[22]
+        ex = m.com[0] + m.com_vel[0] / w - values.dcm_x
+        ey = m.com[1] + m.com_vel[1] / w - values.dcm_y
         if ex * ex + ey * ey <= threshold * threshold or t - self._last_error_replan < ERROR_REPLAN_INTERVAL:
             return False
         planner = self.planner
@@ -244,13 +245,13 @@ class WalkingController:
         if replanned is not None and self.options.com_reference == "planned":
             # The footsteps are the measured state's; the COM goes on from where the plan had it, so that the
             # servos keep pulling the robot back: the plan under way remade from the state sampled before.
-            planner.observe(t, (values[0], values[1]), (values[3], values[4]))
+            planner.observe(t, (values.cog_x, values.cog_y), (values.cog_vx, values.cog_vy))
             planner.replan_now(t, "dcm-error-plan", feedback="measured", step_adjustment=False)
             planner.observe(t, m.com[:2], m.com_vel[:2])
         return replanned is not None
 
     @staticmethod
-    def _only_crossing_catches(values: list[float], support: str, ex: float, ey: float) -> bool:
+    def _only_crossing_catches(values: SampleValues, support: str, ex: float, ey: float) -> bool:
         """Whether, in a single support, the DCM error ``(ex, ey)`` (m) points outward from the stance foot more
         than along it: the capture point then moves away from where the swing foot may land (the stride box keeps
         it on its own side, the leg collision model would refuse a crossing step), so no landing catches it and
@@ -258,8 +259,7 @@ class WalkingController:
         (``max_single_support``), when the replan's decision may hold the stance longer (:func:`_lengthens`)."""
         if support not in _SIDES:
             return False
-        i = 13 if support == "left" else 17  # the stance foot's (x, y, z, yaw) in the sample
-        yaw = values[i + 3]
+        yaw = values.lfoot_yaw if support == "left" else values.rfoot_yaw  # the stance foot's
         c, s = math.cos(yaw), math.sin(yaw)
         along, lateral = c * ex + s * ey, -s * ex + c * ey
         outward = lateral if support == "left" else -lateral

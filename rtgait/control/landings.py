@@ -56,6 +56,7 @@ if TYPE_CHECKING:
     from rtgait.control.settings import ControllerOptions
     from rtgait.core.geometry.footsteps import Side
     from rtgait.core.planner.online import OnlinePlanner
+    from rtgait.core.planner.sample import SampleValues
     from rtgait.estimation.state import Landing, Measurement
 
 __all__ = ["FootLandings"]
@@ -114,8 +115,8 @@ class FootLandings:
 
     # ----- the tick ------------------------------------------------------------------------------------------------
     def update(
-        self, t: float, m: Measurement, values: list[float], support: str, q: int, events: list[ControlEvent]
-    ) -> tuple[list[float], str, int, Pose, Pose, str]:
+        self, t: float, m: Measurement, values: SampleValues, support: str, q: int, events: list[ControlEvent]
+    ) -> tuple[SampleValues, str, int, Pose, Pose, str]:
         """This tick's landing bookkeeping at ``t`` (s) for the planner's sample ``values`` in phase ``q`` of
         support ``support``: a new phase (holds end, swings start, late feet), the height offsets, and the landings
         of ``m`` (logged to ``events``; re-anchored in ``"adaptive"``).
@@ -143,7 +144,7 @@ class FootLandings:
             moved, self._moved = self._moved, [None, None]
             if moved[0] is not None or moved[1] is not None:
                 self._start_blends(t, before, self.targets(values), moved)
-        left, right = self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21])
+        left, right = self._foot_target(0, values.left_foot), self._foot_target(1, values.right_foot)
         # The feet the controller acts on (inline: every tick): the plan's, both after an early touch-down, the
         # other while one is late.
         acting = support
@@ -197,7 +198,7 @@ class FootLandings:
             self._blend[i] = (self._z[i], planner.phase_start(q), planner.timeline.duration(q))
 
     def _landing(
-        self, t: float, landing: Landing, values: list[float], support: str, q: int, events: list[ControlEvent]
+        self, t: float, landing: Landing, values: SampleValues, support: str, q: int, events: list[ControlEvent]
     ) -> bool:
         """Classify a landing and, in ``"adaptive"``, act on it; returns whether the planner replanned."""
         i = 0 if landing.side == "left" else 1
@@ -242,7 +243,8 @@ class FootLandings:
             # Stand on it from now on where it landed; it goes on down with the plan (a stiff robot sags: most early
             # landings are that), but no further than late_descent_limit below where it touched (a higher ground).
             self._blend[i] = None
-            floor = values[15 + 4 * i] + self._z[i] - self.options.late_descent_limit
+            planned_z = values.lfoot_z if i == 0 else values.rfoot_z
+            floor = planned_z + self._z[i] - self.options.late_descent_limit
             self._hold[i] = (landing.x, landing.y, landing.yaw, floor)
             self._moved[i] = (landing.x, landing.y, landing.yaw)
         # A swinging foot's target goes on from where it is to where it landed over what is left of the swing (the
@@ -285,7 +287,7 @@ class FootLandings:
                 else:
                     self._z[i] = landed + (level - landed) * (0.0 if s < 0.0 else s)  # max(s, 0.0)
 
-    def _foot_target(self, i: int, planned: list[float]) -> Pose:
+    def _foot_target(self, i: int, planned: Pose) -> Pose:
         """Foot ``i``'s target ``(x, y, z, yaw)`` before foot force control."""
         hold = self._hold[i]
         if hold is not None:  # early touch-down: where it landed, down with the plan to a floor
@@ -293,9 +295,9 @@ class FootLandings:
             return (hold[0], hold[1], hold[3] if hold[3] > z else z, hold[2])  # max(z, floor), without the call
         return (planned[0], planned[1], planned[2] + self._z[i], planned[3])
 
-    def targets(self, values: list[float]) -> tuple[Pose, Pose]:
+    def targets(self, values: SampleValues) -> tuple[Pose, Pose]:
         """Both feet's targets ``(x, y, z, yaw)`` before foot force control, for the sample ``values``."""
-        return self._foot_target(0, values[13:17]), self._foot_target(1, values[17:21])
+        return self._foot_target(0, values.left_foot), self._foot_target(1, values.right_foot)
 
     def _start_blends(
         self,

@@ -15,7 +15,7 @@ import numpy as np
 
 from rtgait.core.analysis.rollout import Rollout
 from rtgait.core.planner.config import PlannerConfig, VelocityLimits
-from rtgait.core.planner.online import SAMPLE_FIELDS
+from rtgait.core.planner.sample import SampleColumns
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.description import RobotError
 from rtgait.robot.ik import WholeBodyIK
@@ -64,7 +64,6 @@ _LABELS = {
     "torso_orientation": "torso orientation error",
     "pelvis_orientation": "pelvis orientation error",
 }
-_COLUMNS = {name: SAMPLE_FIELDS.index(name) for name in ("cog_x", "lfoot_x", "rfoot_x")}
 
 
 class UnreachableError(ValueError):
@@ -202,7 +201,7 @@ def whole_body_motion(
     """
     times = np.asarray(rollout.times, dtype=float)
     n = len(times)
-    cog = rollout.values[:, _COLUMNS["cog_x"] : _COLUMNS["cog_x"] + 3].copy()
+    cog = rollout.values[:, SampleColumns.cog].copy()
     if cog_offset is not None:
         offset = np.asarray(cog_offset, dtype=float)
         if offset.shape != (n, 2):
@@ -210,8 +209,8 @@ def whole_body_motion(
         if not np.isfinite(offset).all():
             raise ValueError("cog_offset must be finite")
         cog[:, :2] += offset
-    left = rollout.values[:, _COLUMNS["lfoot_x"] : _COLUMNS["lfoot_x"] + 4].tolist()
-    right = rollout.values[:, _COLUMNS["rfoot_x"] : _COLUMNS["rfoot_x"] + 4].tolist()
+    left = rollout.values[:, SampleColumns.left_foot].tolist()
+    right = rollout.values[:, SampleColumns.right_foot].tolist()
     cog_rows = cog.tolist()
     limit = dict(ERROR_LIMITS)
     if limits:

@@ -9,7 +9,7 @@ import pytest
 
 from rtgait.core.geometry.footsteps import Timing
 from rtgait.core.laws.guidance import Admittance, HandGuide
-from rtgait.core.planner.online import OnlinePlanner, PlannerConfig
+from rtgait.core.planner.online import SAMPLE_FIELDS, OnlinePlanner, PlannerConfig
 
 CONFIG = PlannerConfig(timing=Timing(0.7, 0.1), connection="quasi-real-time")  # the paper's experiment
 
@@ -40,27 +40,31 @@ def test_bad_admittance_inputs():
 
 
 def lead(pull, seconds: float, dt: float = 0.005):
-    """Walk a planner by the hand; ``pull(t) -> (fx, fy, tz)``. Returns the sampled rows and decision times."""
+    """Walk a planner by the hand; ``pull(t) -> (fx, fy, tz)``. Returns the planner, each sampled value by name (one
+    array over the ticks each) and the decision times."""
     planner = OnlinePlanner(CONFIG, None)
     guide = HandGuide(planner)
     planner.start(0.0)
     rows, decisions = [], []
     for k in range(int(seconds / dt)):
         t = k * dt
-        heading = 0.5 * (rows[-1][16] + rows[-1][20]) if rows else 0.0  # mean yaw of the feet
+        heading = 0.5 * (rows[-1].lfoot_yaw + rows[-1].rfoot_yaw) if rows else 0.0  # mean yaw of the feet
         if guide.update(t, *pull(t), heading):
             decisions.append(t)
-        rows.append(planner.sample_values(t)[0])
-    return planner, np.array(rows), decisions
+        values, _, _ = planner.sample_values(t)
+        rows.append(values)
+    return planner, dict(zip(SAMPLE_FIELDS, np.array(rows).T, strict=True)), decisions
 
 
 def test_a_steady_pull_walks_the_robot_forward_at_the_commanded_speed():
-    planner, rows, _ = lead(lambda t: (17.0, 0.0, 0.0), 12.0)  # (17 - 5) / 60 = 0.2 m/s
-    speed = (rows[-1, 0] - rows[len(rows) // 2, 0]) / 6.0
+    planner, run, _ = lead(lambda t: (17.0, 0.0, 0.0), 12.0)  # (17 - 5) / 60 = 0.2 m/s
+    cog_x = run["cog_x"]
+    speed = (cog_x[-1] - cog_x[len(cog_x) // 2]) / 6.0
     assert speed == pytest.approx(0.2, abs=0.02)
-    residual = rows[:, 9:11] - (rows[:, 0:2] - rows[:, 6:8] / planner.w**2)
-    assert np.abs(residual).max() < 1e-9  # still a pendulum-consistent plan throughout
-    assert np.abs(np.diff(rows[:, 0:2], axis=0)).max() < 0.2 * 0.005 * 3  # no jumps when the command changes
+    for axis in "xy":  # still a pendulum-consistent plan throughout: p = c - c'' / w^2
+        residual = run[f"zmp_{axis}"] - (run[f"cog_{axis}"] - run[f"cog_a{axis}"] / planner.w**2)
+        assert np.abs(residual).max() < 1e-9
+        assert np.abs(np.diff(run[f"cog_{axis}"])).max() < 0.2 * 0.005 * 3  # no jumps when the command changes
 
 
 def test_turn_release_and_decisions_come_one_double_support_before_lift_off():
@@ -71,10 +75,10 @@ def test_turn_release_and_decisions_come_one_double_support_before_lift_off():
             return 17.0, 0.0, 4.0  # keep pulling and twist: turn left
         return 0.0, 0.0, 0.0  # let go: stepping in place
 
-    planner, rows, decisions = lead(pull, 14.0)
-    yaw = 0.5 * (rows[:, 16] + rows[:, 20])
+    planner, run, decisions = lead(pull, 14.0)
+    yaw = 0.5 * (run["lfoot_yaw"] + run["rfoot_yaw"])
     assert yaw[int(8.0 / 0.005)] > yaw[int(4.0 / 0.005)] + 0.3
-    late = rows[int(11.0 / 0.005) :, 0:2]
+    late = np.column_stack([run["cog_x"], run["cog_y"]])[int(11.0 / 0.005) :]
     heading = np.array([np.cos(yaw[-1]), np.sin(yaw[-1])])
     assert np.ptp(late @ heading) < 0.05  # released: the robot no longer advances (it still sways across its heading)
     for t in decisions:

@@ -89,7 +89,8 @@ def _rollout(planner: OnlinePlanner, change_at: float | None = None) -> tuple[np
         if change_at is not None and abs(t - change_at) < DT / 2:
             planner.change_step(planner.first_open_step() + 1, length=0.16, through=planner.n_steps - 1)
         replans = planner.replan_count
-        rows.append(planner.sample_values(t)[0])
+        values, _, _ = planner.sample_values(t)
+        rows.append(values)
         if planner.replan_count != replans:
             if previous is not None:
                 connections.append((previous, planner.current_plan, planner.plans[-1].t))

@@ -9,6 +9,7 @@ import pytest
 
 pin = pytest.importorskip("pinocchio")
 
+from rtgait.core.planner.sample import SampleColumns  # noqa: E402
 from rtgait.interface.task_targets import IKTargets  # noqa: E402
 from rtgait.robot.ik import WholeBodyIK, _yaw_error  # noqa: E402
 from rtgait.robot.model import RobotModel  # noqa: E402
@@ -38,8 +39,8 @@ def fk_errors(robot: RobotModel, q: np.ndarray, targets: IKTargets) -> dict[str,
 
 
 def walk_targets(walk) -> list[IKTargets]:
-    rows = walk.values
-    return [IKTargets(row[0:3], row[13:17], row[17:21]) for row in rows]
+    columns = (SampleColumns.cog, SampleColumns.left_foot, SampleColumns.right_foot)
+    return [IKTargets(*targets) for targets in zip(*(walk.values[:, c] for c in columns), strict=True)]
 
 
 def test_rotation_error_matches_pinocchio_log():

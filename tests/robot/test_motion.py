@@ -8,6 +8,7 @@ import pytest
 pin = pytest.importorskip("pinocchio")
 
 from rtgait.core.analysis.rollout import ScheduledChange  # noqa: E402
+from rtgait.core.planner.sample import SampleColumns  # noqa: E402
 from rtgait.robot.model import BASE_COLUMNS, RobotModel  # noqa: E402
 from rtgait.robot.motion import ERROR_FIELDS, UnreachableError, whole_body_motion  # noqa: E402
 
@@ -16,7 +17,7 @@ def tracking_errors(robot: RobotModel, q: np.ndarray, walk, cog_offset=None) -> 
     """Per-tick distances of the COG and both soles from the plan, by forward kinematics of the full model."""
     model = robot.full_model
     data = model.createData()
-    planned_cog = walk.values[:, 0:3].copy()
+    planned_cog = walk.values[:, SampleColumns.cog].copy()
     if cog_offset is not None:
         planned_cog[:, :2] += cog_offset
     out = {name: np.empty(len(q)) for name in ("cog", "feet", "tilt", "yaw")}
@@ -24,7 +25,10 @@ def tracking_errors(robot: RobotModel, q: np.ndarray, walk, cog_offset=None) -> 
         pin.framesForwardKinematics(model, data, q_full)
         out["cog"][k] = np.linalg.norm(pin.centerOfMass(model, data, q_full) - planned_cog[k])
         feet, tilt, yaw = [], [], []
-        for frame, columns in ((robot.full_left_sole_id, slice(13, 17)), (robot.full_right_sole_id, slice(17, 21))):
+        for frame, columns in (
+            (robot.full_left_sole_id, SampleColumns.left_foot),
+            (robot.full_right_sole_id, SampleColumns.right_foot),
+        ):
             x, y, z, heading = walk.values[k, columns]
             placement = data.oMf[frame]
             feet.append(np.linalg.norm(placement.translation - [x, y, z]))
@@ -54,7 +58,7 @@ def test_talos_follows_fig8(talos, talos_fig8, talos_fig8_motion):
     assert_within_limits(talos.model, motion.q)
     assert_within_limits(talos.full_model, motion.q_full)
     # The swing feet really travel: the walk is 10 steps, the last ones 0.15 m.
-    assert walk.values[-1, 13] > 1.0
+    assert walk.column("lfoot_x")[-1] > 1.0
 
 
 def test_table_names_joints_by_urdf_name(talos, talos_fig8_motion):
@@ -79,7 +83,8 @@ def test_cog_offset_moves_the_cog(talos, plan_walk):
     motion = whole_body_motion(talos, walk, cog_offset=offset)
     measured = tracking_errors(talos, motion.q, walk, cog_offset=offset)
     assert measured["cog"].max() < 1e-5 and measured["feet"].max() < 1e-5
-    np.testing.assert_allclose(motion.cog_target[:, :2], walk.values[:, 0:2] + offset)
+    planned = np.column_stack([walk.column("cog_x"), walk.column("cog_y")])
+    np.testing.assert_allclose(motion.cog_target[:, :2], planned + offset)
     with pytest.raises(ValueError, match=r"cog_offset must have shape \(\d+, 2\)"):
         whole_body_motion(talos, walk, cog_offset=np.zeros((n, 3)))
     with pytest.raises(ValueError, match="cog_offset must be finite"):

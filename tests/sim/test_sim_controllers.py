@@ -48,14 +48,15 @@ def foot_state(pose, fz, cop, loaded) -> FootState:
 def on_plan(t, values, support, dcm_error=(0.0, 0.0), landings=(), loaded=None) -> Measurement:
     """The measurement of a robot exactly on the plan: COM state, DCM, ZMP, and each foot's load and CoP as the ZMP
     split asks; ``loaded`` overrides which feet are loaded (left, right)."""
-    left, right = tuple(values[13:17]), tuple(values[17:21])
-    split = split_zmp((values[9], values[10]), left, right, SOLE, support)
+    left, right = values.left_foot, values.right_foot
+    zmp = (values.zmp_x, values.zmp_y)
+    split = split_zmp(zmp, left, right, SOLE, support)
     fl = split.left_ratio * WEIGHT
     loaded = loaded or (support != "right", support != "left")
-    dcm = (values[21] + dcm_error[0], values[22] + dcm_error[1])
-    com = (values[0] + dcm_error[0], values[1] + dcm_error[1], values[2])
+    dcm = (values.dcm_x + dcm_error[0], values.dcm_y + dcm_error[1])
+    com = (values.cog_x + dcm_error[0], values.cog_y + dcm_error[1], values.cog_z)
     return Measurement(
-        t, com, tuple(values[3:6]), dcm, (values[9], values[10]), WEIGHT,
+        t, com, (values.cog_vx, values.cog_vy, values.cog_vz), dcm, zmp, WEIGHT,
         foot_state(left, fl, split.left_cop, loaded[0]), foot_state(right, WEIGHT - fl, split.right_cop, loaded[1]),
         tuple(landings), 0,
     )  # fmt: skip
@@ -82,10 +83,10 @@ def test_on_the_plan_every_level_gives_the_plan(level):
         values, support, _ = plan.sample_values(t)
         out = ctl.tick(t, on_plan(t, values, support))
         errors = [
-            *(a - b for a, b in zip(out.com, values[0:3], strict=True)),
-            *(a - b for a, b in zip(out.left_foot, values[13:17], strict=True)),
-            *(a - b for a, b in zip(out.right_foot, values[17:21], strict=True)),
-            out.zmp_command[0] - values[9], out.zmp_command[1] - values[10], *out.offsets, *out.com_offset,
+            *(a - b for a, b in zip(out.com, values.cog, strict=True)),
+            *(a - b for a, b in zip(out.left_foot, values.left_foot, strict=True)),
+            *(a - b for a, b in zip(out.right_foot, values.right_foot, strict=True)),
+            out.zmp_command[0] - values.zmp_x, out.zmp_command[1] - values.zmp_y, *out.offsets, *out.com_offset,
         ]  # fmt: skip
         worst = max(worst, max(abs(e) for e in errors))
         assert out.support == support and not [e for e in out.events if e.kind != "replan"]
@@ -94,13 +95,35 @@ def test_on_the_plan_every_level_gives_the_plan(level):
     assert worst < (1e-6 if level == "adaptive" else 1e-12)
 
 
+def test_the_targets_are_the_plans_quantities_by_name():
+    """The open-loop targets against the plan's closed form (COM, ZMP, DCM = c + c'/w) and the footprints (feet in
+    double support), not against the sample: a sample field the controller reads under another name fails here."""
+    ctl = controller("open-loop", steps=2)
+    planner, w = ctl.planner, ctl.planner.w
+    reference_apart = 0.0
+    for k in range(0, round(planner.end_time / DT), 7):
+        t = k * DT
+        values, support, _ = planner.sample_values(t)  # the measurement's (open loop: not acted on)
+        out = ctl.tick(t, on_plan(t, values, support))
+        plan = planner.current_plan
+        cog, vel, _ = (a[0] for a in plan.evaluate(t))
+        assert out.com == pytest.approx((*cog, CONFIG.cog_height), abs=1e-9)
+        assert out.zmp_planned == pytest.approx(plan.zmp.evaluate(t)[0], abs=1e-9) == out.zmp_command
+        assert out.dcm_planned == pytest.approx(cog + vel / w, abs=1e-9)
+        if support == "double":
+            feet = {f.side: (f.x, f.y, 0.0, f.yaw) for f in planner.contact_feet(out.phase)}
+            assert (out.left_foot, out.right_foot) == (pytest.approx(feet["left"]), pytest.approx(feet["right"]))
+        reference_apart = max(reference_apart, math.dist(out.zmp_planned, (values.zmp_ref_x, values.zmp_ref_y)))
+    assert reference_apart > 1e-5, "the walk tells the planned ZMP from the reference ZMP"
+
+
 def test_the_measurement_filter_lags_by_little():
     ctl, plan = controller("stabilized", steps=2, options=ControllerOptions()), reference(steps=2)
     worst = 0.0
     for k in range(round(plan.end_time / DT)):
         values, support, _ = plan.sample_values(k * DT)
         out = ctl.tick(k * DT, on_plan(k * DT, values, support))
-        worst = max(worst, abs(out.com[0] - values[0]), abs(out.com[1] - values[1]), *map(abs, out.offsets))
+        worst = max(worst, abs(out.com[0] - values.cog_x), abs(out.com[1] - values.cog_y), *map(abs, out.offsets))
     assert 0.0 < worst < 1e-3
 
 
@@ -117,9 +140,10 @@ def test_a_dcm_error_shifts_the_zmp_ahead_and_pulls_the_com_target_back(axis):
     # target against it (a COM accelerated backward moves the ZMP forward, p = c - c''/w^2).
     gains = ctl.options.dcm
     expected = (1.0 + gains.k_p / ctl.planner.w) * error[axis]
-    assert sign * (out.zmp_command[axis] - values[9 + axis]) >= abs(expected)
+    planned_zmp = (values.zmp_x, values.zmp_y)
+    assert sign * (out.zmp_command[axis] - planned_zmp[axis]) >= abs(expected)
     assert sign * out.com_offset[axis] < -1e-4
-    assert out.com[axis] - values[axis] == pytest.approx(out.com_offset[axis])
+    assert out.com[axis] - values.cog[axis] == pytest.approx(out.com_offset[axis])
     assert out.com_offset[1 - axis] == pytest.approx(0.0, abs=1e-9)
 
 
@@ -127,7 +151,7 @@ def test_open_loop_ignores_errors():
     ctl, plan = controller("open-loop"), reference()
     values, support, _ = plan.sample_values(0.05)
     out = ctl.tick(0.05, on_plan(0.05, values, support, dcm_error=(0.05, 0.05)))
-    assert out.com == tuple(values[0:3]) and out.zmp_command == (values[9], values[10])
+    assert out.com == values.cog and out.zmp_command == (values.zmp_x, values.zmp_y)
 
 
 def test_adaptive_observes_every_tick(monkeypatch):
@@ -163,6 +187,11 @@ def walk_to(ctl, t_end, t=0.0, **overrides):
     return out, t
 
 
+def planned_height(values, swing):
+    """The plan's height (m) of the swing foot ``swing`` (0 left, 1 right) in the sample ``values``."""
+    return values.lfoot_z if swing == 0 else values.rfoot_z
+
+
 def first_swing(ctl):
     """Phase 1, the first single support: its start, duration, and which foot swings (0 left, 1 right)."""
     planner = ctl.planner
@@ -180,7 +209,7 @@ def test_adaptive_early_touchdown_reanchors_and_switches_support(blend):
     target = planner.footprints()[2]  # where the swing foot was to land
     landing = Landing(t, side, target.x + 0.012, target.y - 0.006, 0.001, target.yaw + 0.01, 0.0, 0.0, 40.0)
     values, support, _ = planner.sample_values(t)
-    swing_z = values[15 + 4 * swing]
+    swing_z = planned_height(values, swing)
     loaded = (True, True)
     out = ctl.tick(t, on_plan(t, values, support, landings=[landing], loaded=loaded))
     kinds = [(e.kind, e.detail) for e in out.events]
@@ -192,7 +221,7 @@ def test_adaptive_early_touchdown_reanchors_and_switches_support(blend):
     # target gets there at once, or with a blend over anchor_blend from where the plan had it (x, y, yaw).
     floor = swing_z - ctl.options.late_descent_limit
     held = out.left_foot if swing == 0 else out.right_foot
-    planned = values[13 + 4 * swing : 17 + 4 * swing]
+    planned = values.left_foot if swing == 0 else values.right_foot
     start_pose = (landing.x, landing.y, landing.yaw) if blend == 0.0 else (planned[0], planned[1], planned[3])
     assert held == pytest.approx((*start_pose[:2], max(swing_z, floor), start_pose[2]), abs=1e-9)
     landed_at, lowest = t, swing_z
@@ -201,7 +230,7 @@ def test_adaptive_early_touchdown_reanchors_and_switches_support(blend):
         values, support, _ = planner.sample_values(t)
         out = ctl.tick(t, on_plan(t, values, support, loaded=loaded))
         assert out.support == "double"
-        z = values[15 + 4 * swing]
+        z = planned_height(values, swing)
         lowest = min(lowest, z)
         foot = out.left_foot if swing == 0 else out.right_foot
         if t >= landed_at + ctl.options.anchor_blend:
@@ -263,9 +292,9 @@ def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_gro
     out, t = walk_to(ctl, planner.phase_start(5), t)
     assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(ground, abs=1e-12)
     middle = planner.phase_start(5) + 0.5 * planner.timeline.duration(5)
-    values = planner.sample_values(middle)[0]
+    values, _, _ = planner.sample_values(middle)
     out, t = walk_to(ctl, middle + DT, t)
-    blended = (out.left_foot if swing == 0 else out.right_foot)[2] - values[15 + 4 * swing]
+    blended = (out.left_foot if swing == 0 else out.right_foot)[2] - planned_height(values, swing)
     assert blended == pytest.approx(0.5 * ground, abs=1e-9)
     out, t = walk_to(ctl, planner.phase_start(6) + DT, t)
     assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(0.0, abs=1e-9)
@@ -331,7 +360,7 @@ def test_adaptive_keeps_the_plan_for_an_outward_dcm_error_in_single_support(outw
             walk_to(ctl, t)
         out = ctl.tick(t, on_plan(t, values, support, dcm_error=error))
         events += out.events
-        worst = max(worst, math.dist(out.com[:2], (values[0], values[1])) - math.hypot(*out.com_offset))
+        worst = max(worst, math.dist(out.com[:2], (values.cog_x, values.cog_y)) - math.hypot(*out.com_offset))
     kinds = {e.kind for e in events}
     if options is LENGTHENING:
         assert "replan" in kinds and "replan-skipped" not in kinds

@@ -35,8 +35,9 @@ def test_a_feasible_walk_is_walked(talos, short_walk):
     assert result.steps_planned == scenario.steps + 1
     assert result.steps_completed == result.steps_planned
     # The robot ends where the plan ends: COG over the last footprints (0.05 m x 3 + 0.15 m ahead).
-    np.testing.assert_allclose(result.cog[-1, :2], plan.values[-1, 0:2], atol=0.02)
-    assert plan.values[-1, 0] == pytest.approx(0.30, abs=1e-9)
+    end = (plan.column("cog_x")[-1], plan.column("cog_y")[-1])
+    np.testing.assert_allclose(result.cog[-1, :2], end, atol=0.02)
+    assert end[0] == pytest.approx(0.30, abs=1e-9)
     assert result.distance_walked == pytest.approx(0.30, abs=0.03)
     # The measured ZMP follows the plan: centimetres, the sole being 0.21 x 0.13 m.
     assert result.zmp_tracking_error_rms < 0.05

@@ -48,6 +48,7 @@ from rtgait.core.geometry.hull import outside_margin, sole_extents, two_box_hull
 from rtgait.core.lipm.closed_form import omega
 from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.planner_walk import WalkQueries
+from rtgait.core.planner.sample import SampleValues
 from rtgait.core.walk.phases import PhaseInfo, phase_info
 from rtgait.core.walk.walk import StepLimits, Walk
 
@@ -222,8 +223,8 @@ class PreviewPlanner(WalkQueries):
         self._x = gains.A @ self._x + np.outer(gains.B, u)
         self._k = k
 
-    def sample_values(self, t: float) -> tuple[list[float], str, int]:
-        """The sample at ``t`` (s) in :data:`~rtgait.core.planner.sample.SAMPLE_FIELDS` order, its support and phase."""
+    def sample_values(self, t: float) -> tuple[SampleValues, str, int]:
+        """The sample at ``t`` (s) (:class:`~rtgait.core.planner.sample.SampleValues`), its support and phase."""
         if not math.isfinite(self._t0):
             raise RuntimeError("call start() before sample()")
         rel = t - self._t0
@@ -237,22 +238,25 @@ class PreviewPlanner(WalkQueries):
         if phase is None or not phase.start <= rel < phase.end:
             phase = self._phase = phase_info(self._walk, self.timeline, rel, None)
             self._walk.reach(phase.index)
-        x, C = self._x, self.gains.C
-        out = [0.0] * 23
-        out[0:2], out[2] = x[0].tolist(), self.config.cog_height
-        out[3:5], out[6:8] = x[1].tolist(), x[2].tolist()
-        out[9:11] = (C @ x).tolist()
-        out[11:13] = self._references()[max(target, 0)].tolist()
-        out[21:23] = (x[0] + x[1] / self.w).tolist()
-        if phase.swing_from is None:
-            out[13:21] = phase.feet
+        x = self._x  # rows: COG position, velocity, acceleration; columns: the axes
+        (cog_x, cog_y), (cog_vx, cog_vy), (cog_ax, cog_ay) = x.tolist()
+        zmp_x, zmp_y = (self.gains.C @ x).tolist()
+        zmp_ref_x, zmp_ref_y = self._references()[max(target, 0)].tolist()
+        dcm_x, dcm_y = (x[0] + x[1] / self.w).tolist()
+        if phase.swing_from is None:  # both feet on the ground, left then right
+            lfoot_x, lfoot_y, lfoot_z, lfoot_yaw, rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = phase.feet
         else:
             swing = phase.swing(rel, self.config.step_height)
-            if phase.support == "left":
-                out[13:17], out[17:21] = phase.feet, swing
-            else:
-                out[13:17], out[17:21] = swing, phase.feet
-        return out, phase.support, phase.index
+            left, right = (phase.feet, swing) if phase.support == "left" else (swing, phase.feet)
+            lfoot_x, lfoot_y, lfoot_z, lfoot_yaw = left
+            rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = right
+        values = SampleValues(
+            cog_x=cog_x, cog_y=cog_y, cog_z=self.config.cog_height, cog_vx=cog_vx, cog_vy=cog_vy, cog_vz=0.0,
+            cog_ax=cog_ax, cog_ay=cog_ay, cog_az=0.0, zmp_x=zmp_x, zmp_y=zmp_y, zmp_ref_x=zmp_ref_x,
+            zmp_ref_y=zmp_ref_y, lfoot_x=lfoot_x, lfoot_y=lfoot_y, lfoot_z=lfoot_z, lfoot_yaw=lfoot_yaw,
+            rfoot_x=rfoot_x, rfoot_y=rfoot_y, rfoot_z=rfoot_z, rfoot_yaw=rfoot_yaw, dcm_x=dcm_x, dcm_y=dcm_y,
+        )  # fmt: skip
+        return values, phase.support, phase.index
 
 
 # ----- many walks at once --------------------------------------------------------------------------------------

@@ -17,6 +17,7 @@ from rtgait.core.geometry.footsteps import Footstep, SoleRect
 from rtgait.core.geometry.support import signed_margin, support_polygon
 from rtgait.core.limits import MAX_ROLLOUT_TICKS, MIN_DT
 from rtgait.core.planner.online import SAMPLE_FIELDS, OnlinePlanner, PlanRecord
+from rtgait.core.planner.sample import SampleColumns
 
 
 @dataclass(frozen=True)
@@ -39,7 +40,8 @@ class Rollout:
 
     Attributes:
         times: tick times (s), shape ``(k,)``.
-        values: samples in :data:`~rtgait.core.planner.online.SAMPLE_FIELDS` order, shape ``(k, 21)``.
+        values: samples in :data:`~rtgait.core.planner.online.SAMPLE_FIELDS` order, shape ``(k, 23)``; a quantity's
+            columns are :class:`~rtgait.core.planner.sample.SampleColumns`, one value's :meth:`column`.
         support: ``"double"``, ``"left"`` or ``"right"`` per tick.
         phase: phase index per tick.
         margin: signed ZMP margin to the support polygon per tick (m, positive inside).
@@ -164,7 +166,7 @@ def rollout(
             progress(k / n_ticks)
     if progress is not None:
         progress(1.0)
-    zmp = values[:, SAMPLE_FIELDS.index("zmp_x") : SAMPLE_FIELDS.index("zmp_y") + 1]
+    zmp = values[:, SampleColumns.zmp]
     # Footprints may still move until their step is committed: take the ones the walk ended with.
     contacts = {q: _final_contacts(planner, q, feet) for q, feet in contacts.items()}
     polygons = {q: support_polygon(feet, sole) for q, feet in contacts.items()}

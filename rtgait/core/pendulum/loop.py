@@ -59,6 +59,7 @@ from rtgait.core.pendulum.result import ClosedLoopResult
 from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR, ControllerLevel, check_level, level_config
 from rtgait.core.planner.online import OnlinePlanner, PlanRecord
+from rtgait.core.planner.sample import SampleValues
 from rtgait.core.push import Push
 
 DEFAULT_DT = 0.001
@@ -93,19 +94,21 @@ class _SupportCache:
         self.key: tuple[object, ...] | None = None
         self.polygon = np.zeros((0, 2))
 
-    def get(self, values: list[float], support: str) -> np.ndarray:
+    def get(self, values: SampleValues, support: str) -> np.ndarray:
+        left = (values.lfoot_x, values.lfoot_y, values.lfoot_yaw)  # the ground pose (x, y, yaw) of each foot
+        right = (values.rfoot_x, values.rfoot_y, values.rfoot_yaw)
         if support == "double":
-            key: tuple[object, ...] = (support, values[13], values[14], values[16], values[17], values[18], values[20])
+            key: tuple[object, ...] = (support, left, right)
         elif support == "left":
-            key = (support, values[13], values[14], values[16])
+            key = (support, left)
         else:
-            key = (support, values[17], values[18], values[20])
+            key = (support, right)
         if key != self.key:
             feet = []
             if support != "right":
-                feet.append(Footstep(values[13], values[14], values[16], "left"))
+                feet.append(Footstep(*left, "left"))
             if support != "left":
-                feet.append(Footstep(values[17], values[18], values[20], "right"))
+                feet.append(Footstep(*right, "right"))
             self.polygon = support_polygon(feet, self.sole)
             self.key = key
         return self.polygon
@@ -186,11 +189,12 @@ def run_pendulum_loop(
 
     hand_over(0.0)
     current = planner.sample_values(0.0)
+    standing, standing_support, _ = current
     w = planner.w
     # The plant starts on the plan: the planner's standing COM, at rest.
     plant = LipmPlant(
-        planner.config.cog_height, mass, planner.config.gravity, (current[0][0], current[0][1]),
-        (current[0][3], current[0][4]), time=0.0, fall_distance=fall_distance, pushes=pushes,
+        planner.config.cog_height, mass, planner.config.gravity, (standing.cog_x, standing.cog_y),
+        (standing.cog_vx, standing.cog_vy), time=0.0, fall_distance=fall_distance, pushes=pushes,
     )  # fmt: skip
     feedback = None if controller == "open-loop" else DcmFeedback(w, gains, dt)
     decay = math.exp(w * dt)
@@ -202,7 +206,7 @@ def run_pendulum_loop(
     fell, fall_time = False, None
     steps_completed = 0
     landing_phase, landing_time = -1, math.inf  # the single support under way and the instant its swing lands
-    polygon = supports.get(current[0], current[1])
+    polygon = supports.get(standing, standing_support)
     expected = (duration if duration is not None else planner.end_time + end_margin) / dt
     report_every = max(int(expected) // 50, 1)
     plans: list[PlanRecord] = []
@@ -223,7 +227,7 @@ def run_pendulum_loop(
         values, support, q = current
         polygon = supports.get(values, support)
         dcm_x, dcm_y = cx + vx / w, cy + vy / w
-        row_head = (t, values[0], values[1], values[21], values[22], values[9], values[10])
+        row_head = (t, values.cog_x, values.cog_y, values.dcm_x, values.dcm_y, values.zmp_x, values.zmp_y)
         if plant.fallen(polygon):
             fell, fall_time = True, t
             nan = math.nan
@@ -247,13 +251,13 @@ def run_pendulum_loop(
                 planner.touchdown(t, foot.side, foot.x, foot.y, foot.yaw)
         hand_over(t_next)
         following = planner.sample_values(t_next)
-        upcoming = following[0]
+        upcoming, _, _ = following
         if adaptive and planner.replan_count != replans:
             # A plan from the measured state began inside the tick: the two DCMs belong to different plans.
-            ref_x, ref_y = values[9], values[10]
+            ref_x, ref_y = values.zmp_x, values.zmp_y
         else:
-            ref_x = (upcoming[21] - decay * values[21]) * hold
-            ref_y = (upcoming[22] - decay * values[22]) * hold
+            ref_x = (upcoming.dcm_x - decay * values.dcm_x) * hold
+            ref_y = (upcoming.dcm_y - decay * values.dcm_y) * hold
 
         # ----- controller and plant ----------------------------------------------------------------------------
         if feedback is None:
@@ -261,7 +265,7 @@ def run_pendulum_loop(
             real_x, real_y = plant.step(dt, (cmd_x, cmd_y), polygon).tolist()
             saturated = real_x != cmd_x or real_y != cmd_y
         else:
-            out = feedback.update((ref_x, ref_y), (values[21], values[22]), (dcm_x, dcm_y), polygon, dt)
+            out = feedback.update((ref_x, ref_y), (values.dcm_x, values.dcm_y), (dcm_x, dcm_y), polygon, dt)
             cmd_x, cmd_y = out.zmp
             real_x, real_y = plant.step(dt, (cmd_x, cmd_y), polygon).tolist()
             saturated = out.saturated

@@ -65,10 +65,10 @@ class MeasuredPlanning:
         With ``feedback="measured"`` each new plan connects from it, propagated to the connection instant by the
         pendulum (the planned ZMP drives both, so the deviation from the plan evolves as the free pendulum).
         """
-        values = (float(t), float(cog[0]), float(cog[1]), float(cog_vel[0]), float(cog_vel[1]))
+        t, cx, cy, vx, vy = values = (float(t), float(cog[0]), float(cog[1]), float(cog_vel[0]), float(cog_vel[1]))
         # One finiteness test of the sum first (every tick): a NaN or an infinity makes it non-finite, and only
         # then (or on an overflow of huge finite values) are the values tested one by one.
-        if not math.isfinite(values[0] + values[1] + values[2] + values[3] + values[4]) and not all(
+        if not math.isfinite(t + cx + cy + vx + vy) and not all(
             math.isfinite(v) for v in values
         ):
             raise ValueError(f"observe needs a finite time, COG and COG velocity, got {values}")
@@ -81,8 +81,8 @@ class MeasuredPlanning:
         planned = plan.cog_at(t, w)
         self._observed_on_plan = (plan, t, planned)  # the connection from this observation needs it again
         px, py, pvx, pvy = planned
-        ex = values[1] + values[3] / w - px - pvx / w
-        ey = values[2] + values[4] / w - py - pvy / w
+        ex = cx + vx / w - px - pvx / w
+        ey = cy + vy / w - py - pvy / w
         if ex * ex + ey * ey > threshold * threshold and t - self._last_auto_replan >= AUTO_REPLAN_INTERVAL:
             phase, rel = self._phase, t - self._t0
             if phase is not None and phase.start <= rel < phase.end and phase.end - rel < AUTO_MIN_REMAINDER:

@@ -54,11 +54,13 @@ from rtgait.core.planner.config import (
 from rtgait.core.planner.layouts import PlanShapes
 from rtgait.core.planner.measured import MeasuredPlanning
 from rtgait.core.planner.planner_walk import PlannerWalk
-from rtgait.core.planner.sample import SAMPLE_FIELDS, GaitSample, PlanRecord
+from rtgait.core.planner.sample import SAMPLE_FIELDS, GaitSample, PlanRecord, SampleColumns, SampleValues
 from rtgait.core.walk.changes import StepChangeTooLateError, StopCancelledWarning
 from rtgait.core.walk.phases import PhaseInfo, SwingRetarget, phase_info
 from rtgait.core.walk.velocity_command import CommandClampedWarning, StepLimits, VelocityCommand
 from rtgait.core.walk.walk import Walk
+
+_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 
 
 class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
@@ -290,10 +292,11 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
     def sample(self, t: float) -> GaitSample:
         """COG (pos, vel, acc), ZMP, reference ZMP, feet poses, DCM and support at absolute time ``t`` (s)."""
         values, support, phase = self.sample_values(t)
-        return GaitSample(t, np.array(values), support, phase)
+        return GaitSample(t, np.fromiter(values, float, len(values)), support, phase)
 
-    def sample_values(self, t: float) -> tuple[list[float], str, int]:
-        """As :meth:`sample` but returns plain floats in :data:`SAMPLE_FIELDS` order (for tight loops)."""
+    def sample_values(self, t: float) -> tuple[SampleValues, str, int]:
+        """As :meth:`sample` but returns the values as a :class:`SampleValues` of plain floats, read by field (for
+        tight loops), with the support and the phase."""
         if t >= self._commit_time:
             if self._auto.commit(t):
                 self._phase = None  # the swing target of the phase being sampled may have moved
@@ -327,34 +330,36 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
         w = self.w
         e = math.exp(w * tau)
         ch, sh = 0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e)
-        out = [0.0] * 23
-        out[2] = self.config.cog_height
+        axes = []  # per horizontal axis: (cog, vel, acc, zmp, zmp_ref, dcm)
         for axis, coeffs in enumerate(plan.segment(j)):
             a0, a1, a2, a3, a4, A0, A1, A2, A3, A4, V, W = coeffs
             hom = V * ch + W * sh
             cog = hom + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4)))
             vel = w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4))
-            out[axis] = cog
-            out[3 + axis] = vel
-            out[6 + axis] = w * w * hom + 2.0 * A2 + tau * (6.0 * A3 + tau * 12.0 * A4)
+            acc = w * w * hom + 2.0 * A2 + tau * (6.0 * A3 + tau * 12.0 * A4)
             zmp = a0 + tau * (a1 + tau * (a2 + tau * (a3 + tau * a4)))
-            out[9 + axis] = zmp
-            out[21 + axis] = cog + vel / w
             if j == 0:
                 r0, r1, r2, r3 = plan.first_reference[axis]
                 s = tau + plan.reference_offset
-                out[11 + axis] = r0 + s * (r1 + s * (r2 + s * r3))
+                zmp_ref = r0 + s * (r1 + s * (r2 + s * r3))
             else:
-                out[11 + axis] = zmp
-        if phase.swing_from is None:
-            out[13:21] = phase.feet
+                zmp_ref = zmp
+            axes.append((cog, vel, acc, zmp, zmp_ref, cog + vel / w))
+        (cog_x, cog_vx, cog_ax, zmp_x, zmp_ref_x, dcm_x), (cog_y, cog_vy, cog_ay, zmp_y, zmp_ref_y, dcm_y) = axes
+        if phase.swing_from is None:  # both feet on the ground, left then right
+            lfoot_x, lfoot_y, lfoot_z, lfoot_yaw, rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = phase.feet
         else:
             swing = phase.swing(rel, self.config.step_height)
-            if phase.support == "left":
-                out[13:17], out[17:21] = phase.feet, swing
-            else:
-                out[13:17], out[17:21] = swing, phase.feet
-        return out, phase.support, q
+            left, right = (phase.feet, swing) if phase.support == "left" else (swing, phase.feet)
+            lfoot_x, lfoot_y, lfoot_z, lfoot_yaw = left
+            rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = right
+        values = _new_tuple(SampleValues, (  # in field order
+            cog_x, cog_y, self.config.cog_height, cog_vx, cog_vy, 0.0, cog_ax, cog_ay, 0.0,
+            zmp_x, zmp_y, zmp_ref_x, zmp_ref_y,
+            lfoot_x, lfoot_y, lfoot_z, lfoot_yaw, rfoot_x, rfoot_y, rfoot_z, rfoot_yaw,
+            dcm_x, dcm_y,
+        ))  # fmt: skip
+        return values, phase.support, q
 
     def _earliest(self) -> float:
         return self._t0 if self._plan is None else self._plan.t_start
@@ -393,6 +398,8 @@ __all__ = [
     "OnlinePlanner",
     "PlanRecord",
     "PlannerConfig",
+    "SampleColumns",
+    "SampleValues",
     "StepChangeTooLateError",
     "StopCancelledWarning",
     "VelocityCommand",
