@@ -55,7 +55,7 @@ from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.loading import load_scenario
-from rtgait.sim.ground_truth import GroundTruthReader
+from rtgait.sim.contact_reading import ContactReader
 from rtgait.sim.model import SimConfig, build_sim_model
 
 
@@ -68,7 +68,7 @@ def _step_times(robot: RobotModel, config: SimConfig, targets: np.ndarray) -> tu
     sim = build_sim_model(robot, config)
     data = sim.new_data()
     measurer = SimMeasurer.for_sim(sim)
-    reader = GroundTruthReader.for_sim(sim).contacts
+    reader = ContactReader.for_sim(sim)
     clock = time.perf_counter
     steps, contacts, measures = [], np.empty(len(targets)), np.empty(len(targets))
     for k, row in enumerate(targets):

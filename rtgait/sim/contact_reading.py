@@ -27,12 +27,15 @@ its four edge forces; the centre of pressure of the soles is ``(sum p_x f_n, sum
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import mujoco
 import numpy as np
 
 from rtgait.sim.step_snapshot import StepSnapshot
+
+if TYPE_CHECKING:
+    from rtgait.sim.model import SimModel
 
 __all__ = ["ContactReader", "ContactSums"]
 
@@ -94,6 +97,7 @@ class ContactReader:
         right_geoms: Iterable[int] | None = None,
     ) -> None:
         self.model = model
+        self.base_body, self.left_site, self.right_site = int(base_body), int(left_site), int(right_site)
         # geom id -> 1 (left foot), 2 (right foot), -1 (another part of the robot), 0 (the environment).
         root = int(model.body_rootid[int(base_body)])
         owner = [-1 if int(model.body_rootid[b]) == root else 0 for b in model.geom_bodyid.tolist()]
@@ -107,6 +111,14 @@ class ContactReader:
         self._sole_geoms = (int(left_sole_geom), int(right_sole_geom))
         self._force = np.zeros(6)  # the one buffer mj_contactForce writes into (contacts not decoded here)
         self._pyramidal = model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL
+
+    @classmethod
+    def for_sim(cls, sim: SimModel) -> ContactReader:
+        """The reader of a :class:`~rtgait.sim.model.SimModel`: its base body, sole sites and sole boxes."""
+        return cls(
+            sim.model, base_body=sim.base_body, left_site=sim.left_sole_site, right_site=sim.right_sole_site,
+            left_sole_geom=sim.left_sole_geom, right_sole_geom=sim.right_sole_geom,
+        )  # fmt: skip
 
     def read(self, data: mujoco.MjData, snapshot: StepSnapshot) -> ContactSums:
         """The sums of the contacts of ``snapshot`` (:func:`~rtgait.sim.step_snapshot.read_snapshot` of ``data``)."""

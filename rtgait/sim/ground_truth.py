@@ -18,7 +18,6 @@ after ``mj_forward`` to ``data.time``. The caller stamps the truth with its tick
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 import mujoco
@@ -40,45 +39,23 @@ class GroundTruthReader:
     """The ground truth of a simulated humanoid at each tick (module docstring).
 
     Args:
-        model: the compiled MuJoCo model.
-        base_body: body id of the floating base (the robot is its subtree).
-        left_site, right_site: site ids at the sole frames (x forward, z out of the sole).
-        left_sole_geom, right_sole_geom, left_geoms, right_geoms: the feet's geoms
-            (:class:`~rtgait.sim.contact_reading.ContactReader`).
+        contacts: the reader of its contacts; its base body and sole sites are the robot's.
 
     Stateless but for views of the last ``MjData`` read; :meth:`read` allocates tuples of Python floats and no numpy
     array.
     """
 
-    def __init__(
-        self,
-        model: mujoco.MjModel,
-        *,
-        base_body: int,
-        left_site: int,
-        right_site: int,
-        left_sole_geom: int = -1,
-        right_sole_geom: int = -1,
-        left_geoms: Iterable[int] | None = None,
-        right_geoms: Iterable[int] | None = None,
-    ) -> None:
-        self.model = model
-        self.base_body = int(base_body)
-        self.left_site, self.right_site = int(left_site), int(right_site)
-        self.contacts = ContactReader(
-            model, base_body=base_body, left_site=left_site, right_site=right_site, left_sole_geom=left_sole_geom,
-            right_sole_geom=right_sole_geom, left_geoms=left_geoms, right_geoms=right_geoms,
-        )  # fmt: skip
+    def __init__(self, contacts: ContactReader) -> None:
+        self.contacts = contacts
+        self.model = contacts.model
+        self.base_body, self.left_site, self.right_site = contacts.base_body, contacts.left_site, contacts.right_site
         self._rows_of: mujoco.MjData | None = None
         self._base_rows: tuple[np.ndarray, np.ndarray] = (np.zeros(3), np.zeros(3))
 
     @classmethod
     def for_sim(cls, sim: SimModel) -> GroundTruthReader:
-        """The reader of a :class:`~rtgait.sim.model.SimModel`: its base body and sole sites."""
-        return cls(
-            sim.model, base_body=sim.base_body, left_site=sim.left_sole_site, right_site=sim.right_sole_site,
-            left_sole_geom=sim.left_sole_geom, right_sole_geom=sim.right_sole_geom,
-        )  # fmt: skip
+        """The reader of a :class:`~rtgait.sim.model.SimModel`."""
+        return cls(ContactReader.for_sim(sim))
 
     def read(
         self,

@@ -15,6 +15,7 @@ import mujoco
 from rtgait.estimation.ground_truth import GroundTruthEstimator
 from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME
 from rtgait.estimation.state import Measurement
+from rtgait.sim.contact_reading import ContactReader
 from rtgait.sim.ground_truth import GroundTruthReader
 from rtgait.sim.step_snapshot import StepSnapshot
 
@@ -56,10 +57,11 @@ class SimMeasurer:
         min_force: float | None = None,
         ground_height: float = 0.0,
     ) -> None:
-        self.reader = GroundTruthReader(
+        contacts = ContactReader(
             model, base_body=base_body, left_site=left_site, right_site=right_site, left_geoms=left_geoms,
             right_geoms=right_geoms,
         )  # fmt: skip
+        self.reader = GroundTruthReader(contacts)
         self.mass = float(model.body_subtreemass[int(base_body)]) if mass is None else float(mass)
         weight = self.mass * float(-model.opt.gravity[2])
         if not weight > 0.0:

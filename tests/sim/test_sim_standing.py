@@ -10,7 +10,7 @@ pytest.importorskip("pinocchio")
 
 from rtgait.interface.task_targets import IKTargets  # noqa: E402
 from rtgait.robot.ik import WholeBodyIK  # noqa: E402
-from rtgait.sim.ground_truth import GroundTruthReader  # noqa: E402
+from rtgait.sim.contact_reading import ContactReader  # noqa: E402
 from rtgait.sim.step_snapshot import read_snapshot  # noqa: E402
 
 
@@ -70,7 +70,7 @@ def test_contact_measurement_matches_mj_contact_force(talos_sim):
     sx, sy, f_left, f_right, _, _ = _sole_record(talos_sim, data)
     np.testing.assert_allclose((sx, sy, f_left + f_right), sums, rtol=1e-9, atol=1e-9)
     # The truth's full contact force on each foot: the same vertical forces.
-    decoded = GroundTruthReader.for_sim(talos_sim).contacts.read(data, read_snapshot(data))
+    decoded = ContactReader.for_sim(talos_sim).read(data, read_snapshot(data))
     assert decoded.left_force[2] == pytest.approx(per_foot[talos_sim.left_sole_geom], rel=1e-9)
     assert decoded.right_force[2] == pytest.approx(per_foot[talos_sim.right_sole_geom], rel=1e-9)
     assert f_left == pytest.approx(per_foot[talos_sim.left_sole_geom], rel=1e-9)
@@ -80,7 +80,7 @@ def test_contact_measurement_matches_mj_contact_force(talos_sim):
 def _sole_record(sim, data) -> tuple[float, float, float, float, int, int]:
     """The contact record's sums of ``data``'s last step: ``sum p_x f_n``, ``sum p_y f_n`` (N m), the normal force
     on each sole (N) and how many corners of each sole box touch."""
-    sums = GroundTruthReader.for_sim(sim).contacts.read(data, read_snapshot(data))
+    sums = ContactReader.for_sim(sim).read(data, read_snapshot(data))
     return (
         sums.sole_moment_x, sums.sole_moment_y, sums.left_normal, sums.right_normal, sums.left_corners,
         sums.right_corners,
