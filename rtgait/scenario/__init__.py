@@ -1,1 +1,4 @@
-"""Walking scenarios: the scenario model and its files, footstep plans, guide paths, checks and TOML helpers."""
+"""Walking scenarios: the scenario model and its files, footstep plans, guide paths, checks and TOML helpers.
+
+Its modules are mapped in ``docs/architecture.md``.
+"""
