@@ -26,9 +26,9 @@ import time
 
 import numpy as np
 
-from rtgait.core import stepping
 from rtgait.core.geometry.footsteps import SoleRect, Timing
 from rtgait.core.geometry.support import support_polygon
+from rtgait.core.laws import stepping
 from rtgait.core.laws.feedback import DcmFeedback
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
