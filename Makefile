@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean images
+.PHONY: demo test lint bench docs clean images
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -42,6 +42,20 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/replan.py
+
+# The API reference from the docstrings (pdoc, in the dev extra): out/api/index.html. rtgait.core's __all__ lists
+# its public names, which hides its subpackages from pdoc's walk through the package, so they are named here.
+# MUJOCO_GL=disable: importing mujoco would otherwise load an OpenGL backend, which needs no display but starts a
+# subprocess that pdoc refuses while it imports modules; the reference draws nothing. The annotations that name
+# types imported only for type checking cannot be resolved at run time: pdoc shows them as written, and its
+# warning about each is silenced.
+API := out/api
+CORE_SUBPACKAGES := $(subst /,.,$(patsubst %/__init__.py,%,$(wildcard rtgait/core/*/__init__.py)))
+docs: $(STAMP)
+	rm -rf $(API)
+	MUJOCO_GL=disable PYTHONWARNINGS="ignore:Error parsing type annotation" $(BIN)/python -m pdoc --docformat restructuredtext --output-directory $(API) \
+		rtgait $(CORE_SUBPACKAGES) rtgait.core.limits
+	@echo "API reference: $(API)/index.html"
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .hypothesis

@@ -1,14 +1,7 @@
-"""The analytical real-time gait planner (numpy/scipy only): importable alone, no robot, no simulator.
+"""The analytical real-time gait planner, numpy and scipy only: importable alone, no robot, no simulator.
 
-Quick start::
-
-    from rtgait.core import OnlinePlanner, PlannerConfig, Timing, straight_walk
-
-    config = PlannerConfig(cog_height=0.8, timing=Timing(single_support=0.8, double_support=0.2))
-    planner = OnlinePlanner(config, straight_walk(config, steps=10, step_length=0.1))
-    planner.start(0.0)
-    sample = planner.sample(1.234)    # COG pos/vel/acc, ZMP, feet poses, support phase
-    planner.change_step(5, length=0.15, through=10)
+The public names of a control loop are exported here; the subpackages are mapped in ``docs/architecture.md`` and
+the README has a quick start.
 """
 
 from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout

@@ -1,1 +1,4 @@
-"""Footsteps, sole rectangles, support polygons, swing trajectories and the half-plane tests of ZMP margins."""
+"""Footsteps, sole rectangles, support polygons, swing trajectories and the half-plane tests of ZMP margins.
+
+Its modules are mapped in ``docs/architecture.md``.
+"""
