@@ -333,15 +333,19 @@ def _from_csv(folder: Path, summary: dict[str, Any]) -> ZmpSimRun:
     if not path.is_file():
         raise RunFilesError(f"{path} is missing: {folder} does not hold a finished rtgait simulate run")
     table = read_table(path, _CSV_COLUMNS)
-    values = read_floats(table, _CSV_COLUMNS, path)
-    times = values[:, 0]
-    contact = values[:, 9:11] > 0.5
+    column = dict(zip(_CSV_COLUMNS, read_floats(table, _CSV_COLUMNS, path).T, strict=True))
+
+    def pair(name: str) -> np.ndarray:
+        return np.column_stack((column[f"{name}_x"], column[f"{name}_y"]))
+
+    times = column["t"]
+    contact = np.column_stack((column["left_contact"], column["right_contact"])) > 0.5
     return ZmpSimRun(
         times=times,
-        zmp=values[:, 1:3],
-        zmp_planned=values[:, 3:5],
-        zmp_command=values[:, 5:7],
-        cog=values[:, 7:9],
+        zmp=pair("zmp"),
+        zmp_planned=pair("zmp_planned"),
+        zmp_command=pair("zmp_command"),
+        cog=pair("cog"),
         double=contact.all(axis=1) & (times >= 0.0),  # sim.csv has no planned support: the measured one
         double_label="both feet on the floor (measured)",
         single=(contact.sum(axis=1) == 1) & (times >= 0.0),
