@@ -51,10 +51,11 @@ bench: $(STAMP)
 # warning about each is silenced.
 API := out/api
 CORE_SUBPACKAGES := $(subst /,.,$(patsubst %/__init__.py,%,$(wildcard rtgait/core/*/__init__.py)))
+CORE_TOP_MODULES := $(subst /,.,$(patsubst %.py,%,$(filter-out %/__init__.py,$(wildcard rtgait/core/*.py))))
 docs: $(STAMP)
 	rm -rf $(API)
 	MUJOCO_GL=disable PYTHONWARNINGS="ignore:Error parsing type annotation" $(BIN)/python -m pdoc --docformat restructuredtext --output-directory $(API) \
-		rtgait $(CORE_SUBPACKAGES) rtgait.core.limits
+		rtgait $(CORE_SUBPACKAGES) $(CORE_TOP_MODULES)
 	@echo "API reference: $(API)/index.html"
 
 clean:

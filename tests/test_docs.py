@@ -21,7 +21,11 @@ pytest.importorskip("pdoc", reason="pdoc is in the dev extra")
 CORE_SUBPACKAGES = sorted(
     info.name for info in pkgutil.iter_modules(rtgait.core.__path__, "rtgait.core.") if info.ispkg
 )
-"""The subpackages ``make docs`` names on pdoc's command line (``rtgait.core.__all__`` hides them otherwise)."""
+CORE_TOP_MODULES = sorted(
+    info.name for info in pkgutil.iter_modules(rtgait.core.__path__, "rtgait.core.") if not info.ispkg
+)
+"""The subpackages and top-level modules ``make docs`` names on pdoc's command line (``rtgait.core.__all__`` hides
+them otherwise)."""
 CORE_MODULES = sorted(info.name for info in pkgutil.walk_packages(rtgait.core.__path__, "rtgait.core."))
 
 
@@ -35,7 +39,7 @@ def api(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("api")
     command = [sys.executable, "-m", "pdoc", "--docformat", "restructuredtext", "--output-directory", str(out)]
     result = subprocess.run(
-        [*command, "rtgait.core", *CORE_SUBPACKAGES, "rtgait.core.limits"],
+        [*command, "rtgait.core", *CORE_SUBPACKAGES, *CORE_TOP_MODULES],
         capture_output=True,
         text=True,
         timeout=120,
