@@ -7,7 +7,7 @@ import os
 import re
 import signal
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -216,6 +216,16 @@ def ctrl_c() -> None:
     os.kill(os.getpid(), signal.SIGINT)  # a real Ctrl-C, delivered to the main thread (pytest runs tests there)
 
 
+@pytest.fixture
+def terminal_sigint() -> Iterator[None]:
+    """SIGINT as a program started from a terminal has it: Python's own handler, installed in the process again
+    (a library loaded by an earlier test in this process may have left another disposition), restored after."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+@pytest.mark.usefixtures("terminal_sigint")
 @pytest.mark.parametrize("n", MOVES)
 def test_a_real_ctrl_c_while_the_files_move_is_held_back_then_undoes_them(
     n: int, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
@@ -229,6 +239,7 @@ def test_a_real_ctrl_c_while_the_files_move_is_held_back_then_undoes_them(
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # Python's own handler is back
 
 
+@pytest.mark.usefixtures("terminal_sigint")
 def test_a_ctrl_c_while_a_new_folder_is_moved_in_leaves_no_folder(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
