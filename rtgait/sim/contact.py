@@ -20,7 +20,7 @@ import numpy as np
 
 from rtgait.core.push import Push
 from rtgait.sim.contact_reading import ContactSums
-from rtgait.sim.loop_record import row_packer
+from rtgait.sim.row_packing import row_packer
 from rtgait.sim.step_snapshot import StepSnapshot
 
 if TYPE_CHECKING:

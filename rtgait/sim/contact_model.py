@@ -39,7 +39,7 @@ from rtgait.robot.model import RobotModel
 from rtgait.sim.urdf_import import resolve_mesh
 
 if TYPE_CHECKING:
-    from rtgait.sim.model import SimConfig
+    from rtgait.sim.config import SimConfig
 
 __all__ = [
     "FLOOR_BITS",

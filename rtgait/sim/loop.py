@@ -73,11 +73,12 @@ from rtgait.sim.loop_options import (
     timing_headroom,
 )  # fmt: skip
 from rtgait.sim.loop_push import LivePush
-from rtgait.sim.loop_record import TickRecord, TickValues, row_packer
+from rtgait.sim.loop_record import TickRecord, TickValues
 from rtgait.sim.loop_result import loop_result
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SimResult
 from rtgait.sim.robot import SimRobot
+from rtgait.sim.row_packing import row_packer
 from rtgait.sim.tick_log import TickLog
 from rtgait.stack.setup import start_pose
 from rtgait.stack.walking_stack import WalkingStack

@@ -17,8 +17,6 @@ Row layouts: ``planned`` is (planned ZMP x, y, commanded ZMP x, y, measured DCM 
 from __future__ import annotations
 
 import math
-import struct
-from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
@@ -26,7 +24,7 @@ import numpy as np
 if TYPE_CHECKING:
     from rtgait.sim.contact import ContactMonitor
 
-__all__ = ["TickRecord", "TickValues", "row_packer"]
+__all__ = ["TickRecord", "TickValues"]
 
 
 class TickValues(NamedTuple):
@@ -137,11 +135,3 @@ class TickRecord:
             "legs_touch": arrange(contacts.legs_touch(held), ticks),
             "commanded_q": arrange(self.commanded, ticks),
         }
-
-
-def row_packer(rows: np.ndarray) -> tuple[Callable[..., None], memoryview, int]:
-    """``(pack_into, bytes, row size)`` writing a row of Python numbers into the C-contiguous float64 ``rows``."""
-    if rows.dtype != np.float64 or not rows.flags.c_contiguous:  # pragma: no cover - every caller allocates them so
-        raise ValueError("rows must be a C-contiguous float64 array")
-    n = rows.shape[1]
-    return struct.Struct(f"={n}d").pack_into, memoryview(rows).cast("B"), n * rows.itemsize

@@ -21,17 +21,49 @@ Nothing here runs per tick: it is read once the run is over, or whenever a live 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Protocol
 
 from rtgait.sim.result import SimResult
 
 if TYPE_CHECKING:
-    from rtgait.sim.loop import ClosedLoop
+    from rtgait.control.controller import ControlEvent, WalkingController
+    from rtgait.core.planner.online import OnlinePlanner
+    from rtgait.core.push import Push
+    from rtgait.sim.contact import ContactMonitor, Landings
+    from rtgait.sim.loop_options import LoopOptions
+    from rtgait.sim.loop_record import TickRecord
+    from rtgait.sim.model import SimModel
+    from rtgait.sim.tick_log import TickLog
 
-__all__ = ["loop_result"]
+__all__ = ["RunState", "loop_result"]
 
 
-def loop_result(loop: ClosedLoop, wall_time: float, n_steps: int, walk_end: float) -> SimResult:
+class RunState(Protocol):
+    """What the outcome is made of: the closed loop's state after its ticks (:class:`rtgait.sim.loop.ClosedLoop`)."""
+
+    sim: SimModel
+    planner: OnlinePlanner
+    controller: WalkingController
+    options: LoopOptions
+    record: TickRecord
+    contacts: ContactMonitor
+    landings: Landings
+    log: TickLog | None
+    events: Sequence[ControlEvent]
+    pushes: Sequence[Push]
+    k: int
+    k0: int
+    t: float
+    dt: float
+    gravity: float
+    threshold: float
+    fell: bool
+    fall_time: float | None
+    fall_cause: str | None
+
+
+def loop_result(loop: RunState, wall_time: float, n_steps: int, walk_end: float) -> SimResult:
     """The :class:`SimResult` of the ``loop.k`` ticks ``loop`` has run (at least one): the record's arrays, the
     walk's outcome (module docstring) and the wall-clock time ``wall_time`` (s) to report.
 

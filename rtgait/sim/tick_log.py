@@ -43,7 +43,7 @@ import numpy as np
 from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.core.geometry.support import SUPPORT_CODES
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
-from rtgait.sim.loop_record import row_packer
+from rtgait.sim.row_packing import row_packer
 
 if TYPE_CHECKING:
     from rtgait.control.settings import ControlTargets
