@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -11,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 from rtgait.cli.common import PROG, RunError, load_robot, robot_walk
 from rtgait.cli.control_file import controller_settings
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
+from rtgait.io.summary_json import summary_text
 from rtgait.robot.controller_info import robot_info
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
@@ -167,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
     if args.summary is not None:
         from rtgait.outputs import write_text_atomic
 
-        write_text_atomic(args.summary, json.dumps(summary, indent=2, allow_nan=False) + "\n")
+        write_text_atomic(args.summary, summary_text(summary))
     if not args.quiet:
         print(_summary_line(summary))
     return 0

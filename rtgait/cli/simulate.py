@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import json
 import math
 import sys
 import warnings
@@ -29,6 +28,7 @@ from rtgait.cli.common import (
 from rtgait.cli.control_file import controller_settings, read_control_file
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.io.plan_files import pendulum_report
+from rtgait.io.summary_json import summary_text
 from rtgait.outputs import check_destination, staged_outputs
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
@@ -348,7 +348,7 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path, 
 
             plot_pendulum(result, staging.add(figure_name), title=f"{scenario.name} ({scenario.connection})")
             summary["files"].append(figure_name)
-            text = json.dumps(summary, indent=2, allow_nan=False) + "\n"  # again, now listing the figure
+            text = summary_text(summary)  # again, now listing the figure
             (staging.folder / "summary.json").write_text(text, encoding="utf-8")
     if not args.quiet:
         sys.stdout.write(pendulum_report(summary, out))

@@ -22,7 +22,6 @@ units (s, m, m/s), columns :data:`PENDULUM_CSV_COLUMNS`:
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -36,6 +35,7 @@ from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.pendulum.loop import DEFAULT_DT, DEFAULT_MASS, ClosedLoopResult, run_pendulum_loop
 from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR, ControllerLevel, check_level
 from rtgait.core.push import Push
+from rtgait.io.summary_json import summary_text
 from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.scenario.scenario import Scenario
 
@@ -189,5 +189,5 @@ def write_pendulum_outputs(
         "rows": result.ticks,
         "files": list(PENDULUM_FILES),
     }
-    write_text_atomic(out / "summary.json", json.dumps(summary, indent=2, allow_nan=False) + "\n")
+    write_text_atomic(out / "summary.json", summary_text(summary))
     return summary

@@ -7,7 +7,6 @@ is written through a temporary name (:func:`rtgait.outputs.write_atomic`), so no
 
 from __future__ import annotations
 
-import json
 import os
 import statistics
 from pathlib import Path
@@ -18,6 +17,7 @@ import numpy as np
 from rtgait.core.analysis.rollout import Rollout
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.planner.online import SAMPLE_FIELDS
+from rtgait.io.summary_json import summary_text
 from rtgait.outputs import Staging, staged_outputs, write_atomic
 from rtgait.scenario.scenario import Scenario
 from rtgait.viz.run_data import figure_file, margin_marker, plan_figure_files, plan_free_segments
@@ -266,7 +266,7 @@ def write_plan_outputs(
             _write_replay(result, scenario, robot_run, staging.add("replay.html"), background)
         summary["rows"] = rows
         summary["files"] = list(staging.files)
-        summary_path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+        summary_path.write_text(summary_text(summary), encoding="utf-8")
     return summary
 
 

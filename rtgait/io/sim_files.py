@@ -7,13 +7,13 @@ walk's clock (t = 0 when the walk starts; the start transition from half-sitting
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from rtgait.io.summary_json import summary_text
 from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.robot.model import RobotModel
 from rtgait.sim.log_file import LOG_FILE, parquet_available, write_sim_log
@@ -227,7 +227,7 @@ def write_sim_outputs(
         )
         files.append("replay.html")
     summary: dict[str, Any] = {**(extra or {}), **result.summary(), "rows": len(result.times), "files": files}
-    write_text_atomic(out / "summary.json", json.dumps(summary, indent=2, allow_nan=False) + "\n")
+    write_text_atomic(out / "summary.json", summary_text(summary))
     return summary
 
 
