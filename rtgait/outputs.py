@@ -81,6 +81,13 @@ def check_destination(out: Path, names: Iterable[str] = ()) -> None:
         OutputError: naming ``out`` and what is in the way.
     """
     where = f"cannot write outputs to {out}:"
+    try:
+        _check_destination(out, names, where)
+    except OSError as error:  # a name the file system refuses (too long, a bad byte), an unreadable folder
+        raise OutputError(f"{where} {error.strerror or error}") from None
+
+
+def _check_destination(out: Path, names: Iterable[str], where: str) -> None:
     if _existing(out):
         if not out.is_dir():
             raise OutputError(f"{where} it exists and is not a folder")

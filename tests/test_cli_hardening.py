@@ -381,3 +381,13 @@ def test_a_warning_during_a_command_is_one_line(
     monkeypatch.setitem(cli._COMMANDS, "scenarios", command)
     assert main(["scenarios"]) == 0
     assert capsys.readouterr().err == "rtgait: warning: velocity command exceeds the step limits: clamped\n"
+
+
+@pytest.mark.parametrize("command", [["plan", "fig8"], ["simulate", "fig8", "--model", "lipm"]])
+def test_an_output_folder_name_the_file_system_refuses_is_one_error_line(
+    command: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / ("a" * 300)  # longer than a file name may be (255 bytes on Linux)
+    assert main([*command, "--out", str(out), "--no-figures", "--quiet"]) == 1
+    assert one_error_line(capsys).strip() == f"rtgait: error: cannot write outputs to {out}: File name too long"
+    assert list(tmp_path.iterdir()) == []
