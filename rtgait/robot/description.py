@@ -21,9 +21,10 @@ loaded by path. Its tables, in SI units (m, rad, s, kg m^2, N m/rad):
   ``[velocity]`` (bounds of walks by velocity command, :class:`~rtgait.core.planner.config.VelocityLimits`).
 
 Every problem raises :class:`RobotError` with one line naming the field. The URDF is read with the standard
-library's XML parser (not Pinocchio) to check frame and joint names, so a description can be validated without
-building the model. This module holds :class:`RobotDescription`, the document-level parse (:func:`parse_robot`) and
-the loaders; the readers and checks of the parts are in :mod:`rtgait.robot.description_checks`.
+library's XML parser (not Pinocchio) to check frame and joint names and its links' masses and inertias
+(:mod:`rtgait.robot.physical_checks`), so a description can be validated without building the model. This
+module holds :class:`RobotDescription`, the document-level parse (:func:`parse_robot`) and the loaders; the readers
+and checks of the parts are in :mod:`rtgait.robot.description_checks`.
 """
 
 from __future__ import annotations
@@ -55,10 +56,12 @@ from rtgait.robot.description_checks import (
     parse_gain,
     parse_stepping,
     parse_velocity,
+    read_urdf,
     read_urdf_names,
     resolve_path,
     resolve_urdf,
 )
+from rtgait.robot.physical_checks import check_urdf_physics
 from rtgait.scenario.tomlfile import SettingsPairs, is_finite_number
 
 __all__ = [
@@ -193,7 +196,9 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
                 raise RobotError(f"model.package_dirs: no such folder {folder}")
     else:
         package_dirs = default_package_dirs()
-    names = read_urdf_names(urdf)
+    root = read_urdf(urdf)
+    names = read_urdf_names(root, urdf)
+    check_urdf_physics(root, urdf)  # before any URDF parser builds a model of it
 
     feet = FILES.table(data["feet"], "feet")
     FILES.check_keys(feet, "feet", ("left_sole_frame", "right_sole_frame", "sole"), ("sole_offset",))

@@ -5,8 +5,8 @@ the field: the paths (``model.urdf``, ``model.package_dirs``), the joint-valued 
 the ``[actuation]`` table (:mod:`rtgait.robot.actuation_table`: a group's ``rotor_inertia`` and ``gear_ratio``
 become its armature, ``armature = rotor_inertia * gear_ratio^2`` in kg m^2) and the ``[stepping]`` and
 ``[velocity]`` limits (their values checked by the core's own parsers). Names are checked against the URDF's
-(:func:`read_urdf_names`: links, joints with their types and limits, read with the standard library's XML parser,
-not Pinocchio, so that a description can be validated without building the model).
+(:func:`read_urdf`, :func:`read_urdf_names`: links, joints with their types and limits, read with the standard
+library's XML parser, not Pinocchio, so that a description can be validated without building the model).
 
 :func:`rtgait.robot.description.parse_robot` puts the parts together into a
 :class:`~rtgait.robot.description.RobotDescription`.
@@ -42,6 +42,7 @@ __all__ = [
     "parse_gain",
     "parse_stepping",
     "parse_velocity",
+    "read_urdf",
     "read_urdf_names",
     "resolve_path",
     "resolve_urdf",
@@ -81,14 +82,19 @@ class UrdfNames:
         return self.links | frozenset(self.joints)
 
 
-def read_urdf_names(path: Path) -> UrdfNames:
-    """The names the URDF at ``path`` declares (:class:`RobotError` when it is not a readable URDF)."""
+def read_urdf(path: Path) -> ElementTree.Element:
+    """The ``<robot>`` element of the URDF at ``path`` (:class:`RobotError` when it is not a readable URDF)."""
     try:
         root = ElementTree.parse(path).getroot()
     except (OSError, ElementTree.ParseError) as error:
         raise RobotError(f"model.urdf {path} is not a readable URDF: {error}") from None
     if root.tag != "robot":
         raise RobotError(f"model.urdf {path} is not a URDF: its root element is <{root.tag}>, not <robot>")
+    return root
+
+
+def read_urdf_names(root: ElementTree.Element, path: Path) -> UrdfNames:
+    """The names the URDF ``root`` (:func:`read_urdf`, from the file ``path``) declares."""
     links = frozenset(link.get("name", "") for link in root.findall("link"))
     joints: dict[str, str] = {}
     limits: dict[str, tuple[float, float]] = {}

@@ -11,6 +11,12 @@ Configurations follow Pinocchio: ``q[0:3]`` base position (m), ``q[3:7]`` base o
 
 from __future__ import annotations
 
+import os
+import sys
+import tempfile
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,6 +24,7 @@ import numpy as np
 import pinocchio as pin
 
 from rtgait.robot.description import RobotDescription, RobotError, load_robot
+from rtgait.robot.physical_checks import check_whole_body
 
 __all__ = ["BASE_COLUMNS", "RobotModel"]
 
@@ -73,15 +80,13 @@ class RobotModel:
         """Build the models from a description (or a built-in robot name / description file path).
 
         Raises:
-            RobotError: the URDF cannot be parsed by Pinocchio, or the half-sitting posture does not put both
-                soles flat on the ground.
+            RobotError: the URDF cannot be parsed by Pinocchio, the half-sitting posture does not put both soles
+                flat on the ground, or the robot's total mass or COM height is implausible
+                (:func:`~rtgait.robot.physical_checks.check_whole_body`).
         """
         if not isinstance(description, RobotDescription):
             description = load_robot(description)
-        try:
-            full = pin.buildModelFromUrdf(str(description.urdf), pin.JointModelFreeFlyer())
-        except (RuntimeError, ValueError) as error:
-            raise RobotError(f"model.urdf {description.urdf}: Pinocchio cannot build it: {error}") from None
+        full = _build_full_model(description.urdf)
         full.name = description.name
         left_id, right_id = _sole_frames(full, description)
 
@@ -103,13 +108,15 @@ class RobotModel:
         torso = model.getFrameId(description.torso_frame)
         # The lateral distance in the ground frame: the soles are level and the feet head +x at half-sitting.
         step_width = float(abs(data.oMf[left].translation[1] - data.oMf[right].translation[1]))
+        mass = float(pin.computeTotalMass(model))
+        check_whole_body(description.name, mass, float(data.com[0][2]))
         return cls(
             description=description,
             full_model=full,
             model=model,
             q_half_sitting=q,
             q_full_half_sitting=q_full,
-            mass=float(pin.computeTotalMass(model)),
+            mass=mass,
             step_width=step_width,
             cog_half_sitting=data.com[0].copy(),
             left_sole_id=int(left),
@@ -157,6 +164,66 @@ class RobotModel:
         data = self.model.createData()
         pin.framesForwardKinematics(self.model, data, q)
         return data.oMf[self.left_sole_id].translation.copy(), data.oMf[self.right_sole_id].translation.copy()
+
+
+def _build_full_model(urdf: Path) -> pin.Model:
+    """Pinocchio's model of ``urdf``, free-flyer root joint first.
+
+    Pinocchio's URDF parser (urdfdom) writes its messages to the process's standard error from C++, several lines
+    each, and after some errors goes on: an ``<inertial>`` it cannot read is dropped, and the model is built without
+    that link's mass. So its messages are caught: an error refuses the URDF in one line, a warning becomes a Python
+    warning (one line on the command line).
+    """
+    failure = None
+    with _stderr_lines() as lines:
+        try:
+            full = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
+        except (RuntimeError, ValueError) as error:
+            failure = " ".join(str(error).split())
+    errors, notes = _parser_messages(lines)
+    if errors or failure is not None:
+        raise RobotError(f"model.urdf {urdf}: Pinocchio cannot build it: {errors[0] if errors else failure}")
+    for note in notes:
+        warnings.warn(f"model.urdf {urdf.name}: {note}", stacklevel=3)
+    return full
+
+
+@contextmanager
+def _stderr_lines() -> Iterator[list[str]]:
+    """The lines written to file descriptor 2 (by C++ code too) inside the block, given in the list at its end."""
+    lines: list[str] = []
+    sys.stderr.flush()  # what Python wrote before the block goes out first
+    try:
+        saved = os.dup(2)
+    except OSError:  # no standard error to catch (a closed descriptor): nothing to hide either
+        yield lines
+        return
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield lines
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            lines.extend(sink.read().decode(errors="replace").splitlines())
+
+
+def _parser_messages(lines: list[str]) -> tuple[list[str], list[str]]:
+    """urdfdom's messages (``"Error:   text"`` or ``"Warning: text"``, each followed by an ``"at line N in
+    file.cpp"`` line) as the errors' and the other messages' texts."""
+    errors: list[str] = []
+    notes: list[str] = []
+    for line in lines:
+        text = line.strip()
+        if not text or text.startswith("at line "):
+            continue
+        level, colon, rest = text.partition(":")
+        if colon and level == "Error":
+            errors.append(rest.strip())
+        else:
+            notes.append(rest.strip() if colon and level == "Warning" else text)
+    return errors, notes
 
 
 def _sole_frames(full: pin.Model, description: RobotDescription) -> tuple[int, int]:
