@@ -294,6 +294,7 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path, 
     """``simulate --model lipm``: the walk on the point-mass pendulum at the controller level asked for, with the
     DCM law's gains and ``replan_dcm_error`` of the ``[control]`` tables (the rest acts on a robot only)."""
     from rtgait.io.pendulum_run import PENDULUM_FILES, simulate_pendulum, write_pendulum_outputs
+    from rtgait.robot.physical_checks import TOTAL_MASS_RANGE
     from rtgait.viz.run_data import PENDULUM_FIGURE, figure_file
 
     for option, why in (("velocity", "walks by command"), ("html", "the 3D replay"), ("physics_dt", "its step")):
@@ -311,8 +312,9 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path, 
         description = robot.description
         stepping = description.stepping  # the robot's step limits ([stepping]), if it has them
     options, chosen = controller_settings(description, scenario, args.control, control_pairs)
-    if mass is not None and not (math.isfinite(mass) and 1.0 <= mass <= 500.0):
-        raise ScenarioError(f"--mass must be within [1, 500] kg, got {mass}")
+    low, high = TOTAL_MASS_RANGE  # a humanoid's, as a robot's URDF is checked
+    if mass is not None and not (math.isfinite(mass) and low <= mass <= high):
+        raise ScenarioError(f"--mass must be within [{low:g}, {high:g}] kg, got {mass}")
     dt = 0.001 if args.control_dt is None else args.control_dt
     if not (math.isfinite(dt) and 1e-5 <= dt <= min(scenario.timing.single_support, scenario.timing.double_support)):
         raise ScenarioError(f"--control-dt must be within [1e-05 s, the shortest phase], got {dt}")
