@@ -196,6 +196,8 @@ def _stderr_lines() -> Iterator[list[str]]:
     try:
         saved = os.dup(2)
     except OSError:  # no standard error to catch (a closed descriptor): nothing to hide either
+        saved = None
+    if saved is None:
         yield lines
         return
     with tempfile.TemporaryFile() as sink:
