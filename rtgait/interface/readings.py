@@ -19,6 +19,11 @@ __all__ = ["ImuReading", "SensorReadings", "Wrench"]
 class Wrench(NamedTuple):
     """A 6-axis force/torque reading in its sensor's frame.
 
+    Sign: the wrench the environment exerts on the robot's body through the sensor. For a foot's sensor between the
+    ankle and the sole, that is the wrench the part of the foot below the sensor (which the floor pushes) exerts on
+    the leg above it: standing still with the sensor's z axis up, ``fz`` is the weight the foot carries less the
+    weight of the foot below the sensor, positive.
+
     Attributes:
         force: ``(fx, fy, fz)`` (N), the force the environment exerts on the body through the sensor.
         torque: ``(tx, ty, tz)`` (N m), its moment about the sensor frame's origin.
