@@ -131,9 +131,10 @@ class SensorModel:
                 self._tilt(values, float(draws[size + 6]), float(draws[size + 7]), k * self.dt)
             resolution = self._resolution
             if resolution > 0.0:
-                n = layout.joints
-                np.round(values[:n] / resolution, out=values[:n])
-                values[:n] *= resolution
+                counts = values[: layout.joints]
+                counts *= 1.0 / resolution
+                np.rint(counts, out=counts)
+                counts *= resolution
         self._stamps[slot] = t
         if k == 0:  # until a reading `latency` ticks old exists, the first one is delivered
             ring[1:] = values
@@ -170,14 +171,14 @@ class SensorModel:
         layout = self.layout
         n = layout.joints
         imu = left = right = None
-        k = 3 * n
+        row = values[3 * n :].tolist()  # Python floats: the tuples are built from them at once
+        k = 0
         if layout.imu:
-            q, gyro, accel = values[k : k + 4].tolist(), values[k + 4 : k + 7].tolist(), values[k + 7 : k + 10].tolist()
-            imu = _new_tuple(ImuReading, (tuple(q), tuple(gyro), tuple(accel)))
-            k += 10
+            imu = _new_tuple(ImuReading, (tuple(row[0:4]), tuple(row[4:7]), tuple(row[7:10])))
+            k = 10
         if layout.feet:
             # MuJoCo's sign: the wrench on the foot from the leg; the reading's: on the leg from the foot.
-            w = (-values[k : k + 12]).tolist()
+            w = [-x for x in row[k : k + 12]]
             left = _new_tuple(Wrench, (tuple(w[0:3]), tuple(w[3:6])))
             right = _new_tuple(Wrench, (tuple(w[6:9]), tuple(w[9:12])))
         torques = values[2 * n : 3 * n] if self.joint_torques else None
