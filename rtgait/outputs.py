@@ -48,8 +48,8 @@ _STAGING_NAME = re.compile(
     r"\.(?:(?P<prefix>.+)\.)?" + _STAGING + r"\.(?P<host>[A-Za-z0-9-]+)\.(?P<pid>[0-9]+)\.[0-9a-f]{8}\.tmp"
 )
 _PREFIX_LENGTH = 64
-"""Characters of the output folder's name kept in a staging folder's name beside it: the whole name would make the
-staging name longer than a file system allows (255 bytes) for an output name that is itself fine."""
+"""Characters of an output's name kept in the name of its staging folder or temporary file beside it: the whole name
+would make that name longer than a file system allows (255 bytes) for an output name that is itself fine."""
 
 
 class OutputError(Exception):
@@ -407,7 +407,8 @@ def write_atomic(path: str | os.PathLike[str], write: Callable[[Path], None]) ->
         Whatever ``write`` raises, or ``OSError``; the temporary file is removed then and ``path`` is unchanged.
     """
     target = Path(path)
-    temporary = target.with_name(f".{target.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+    # The name cut short: a target whose name is near the file system's limit would make the temporary one too long.
+    temporary = target.with_name(f".{target.name[:_PREFIX_LENGTH]}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
     try:
         write(temporary)
         os.replace(temporary, target)

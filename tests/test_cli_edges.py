@@ -147,6 +147,13 @@ def test_an_output_path_too_long_deep_inside_is_one_line(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run", "s.toml"]
 
 
+def test_names_near_the_file_systems_limit_are_written(tmp_path: Path) -> None:
+    # The staging folder beside a new output folder and a file's temporary name are longer than the name itself.
+    out, export = tmp_path / ("o" * 250), tmp_path / ("f" * 245 + ".toml")
+    assert main(["plan", "fig6", "--out", str(out), "--no-figures", "--quiet", "--export-footsteps", str(export)]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([out.name, export.name])
+
+
 def test_an_export_file_name_too_long_is_refused_before_the_run(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
