@@ -147,7 +147,8 @@ def run(args: argparse.Namespace) -> int:
         try:
             write_text_atomic(args.export_footsteps, footstep_plan_text(scenario, result.footprints))
         except OSError as error:  # a full disk, or a folder changed during the run
-            raise OutputError(f"--export-footsteps: cannot write {args.export_footsteps}: {error.strerror}") from None
+            reason = error.strerror or error
+            raise OutputError(f"--export-footsteps: cannot write {args.export_footsteps}: {reason}") from None
     if not args.quiet:
         sys.stdout.write(plan_report(summary, out, wall_time))
         if args.export_footsteps is not None:
