@@ -5,7 +5,6 @@ checks, Dask's log lines under ``--quiet``."""
 from __future__ import annotations
 
 import errno
-import fcntl
 import os
 import signal
 import subprocess
@@ -69,6 +68,7 @@ def staging(folder: Path, pid: int, host: str | None = None, prefix: str = "") -
 def test_only_the_staging_folders_of_dead_runs_on_this_host_are_removed(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    fcntl = pytest.importorskip("fcntl")  # POSIX
     out = tmp_path / "o"
     dead = dead_pid(tmp_path)
     alive = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
