@@ -301,6 +301,7 @@ def _abandoned(folder: Path, host: str, pid: int) -> bool:
 
 
 def _holds_previous_outputs(folder: Path) -> bool:
+    """Whether the staging ``folder`` holds replaced files that were not put back (or cannot tell)."""
     backup = folder / _BACKUP
     try:
         return backup.is_dir() and any(backup.iterdir())
@@ -310,8 +311,7 @@ def _holds_previous_outputs(folder: Path) -> bool:
 
 def _discard(folder: Path, created: Sequence[Path]) -> None:
     """Remove a failed run's staging folder, unless it still holds replaced files that could not be put back."""
-    backup = folder / _BACKUP
-    if backup.is_dir() and any(backup.iterdir()):
+    if _holds_previous_outputs(folder):
         return  # the message of the error that got here names this folder
     shutil.rmtree(folder, ignore_errors=True)
     _remove_created(created)
