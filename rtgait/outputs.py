@@ -9,6 +9,12 @@ Two tools, standard library only, for every file rtgait writes:
   staging folder first, so any failure or Ctrl-C while the files move puts the old ones back: the folder ends
   with the complete new set or unchanged. Files of other names in the output folder are never touched.
 
+A run killed outright (SIGKILL, a power cut) cannot clean up: its staging folder stays. The next run into the same
+output folder removes it, and only it: a staging folder's name holds its owner's host and process id, and its owner
+holds a lock on it (``flock``) while it lives, so a folder is removed only when it was made on this host by a process
+that no longer exists and nobody holds its lock. One that still holds previous outputs (the run was killed while
+the files moved) is kept, with a warning naming it.
+
 :func:`check_destination` tells, before a long run, whether its outputs could be written at all. Every problem
 is an :class:`OutputError` with a one-line message.
 """
@@ -17,18 +23,33 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import shutil
 import signal
+import socket
 import threading
 import uuid
+import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["OutputError", "Staging", "check_destination", "staged_outputs", "write_atomic", "write_text_atomic"]
+__all__ = [
+    "OutputError", "Staging", "check_destination", "create_folder", "remove_stale_staging", "staged_outputs",
+    "write_atomic", "write_text_atomic",
+]  # fmt: skip
 
 _BACKUP = ".previous"
 """Folder inside the staging folder that holds the files being replaced until the new ones are all in place."""
+_STAGING = "rtgait-staging"
+"""The word in every staging folder's name: ``.rtgait-staging.HOST.PID.XXXXXXXX.tmp`` inside the output folder, or
+``.NAME.rtgait-staging.HOST.PID.XXXXXXXX.tmp`` beside an output folder ``NAME`` that does not exist yet."""
+_STAGING_NAME = re.compile(
+    r"\.(?:(?P<prefix>.+)\.)?" + _STAGING + r"\.(?P<host>[A-Za-z0-9-]+)\.(?P<pid>[0-9]+)\.[0-9a-f]{8}\.tmp"
+)
+_PREFIX_LENGTH = 64
+"""Characters of an output's name kept in the name of its staging folder or temporary file beside it: the whole name
+would make that name longer than a file system allows (255 bytes) for an output name that is itself fine."""
 
 
 class OutputError(Exception):
@@ -120,12 +141,14 @@ def staged_outputs(out: Path) -> Iterator[Staging]:
             full disk); the message names ``out`` and the reason.
     """
     check_destination(out)
+    remove_stale_staging(out)
     created = _make_parents(out)
     try:
-        staging = Staging(_new_staging_folder(out))
+        folder, lock = _new_staging_folder(out)
     except OSError as error:
         _remove_created(created)
         raise OutputError(f"cannot create output folder {out}: {error.strerror or error}") from None
+    staging = Staging(folder)
     try:
         yield staging
         with _interrupts_held() as interrupted:
@@ -137,6 +160,8 @@ def staged_outputs(out: Path) -> Iterator[Staging]:
         if isinstance(error, OSError):
             raise OutputError(f"cannot write outputs to {out}: {error.strerror or error}") from None
         raise
+    finally:
+        _release(lock)
 
 
 def _make_parents(out: Path) -> list[Path]:
@@ -150,25 +175,143 @@ def _make_parents(out: Path) -> list[Path]:
     return missing
 
 
+def create_folder(out: Path) -> None:
+    """Create the folder ``out`` and the missing folders above it, for outputs written straight into it (a sweep's).
+
+    Raises:
+        OutputError: a folder cannot be created; those created before are removed.
+    """
+    missing = [path for path in (out, *out.parents) if not _existing(path)]
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        _remove_created(missing)
+        raise OutputError(f"cannot create output folder {out}: {error.strerror or error}") from None
+
+
 def _remove_created(folders: Sequence[Path]) -> None:
     for folder in folders:  # deepest first; rmdir refuses a folder someone has put something in meanwhile
         with contextlib.suppress(OSError):
             folder.rmdir()
 
 
-def _new_staging_folder(out: Path) -> Path:
-    """A fresh hidden folder on the same file system as ``out``: inside it when it exists, else beside it."""
-    tag = f"{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp"
-    staging = out / f".rtgait-staging.{tag}" if out.is_dir() else out.parent / f".{out.name}.{tag}"
+def _host() -> str:
+    """This machine's name as a staging folder's name holds it: letters, digits and '-' only."""
+    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:_PREFIX_LENGTH] or "host"
+
+
+def _new_staging_folder(out: Path) -> tuple[Path, int | None]:
+    """A fresh hidden folder on the same file system as ``out``: inside it when it exists, else beside it; and the
+    descriptor holding its lock (``None`` where locks are not available), to release when the outputs are in place."""
+    tag = f"{_STAGING}.{_host()}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp"
+    staging = out / f".{tag}" if out.is_dir() else out.parent / f".{out.name[:_PREFIX_LENGTH]}.{tag}"
     # Not tempfile.mkdtemp: its 0700 mode would survive the rename and surprise anyone sharing the results.
     staging.mkdir()
-    return staging
+    return staging, _lock(staging)
+
+
+def _lock(folder: Path) -> int | None:
+    """Take the lock that tells other runs the staging ``folder`` is in use, and return its descriptor; the system
+    releases it when the process ends, however it ends. ``None`` where there is no ``flock`` (Windows) or the file
+    system refuses it.
+
+    Raises:
+        BlockingIOError: another process holds the lock.
+    """
+    try:
+        import fcntl
+    except ImportError:
+        return None
+    try:
+        descriptor = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return None
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError as error:
+        os.close(descriptor)
+        if isinstance(error, BlockingIOError):
+            raise
+        return None
+    return descriptor
+
+
+def _release(lock: int | None) -> None:
+    if lock is not None:
+        with contextlib.suppress(OSError):
+            os.close(lock)  # closing the last descriptor releases the lock
+
+
+def remove_stale_staging(out: Path) -> list[Path]:
+    """Remove the staging folders that runs into ``out`` killed outright left behind (module docstring); returns
+    the folders removed. A folder that may belong to a live run, or that holds previous outputs, is kept."""
+    places = [(out, None), (out.parent, out.name[:_PREFIX_LENGTH])]
+    removed = []
+    for folder, prefix in places:
+        try:
+            entries = list(os.scandir(folder))
+        except OSError:  # no such folder yet, or unreadable: nothing of ours can be there
+            continue
+        for entry in entries:
+            match = _STAGING_NAME.fullmatch(entry.name)
+            if match is None or match["prefix"] != prefix or not _is_folder(entry):
+                continue
+            path = Path(entry.path)
+            if not _abandoned(path, match["host"], int(match["pid"])):
+                continue
+            if _holds_previous_outputs(path):
+                warnings.warn(
+                    f"{path} holds the previous outputs of a run killed while it replaced them in {out}: kept (move "
+                    "them back, or remove the folder)",
+                    stacklevel=2,
+                )
+                continue
+            shutil.rmtree(path, ignore_errors=True)
+            removed.append(path)
+    return removed
+
+
+def _is_folder(entry: os.DirEntry[str]) -> bool:
+    try:
+        return entry.is_dir(follow_symlinks=False)  # a link is never ours to follow
+    except OSError:
+        return False
+
+
+def _abandoned(folder: Path, host: str, pid: int) -> bool:
+    """Whether the staging ``folder`` of process ``pid`` on ``host`` belongs to no live run: made on this host, by a
+    process that no longer exists, and unlocked. A process id reused since is taken for the owner (kept: safe)."""
+    if host != _host() or pid == os.getpid() or os.name != "posix":  # os.kill(pid, 0) is no probe on Windows
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        pass  # no such process
+    except OSError:
+        return False  # it exists (another user's): alive
+    else:
+        return False
+    # The same host name may hide another process namespace (a container), where the owner has another id: its lock
+    # tells. Taken now, it is released at once: the folder is removed next.
+    try:
+        _release(_lock(folder))
+    except BlockingIOError:
+        return False
+    return True
+
+
+def _holds_previous_outputs(folder: Path) -> bool:
+    """Whether the staging ``folder`` holds replaced files that were not put back (or cannot tell)."""
+    backup = folder / _BACKUP
+    try:
+        return backup.is_dir() and any(backup.iterdir())
+    except OSError:
+        return True  # cannot tell: keep it
 
 
 def _discard(folder: Path, created: Sequence[Path]) -> None:
     """Remove a failed run's staging folder, unless it still holds replaced files that could not be put back."""
-    backup = folder / _BACKUP
-    if backup.is_dir() and any(backup.iterdir()):
+    if _holds_previous_outputs(folder):
         return  # the message of the error that got here names this folder
     shutil.rmtree(folder, ignore_errors=True)
     _remove_created(created)
@@ -264,7 +407,8 @@ def write_atomic(path: str | os.PathLike[str], write: Callable[[Path], None]) ->
         Whatever ``write`` raises, or ``OSError``; the temporary file is removed then and ``path`` is unchanged.
     """
     target = Path(path)
-    temporary = target.with_name(f".{target.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+    # The name cut short: a target whose name is near the file system's limit would make the temporary one too long.
+    temporary = target.with_name(f".{target.name[:_PREFIX_LENGTH]}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
     try:
         write(temporary)
         os.replace(temporary, target)

@@ -134,10 +134,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         except (RunError, OutputError) as error:
             print_error(str(error))
             return 1
+        except OSError as error:  # a file the commands' own checks did not name: still one line, not a traceback
+            print_error(_os_error_text(error))
+            return 1
         except KeyboardInterrupt:
             print_error("interrupted")
             return 130
 
+
+def _os_error_text(error: OSError) -> str:
+    """``path: reason`` without Python's ``[Errno n]`` and quotes (``reason`` alone when no file is named)."""
+    reason = error.strerror or str(error) or type(error).__name__
+    return f"{error.filename}: {reason}" if error.filename is not None else reason
 
 
 if __name__ == "__main__":  # pragma: no cover

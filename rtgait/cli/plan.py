@@ -144,7 +144,11 @@ def run(args: argparse.Namespace) -> int:
         background=args.replay_background,
     )  # fmt: skip
     if args.export_footsteps is not None:
-        write_text_atomic(args.export_footsteps, footstep_plan_text(scenario, result.footprints))
+        try:
+            write_text_atomic(args.export_footsteps, footstep_plan_text(scenario, result.footprints))
+        except OSError as error:  # a full disk, or a folder changed during the run
+            reason = error.strerror or error
+            raise OutputError(f"--export-footsteps: cannot write {args.export_footsteps}: {reason}") from None
     if not args.quiet:
         sys.stdout.write(plan_report(summary, out, wall_time))
         if args.export_footsteps is not None:
@@ -159,6 +163,13 @@ def _check_export(path: Path | None) -> None:
     option = "--export-footsteps"
     if str(path) in ("", "."):
         raise ScenarioError(f"{option} needs a file name")
+    try:
+        _check_export_path(path, option)
+    except OSError as error:  # a name the file system refuses (too long), an unreadable folder
+        raise OutputError(f"{option}: cannot write {path}: {error.strerror or error}") from None
+
+
+def _check_export_path(path: Path, option: str) -> None:
     if path.is_dir():
         raise ScenarioError(f"{option} {path} is a folder")
     folder = path.parent
@@ -166,4 +177,3 @@ def _check_export(path: Path | None) -> None:
         raise OutputError(f"{option}: folder {folder} does not exist")
     if not os.access(folder, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
         raise OutputError(f"{option}: {path} is not writable")
-

@@ -11,6 +11,7 @@ from rtgait.cli.common import PROG, RunError, load_robot, robot_walk
 from rtgait.cli.control_file import controller_settings
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.io.summary_json import summary_text
+from rtgait.outputs import OutputError, check_destination
 from rtgait.robot.controller_info import robot_info
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
@@ -77,8 +78,14 @@ def _check_options(args: argparse.Namespace) -> None:
             continue
         if path.suffix.lower() != suffix:
             raise ScenarioError(f"{option} must name a {suffix} file, got {str(path)!r}")
-        if path.is_dir() or not path.parent.is_dir():
-            raise ScenarioError(f"{option} {str(path)!r}: its folder does not exist")
+        try:
+            if path.is_dir() or not path.parent.is_dir():
+                raise ScenarioError(f"{option} {str(path)!r}: its folder does not exist")
+            check_destination(path.parent, [path.name])  # written at the end: refused now, not after the walk
+        except OutputError as error:
+            raise OutputError(f"{option}: {error}") from None
+        except OSError as error:  # a name the file system refuses (too long)
+            raise OutputError(f"{option}: cannot write {path}: {error.strerror or error}") from None
 
 
 def _requirements(screenshot: bool) -> None:
@@ -141,13 +148,15 @@ def run(args: argparse.Namespace) -> int:
     _check_options(args)
     scenario, by_command = _scenario(args.scenario)
     _requirements(args.screenshot is not None)
+    # Every argument and file is checked before the display is: a bad --robot file is bad input (exit 2) with or
+    # without a display. Loading a robot takes well under a second.
+    robot = load_robot(args.robot)
     from rtgait.viz.live_view import DisplayError, check_display, play
 
     try:
-        check_display()  # before loading the robot: no display, no wait
+        check_display()
     except DisplayError as error:
         raise RunError(str(error)) from None
-    robot = load_robot(args.robot)
     from rtgait.io.sim_run import mujoco_messages
 
     live, walk = _live_walk(scenario, by_command, robot, args.controller, args.push_force)
@@ -167,7 +176,10 @@ def run(args: argparse.Namespace) -> int:
     if args.summary is not None:
         from rtgait.outputs import write_text_atomic
 
-        write_text_atomic(args.summary, summary_text(summary))
+        try:
+            write_text_atomic(args.summary, summary_text(summary))
+        except OSError as error:  # a full disk, or the folder changed during the walk
+            raise OutputError(f"--summary: cannot write {args.summary}: {error.strerror or error}") from None
     if not args.quiet:
         print(_summary_line(summary))
     return 0

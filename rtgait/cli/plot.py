@@ -21,6 +21,7 @@ from rtgait.cli.common import add_format_option, out_folder, require_extras
 from rtgait.outputs import check_destination, staged_outputs
 from rtgait.viz.run_data import (
     PENDULUM_FIGURE,
+    RunFilesError,
     figure_file,
     plan_figure_files,
     read_plan_run,
@@ -48,7 +49,10 @@ def run(args: argparse.Namespace) -> int:
     fmt: str = args.figure_format
     # Everything is read and checked before anything is drawn: a bad DIR is one line and exit 2 (RunFilesError is a
     # ValueError), and the output folder is not touched.
-    kind = run_kind(folder)
+    try:
+        kind = run_kind(folder)
+    except OSError as error:  # a name the file system refuses, an unreadable folder
+        raise RunFilesError(f"cannot read {folder}: {error.strerror or error}") from None
     require_extras(figures=True, html=False)
     if kind == "mujoco":
         from rtgait.viz.sim_figure import ZMP_SIM_FIGURE, read_zmp_sim_run
@@ -87,4 +91,3 @@ def run(args: argparse.Namespace) -> int:
         what = "MuJoCo simulation" if kind == "mujoco" else f"{kind} run"
         sys.stdout.write(f"figures     {out}{os.sep}: {', '.join(names)} (from the {what} in {folder})\n")
     return 0
-

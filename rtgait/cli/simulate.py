@@ -26,6 +26,7 @@ from rtgait.cli.common import (
     robot_walk,
 )
 from rtgait.cli.control_file import controller_settings, read_control_file
+from rtgait.core.geometry.footsteps import Timeline
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.io.plan_files import pendulum_report
 from rtgait.io.summary_json import summary_text
@@ -188,6 +189,7 @@ def run(args: argparse.Namespace) -> int:
     args.robot = args.robot or "talos"
     controller = args.controller or "adaptive"
     velocity, schedule = _velocities(args.velocity)
+    _check_command_times(args.velocity, schedule, scenario)
     try:
         from rtgait.io.sim_run import mujoco_messages, planned_walk
         from rtgait.robot.motion import whole_body_motion
@@ -248,6 +250,31 @@ def _velocities(texts: Sequence[str] | None) -> tuple[tuple[float, ...] | None, 
     if len(schedule) == 1 and schedule[0][0] == 0.0:
         return schedule[0][1:], []
     return schedule[0][1:], schedule
+
+
+def last_command_time(scenario: Scenario) -> float:
+    """The last time (s, on the walk's clock) a velocity command changes a walk of ``scenario`` by command: the
+    start of phase ``2n - 1`` (the swing of its last forward step ``n = walk.steps``) with the real-time and auto
+    connections, of ``2n - 2`` (the double support before it) with the quasi-real-time one. From then on step ``n``
+    can no longer change (:meth:`rtgait.core.walk.walk.Walk.first_open_step`) and the walk is stopped
+    (:mod:`rtgait.sim.loop_inputs`); a command due at that very tick still reaches step ``n``. A walk by command
+    has one timing for every step."""
+    steps = scenario.steps
+    phase = 2 * steps - 2 if scenario.connection == "quasi-real-time" else 2 * steps - 1
+    return Timeline(scenario.timing).start_time(phase)
+
+
+def _check_command_times(texts: Sequence[str] | None, schedule: list[tuple[float, ...]], scenario: Scenario) -> None:
+    """Refuse a ``--velocity ...@T`` that would silently change nothing, as a ``--push`` after the run is."""
+    if not schedule:
+        return
+    last = last_command_time(scenario)
+    for text, (t, *_) in zip(texts or (), schedule, strict=True):
+        if t > last + 1e-9:  # the loop's own tolerance on a command's time (rtgait.sim.loop_inputs)
+            raise ScenarioError(
+                f"--velocity {text} comes after the walk's last step is decided (at {last:.2f} s on the walk's clock):"
+                " it would change nothing; more walk.steps make the walk longer"
+            )
 
 
 def _check_periods(control_dt: float | None, physics_dt: float | None) -> None:
@@ -407,7 +434,7 @@ def _physics(
     loop = loop_options(pushes or None)
     result, led = simulate_guided(
         sim, walk, loop, controller=controller, controller_options=options, progress=progress  # type: ignore[arg-type]
-    )
+    )  # fmt: skip
     extra["guide"] = {**asdict(led), "base_error": led.base_error}
     return result
 

@@ -15,17 +15,19 @@ cases finished and is raised again.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from rtgait.cli.common import RunError
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
-from rtgait.outputs import check_destination, write_text_atomic
+from rtgait.outputs import OutputError, check_destination, create_folder, write_text_atomic
 from rtgait.sweep.spec import MAX_PHYSICS_CASES, SweepError, SweepSpec, case_id, load_spec
 from rtgait.sweep.store import CSV_FILE, JOURNAL, PARQUET_FILE, ResultStore
 
@@ -54,8 +56,13 @@ def add_parser(subparsers: Any) -> None:
     sweep.add_argument("--workers", metavar="N", type=int, help="physics cases at a time (default: one per core)")
     sweep.add_argument("--scheduler", metavar="ADDRESS", help="run physics cases on this Dask scheduler ('local': a "
                        "LocalCluster of --workers processes)")  # fmt: skip
-    sweep.add_argument("--timeout", metavar="S", type=float, default=DEFAULT_TIMEOUT,
-                       help=f"seconds a physics case may take before it is killed (default {DEFAULT_TIMEOUT:g})")
+    sweep.add_argument(
+        "--timeout",
+        metavar="S",
+        type=float,
+        default=DEFAULT_TIMEOUT,
+        help=f"seconds a physics case may take before it is killed (default {DEFAULT_TIMEOUT:g})",
+    )
     sweep.add_argument("--no-figures", action="store_true", help="skip map.png and map.pdf")
     sweep.add_argument("--quiet", action="store_true", help="print nothing on success")
 
@@ -77,26 +84,40 @@ def run(args: argparse.Namespace) -> int:
     executor = _executor(args) if args.physics else None  # an unreachable scheduler is refused before writing
     began = time.perf_counter()
     cases = [(case_id(spec.fingerprint(), values), values) for values in spec.cases()]
-    out.mkdir(parents=True, exist_ok=True)  # every check has passed: from here on the sweep writes
     store = ResultStore(out)
-    store.load()
-    write_text_atomic(out / SWEEP_FILE, json.dumps(_description(spec, args), indent=2) + "\n")
     try:
+        create_folder(out)  # every check has passed: from here on the sweep writes
+        with _writing(out):
+            store.load()
+            write_text_atomic(out / SWEEP_FILE, json.dumps(_description(spec, args), indent=2) + "\n")
         _pendulum_stage(spec, cases, store, args.quiet)
         if executor is not None:
             _physics_stage(spec, cases, store, executor, args)
     finally:
-        rows = store.write_tables(spec.axis_names, cases, args.physics)
-        store.close()
-        if executor is not None:
-            executor.close()
+        try:
+            rows = store.write_tables(spec.axis_names, cases, args.physics) if store.loaded else 0
+        finally:  # the journal and the executor (a Dask cluster's processes) are closed whatever happened
+            store.close()
+            if executor is not None:
+                executor.close()
+    maps: list[str] = []
     if figures:
         from rtgait.sweep.maps import write_map
 
-        write_map(out)
+        with _writing(out):
+            maps = [path.name for path in write_map(out)]  # none when the axes make no map (docs/sweeps.md)
     if not args.quiet:
-        sys.stdout.write(_report(spec, store, cases, out, rows, time.perf_counter() - began, args.physics, figures))
+        sys.stdout.write(_report(spec, store, cases, out, rows, time.perf_counter() - began, args.physics, maps))
     return 0
+
+
+@contextlib.contextmanager
+def _writing(out: Path) -> Iterator[None]:
+    """An ``OSError`` while the sweep writes into ``out`` as one :class:`OutputError` line."""
+    try:
+        yield
+    except OSError as error:
+        raise OutputError(f"cannot write outputs to {out}: {error.strerror or error}") from None
 
 
 def _check_options(args: argparse.Namespace, spec: SweepSpec) -> None:
@@ -136,7 +157,7 @@ def _executor(args: argparse.Namespace):
     if args.scheduler is None:
         return _Closing(LocalExecutor(args.workers))
     try:
-        return DaskExecutor(args.scheduler, args.workers)
+        return DaskExecutor(args.scheduler, args.workers, quiet=args.quiet)
     except RuntimeError as error:
         raise RunError(str(error)) from None
 
@@ -229,7 +250,7 @@ def _description(spec: SweepSpec, args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-def _report(spec, store, cases, out: Path, rows: int, wall: float, physics: bool, figures: bool) -> str:
+def _report(spec, store, cases, out: Path, rows: int, wall: float, physics: bool, maps: list[str]) -> str:
     pendulum = store.done("pendulum")
     by_method: dict[str, list[bool]] = {}
     for key, values in cases:
@@ -244,7 +265,7 @@ def _report(spec, store, cases, out: Path, rows: int, wall: float, physics: bool
         fell = sum(1 for r in walked if r.get("fell"))
         failed = sum(1 for r in walked if r.get("physics") == "failed")
         lines.append(f"physics     {len(walked)} cases: {fell} fell, {failed} failed to run")
-    files = [CSV_FILE, PARQUET_FILE, SWEEP_FILE, *(MAP_FILES if figures else ())]
+    files = [CSV_FILE, PARQUET_FILE, SWEEP_FILE, *maps]
     lines.append(f"outputs     {out}{os.sep}: {', '.join(files)} ({rows} rows)")
     return "\n".join(lines) + "\n"
 

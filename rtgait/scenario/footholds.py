@@ -3,9 +3,9 @@
 A footstep plan is a TOML file like a scenario (``name``, ``connection``, ``[robot]``, ``[timing]``; every key in
 ``docs/cli_and_scenarios.md``, "Footstep plans") whose walk is a list of landings instead of a step length::
 
-    [walk]
-    step_width = 0.19                   # m: the standing feet, side by side at the origin heading +x
-    step_height = 0.05                  # m, swing-foot peak height
+    [walk]                              # optional, as each of its keys
+    step_width = 0.19                   # m: the standing feet, side by side at the origin heading +x (default 0.19)
+    step_height = 0.05                  # m, swing-foot peak height (default 0.05)
 
     [[footstep]]                        # one per step, in walking order, at least two
     side = "right"                      # "left" | "right", alternating; the first one is the foot that swings first
@@ -35,7 +35,7 @@ from typing import Any
 
 from rtgait.core.geometry.footsteps import Footstep, Timing, standing_feet, stride_between
 from rtgait.core.limits import MAX_STEPS, MAX_STRIDE
-from rtgait.scenario.scenario import Scenario, ScenarioError, build_scenario, number, parse_common
+from rtgait.scenario.scenario import Scenario, ScenarioError, build_scenario, number, parse_common, walk_stance
 from rtgait.scenario.tomlfile import TomlFiles
 
 __all__ = ["footstep_plan_text", "parse_footstep_plan"]
@@ -100,14 +100,15 @@ def parse_footstep_plan(data: dict[str, Any], source: str = "") -> Scenario:
     """Build the :class:`~rtgait.scenario.scenario.Scenario` of a footstep plan from its parsed TOML ``data`` (module
     docstring)."""
     _FILES.check_keys(
-        data, "", ("name", "connection", "robot", "timing", "walk", "footstep"),
-        ("description", "auto_margin", "control"),
+        data,
+        "",
+        ("name", "connection", "robot", "timing", "footstep"),
+        ("description", "auto_margin", "control", "walk"),
     )
     common = parse_common(data)
-    walk = _FILES.table(data["walk"], "walk")
-    _FILES.check_keys(walk, "walk", ("step_width", "step_height"), ())
-    step_width = number(walk, "step_width", "walk", rule="> 0", unit="m", bounds=(0.0, MAX_STRIDE))
-    step_height = number(walk, "step_height", "walk", rule=">= 0", unit="m")
+    walk = _FILES.table(data.get("walk", {}), "walk")
+    _FILES.check_keys(walk, "walk", (), ("step_width", "step_height"))
+    step_width, step_height = walk_stance(walk)  # the built-in scenarios' values when not given
     raw = data["footstep"]
     if not isinstance(raw, list):
         raise ScenarioError("footstep must be an array of tables, written [[footstep]]")

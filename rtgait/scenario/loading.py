@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from rtgait.scenario.footholds import parse_footstep_plan
 from rtgait.scenario.scenario import SCENARIO_FILES, Scenario, parse_scenario
 
-__all__ = ["builtin_scenarios", "load_scenario"]
+__all__ = ["builtin_scenarios", "load_scenario", "parse_document"]
+
 
 def builtin_scenarios() -> dict[str, str]:
     """Built-in scenario names mapped to their one-line descriptions."""
@@ -22,6 +24,12 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     looks like a path (a ``.toml`` suffix, a folder separator, or an existing file) is read as a file.
     """
     document = SCENARIO_FILES.load(name_or_path)
-    if "footstep" in document.data:
-        return parse_footstep_plan(document.data, document.source)
-    return parse_scenario(document.data, document.source)
+    return parse_document(document.data, document.source)
+
+
+def parse_document(data: dict[str, Any], source: str = "") -> Scenario:
+    """The :class:`Scenario` of a parsed scenario or footstep-plan TOML document ``data`` (a footstep plan has
+    ``[[footstep]]`` entries)."""
+    if "footstep" in data:
+        return parse_footstep_plan(data, source)
+    return parse_scenario(data, source)

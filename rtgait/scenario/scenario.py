@@ -76,6 +76,8 @@ from rtgait.scenario.guide_path import GuidePath
 from rtgait.scenario.tomlfile import NumberRule, SettingsPairs, TomlFiles
 
 __all__ = [
+    "DEFAULT_STEP_HEIGHT",
+    "DEFAULT_STEP_WIDTH",
     "MAX_WALK_STEPS",
     "PHASES",
     "GuidePath",
@@ -97,6 +99,12 @@ _PHASE_BOUNDS = (MIN_PHASE_DURATION, MAX_PHASE_DURATION)
 _LENGTH_BOUNDS = (-MAX_STRIDE, MAX_STRIDE)
 _WIDTH_BOUNDS = (0.0, MAX_STRIDE)
 _MASS_BOUNDS = (1.0, 500.0)  # kg: from a toy biped to the heaviest humanoid built
+DEFAULT_STEP_WIDTH = 0.19
+"""``walk.step_width`` of a footstep plan that does not give it (m): every built-in scenario's, an adult humanoid's
+stance (a robot's own replaces it in ``--robot`` runs). A scenario gives its own: it is the width of every step."""
+DEFAULT_STEP_HEIGHT = 0.05
+"""``walk.step_height`` of a footstep plan that does not give it (m): every built-in scenario's swing-foot peak
+height."""
 
 SCENARIO_FILES = TomlFiles(kind="scenario", folder="scenarios", error=ScenarioError)
 """The scenario TOML files: the built-in ones by name, any other by path; their readers and checks."""
@@ -170,9 +178,7 @@ class Scenario:
         if not _NAME_PATTERN.fullmatch(self.name):
             raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {self.name!r}")
         if self.connection not in ALL_CONNECTION_MODES:
-            raise ScenarioError(
-                f"connection must be one of {', '.join(ALL_CONNECTION_MODES)}, got {self.connection!r}"
-            )
+            raise ScenarioError(f"connection must be one of {', '.join(ALL_CONNECTION_MODES)}, got {self.connection!r}")
         within("auto_margin", self.auto_margin, (-MAX_AUTO_MARGIN, MAX_AUTO_MARGIN), "m")
         if self.connection == "auto" and not self.timing.uniform:
             raise ScenarioError('connection = "auto" needs one timing for every step: per-step timings are unsupported')
@@ -380,6 +386,18 @@ def parse_common(data: dict[str, Any]) -> dict[str, Any]:
     }  # fmt: skip
 
 
+def walk_stance(walk: dict[str, Any]) -> tuple[float, float]:
+    """``step_width`` and ``step_height`` (m) of a ``[walk]`` table, checked; each :data:`DEFAULT_STEP_WIDTH` or
+    :data:`DEFAULT_STEP_HEIGHT` when not given (a scenario's table has both: its keys are checked first)."""
+    step_width = DEFAULT_STEP_WIDTH
+    if "step_width" in walk:
+        step_width = _number(walk, "step_width", "walk", rule="> 0", unit="m", bounds=_WIDTH_BOUNDS)
+    step_height = DEFAULT_STEP_HEIGHT
+    if "step_height" in walk:
+        step_height = _number(walk, "step_height", "walk", rule=">= 0", unit="m")
+    return step_width, step_height
+
+
 number = _number
 """A finite number of a scenario-like file, checked and worded as the scenario's own fields (for
 :mod:`rtgait.scenario.footholds`)."""
@@ -409,8 +427,7 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     _FILES.check_keys(walk, "walk", walk_required, ("yaw", "first_foot", "change"))
     steps = _FILES.count(walk["steps"], "walk.steps", high=MAX_WALK_STEPS, why=_STEPS_WHY)
     step_length = _number(walk, "step_length", "walk", unit="m", bounds=_LENGTH_BOUNDS)
-    step_width = _number(walk, "step_width", "walk", rule="> 0", unit="m", bounds=_WIDTH_BOUNDS)
-    step_height = _number(walk, "step_height", "walk", rule=">= 0", unit="m")
+    step_width, step_height = walk_stance(walk)
     yaw = _number(walk, "yaw", "walk", rule=_YAW_RULE, unit="rad") if "yaw" in walk else 0.0
     first_foot = _choice(walk, "first_foot", "walk", ("right", "left")) if "first_foot" in walk else "right"
     changes = _parse_changes(walk["change"], steps) if "change" in walk else ()

@@ -19,12 +19,13 @@ from __future__ import annotations
 
 import contextlib
 import json
+import logging
 import os
 import signal
 import subprocess
 import sys
 import tempfile
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from typing import Any
 
@@ -144,22 +145,45 @@ class LocalExecutor:
                 raise
 
 
+@contextlib.contextmanager
+def _dask_logs(level: int) -> Iterator[None]:
+    """Dask's log lines in this process at ``level`` and above only, while the block runs: the handlers of its
+    ``distributed`` logger, which every ``distributed.*`` logger reaches, and those of ``bokeh`` (its dashboard)."""
+    handlers = {
+        handler: handler.level for name in ("distributed", "bokeh") for handler in logging.getLogger(name).handlers
+    }
+    for handler, previous in handlers.items():  # one handler may serve both loggers: each is set and restored once
+        handler.setLevel(max(previous, level))
+    try:
+        yield
+    finally:
+        for handler, previous in handlers.items():
+            handler.setLevel(previous)
+
+
 class DaskExecutor:
     """Cases on a Dask cluster: ``address`` of its scheduler, or ``"local"`` for a
-    :class:`distributed.LocalCluster` of ``workers`` single-threaded worker processes on this machine."""
+    :class:`distributed.LocalCluster` of ``workers`` single-threaded worker processes on this machine. ``quiet``:
+    Dask's warnings are not shown (only its errors), here and in the local cluster's processes."""
 
-    def __init__(self, address: str, workers: int | None = None, connect_timeout: float | None = None) -> None:
+    def __init__(
+        self, address: str, workers: int | None = None, connect_timeout: float | None = None, quiet: bool = False
+    ) -> None:
         try:
             import distributed
         except ImportError:
             raise RuntimeError("--scheduler needs dask.distributed: pip install 'dask[distributed]'") from None
         self._cluster = None
+        log_level = logging.ERROR if quiet else logging.WARNING  # WARNING: LocalCluster's own default
+        self._logs = contextlib.ExitStack()
+        if quiet:
+            self._logs.enter_context(_dask_logs(log_level))
         connect_timeout = CONNECT_TIMEOUT if connect_timeout is None else connect_timeout
         try:
             if address == "local":
                 self._cluster = distributed.LocalCluster(
                     n_workers=max(1, workers or os.cpu_count() or 1), threads_per_worker=1, processes=True,
-                    dashboard_address=None,
+                    dashboard_address=None, silence_logs=log_level,  # the workers' processes log at it too
                 )  # fmt: skip
                 self.client = distributed.Client(self._cluster, timeout=connect_timeout)
             else:
@@ -207,11 +231,14 @@ class DaskExecutor:
             raise
 
     def close(self) -> None:
-        client = getattr(self, "client", None)
-        if client is not None:
-            client.close()
-        if self._cluster is not None:
-            self._cluster.close()
+        try:
+            client = getattr(self, "client", None)
+            if client is not None:
+                client.close()
+            if self._cluster is not None:
+                self._cluster.close()
+        finally:
+            self._logs.close()  # after the cluster: it may warn while its workers stop
 
 
 __all__ = [

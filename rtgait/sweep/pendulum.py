@@ -3,8 +3,8 @@
 Cases that differ only in the numbers a walk is affine in (``change.length``, ``change.width``,
 ``walk.step_length``) form one group: one :class:`~rtgait.core.analysis.walk_family.WalkFamily` (or one preview loop),
 one vectorised pass (:mod:`rtgait.core.analysis.batch`, :func:`rtgait.core.analysis.preview.evaluate_preview`). The
-numbers are those ``rtgait plan`` reports for the same scenario. A base scenario the batch cannot take (a turning walk)
-is rolled out case by case instead, with the same results, slowly.
+numbers are those ``rtgait plan`` reports for the same scenario. A base scenario the batch cannot take (a turning walk,
+a footstep plan) is rolled out case by case instead, with the same results, slowly.
 """
 
 from __future__ import annotations
@@ -52,8 +52,7 @@ def evaluate_group(spec: SweepSpec, group: list[tuple[str, dict[str, Any]]]) -> 
             raise
         return {key: rolled_out(case_scenario(spec.base, values), method) for key, values in group}
     return {
-        key: _fields(float(margin[i]), float(time[i]), deviation[i], decisions[i])
-        for i, (key, _) in enumerate(group)
+        key: _fields(float(margin[i]), float(time[i]), deviation[i], decisions[i]) for i, (key, _) in enumerate(group)
     }
 
 
@@ -89,7 +88,7 @@ def _walk(scenario: Scenario, method: str) -> StraightWalk:
     config = scenario.planner_config()
     if method == "preview":
         config = replace(config, connection="real-time")  # its changes are decided at the real-time deadline
-    if scenario.yaw != 0.0:
+    if scenario.yaw != 0.0 or scenario.footholds is not None:  # a footstep plan's strides are its own
         raise ValueError("batched evaluation needs straight walks")
     return StraightWalk(config, scenario.sole, scenario.dt, scenario.steps, scenario.step_length, scenario.changes)
 

@@ -2,7 +2,8 @@
 
 A sweep file is TOML::
 
-    base = "fig4"                      # a built-in scenario or a scenario file (relative to this file)
+    base = "fig4"                      # a built-in scenario, a scenario file or a footstep plan (relative to
+                                       # this file; a footstep plan's axes: timing.* and connection)
 
     [axes]                             # the cases are every combination, in this order
     "change.length" = { start = -0.1, stop = 0.45, num = 56 }    # m, the first change's new length
@@ -27,7 +28,8 @@ from typing import Any
 
 from rtgait.core.limits import MAX_STRIDE
 from rtgait.core.planner.config import ALL_CONNECTION_MODES
-from rtgait.scenario.scenario import Scenario, ScenarioError, parse_scenario
+from rtgait.scenario.loading import parse_document
+from rtgait.scenario.scenario import Scenario, ScenarioError
 from rtgait.scenario.tomlfile import TomlFiles, is_finite_number
 
 MAX_CASES = 200_000
@@ -108,7 +110,7 @@ def parse_spec(data: dict[str, Any], folder: Path | None = None, source: str = "
         target = Path(base_name) if folder is None or Path(base_name).is_absolute() else folder / base_name
     try:
         document = _SCENARIOS.load(target)
-        base = parse_scenario(document.data, document.source)
+        base = parse_document(document.data, document.source)
     except ScenarioError as error:
         raise SweepError(f"base: {error}") from None
     table = _FILES.table(data["axes"], "axes")
@@ -118,6 +120,8 @@ def parse_spec(data: dict[str, Any], folder: Path | None = None, source: str = "
     for name, raw in table.items():
         if name not in AXES:
             raise SweepError(f"axes.{name} is not an axis one can sweep; the axes are {', '.join(AXES)}")
+        if base.footholds is not None:
+            _check_footstep_axis(name, base)
         axes.append((name, _values(name, raw)))
     spec = SweepSpec(base, document.data, tuple(axes), source)
     if any(name.startswith("change.") for name in spec.axis_names) and not base.changes:
@@ -132,6 +136,24 @@ def parse_spec(data: dict[str, Any], folder: Path | None = None, source: str = "
     for pick in (min, max):
         case_scenario(spec.base, {name: pick(v) if name != "connection" else v[0] for name, v in spec.axes})
     return spec
+
+
+FOOTSTEP_PLAN_AXES = ("timing.double_support", "timing.single_support", "connection")
+"""The axes of a sweep whose base is a footstep plan: its footholds are given one by one, so it has no step length
+and no ``[[walk.change]]`` to vary."""
+
+
+def _check_footstep_axis(name: str, base: Scenario) -> None:
+    """Refuse an axis that has no meaning for the footstep plan ``base``, in one line."""
+    where = f"axes.{name}: the base {base.name} is a footstep plan"
+    if name not in FOOTSTEP_PLAN_AXES:
+        what = "step length" if name == "walk.step_length" else "[[walk.change]]"
+        raise SweepError(
+            f"{where}, whose footholds are given one by one: it has no {what} to vary (a footstep plan's axes: "
+            f"{', '.join(FOOTSTEP_PLAN_AXES)})"
+        )
+    if name.startswith("timing.") and not base.timing.uniform:
+        raise SweepError(f"{where} whose steps have their own timing: {name} would not reach them")
 
 
 def _values(name: str, raw: Any) -> tuple[Any, ...]:
@@ -211,12 +233,13 @@ def case_scenario(base: Scenario, values: dict[str, Any]) -> Scenario:
 
 
 def scenario_from_document(document: dict[str, Any]) -> Scenario:
-    """The base scenario from its TOML document (how workers on other machines rebuild it)."""
-    return parse_scenario(document, "sweep")
+    """The base scenario (or footstep plan) from its TOML document (how workers on other machines rebuild it)."""
+    return parse_document(document, "sweep")
 
 
 __all__ = [
     "AXES",
+    "FOOTSTEP_PLAN_AXES",
     "MAX_CASES",
     "MAX_PHYSICS_CASES",
     "METHODS",

@@ -9,20 +9,24 @@ whose result of that kind is there, so no case runs twice.
 ``DIR/results.csv`` and ``DIR/results.parquet`` are rewritten from the journal (each through a temporary name, so
 never seen half written) whenever the sweep stops: at the end, after Ctrl-C, after an error. One row per case of
 the sweep, in the order of its axes; the cases not done yet are left out.
+
+A file that cannot be read or written (a full disk, a folder made read-only meanwhile) raises
+:class:`~rtgait.outputs.OutputError` with one line naming the folder.
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
 import math
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from rtgait.outputs import write_atomic, write_text_atomic
+from rtgait.outputs import OutputError, write_atomic, write_text_atomic
 
 JOURNAL = "sweep_journal.jsonl"
 CSV_FILE = "results.csv"
@@ -51,13 +55,19 @@ class ResultStore:
         self.path = self.folder / JOURNAL
         self._done: dict[str, dict[str, dict[str, Any]]] = {}  # kind -> case id -> result
         self._stream: io.TextIOWrapper | None = None
+        self.loaded = False  # until load() has read the journal: tables written before would hold nothing
 
     def load(self) -> None:
         """Read what earlier runs finished (a missing journal is an empty one)."""
         self._done = {"pendulum": {}, "physics": {}}
+        with _file_errors(f"cannot read {self.path}"):
+            self._load()
+        self.loaded = True
+
+    def _load(self) -> None:
         if not self.path.exists():
             return
-        with open(self.path, encoding="utf-8") as stream:
+        with open(self.path, encoding="utf-8", errors="replace") as stream:  # a damaged line is skipped below
             for line in stream:
                 try:
                     record = json.loads(line)
@@ -74,18 +84,25 @@ class ResultStore:
         """Record finished results (case id -> fields) durably before going on."""
         if not results:
             return
-        if self._stream is None:
-            self.folder.mkdir(parents=True, exist_ok=True)
-            self._stream = open(self.path, "a", encoding="utf-8")  # noqa: SIM115  # kept open for the sweep
-        self._stream.write(json.dumps({"kind": kind, "results": results}, allow_nan=False, default=_json) + "\n")
-        self._stream.flush()
-        os.fsync(self._stream.fileno())
+        line = json.dumps({"kind": kind, "results": results}, allow_nan=False, default=_json) + "\n"
+        with _file_errors(self._cannot_write):
+            if self._stream is None:
+                self.folder.mkdir(parents=True, exist_ok=True)
+                self._stream = open(self.path, "a", encoding="utf-8")  # noqa: SIM115  # kept open for the sweep
+            self._stream.write(line)
+            self._stream.flush()
+            os.fsync(self._stream.fileno())
         self.done(kind).update(results)
 
     def close(self) -> None:
-        if self._stream is not None:
-            self._stream.close()
-            self._stream = None
+        stream, self._stream = self._stream, None
+        if stream is not None:
+            with _file_errors(self._cannot_write):
+                stream.close()
+
+    @property
+    def _cannot_write(self) -> str:
+        return f"cannot write outputs to {self.folder}"
 
     def write_tables(self, axes: Sequence[str], cases: Iterable[tuple[str, dict[str, Any]]], physics: bool) -> int:
         """Write ``results.csv`` and ``results.parquet`` for the ``(id, axis values)`` cases done; returns the rows."""
@@ -101,9 +118,19 @@ class ResultStore:
         writer.writeheader()
         for row in rows:
             writer.writerow({k: _cell(row.get(k)) for k in columns})
-        write_text_atomic(self.folder / CSV_FILE, text.getvalue())
-        _write_parquet(self.folder / PARQUET_FILE, columns, rows)
+        with _file_errors(self._cannot_write):
+            write_text_atomic(self.folder / CSV_FILE, text.getvalue())
+            _write_parquet(self.folder / PARQUET_FILE, columns, rows)
         return len(rows)
+
+
+@contextlib.contextmanager
+def _file_errors(what: str) -> Iterator[None]:
+    """An ``OSError`` in the block as one :class:`~rtgait.outputs.OutputError` line: ``what: reason``."""
+    try:
+        yield
+    except OSError as error:
+        raise OutputError(f"{what}: {error.strerror or error}") from None
 
 
 def read_results(folder: Path) -> list[dict[str, Any]]:

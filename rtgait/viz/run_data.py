@@ -14,6 +14,7 @@ module on a core install.
 from __future__ import annotations
 
 import json
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -244,17 +245,26 @@ def _footstep(entry: Any, where: str) -> Footstep:
 def read_table(path: Path, required: Sequence[str]) -> dict[str, np.ndarray]:
     """The columns of a CSV file written by rtgait, as text arrays by name; refuses one missing ``required``."""
     try:
-        with open(path, encoding="utf-8") as stream:
+        with open(path, encoding="utf-8") as stream, warnings.catch_warnings():
+            # An empty body is no warning here (its stream's repr would be the message): "no rows" is said below.
+            warnings.simplefilter("ignore")
             header = stream.readline().strip().split(",")
             # ndmin=2: a run of a single tick is still a table of one row.
             table = np.loadtxt(stream, delimiter=",", dtype=str, ndmin=2)
-    except (OSError, UnicodeDecodeError, ValueError) as error:
-        raise RunFilesError(f"cannot read {path}: {error}") from None
+    except OSError as error:
+        raise RunFilesError(f"cannot read {path}: {error.strerror or error}") from None
+    except UnicodeDecodeError:
+        raise RunFilesError(f"cannot read {path}: not a text file") from None
+    except ValueError as error:  # numpy's "the number of columns changed from 27 to 22 at row 132; use `usecols`..."
+        detail = str(error).split(";")[0]
+        raise RunFilesError(f"cannot read {path}: it is cut short or damaged ({detail})") from None
+    if table.shape[0] < 1:  # first: a header cut short also lacks columns, but "cut short" is the news
+        raise RunFilesError(f"{path} has no rows: it is cut short or damaged")
     missing = [name for name in required if name not in header]
     if missing:
         raise RunFilesError(f"{path} has no column {missing[0]}: not a file rtgait wrote for this kind of run")
-    if table.shape[0] < 1 or table.shape[1] != len(header):
-        raise RunFilesError(f"{path} has no rows, or rows that do not match its header")
+    if table.shape[1] != len(header):
+        raise RunFilesError(f"{path} has rows that do not match its header: it is cut short or damaged")
     return {name: table[:, index] for index, name in enumerate(header)}
 
 
