@@ -132,9 +132,7 @@ class ModelError:
             "seed": self.seed,
             "ranges": self.ranges.summary(),
             "mass_factors": dict(zip(self.bodies, self.mass_factors.tolist(), strict=True)),
-            "com_shifts_mm": {
-                name: shift for name, shift in zip(self.bodies, (1e3 * self.com_shifts).tolist(), strict=True)
-            },
+            "com_shifts_mm": dict(zip(self.bodies, (1e3 * self.com_shifts).tolist(), strict=True)),
             "joint_offsets_deg": dict(zip(self.joints, np.degrees(self.joint_offsets).tolist(), strict=True)),
         }
 
