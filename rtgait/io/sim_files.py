@@ -1,5 +1,6 @@
 """The files of a walk in physics: ``sim.csv``, ``sim.parquet`` (the complete log, :mod:`rtgait.sim.log_file`),
-``summary.json``, the ZMP figure, the 3D replay, and the lines ``rtgait simulate`` prints about them.
+``summary.json``, the ZMP figure, the 3D replay, ``model_error.json`` for a robot simulated with a model error, and
+the lines ``rtgait simulate`` prints about them.
 
 Every file is written to a temporary name first and renamed when complete (:mod:`rtgait.outputs`). Times are on the
 walk's clock (t = 0 when the walk starts; the start transition from half-sitting at negative times).
@@ -21,6 +22,7 @@ from rtgait.sim.result import SimResult
 from rtgait.viz.walk_title import velocity_commands, walk_title
 
 __all__ = [
+    "MODEL_ERROR_FILE",
     "SIM_CSV_COLUMNS",
     "SIM_FILES",
     "TORQUE_COLUMN_PREFIX",
@@ -49,7 +51,11 @@ TORQUE_COLUMN_PREFIX = "tau_"
 
 SIM_FILES = ("sim.csv", "sim.parquet", "summary.json", "zmp_sim.png")
 """Files written by :func:`write_sim_outputs` with the figure in PNG (``sim.parquet`` when pyarrow is installed, the
-figure when asked for)."""
+figure when asked for); and :data:`MODEL_ERROR_FILE` for a run with a model error."""
+
+MODEL_ERROR_FILE = "model_error.json"
+"""Every drawn value of a run's model error, by body and joint (:meth:`rtgait.sim.model_error.ModelError.values`);
+``summary.json`` has its compact record."""
 
 _FLOAT_FORMAT = "%.10g"
 _PHASE_LABELS = {0: "double support", 1: "left support", 2: "right support"}
@@ -184,7 +190,8 @@ def write_sim_outputs(
     background: str = "sky",
 ) -> dict[str, Any]:
     """Write ``sim.csv``, ``summary.json``, with ``log`` ``sim.parquet`` (when pyarrow is installed and the result has
-    its tick log), with ``figure`` ``zmp_sim.<figure_format>`` and with ``replay`` ``replay.html`` into ``out_dir``.
+    its tick log), with ``figure`` ``zmp_sim.<figure_format>``, with ``replay`` ``replay.html`` and, for a robot
+    simulated with a model error, :data:`MODEL_ERROR_FILE` into ``out_dir``.
 
     Args:
         result: the simulated walk.
@@ -226,6 +233,10 @@ def write_sim_outputs(
             result, replay, out / "replay.html", sole=sole, title=f"rtgait: {label} in MuJoCo", background=background
         )
         files.append("replay.html")
+    if result.model_error is not None:
+        values = result.model_error.values()
+        write_text_atomic(out / MODEL_ERROR_FILE, summary_text(values))
+        files.append(MODEL_ERROR_FILE)
     summary: dict[str, Any] = {**(extra or {}), **result.summary(), "rows": len(result.times), "files": files}
     write_text_atomic(out / "summary.json", summary_text(summary))
     return summary

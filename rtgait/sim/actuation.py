@@ -268,18 +268,27 @@ class ReferenceInterpolator:
     MuJoCo's actuator takes one control per joint, ``ctrl = q_ref + (kd / kp) qd_ref`` (see the module docstring),
     which is linear in the reference, so interpolating the controls is interpolating ``(q_ref, qd_ref)``.
 
+    A drive servos its encoder's reading, not the joint: with encoder offsets ``o`` (reading - true angle, a model
+    error's joint zeros, :mod:`rtgait.sim.model_error`) the control is ``q_ref - o + (kd / kp) qd_ref``, so the joint
+    goes to ``q_ref - o`` and reads ``q_ref``. The references kept (:attr:`q`, :meth:`reference`) are the
+    controller's, in its model's convention.
+
     Args:
         actuation: the servos (their ``kd / kp`` turns a velocity reference into a position lead).
         q: the joint positions the servos hold at the start (rad); the velocity reference starts at 0.
+        offsets: the encoders' offsets (rad), or ``None``: none.
     """
 
-    def __init__(self, actuation: Actuation, q: np.ndarray) -> None:
+    def __init__(self, actuation: Actuation, q: np.ndarray, offsets: np.ndarray | None = None) -> None:
         self.n = actuation.substeps
         self.lead = actuation.kd / actuation.kp  # s
+        self.offsets = offsets
         self.q = np.array(q, dtype=float)
         self.qd = np.zeros_like(self.q)
         self.q_previous, self.qd_previous = self.q, self.qd
         self._ctrl = self.q.copy()  # the control of the period's last substep: the new reference's
+        if offsets is not None:
+            self._ctrl -= offsets
         self._ctrl_previous = self._ctrl
         self._ctrl_step = np.zeros_like(self.q)
 
@@ -290,6 +299,8 @@ class ReferenceInterpolator:
         self.q, self.qd = q_ref, qd_ref
         self._ctrl_previous = self._ctrl
         self._ctrl = q_ref + self.lead * qd_ref
+        if self.offsets is not None:
+            self._ctrl -= self.offsets
         if self.n > 1:
             self._ctrl_step = (self._ctrl - self._ctrl_previous) * (1.0 / self.n)
 

@@ -75,6 +75,8 @@ class SimConfig:
         meshes: keep the visual meshes (for viewing); without them the model builds faster and simulates the same.
         sensors: noise, latency and seed of the simulated sensors' readings (:class:`SensorSettings`); the
             physics does not depend on them.
+        model_error: seed of the differences between the simulated robot and the controller's model of it (masses,
+            centres of mass, joint zeros: :mod:`rtgait.sim.model_error`); ``None``: none, the robot is the model.
     """
 
     physics_dt: float | None = None
@@ -90,6 +92,7 @@ class SimConfig:
     armature_scale: float = 1.0
     meshes: bool = True
     sensors: SensorSettings = SensorSettings()
+    model_error: int | None = None
 
     def __post_init__(self) -> None:
         step = self.physics_dt
@@ -118,6 +121,9 @@ class SimConfig:
             raise ValueError(
                 f"SimConfig.noslip_iterations must be an integer in [0, 1000], got {self.noslip_iterations}"
             )
+        seed = self.model_error
+        if seed is not None and not (isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
+            raise ValueError(f"SimConfig.model_error must be an integer seed >= 0 or None, got {seed!r}")
         low, high = self.contact_impedance
         if not 0.0 < low <= high < 1.0:
             raise ValueError(

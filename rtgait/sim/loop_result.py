@@ -117,4 +117,5 @@ def loop_result(loop: RunState, wall_time: float, n_steps: int, walk_end: float)
         model=robot.model,
         gravity=loop.gravity,
         log=loop.log.finish(ticks) if loop.log is not None else None,
+        model_error=sim.model_error,
     )

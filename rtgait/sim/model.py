@@ -17,6 +17,8 @@ What the importer gets from the URDF and what is changed (:mod:`rtgait.sim.urdf_
 * Each moving joint gets a PD servo with its torque limit and armature (:mod:`rtgait.sim.actuation`).
 * The sensors of the description's ``[sensors]``: sites at their frames and MuJoCo's sensors on them
   (:mod:`rtgait.sim.sensor_sites`); massless, they change nothing in the physics.
+* With ``config.model_error``, the robot differs from the model the controller has of it: masses, centres of mass
+  and joint zeros drawn from that seed (:mod:`rtgait.sim.model_error`).
 * The ``implicitfast`` integrator: the servo damping is integrated implicitly, which keeps stiff, heavily damped
   servos on light links stable at a millisecond step.
 
@@ -37,6 +39,7 @@ from rtgait.robot.model import RobotModel
 from rtgait.sim.actuation import Actuation, add_actuators, resolve_actuation
 from rtgait.sim.config import SimConfig
 from rtgait.sim.contact_model import add_floor, add_leg_shapes, add_sole, exclude_pairs, touching_pairs
+from rtgait.sim.model_error import ModelError, apply_model_error, draw
 from rtgait.sim.sensor_sites import SensorLayout, add_sensors
 from rtgait.sim.urdf_import import MESH_FORMATS, MeshSkippedWarning, compile_spec, lock_joint, urdf_for_mujoco
 
@@ -68,6 +71,8 @@ class SimModel:
             are therefore excluded from colliding.
         qpos_half_sitting: MuJoCo configuration at half-sitting, soles on the floor (m, unit quaternion, rad).
         sensors: where the robot's sensors are in ``data.sensordata`` (:mod:`rtgait.sim.sensor_sites`).
+        model_error: how the simulated robot differs from ``robot`` (:mod:`rtgait.sim.model_error`; ``model`` has
+            its masses and COMs, :attr:`encoder_offsets` its joint zeros), or ``None``: it does not.
     """
 
     robot: RobotModel
@@ -87,6 +92,7 @@ class SimModel:
     leg_geoms: tuple[int, ...] = ()
     excluded_leg_pairs: tuple[tuple[str, str], ...] = ()
     sensors: SensorLayout | None = None
+    model_error: ModelError | None = None
 
     @property
     def timestep(self) -> float:
@@ -112,6 +118,12 @@ class SimModel:
     def kd(self) -> np.ndarray:
         """Damping gains per joint of ``joint_names`` (N m s/rad)."""
         return self.actuation.kd
+
+    @property
+    def encoder_offsets(self) -> np.ndarray | None:
+        """Encoder reading - true angle of each joint of ``joint_names`` (rad; the model error's joint zeros), or
+        ``None`` without a model error. A drive holding ``q_ref`` holds the joint at ``q_ref - offset``."""
+        return None if self.model_error is None else self.model_error.joint_offsets
 
     def qpos_from_pinocchio(self, q: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """MuJoCo ``qpos`` from a configuration of the robot's reduced Pinocchio model.
@@ -180,7 +192,9 @@ class SimModel:
                 soles have sunk into the soft contact and the servos carry the weight: a run then starts from
                 rest instead of from a small drop onto the floor. 0 starts with the soles exactly on the floor.
             q: configuration of the robot's reduced Pinocchio model to start from (soles on the floor); default
-                half-sitting.
+                half-sitting. With a model error the drives hold its joint angles in the model's convention, so the
+                joints move by the encoder offsets while the robot settles on its soles, as a miscalibrated robot
+                set down on the floor would.
         """
         if not (math.isfinite(settle) and settle >= 0.0):
             raise ValueError(f"settle must be a duration >= 0 s, got {settle}")
@@ -191,6 +205,8 @@ class SimModel:
         else:
             self.qpos_from_pinocchio(np.asarray(q, dtype=float), out=data.qpos)
         data.ctrl[:] = data.qpos[self.qpos_index]
+        if self.model_error is not None:  # the drives servo their encoders, which read the joints + the offsets
+            data.ctrl -= self.model_error.joint_offsets
         for _ in range(round(settle / model.opt.timestep)):
             mujoco.mj_step(model, data)
         data.qvel[:] = 0.0
@@ -255,6 +271,11 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
         if excluded:
             exclude_pairs(spec, excluded)
             model = compile_spec(spec, description)
+    error = None
+    if config.model_error is not None:
+        reference = _half_sitting_qpos(model, robot)
+        error = draw(config.model_error, model, robot.joint_names, reference=reference)
+        apply_model_error(model, error)
 
     def ident(kind: mujoco.mjtObj, name: str) -> int:
         index = mujoco.mj_name2id(model, kind, name)
@@ -284,6 +305,7 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
         leg_geoms=tuple(ident(mujoco.mjtObj.mjOBJ_GEOM, shape.geom_name) for shape in shapes),
         excluded_leg_pairs=tuple(excluded),
         sensors=SensorLayout.of(model, robot),
+        model_error=error,
     )
     qpos = sim.qpos_from_pinocchio(robot.q_half_sitting)
     object.__setattr__(sim, "qpos_half_sitting", qpos)

@@ -44,6 +44,7 @@ if TYPE_CHECKING:
 
     from rtgait.control.controller import ControlEvent
     from rtgait.core.laws.stepping import StepDecision
+    from rtgait.sim.model_error import ModelError
     from rtgait.sim.tick_log import CompleteLog
 
 __all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SimResult", "Stance", "stances"]
@@ -195,6 +196,7 @@ class SimResult:
         model: the reduced Pinocchio model of :attr:`commanded_q` (for the multibody ZMP), or ``None``.
         log: the rest of the per-tick record (joint and base velocities, per-foot wrench, feet targets, ...:
             :class:`~rtgait.sim.tick_log.CompleteLog`), or ``None`` for a result made without it.
+        model_error: how the simulated robot differed from its model (:mod:`rtgait.sim.model_error`), or ``None``.
         at_rest_speed: mean horizontal COM speed over the run's last 0.1 s (m/s).
     """
 
@@ -245,6 +247,7 @@ class SimResult:
     model: pin.Model | None = field(default=None, repr=False)
     gravity: float = 9.81
     log: CompleteLog | None = field(default=None, repr=False)
+    model_error: ModelError | None = field(default=None, repr=False)
 
     # ----- time ------------------------------------------------------------------------------------------------------
     @property
@@ -406,9 +409,10 @@ class SimResult:
         }
 
     def summary(self) -> dict[str, Any]:
-        """The outcome as JSON-ready values (SI units; times on the walk's clock)."""
+        """The outcome as JSON-ready values (SI units; times on the walk's clock); with a model error, its compact
+        record (:meth:`~rtgait.sim.model_error.ModelError.summary`) as ``model_error``."""
         worst = max(self.stances, key=lambda s: s.slip, default=None)
-        return {
+        summary: dict[str, Any] = {
             "model": "mujoco",
             "robot": self.robot,
             "controller": self.controller,
@@ -441,3 +445,6 @@ class SimResult:
             "control_dt": self.control_dt,
             "physics_dt": self.physics_dt,
         }
+        if self.model_error is not None:
+            summary["model_error"] = self.model_error.summary()
+        return summary

@@ -6,7 +6,9 @@ The drives are MuJoCo position actuators with the gains of the robot description
 (:mod:`rtgait.sim.actuation`): a command's ``q_ref`` and ``dq_ref`` are interpolated linearly over the control
 period's physics substeps. What it does not simulate yet is refused, not ignored: gains other than the drives' own,
 feed-forward torques. The readings are those of the robot description's ``[sensors]`` (:mod:`rtgait.sim.sensors`):
-encoders, joint torques, the IMU and the feet's force sensors where the robot has them.
+encoders, joint torques, the IMU and the feet's force sensors where the robot has them. With a model error
+(:mod:`rtgait.sim.model_error`) the encoders read the joints plus their zero offsets, and the drives servo those
+readings to the commanded references.
 """
 
 from __future__ import annotations
@@ -48,7 +50,7 @@ class SimRobot:
     def __init__(self, sim: SimModel, data: mujoco.MjData, joints: np.ndarray) -> None:
         self.sim, self.data = sim, data
         self.joint_names = sim.joint_names
-        self.servo = ReferenceInterpolator(sim.actuation, joints)
+        self.servo = ReferenceInterpolator(sim.actuation, joints, sim.encoder_offsets)
         self.reader = GroundTruthReader.for_sim(sim)
         self.sensors = SensorModel(sim)
         self.substeps = sim.substeps

@@ -15,9 +15,13 @@ SensorSettings`), one reading per control tick of period ``dt``:
 * the IMU filter's orientation ``q_m = q_e q``, an error rotation in the world frame: white roll and pitch, and a yaw
   that drifts at a rate drawn once per run (``yaw = rate t``, ``t`` from the first reading).
 
+With a model error (:mod:`rtgait.sim.model_error`) each encoder also reads its joint's zero offset, ``q + o``, at
+any noise factor: the offset belongs to the robot's calibration, not to its sensors' noise.
+
 All the white noise and walks of a tick come from one call of the run's seeded generator, so a seed fixes the
 readings. A latency of ``L`` control periods delivers at each tick the reading sampled ``L`` ticks before (the first
-one until then), stamped with its sampling time. Noise factor 0: the truth, exactly (not quantized either).
+one until then), stamped with its sampling time. Noise factor 0: the truth, exactly (not quantized either), but for
+the encoder offsets of a model error.
 
 Each :meth:`SensorModel.read` is one control tick: call it once a tick.
 """
@@ -106,6 +110,8 @@ class SensorModel:
             for side in (k, k + 6):
                 offset[side : side + 3] = start[side - k : side - k + 3] * feet.force_offset
                 offset[side + 3 : side + 6] = start[side - k + 3 : side - k + 6] * feet.torque_offset
+        if sim.encoder_offsets is not None:
+            offset[0:n] = sim.encoder_offsets
         self._white, self._offset, self._walk = white, offset, walk
         self._resolution = spec.encoder_resolution if s > 0.0 else 0.0
         # The draws of one tick: white noise for every reading, the bias walks, roll and pitch of the filter.
