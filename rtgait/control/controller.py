@@ -178,10 +178,9 @@ class WalkingController:
         if self.feedback is not None:
             zmp_measured, left_state, right_state = self._filter(m)
             polygon = self._support_polygon(support, left, right)
-            # The DCM with the planner's w (the measurer's may differ), so that it compares with the plan's.
-            w = planner.w
-            dcm = (m.com[0] + m.com_vel[0] / w, m.com[1] + m.com_vel[1] / w)
-            out = self.feedback.update(planned_zmp, (values.dcm_x, values.dcm_y), dcm, polygon, None, zmp_measured)
+            # The measurement's DCM, made once by the estimator with the planner's w (checked at the stack's
+            # making), is the one acted on and the one logged.
+            out = self.feedback.update(planned_zmp, (values.dcm_x, values.dcm_y), m.dcm, polygon, None, zmp_measured)
             zmp, com_offset = out.zmp, out.com_offset
             if out.saturated and self.hip is not None:
                 # The law asks more than the sole gives: the rest is asked of the upper body's lean.
@@ -225,9 +224,8 @@ class WalkingController:
         the push. The step swinging now, or lifting off next, still takes its best landing (``"continue"``): that
         foot can still go toward the capture point."""
         threshold = self.options.replan_dcm_error
-        w = self.planner.w
-        ex = m.com[0] + m.com_vel[0] / w - values.dcm_x
-        ey = m.com[1] + m.com_vel[1] / w - values.dcm_y
+        ex = m.dcm[0] - values.dcm_x
+        ey = m.dcm[1] - values.dcm_y
         if ex * ex + ey * ey <= threshold * threshold or t - self._last_error_replan < ERROR_REPLAN_INTERVAL:
             return False
         planner = self.planner

@@ -51,12 +51,16 @@ def shifted_measurement(
     m: Measurement, offset: tuple[float, float], rate: tuple[float, float], w: float
 ) -> Measurement:
     """``m`` with its COM moved by ``offset`` (m), its COM velocity by ``rate`` (m/s) and its DCM by
-    ``offset + rate / w`` (m); the ZMP and the feet as measured."""
+    ``offset + rate / w`` (m); the ZMP and the feet as measured.
+
+    The moved DCM is made as that of the moved COM state, ``(c + offset) + (c' + rate) / w``: equal to
+    ``m.dcm + offset + rate / w`` but for round-off, and in the float operations the controller has always
+    used (a walk led by the hand stays bit for bit what it was)."""
     dx, dy = offset
     vx, vy = rate
-    com = (m.com[0] + dx, m.com[1] + dy, m.com[2])
-    com_vel = (m.com_vel[0] + vx, m.com_vel[1] + vy, m.com_vel[2])
-    return m._replace(com=com, com_vel=com_vel, dcm=(m.dcm[0] + dx + vx / w, m.dcm[1] + dy + vy / w))
+    cx, cy = m.com[0] + dx, m.com[1] + dy
+    cvx, cvy = m.com_vel[0] + vx, m.com_vel[1] + vy
+    return m._replace(com=(cx, cy, m.com[2]), com_vel=(cvx, cvy, m.com_vel[2]), dcm=(cx + cvx / w, cy + cvy / w))
 
 
 class ExternalForce:

@@ -146,8 +146,10 @@ class SimResult:
             ground projection.
         zmp_command: the ZMP the controller asked the feet for (m), shape ``(k, 2)``: the DCM law's, or the plan's
             in ``open-loop`` and during the start transition.
-        dcm: the measured DCM ``c + c'/w`` the controller acted on (m), shape ``(k, 2)``: of the state one physics step
-            before the tick (:mod:`rtgait.sim.loop`); NaN during the start transition.
+        dcm: the measured DCM ``c + c'/w`` the controller acted on (m), shape ``(k, 2)``: the estimator's, made once
+            (the controller takes it as it is, or moved by its lean against a known pull,
+            :mod:`rtgait.control.external_force`), of the state one physics step before the tick
+            (:mod:`rtgait.sim.loop`); NaN during the start transition.
         dcm_planned: the plan's DCM at the tick (m), shape ``(k, 2)``; NaN during the start transition.
         cog: the measured COG (m), shape ``(k, 3)``.
         cog_planned: the COG target given to the IK (m), shape ``(k, 3)`` (the plan's with the controller's COM

@@ -64,6 +64,9 @@ class WalkingStack:
         ik: the whole-body IK of the robot.
         q: the configuration the robot starts from (the IK's first solution), shape ``(nq,)``.
         ankles: where the feet's tilts go; default found from the robot's sole frames.
+
+    The controller acts on the measurement's DCM as the estimator made it, so an estimator that says its pendulum
+    frequency (an ``omega`` attribute, 1/s) must make it with the planner's ``w``.
     """
 
     def __init__(
@@ -77,6 +80,9 @@ class WalkingStack:
         q = np.array(q, dtype=float)
         if q.shape != (ik.robot.model.nq,):
             raise ValueError(f"q must have the robot's {ik.robot.model.nq} coordinates, got shape {q.shape}")
+        omega, w = getattr(estimator, "omega", None), controller.planner.w
+        if omega is not None and omega != w:
+            raise ValueError(f"the estimator's DCM omega {omega} 1/s differs from the planner's w {w} 1/s")
         self.estimator, self.controller, self.ik = estimator, controller, ik
         self.ankles = find_ankle_joints(ik.robot) if ankles is None else ankles
         self.dt = controller.dt

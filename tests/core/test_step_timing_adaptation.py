@@ -199,6 +199,42 @@ def test_the_batched_choice_is_the_direct_evaluation_of_every_candidate(required
     assert margin == pytest.approx(best[3], abs=1e-12)
 
 
+def test_when_no_candidate_is_enough_the_largest_margin_no_later_than_planned_is_taken():
+    """The documented fallback on a case built by hand: one edge, ``x <= 0``, the ZMP of each timing a constant ahead
+    of it, moved by half the landing's change. A later touch-down would give the largest margin, yet the choice is
+    the largest among the nominal and sooner timings (a stance held longer with its ZMP outside only lets the fall
+    grow), and of the landings within a millimetre of that margin the nearest to the nominal one."""
+    adjust = StepAdjustment(sole=SOLE, adapt_timing=True)
+    halfplanes = (np.array([[1.0, 0.0]]), np.array([0.0]))
+    nominal = np.array([0.3, -0.2])
+    moves = np.array([[-0.02, 0.0], [-0.02, 0.05], [-0.018, 0.0], [-0.01, 0.0], [0.0, 0.0], [0.01, 0.0]])
+    candidates = nominal + moves
+    time_left = np.array([0.3, 0.2, 0.4])  # nominal, sooner, later
+    change = time_left - time_left[0]
+    ahead = np.array([0.05, 0.03, 0.012])  # the ZMP's x with the nominal landing under each timing (m)
+    zmp = np.zeros((3, 4, 2))
+    zmp[:, :, 0] = ahead[:, None]
+    gain = np.full((3, 4), 0.5)
+    # The margins, -(ahead_d + 0.5 dx): at best -0.04 (nominal), -0.02 (sooner), -0.002 (later); all short of 5 mm.
+    d, landing, margin, enough = choose_step(
+        adjust, candidates, tuple(nominal), zmp, gain, halfplanes, tuple(nominal), time_left, change
+    )
+    nearer = nominal + moves[2]  # 0.018 m back
+    assert not enough
+    assert d == 1, f"timing {d} (change {change[d]:+.1f} s): not the sooner one, the best no later than planned"
+    # -0.02 at 0.02 m back, -0.021 at 0.018 m back: within a millimetre, the nearer landing.
+    assert tuple(landing) == pytest.approx(tuple(nearer), abs=1e-12)
+    assert margin == pytest.approx(-(ahead[1] + 0.5 * -0.018), abs=1e-12)
+    # The later timing alone beside the nominal one: still the nominal timing (margin -0.04, the same nearer
+    # landing within its millimetre).
+    keep = [0, 2]
+    d, landing, margin, enough = choose_step(
+        adjust, candidates, tuple(nominal), zmp[keep], gain[keep], halfplanes, tuple(nominal), time_left[keep],
+        change[keep],
+    )  # fmt: skip
+    assert (d, enough) == (0, False) and tuple(landing) == pytest.approx(tuple(nearer), abs=1e-12)
+
+
 def test_candidate_timings_stay_within_the_limits():
     adjust = StepAdjustment(SOLE, SteppingLimits(min_single_support=0.4), adapt_timing=True, durations=4)
     assert single_support_options(adjust, 0.7) == pytest.approx((0.4, 0.5, 0.6))
@@ -243,7 +279,6 @@ def test_the_auto_connection_keeps_its_uniform_timing():
 def test_bad_timing_settings_are_refused_naming_the_key(options, match):
     with pytest.raises(ValueError, match=f"step_adjustment.{match}"):
         StepAdjustment(sole=SOLE, **options)
-
 
 
 # ----- per-call overrides and on_failure="keep" --------------------------------------------------------------------

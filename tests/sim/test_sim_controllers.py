@@ -176,6 +176,36 @@ def test_adaptive_replans_on_a_large_dcm_error():
     assert [(e.kind, e.detail) for e in events][:1] == [("replan", "dcm-error")]
 
 
+def test_the_controller_acts_on_the_measurement_s_dcm():
+    """The DCM is made once, by the estimator (``Measurement.dcm``): the controller's law and its DCM-error replan act
+    on that value, which the run logs, and not on one made again from the COM state. A measurement whose DCM field
+    is off the plan while its COM state is on it moves the ZMP command and replans; the converse does neither."""
+    error = (0.0, -0.04)
+
+    def run(level, moved):
+        ctl, plan = controller(level), reference()
+        outs = []
+        for k in range(100):
+            values, support, _ = plan.sample_values(k * DT)
+            m = on_plan(k * DT, values, support)
+            if moved == "dcm":
+                m = m._replace(dcm=(m.dcm[0] + error[0], m.dcm[1] + error[1]))
+            else:  # the COM state moved so that c + c'/w moves by the error, the DCM field left on the plan
+                m = m._replace(com=(m.com[0] + error[0], m.com[1] + error[1], m.com[2]))
+            outs.append(ctl.tick(k * DT, m))
+        return ctl, values, outs
+
+    ctl, values, outs = run("stabilized", "dcm")
+    expected = (1.0 + ctl.options.dcm.k_p / ctl.planner.w) * error[1]
+    assert outs[-1].zmp_command[1] - values.zmp_y <= expected < -0.04
+    _, values, outs = run("stabilized", "com")
+    assert outs[-1].zmp_command == pytest.approx((values.zmp_x, values.zmp_y), abs=1e-12)
+    _, _, outs = run("adaptive", "dcm")
+    assert ("replan", "dcm-error") in [(e.kind, e.detail) for out in outs for e in out.events]
+    _, _, outs = run("adaptive", "com")
+    assert ("replan", "dcm-error") not in [(e.kind, e.detail) for out in outs for e in out.events]
+
+
 def walk_to(ctl, t_end, t=0.0, **overrides):
     """Tick ``ctl`` on its own plan from ``t`` until ``t_end`` (s); returns the last targets and the next tick's
     time."""

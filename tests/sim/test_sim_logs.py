@@ -195,6 +195,88 @@ def test_com_velocity_is_pinocchios_of_the_measured_state(logged: tuple[Any, Pat
     np.testing.assert_allclose(dcm, np.array([c["dcm_x"], c["dcm_y"]]).T, rtol=0, atol=1e-12)
 
 
+def _replayed(log: Any, result: Any, sim: Any, rows: np.ndarray) -> Any:
+    """MuJoCo's state at each of the log's ``rows``, rebuilt from its measured positions and velocities (base pose
+    and velocity, joints) in a fresh ``MjData`` and run through ``mj_forward`` and ``mj_subtreeVel``: yields
+    ``(row, data)``. Free joint: ``qpos = (p, qw, qx, qy, qz)``, ``qvel = (v_p in the world, w in the base frame)``."""
+    import mujoco
+
+    c = log.columns
+    data = mujoco.MjData(sim.model)
+    joints_q = np.column_stack([c[f"q_{n}"] for n in result.joint_names])
+    joints_v = np.column_stack([c[f"dq_{n}"] for n in result.joint_names])
+    for k in rows:
+        quat = np.array([c[f"base_q{a}"][k] for a in "wxyz"])
+        rotation = np.empty(9)
+        mujoco.mju_quat2Mat(rotation, quat)
+        data.qpos[0:3] = [c[f"base_{a}"][k] for a in "xyz"]
+        data.qpos[3:7] = quat
+        data.qpos[sim.qpos_index] = joints_q[k]
+        data.qvel[0:3] = [c[f"base_v{a}"][k] for a in "xyz"]
+        data.qvel[3:6] = rotation.reshape(3, 3).T @ np.array([c[f"base_w{a}"][k] for a in "xyz"])
+        data.qvel[sim.dof_index] = joints_v[k]
+        mujoco.mj_forward(sim.model, data)
+        mujoco.mj_subtreeVel(sim.model, data)
+        yield k, data
+
+
+def test_the_dcm_the_controller_acted_on_is_that_of_mujoco_s_state(
+    logged: tuple[Any, Path], log: Any, talos: Any, talos_sim: Any
+) -> None:
+    """``dcm_control`` at tick k is ``c + c'/w`` of the state the controller measured, one physics step before t:
+    with one step a tick, tick k - 1's state. Its COM and COM velocity are MuJoCo's ``subtree_com`` and
+    ``subtree_linvel`` of that state rebuilt from the log, and ``w = sqrt(g / z_c)`` with the robot's walking
+    height: a DCM made with a wrong sign, frequency or instant fails here."""
+    result, _ = logged
+    c = log.columns
+    assert result.physics_dt == result.control_dt
+    w = math.sqrt(result.gravity / talos.description.cog_height)
+    assert log.metadata["omega"] == w
+    walking = np.flatnonzero(result.times >= 0.0)
+    assert walking[0] > 0 and np.isnan(c["dcm_control_x"][: walking[0]]).all()  # no controller in the transition
+    base = talos_sim.base_body
+    truth = np.array([
+        data.subtree_com[base, 0:2] + data.subtree_linvel[base, 0:2] / w
+        for _, data in _replayed(log, result, talos_sim, walking - 1)
+    ])  # fmt: skip
+    logged_dcm = np.column_stack([c["dcm_control_x"], c["dcm_control_y"]])[walking]
+    np.testing.assert_allclose(logged_dcm, truth, rtol=0, atol=1e-9)
+    # The walk moves the DCM both ways sideways and forward: a test of both components and their signs.
+    assert truth[:, 1].min() < -0.02 < 0.02 < truth[:, 1].max() and np.ptp(truth[:, 0]) > 0.05
+
+
+def test_the_soles_orientation_columns_are_mujoco_s_sole_frames(
+    logged: tuple[Any, Path], log: Any, talos_sim: Any
+) -> None:
+    """Each sole's ``yaw``, ``pitch`` and ``roll`` columns make ``Rz(yaw) Ry(pitch) Rx(roll)``, MuJoCo's sole site
+    frame (``site_xmat``) of the state rebuilt from the log; the ``tilt`` column is its normal's angle from the
+    vertical. The swing foot pitches and rolls by different amounts: angles swapped or of a wrong sign fail."""
+    result, _ = logged
+    c = log.columns
+
+    def rz(a: float) -> np.ndarray:
+        return np.array([[math.cos(a), -math.sin(a), 0.0], [math.sin(a), math.cos(a), 0.0], [0.0, 0.0, 1.0]])
+
+    def ry(a: float) -> np.ndarray:
+        return np.array([[math.cos(a), 0.0, math.sin(a)], [0.0, 1.0, 0.0], [-math.sin(a), 0.0, math.cos(a)]])
+
+    def rx(a: float) -> np.ndarray:
+        return np.array([[1.0, 0.0, 0.0], [0.0, math.cos(a), -math.sin(a)], [0.0, math.sin(a), math.cos(a)]])
+
+    rows = np.arange(0, len(result.times), 7)
+    sites = {"left": talos_sim.left_sole_site, "right": talos_sim.right_sole_site}
+    for k, data in _replayed(log, result, talos_sim, rows):
+        for side, site in sites.items():
+            frame = data.site_xmat[site].reshape(3, 3)
+            yaw, pitch, roll = (float(c[f"{side}_sole_{a}"][k]) for a in ("yaw", "pitch", "roll"))
+            np.testing.assert_allclose(rz(yaw) @ ry(pitch) @ rx(roll), frame, rtol=0, atol=1e-9, err_msg=(side, k))
+            assert c[f"{side}_tilt"][k] == pytest.approx(math.acos(min(frame[2, 2], 1.0)), abs=1e-6)
+    # The soles tilt by a few milliradians (the right one most: it swings), and pitch and roll differently: far
+    # beyond the 1e-9 above, so a swap or a sign is seen.
+    pitch, roll = c["right_sole_pitch"], c["right_sole_roll"]
+    assert np.abs(pitch).max() > 2e-3 and np.abs(roll).max() > 1e-3 and np.abs(pitch - roll).max() > 2e-3
+
+
 def test_per_foot_wrench_sums_to_the_contact_record(logged: tuple[Any, Path], log: Any) -> None:
     """The controller's per-foot wrench (mj_contactForce, the contacts of the last physics step) against the
     contact record's vertical forces (the constraint forces' pyramid edges), which at tick k - 1 read the same

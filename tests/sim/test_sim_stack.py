@@ -71,3 +71,14 @@ def test_one_tick_from_readings_to_the_joint_command(standing):
     for i in range(1, robot.substeps):
         robot.substep(i)
     np.testing.assert_array_equal(robot.data.ctrl, robot.servo.lead * out.command.velocities + out.command.positions)
+
+
+def test_an_estimator_whose_dcm_frequency_is_not_the_planner_s_is_refused(standing):
+    """The controller acts on the estimator's DCM as it is: made with another ``w``, it would not compare with the
+    plan's, so the stack refuses it at once."""
+    _, stack, talos = standing
+    w = stack.controller.planner.w
+    other = GroundTruthEstimator(1.01 * w, talos.mass * 9.81)
+    with pytest.raises(ValueError, match="differs from the planner's w"):
+        WalkingStack(other, stack.controller, stack.ik, stack.q)
+    assert WalkingStack(GroundTruthEstimator(w, talos.mass * 9.81), stack.controller, stack.ik, stack.q).dt == stack.dt

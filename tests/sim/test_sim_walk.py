@@ -85,6 +85,37 @@ def test_pushes_move_the_base_in_their_direction(talos, talos_sim, shorten, dire
     assert np.allclose(pushed.base_position[:1000], quiet.base_position[:1000]), "nothing differs before the push"
 
 
+def test_a_robot_pushed_over_falls_at_the_first_tick_its_base_tilts_past_the_limit(talos, talos_sim, shorten):
+    """100 N s sideways while standing tips Talos over its soles' edge: the run ends at the first tick whose base,
+    as MuJoCo has it, is tilted past the fall limits' documented 45 degrees from upright, and says so; the base stays
+    well above the "too low" limit until then, so the tilt is what ended it."""
+    import mujoco
+
+    from rtgait.sim.contact import FallLimits
+
+    limits = FallLimits()
+    limit = limits.tilt
+    assert limit == pytest.approx(math.radians(45.0))
+    options = LoopOptions(start_ramp=0.5, start_hold=1.5)
+    push = Push(start=-1.0, duration=0.1, force=(0.0, 1000.0, 0.0))
+    result = simulate(shorten("fig8", 1), talos, sim=talos_sim, options=options, push=push)
+    # The tilt of each tick's base (the state at the tick, before its physics): the angle of the base's z axis from
+    # the vertical, from its rotation matrix.
+    rotation = np.empty(9)
+    tilt = []
+    for qx, qy, qz, qw in result.base_quaternion:
+        mujoco.mju_quat2Mat(rotation, np.array([qw, qx, qy, qz]))
+        tilt.append(math.acos(min(rotation[8], 1.0)))
+    beyond = np.flatnonzero(np.array(tilt) > limit)
+    assert beyond.size, f"the push did not tip the robot over (largest tilt {max(tilt):.2f} rad)"
+    assert result.fell and result.fall_cause == "base tilted"
+    assert result.fall_time == result.times[beyond[0]] == result.times[-1]  # the first tick past it ends the run
+    assert result.fall_time > push.start + push.duration
+    start_height = result.base_position[0, 2]
+    assert result.base_position[:, 2].min() > (limits.base_height_fraction + 0.1) * start_height
+    assert result.summary()["fall_cause"] == "base tilted"
+
+
 def test_walking_by_velocity_command(talos, talos_sim, shorten):
     scenario = shorten("fig8", 2)
     fractions: list[float] = []
