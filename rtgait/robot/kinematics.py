@@ -1,0 +1,166 @@
+"""A robot's kinematics for the state estimator, with Pinocchio: the frames of
+:class:`~rtgait.interface.body_kinematics.BodyKinematics` relative to the floating base, the feet's force sensor
+mounts and the legs' statics (the protocol :class:`rtgait.estimation.kinematics.RobotKinematics`).
+
+The reduced model's configuration is the base at the origin, unrotated, and the encoders' joints; its velocity the
+joints' alone. One ``centerOfMass(q, v)`` a tick runs the forward kinematics (positions and velocities) and the COM
+with its velocity; the sole frames and the IMU's are read off it (the IMU's only when a joint moves it relative to
+the base). The legs' statics (for a robot without foot force sensors) cost a generalized-gravity pass and the joint
+Jacobians, with the gravity turned into the base frame.
+
+A foot force sensor on frame ``s`` measures the wrench between the body it is on and that body's parent (as a
+simulator's force sensor at a site does, and an ankle sensor between shin and foot): the mass it carries besides
+the ground's force is that of the subtree of the frame's joint (the foot), centred where that subtree's COM is.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from rtgait.interface.body_kinematics import BodyKinematics, ForceSensorMount, FrameMotion
+from rtgait.robot.description import RobotError
+from rtgait.robot.model import RobotModel
+
+__all__ = ["PinocchioKinematics"]
+
+_ROOT = 1  # the free flyer's joint id in Pinocchio's models (0 is the universe)
+_AT_REST = (0.0, 0.0, 0.0)
+_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
+
+
+class PinocchioKinematics:
+    """The estimator's kinematics of ``robot`` (module docstring).
+
+    Args:
+        robot: the loaded robot; its reduced model (the joints the readings carry).
+        imu_frame: the IMU's frame in the model; ``None``: the base's own frame.
+        foot_sensor_frames: the left and right feet's force sensor frames; ``None``: a robot without foot force
+            sensors (its feet's wrenches come from the joint torques).
+
+    Raises:
+        RobotError: a frame the model does not have, or a leg whose joints are not all one-coordinate joints.
+    """
+
+    def __init__(
+        self,
+        robot: RobotModel,
+        imu_frame: str | None = None,
+        foot_sensor_frames: tuple[str, str] | None = None,
+    ) -> None:
+        model = pin.Model(robot.model)  # its own copy: leg_statics sets its gravity
+        self.model, self.data = model, model.createData()
+        self.joint_count = model.nv - 6
+        self.mass = robot.mass
+        self._q = pin.neutral(model)
+        self._v = np.zeros(model.nv)
+        self._soles = (robot.left_sole_id, robot.right_sole_id)
+        self._imu = None if imu_frame is None else _frame(model, imu_frame, "imu_frame")
+        self.leg_joints = (self._leg(robot.left_sole_id), self._leg(robot.right_sole_id))
+        self._leg_columns = np.array(self.leg_joints) + 6
+        standing = model.createData()  # for the fixed placements, at half-sitting
+        pin.centerOfMass(model, standing, robot.q_half_sitting)
+        pin.framesForwardKinematics(model, standing, robot.q_half_sitting)
+        # An IMU on the base's own body has a fixed placement: read once.
+        self._imu_fixed: FrameMotion | None = None
+        if self._imu is None:
+            self._imu_fixed = FrameMotion(_AT_REST, (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0), _AT_REST)
+        elif model.frames[self._imu].parentJoint == _ROOT:
+            placement = model.frames[self._imu].placement
+            self._imu_fixed = FrameMotion(
+                tuple(placement.translation.tolist()), tuple(placement.rotation.ravel().tolist()), _AT_REST
+            )
+        # Views of the data's arrays that the forward kinematics rewrite in place: the COM, its velocity, the frames'
+        # translations and rotations (column-major, flattened without a copy); the frame velocities are new each tick.
+        data = self.data
+        frames = (robot.left_sole_id, robot.right_sole_id) + (() if self._imu_fixed is not None else (self._imu,))
+        self._frames = (*frames[:2], frames[2] if len(frames) == 3 else -1)
+        self._parts: list[np.ndarray] = [data.com[0], data.vcom[0]]
+        for frame in frames:
+            placement = data.oMf[frame]
+            self._parts += [placement.translation, placement.rotation.T.reshape(9), np.zeros(3)]
+        self._buffer = np.empty(sum(part.size for part in self._parts))
+        self.foot_sensors: tuple[ForceSensorMount, ForceSensorMount] | None = None
+        if foot_sensor_frames is not None:
+            self.foot_sensors = tuple(  # type: ignore[assignment]
+                self._mount(standing, sole, _frame(model, name, f"foot_sensor_frames[{i}]"))
+                for i, (sole, name) in enumerate(zip(self._soles, foot_sensor_frames, strict=True))
+            )
+
+    def update(self, joint_positions: np.ndarray, joint_velocities: np.ndarray) -> BodyKinematics:
+        """The frames for the joints' positions (rad) and velocities (rad/s), base frame, base at rest."""
+        model, data, q, v = self.model, self.data, self._q, self._v
+        q[7:] = joint_positions
+        v[6:] = joint_velocities
+        pin.centerOfMass(model, data, q, v, False)  # forward kinematics (positions, velocities), COM, COM velocity
+        left, right, imu = self._frames
+        pin.updateFramePlacement(model, data, left)
+        pin.updateFramePlacement(model, data, right)
+        parts, world = self._parts, pin.LOCAL_WORLD_ALIGNED
+        parts[4] = pin.getFrameVelocity(model, data, left, world).linear
+        parts[7] = pin.getFrameVelocity(model, data, right, world).linear
+        fixed = self._imu_fixed
+        if fixed is None:
+            pin.updateFramePlacement(model, data, imu)
+            parts[10] = pin.getFrameVelocity(model, data, imu, world).linear
+        # One copy of every value into a buffer and one conversion to Python floats; the rotations are Pinocchio's
+        # column-major storage, turned row-major by slicing.
+        values = np.concatenate(parts, out=self._buffer).tolist()
+        if fixed is None:
+            fixed = _new_tuple(
+                FrameMotion, (tuple(values[36:39]), _row_major(values, 39), tuple(values[48:51]))
+            )  # fmt: skip
+        sole_left = _new_tuple(FrameMotion, (tuple(values[6:9]), _row_major(values, 9), tuple(values[18:21])))
+        sole_right = _new_tuple(FrameMotion, (tuple(values[21:24]), _row_major(values, 24), tuple(values[33:36])))
+        return _new_tuple(BodyKinematics, (tuple(values[0:3]), tuple(values[3:6]), sole_left, sole_right, fixed))
+
+    def leg_statics(self, gravity: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """The soles' Jacobians (sole frame, rows linear then angular) with respect to each leg's joints, shape
+        ``(2, 6, n_leg)``, and the torques holding each leg against ``gravity`` (m/s^2, base frame), shape
+        ``(2, n_leg)``, at the configuration of the last :meth:`update`."""
+        model, data, q = self.model, self.data, self._q
+        model.gravity.linear = np.asarray(gravity, dtype=float)
+        holding = pin.computeGeneralizedGravity(model, data, q)
+        pin.computeJointJacobians(model, data, q)
+        columns = self._leg_columns
+        left = pin.getFrameJacobian(model, data, self._soles[0], pin.LOCAL)[:, columns[0]]
+        right = pin.getFrameJacobian(model, data, self._soles[1], pin.LOCAL)[:, columns[1]]
+        return np.stack((left, right)), holding[columns]
+
+    # ----- construction --------------------------------------------------------------------------------------------
+    def _leg(self, sole: int) -> tuple[int, ...]:
+        """The joints from the base to a sole's body, as indices into the joint order."""
+        model = self.model
+        chain = [j for j in model.supports[model.frames[sole].parentJoint] if j > _ROOT]
+        if any(model.joints[j].nv != 1 for j in chain):
+            raise RobotError(f"the leg of frame {model.frames[sole].name!r} has joints of more than one coordinate")
+        return tuple(model.joints[j].idx_v - 6 for j in chain)
+
+    def _mount(self, data: pin.Data, sole: int, sensor: int) -> ForceSensorMount:
+        """A force sensor's mount in its sole frame at half-sitting (both fixed on the foot), and the foot's mass below
+        it (module docstring)."""
+        model = self.model
+        if model.frames[sensor].parentJoint != model.frames[sole].parentJoint:
+            raise RobotError(
+                f"the foot force sensor frame {model.frames[sensor].name!r} is not on the body of the sole frame "
+                f"{model.frames[sole].name!r}"
+            )
+        in_sole = data.oMf[sole].actInv(data.oMf[sensor])
+        joint = model.frames[sole].parentJoint
+        # The subtree of the foot's joint: its mass and COM (Pinocchio's data.mass/com per joint subtree, world frame).
+        mass = float(data.mass[joint])
+        com = data.oMf[sole].actInv(data.com[joint])
+        return ForceSensorMount(
+            tuple(in_sole.translation.tolist()), tuple(in_sole.rotation.ravel().tolist()), mass, tuple(com.tolist())
+        )
+
+
+def _frame(model: pin.Model, name: str, field: str) -> int:
+    if not model.existFrame(name):
+        raise RobotError(f"{field}: the robot's model has no frame {name!r}")
+    return int(model.getFrameId(name))
+
+
+def _row_major(values: list[float], start: int) -> tuple[float, ...]:
+    """The row-major tuple of a 3x3 matrix stored column-major at ``values[start:start + 9]``."""
+    return tuple(values[start : start + 9 : 3] + values[start + 1 : start + 9 : 3] + values[start + 2 : start + 9 : 3])
