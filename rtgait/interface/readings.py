@@ -4,7 +4,8 @@ Fields follow the low-level interfaces of real humanoids (Unitree's ``LowState``
 Talos's ankle force/torque sensors): joint positions and velocities in the order of the robot's joint names; the
 IMU's orientation as its own filter reports it, with its angular velocity and linear acceleration in the IMU frame;
 a 6-axis wrench per force sensor, in that sensor's frame. A sensor the robot does not have is ``None``. SI units:
-rad, rad/s, N m, m/s^2, N.
+rad, rad/s, N m, m/s^2, N. Where the sensors are and how noisy: the robot description's ``[sensors]``
+(:mod:`rtgait.interface.sensor_spec`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,11 @@ __all__ = ["ImuReading", "SensorReadings", "Wrench"]
 
 class Wrench(NamedTuple):
     """A 6-axis force/torque reading in its sensor's frame.
+
+    Sign: the wrench the environment exerts on the robot's body through the sensor. For a foot's sensor between the
+    ankle and the sole, that is the wrench the part of the foot below the sensor (which the floor pushes) exerts on
+    the leg above it: standing still with the sensor's z axis up, ``fz`` is the weight the foot carries less the
+    weight of the foot below the sensor, positive.
 
     Attributes:
         force: ``(fx, fy, fz)`` (N), the force the environment exerts on the body through the sensor.
@@ -36,7 +42,7 @@ class ImuReading(NamedTuple):
             ``(w, x, y, z)``.
         angular_velocity: ``(wx, wy, wz)`` in the IMU frame (rad/s).
         linear_acceleration: specific force ``(ax, ay, az)`` in the IMU frame (m/s^2): ``R^T (a - g)``, so about
-            ``(0, 0, 9.81)`` at rest.
+            ``(0, 0, 9.81)`` at rest with the IMU's z axis up.
     """
 
     orientation: tuple[float, float, float, float]
@@ -48,7 +54,8 @@ class SensorReadings(NamedTuple):
     """Everything the robot's sensors report at one tick (module docstring).
 
     Attributes:
-        t: the tick's time (s).
+        t: when the sensors sampled (s): with a latency of ``L`` control periods, ``L`` periods before the tick
+            that reads them.
         joint_positions: encoder positions, one per joint in the robot's joint order (rad), shape ``(n,)``.
         joint_velocities: joint velocities (rad/s), shape ``(n,)``.
         joint_torques: measured or estimated joint torques (N m), shape ``(n,)``; ``None`` where the drives do not

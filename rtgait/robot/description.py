@@ -18,7 +18,9 @@ loaded by path. Its tables, in SI units (m, rad, s, kg m^2, N m/rad):
   patterns, a later group winning); a joint's actuation is resolved key by key: the last matching group that sets
   it, else ``[gains]``, else a default derived from the URDF by :mod:`rtgait.sim.actuation`;
 * optional: ``[stepping]`` (step adjustment's limits, :class:`~rtgait.core.laws.stepping.SteppingLimits`) and
-  ``[velocity]`` (bounds of walks by velocity command, :class:`~rtgait.core.planner.config.VelocityLimits`).
+  ``[velocity]`` (bounds of walks by velocity command, :class:`~rtgait.core.planner.config.VelocityLimits`);
+* optional: ``[sensors]`` (the IMU, the feet's force/torque sensors, encoders, joint torques, their noise and
+  latency: :mod:`rtgait.robot.sensor_table`).
 
 Every problem raises :class:`RobotError` with one line naming the field. The URDF is read with the standard
 library's XML parser (not Pinocchio) to check frame and joint names, so a description can be validated without
@@ -38,6 +40,7 @@ from typing import Any
 from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.core.laws.stepping import SteppingLimits
 from rtgait.core.planner.config import VelocityLimits
+from rtgait.interface.sensor_spec import SensorSpec
 from rtgait.robot.actuation_table import (
     DEFAULT_NATURAL_FREQUENCY,
     ActuationSpec,
@@ -59,6 +62,7 @@ from rtgait.robot.description_checks import (
     resolve_path,
     resolve_urdf,
 )
+from rtgait.robot.sensor_table import parse_sensors
 from rtgait.scenario.tomlfile import SettingsPairs, is_finite_number
 
 __all__ = [
@@ -109,6 +113,8 @@ class RobotDescription:
         control: the ``[control]`` table, the controller's settings for this robot, as read
             (:data:`~rtgait.scenario.tomlfile.SettingsPairs`; :mod:`rtgait.control.control_table` checks and applies
             them, a scenario's own over them).
+        sensors: the ``[sensors]`` table (:class:`~rtgait.interface.sensor_spec.SensorSpec`; without it, perfect
+            encoders and joint torques and nothing else).
         source: where the description came from (``"builtin"`` or a file path); informative only.
     """
 
@@ -130,6 +136,7 @@ class RobotDescription:
     stepping: SteppingLimits | None = None
     velocity: VelocityLimits | None = None
     control: SettingsPairs = ()
+    sensors: SensorSpec = field(default_factory=SensorSpec)
     source: str = field(default="", compare=False)
 
     def posture_angle(self, joint: str) -> float:
@@ -171,7 +178,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         data,
         "",
         ("name", "model", "feet", "walking", "posture"),
-        ("description", "gains", "actuation", "stepping", "velocity", "control"),
+        ("description", "gains", "actuation", "stepping", "velocity", "control", "sensors"),
     )
     name = FILES.string(data, "name", non_empty=True)
     if not _NAME_PATTERN.fullmatch(name):
@@ -257,6 +264,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
     stepping = parse_stepping(data["stepping"], sole) if "stepping" in data else None
     velocity = parse_velocity(data["velocity"], sole) if "velocity" in data else None
     control = FILES.settings(data["control"], "control") if "control" in data else ()
+    sensors = parse_sensors(data["sensors"], names) if "sensors" in data else SensorSpec()
 
     return RobotDescription(
         name=name,
@@ -277,6 +285,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         stepping=stepping,
         velocity=velocity,
         control=control,
+        sensors=sensors,
         source=source,
     )
 

@@ -12,7 +12,33 @@ from rtgait.sim.actuation import substeps
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
 
-__all__ = ["SimConfig"]
+__all__ = ["SensorSettings", "SimConfig"]
+
+
+@dataclass(frozen=True)
+class SensorSettings:
+    """How the simulated sensors of a run report (:mod:`rtgait.sim.sensors`); the sensors themselves are the robot
+    description's ``[sensors]``.
+
+    Attributes:
+        noise: factor on every noise, bias and offset of the description (1: as described; 0: noise-free, the
+            readings are the simulator's truth, not quantized).
+        latency: control periods between sampling and reading; ``None``: the description's ``sensors.latency``.
+        seed: seed of the run's random generator: the same seed, the same readings.
+    """
+
+    noise: float = 1.0
+    latency: int | None = None
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.noise) and self.noise >= 0.0):
+            raise ValueError(f"SensorSettings.noise must be a finite number >= 0, got {self.noise}")
+        latency = self.latency
+        if latency is not None and not (isinstance(latency, int) and not isinstance(latency, bool) and latency >= 0):
+            raise ValueError(f"SensorSettings.latency must be a whole number of control periods >= 0, got {latency}")
+        if not (isinstance(self.seed, int) and not isinstance(self.seed, bool) and self.seed >= 0):
+            raise ValueError(f"SensorSettings.seed must be an integer >= 0, got {self.seed}")
 
 
 @dataclass(frozen=True)
@@ -47,6 +73,8 @@ class SimConfig:
         gain_scale: factor on every joint's kp and kd (1: the description's or derived gains); for ensembles.
         armature_scale: factor on every joint's armature; for ensembles.
         meshes: keep the visual meshes (for viewing); without them the model builds faster and simulates the same.
+        sensors: noise, latency and seed of the simulated sensors' readings (:class:`SensorSettings`); the
+            physics does not depend on them.
     """
 
     physics_dt: float | None = None
@@ -61,6 +89,7 @@ class SimConfig:
     gain_scale: float = 1.0
     armature_scale: float = 1.0
     meshes: bool = True
+    sensors: SensorSettings = SensorSettings()
 
     def __post_init__(self) -> None:
         step = self.physics_dt

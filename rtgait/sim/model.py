@@ -15,6 +15,8 @@ What the importer gets from the URDF and what is changed (:mod:`rtgait.sim.urdf_
 * Every joint outside ``walking.moving_joints`` is locked at its half-sitting angle, as the whole-body IK treats it:
   fewer degrees of freedom, cheaper physics steps.
 * Each moving joint gets a PD servo with its torque limit and armature (:mod:`rtgait.sim.actuation`).
+* The sensors of the description's ``[sensors]``: sites at their frames and MuJoCo's sensors on them
+  (:mod:`rtgait.sim.sensor_sites`); massless, they change nothing in the physics.
 * The ``implicitfast`` integrator: the servo damping is integrated implicitly, which keeps stiff, heavily damped
   servos on light links stable at a millisecond step.
 
@@ -35,13 +37,13 @@ from rtgait.robot.model import RobotModel
 from rtgait.sim.actuation import Actuation, add_actuators, resolve_actuation
 from rtgait.sim.config import SimConfig
 from rtgait.sim.contact_model import add_floor, add_leg_shapes, add_sole, exclude_pairs, touching_pairs
+from rtgait.sim.sensor_sites import SensorLayout, add_sensors
 from rtgait.sim.urdf_import import MESH_FORMATS, MeshSkippedWarning, compile_spec, lock_joint, urdf_for_mujoco
 
 __all__ = ["MESH_FORMATS", "SETTLE_TIME", "MeshSkippedWarning", "SimConfig", "SimModel", "build_sim_model"]
 
 SETTLE_TIME = 0.2
 """Physics time (s) a fresh state stands still before its clock starts (see :meth:`SimModel.reset`)."""
-
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,6 +67,7 @@ class SimModel:
         excluded_leg_pairs: MuJoCo body names of the left and right leg links whose shapes touch at half-sitting and
             are therefore excluded from colliding.
         qpos_half_sitting: MuJoCo configuration at half-sitting, soles on the floor (m, unit quaternion, rad).
+        sensors: where the robot's sensors are in ``data.sensordata`` (:mod:`rtgait.sim.sensor_sites`).
     """
 
     robot: RobotModel
@@ -83,6 +86,7 @@ class SimModel:
     qpos_half_sitting: np.ndarray
     leg_geoms: tuple[int, ...] = ()
     excluded_leg_pairs: tuple[tuple[str, str], ...] = ()
+    sensors: SensorLayout | None = None
 
     @property
     def timestep(self) -> float:
@@ -239,6 +243,7 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
     actuation = resolve_actuation(robot, config.control_dt, config.physics_dt)
     actuation = actuation.scaled(config.gain_scale, config.armature_scale)
     add_actuators(spec, actuation)
+    add_sensors(spec, robot, root)
 
     spec.option.timestep = config.physics_dt
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
@@ -278,6 +283,7 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
         qpos_half_sitting=np.empty(0),
         leg_geoms=tuple(ident(mujoco.mjtObj.mjOBJ_GEOM, shape.geom_name) for shape in shapes),
         excluded_leg_pairs=tuple(excluded),
+        sensors=SensorLayout.of(model, robot),
     )
     qpos = sim.qpos_from_pinocchio(robot.q_half_sitting)
     object.__setattr__(sim, "qpos_half_sitting", qpos)

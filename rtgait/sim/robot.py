@@ -5,8 +5,8 @@ on its own channel (:class:`~rtgait.interface.robot.GroundTruthSource`).
 The drives are MuJoCo position actuators with the gains of the robot description's ``[actuation]``
 (:mod:`rtgait.sim.actuation`): a command's ``q_ref`` and ``dq_ref`` are interpolated linearly over the control
 period's physics substeps. What it does not simulate yet is refused, not ignored: gains other than the drives' own,
-feed-forward torques. The readings carry the encoders and the drives' torques; the IMU and the feet's force sensors
-are not simulated (``None``), so the only estimator that can run on it today is the ground-truth one.
+feed-forward torques. The readings are those of the robot description's ``[sensors]`` (:mod:`rtgait.sim.sensors`):
+encoders, joint torques, the IMU and the feet's force sensors where the robot has them.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from rtgait.interface.truth import GroundTruth
 from rtgait.sim.actuation import ReferenceInterpolator
 from rtgait.sim.contact_reading import ContactSums
 from rtgait.sim.ground_truth import GroundTruthReader
+from rtgait.sim.sensors import SensorModel
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
 if TYPE_CHECKING:
@@ -47,6 +48,7 @@ class SimRobot:
         self.joint_names = sim.joint_names
         self.servo = ReferenceInterpolator(sim.actuation, joints)
         self.reader = GroundTruthReader.for_sim(sim)
+        self.sensors = SensorModel(sim)
         self.substeps = sim.substeps
         self._model, self._ctrl = sim.model, data.ctrl
         # The first substep's contacts and sites, decoded once, when they are also the next tick's truth.
@@ -54,11 +56,10 @@ class SimRobot:
 
     # ----- RobotInterface ------------------------------------------------------------------------------------------
     def read(self) -> SensorReadings:
-        """The encoders and the drives' torques now."""
-        data, sim = self.data, self.sim
-        return SensorReadings(
-            float(data.time), data.qpos[sim.qpos_index], data.qvel[sim.dof_index], data.actuator_force.copy()
-        )
+        """The sensors' readings now (:mod:`rtgait.sim.sensors`: after a physics step, of the state it started
+        from, like :meth:`ground_truth`), stamped ``data.time``."""
+        data = self.data
+        return self.sensors.read(data.sensordata, float(data.time))
 
     def write(self, command: JointCommand) -> None:
         """The drives' references for the coming control period (the arrays are kept: pass new ones each period).

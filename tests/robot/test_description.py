@@ -136,6 +136,18 @@ BAD = [
     ("soles overlapping", edited("min_width = 0.15", "min_width = 0.1"),
      "stepping.min_width (0.1 m) must be at least 2 x feet.sole.inner (0.13 m)"),
     ("stepping not a table", edited("[stepping]", "stepping = 1\n[stepping_]"), "stepping"),
+    ("sensor frame not in URDF", edited('frame = "imu_link"', 'frame = "imu_nowhere"'),
+     "sensors.imu.frame: the URDF has no link or joint named 'imu_nowhere'"),
+    ("unknown sensor key", edited("yaw_drift = 1e-4", "yaw_drfit = 1e-4"), "sensors.imu.yaw_drfit"),
+    ("negative sensor noise", edited("force_noise = 0.5", "force_noise = -0.5"),
+     "sensors.feet.force_noise must be a number >= 0 N"),
+    ("fractional latency", edited("latency = 0", "latency = 0.5"), "sensors.latency must be a whole number"),
+    ("joint torques not a flag", edited("latency = 0", "joint_torques = 1"), "sensors.joint_torques must be"),
+    ("bad sensor offset", edited('frame = "imu_link"', 'frame = "imu_link"\noffset = [0.1]'), "sensors.imu.offset"),
+    ("one foot sensor frame twice", edited('right_frame = "leg_right_6_link"', 'right_frame = "leg_left_6_link"'),
+     "sensors.feet.left_frame and sensors.feet.right_frame must be different frames"),
+    ("foot sensor frame missing", edited('right_frame = "leg_right_6_link"', ""),
+     "missing required key sensors.feet.right_frame"),
 ]  # fmt: skip
 
 

@@ -44,7 +44,7 @@ def test_the_simulated_robot_offers_the_robot_interface_and_its_truth(standing):
     assert isinstance(robot, RobotInterface) and isinstance(robot, GroundTruthSource)
     readings = robot.read()
     assert readings.joint_positions.shape == readings.joint_velocities.shape == (len(robot.joint_names),)
-    assert readings.imu is None and readings.left_foot is None  # not simulated: said, not faked
+    assert readings.imu is not None and readings.left_foot is not None and readings.right_foot is not None
     with pytest.raises(ValueError, match="feed-forward"):
         gains = np.ones(len(talos.joint_names))
         robot.write(JointCommand(readings.joint_positions, readings.joint_velocities, kp=gains))
