@@ -22,7 +22,9 @@ touched: what a sole still moves after the first touch (it rolls flat, the sole 
 while the foot is light. With ``e`` the anchors' disagreement with the kinematics (``a_1 - a_2 - R (p_1 - p_2)``),
 one tick halves it at equal loads and moves the base by ``w_1 w_2 (w_1 - w_2) e``: nothing at equal loads, and, for
 a sinking that follows the load from one foot to the other, nothing over the whole transfer (the integral of
-``w (1 - w) (1 - 2 w)`` over ``w`` in [0, 1] is 0). A tick without load on either foot keeps the last weights.
+``w (1 - w) (1 - 2 w)`` over ``w`` in [0, 1] is 0). A tick without load on either foot (a flight, a fall) keeps the
+last weights and has both anchors follow their soles: the base keeps the place and yaw of the last tick, turned on
+by the IMU.
 
 The world frame is fixed at the start, by the standing feet's poses when given (the plan's, so that the estimate and
 the plan share a frame), else by the feet's midpoint at the origin on the ground with the IMU's heading.
@@ -90,12 +92,14 @@ class FootAnchors:
             wl * (lz - left[2]) + wr * (rz - right[2]),
         )
 
-    def settle(self, weight_left: float, left: Pose, right: Pose) -> None:
+    def settle(self, weight_left: float, left: Pose, right: Pose, standing: bool = True) -> None:
         """Pull each anchor toward its sole's pose now, ``left`` and ``right`` ``(x, y, z, yaw)`` (m, rad), by the share
-        of the weight the other foot carries (module docstring)."""
+        of the weight the other foot carries (module docstring); ``standing=False`` (no foot on the ground): all the
+        way."""
         poses = self.poses
         assert poses is not None
-        for i, (pose, gain) in enumerate(((left, 1.0 - weight_left), (right, weight_left))):
+        gains = (1.0 - weight_left, weight_left) if standing else (1.0, 1.0)
+        for i, (pose, gain) in enumerate(((left, gains[0]), (right, gains[1]))):
             if gain == 0.0:
                 continue
             x, y, z, yaw = poses[i]

@@ -13,10 +13,11 @@ checked against the simulator's truth on its own.
 Each tick, with the base frame's kinematics (:class:`~rtgait.estimation.kinematics.RobotKinematics`):
 
 1. **Orientation.** The IMU's ``R_WI`` and its mount ``R_BI`` give the base's ``R' = R_WI R_BI^T``; roll and pitch
-   are the IMU filter's. Yaw (``yaw="feet"``, default) is anchored on the feet in contact, whose sole headings
-   are remembered from their landings (:mod:`rtgait.estimation.anchors`): an IMU's yaw drifts without a magnetometer
-   and the feet on the ground do not turn; ``yaw="imu"`` keeps the IMU's yaw, turned once at the start into the
-   world frame.
+   are the IMU filter's, smoothed with the gyro (:mod:`rtgait.estimation.attitude_filter`, 0.8 Hz). Yaw
+   (``yaw="feet"``, default) is anchored on the feet in contact, whose sole headings are remembered from their
+   landings (:mod:`rtgait.estimation.anchors`): an IMU's yaw drifts without a magnetometer and the feet on the ground
+   do not turn; ``yaw="imu"`` keeps the IMU's yaw, turned once at the start into the world frame. The gyro measures
+   the IMU's body, so the base's angular velocity is ``R_BI w_I`` less the IMU's turn relative to the base.
 2. **Feet wrenches.** The ground's wrench on each sole (:mod:`rtgait.estimation.sole_wrenches`): from the foot
    force sensors when the readings have them, else from the legs' joint torques (``J^T`` statics).
 3. **Base position.** ``p = sum_i w_i (a_i - R p_i)`` over the feet anchors ``a_i``, weighted by the feet's vertical
@@ -41,6 +42,7 @@ from typing import Literal
 import numpy as np
 
 from rtgait.estimation.anchors import FootAnchors, Pose
+from rtgait.estimation.attitude_filter import DEFAULT_ATTITUDE_CUTOFF, AttitudeFilter
 from rtgait.estimation.feet import FeetFromWrenches
 from rtgait.estimation.kinematics import RobotKinematics
 from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
@@ -81,6 +83,7 @@ class KinematicInertialEstimator:
             the landing force's default is :data:`TORQUE_LANDING_FRACTION` of the weight for ``"torques"``, the release
             force's the ground-truth estimator's for both sources (at most the landing force).
         velocity_cutoff: the complementary velocity filter's cut-off (Hz); ``inf``: kinematics alone.
+        attitude_cutoff: the attitude filter's cut-off (Hz); ``inf``: the IMU filter's attitude as it is.
         yaw: where the base's yaw comes from: ``"feet"`` (the feet in contact) or ``"imu"``.
         start_feet: the standing soles' world poses ``(x, y, z, yaw)``, left then right, that fix the world frame
             at the first update (the plan's standing feet); ``None``: the feet's midpoint at the origin.
@@ -101,6 +104,7 @@ class KinematicInertialEstimator:
         min_force: float | None = None,
         ground_height: float = 0.0,
         velocity_cutoff: float = DEFAULT_VELOCITY_CUTOFF,
+        attitude_cutoff: float = DEFAULT_ATTITUDE_CUTOFF,
         yaw: YawSource = "feet",
         start_feet: tuple[Pose, Pose] | None = None,
     ) -> None:
@@ -137,6 +141,7 @@ class KinematicInertialEstimator:
         self.min_force = 1e-3 * weight if min_force is None else float(min_force)
         self.feet = FeetFromWrenches(self.load, self.min_force, ground_height)
         self.velocity = ComplementaryVelocity(velocity_cutoff)
+        self.attitude = AttitudeFilter(attitude_cutoff)
         self.anchors = FootAnchors()
         self._legs = np.array(kinematics.leg_joints, dtype=int)
         self._mounts = kinematics.foot_sensors if wrenches == "sensors" else None
@@ -147,6 +152,7 @@ class KinematicInertialEstimator:
         """Forget every state: the next update starts the world frame, the filter and the feet's loads afresh."""
         self.load.reset()
         self.velocity.reset()
+        self.attitude.reset()
         self.anchors.reset()
         self._loaded = (True, True)  # the first tick's feet anchor the world frame
         self._weight_left = 0.5
@@ -164,8 +170,11 @@ class KinematicInertialEstimator:
         t, imu = readings.t, readings.imu
         kin = self._kinematics_update(readings.joint_positions, readings.joint_velocities)
         left_sole, right_sole, imu_frame = kin.left_sole, kin.right_sole, kin.imu
-        # 1. The base's orientation as the IMU has it (its yaw the IMU's): R' = R_WI R_BI^T.
-        r_imu = quat_matrix(*imu.orientation)
+        dt = 0.0 if self._t is None else t - self._t
+        self._t = t
+        # 1. The base's orientation as the IMU has it (its yaw the IMU's), R' = R_WI R_BI^T, the IMU filter's attitude
+        # smoothed with the gyro.
+        r_imu = quat_matrix(*self.attitude.update(dt, imu.orientation, imu.angular_velocity))
         r_base = mat_mul_t(r_imu, imu_frame.rotation)
         r_left, r_right = mat_mul(r_base, left_sole.rotation), mat_mul(r_base, right_sole.rotation)
         # 2. The ground's wrenches on the soles, in the sole frames.
@@ -196,12 +205,18 @@ class KinematicInertialEstimator:
         px, py, pz = anchors.base_position(wl, left_rel, right_rel)
         left_pos = (px + lx, py + ly, pz + lz)
         right_pos = (px + rx, py + ry, pz + rz)
-        anchors.settle(wl, (*left_pos, yaw_of(r_left)), (*right_pos, yaw_of(r_right)))
+        # Without a foot on the ground (a flight, a fall), no anchor holds: both follow their soles, and the base keeps
+        # the yaw and place the last tick gave it.
+        standing = loaded_left or loaded_right
+        anchors.settle(wl, (*left_pos, yaw_of(r_left)), (*right_pos, yaw_of(r_right)), standing)
         # 4. Velocity, worked out in the base frame (B) and turned into the world once: the base origin's with each
         # stance foot held still, u = -sum_i w_i (w_B x p_i + p_i'), moved to the IMU (+ w_B x p_I + p_I'), blended
         # with the IMU's acceleration.
+        # The gyro measures the IMU's body: the base turns at w_B = R_BI w_I less the IMU's turn relative to the base.
         mount = imu_frame.rotation
         wx, wy, wz = mat_vec(mount, imu.angular_velocity)
+        rwx, rwy, rwz = imu_frame.angular_velocity
+        wx, wy, wz = wx - rwx, wy - rwy, wz - rwz
         (lx, ly, lz), (lvx, lvy, lvz) = left_sole.position, left_sole.velocity
         (rx, ry, rz), (rvx, rvy, rvz) = right_sole.position, right_sole.velocity
         (ox, oy, oz), (ovx, ovy, ovz) = imu_frame.position, imu_frame.velocity
@@ -212,8 +227,6 @@ class KinematicInertialEstimator:
             wx * oy - wy * ox + ovz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz),
         ))  # fmt: skip
         fx, fy, fz = mat_vec(rot, mat_vec(mount, imu.linear_acceleration))
-        dt = 0.0 if self._t is None else t - self._t
-        self._t = t
         vix, viy, viz = self.velocity.update(dt, kinematic, (fx, fy, fz - self.gravity))
         # 5. COM and its velocity: c = p + R c_B, c' = v_I + R (w_B x (c_B - p_I) + c_B' - p_I').
         (cx, cy, cz), (cvx, cvy, cvz) = kin.com, kin.com_velocity

@@ -22,11 +22,13 @@ class FrameMotion(NamedTuple):
         position: the frame's origin (m).
         rotation: its orientation, row-major 3x3 (the frame's axes as columns).
         velocity: its origin's velocity from the joints' velocities (m/s).
+        angular_velocity: its angular velocity from the joints' velocities (rad/s).
     """
 
     position: tuple[float, float, float]
     rotation: tuple[float, ...]
     velocity: tuple[float, float, float]
+    angular_velocity: tuple[float, float, float]
 
 
 class BodyKinematics(NamedTuple):

@@ -19,6 +19,7 @@ import numpy as np
 import pinocchio as pin
 
 from rtgait.interface.body_kinematics import BodyKinematics, ForceSensorMount, FrameMotion
+from rtgait.interface.sensor_spec import SensorFrame
 from rtgait.robot.description import RobotError
 from rtgait.robot.model import RobotModel
 
@@ -34,28 +35,37 @@ class PinocchioKinematics:
 
     Args:
         robot: the loaded robot; its reduced model (the joints the readings carry).
-        imu_frame: the IMU's frame in the model; ``None``: the base's own frame.
-        foot_sensor_frames: the left and right feet's force sensor frames; ``None``: a robot without foot force
-            sensors (its feet's wrenches come from the joint torques).
+        imu: the IMU's frame (a link or joint of the model and an offset in it, the link's axes); ``None``: the
+            base's own frame.
+        feet: the left and right feet's force sensor frames; ``None``: a robot without foot force sensors (its feet's
+            wrenches come from the joint torques).
 
     Raises:
-        RobotError: a frame the model does not have, or a leg whose joints are not all one-coordinate joints.
+        RobotError: a frame the model does not have, a foot sensor not on its sole's body, or a leg whose joints are
+            not all one-coordinate joints.
     """
 
     def __init__(
         self,
         robot: RobotModel,
-        imu_frame: str | None = None,
-        foot_sensor_frames: tuple[str, str] | None = None,
+        imu: SensorFrame | None = None,
+        feet: tuple[SensorFrame, SensorFrame] | None = None,
     ) -> None:
-        model = pin.Model(robot.model)  # its own copy: leg_statics sets its gravity
+        model = pin.Model(robot.model)  # its own copy: leg_statics sets its gravity, the sensors add frames
+        imu_frame = None if imu is None else _add_frame(model, "rtgait_imu", imu, "sensors.imu.frame")
+        sensor_frames = None
+        if feet is not None:
+            sensor_frames = tuple(
+                _add_frame(model, f"rtgait_{side}_foot_sensor", frame, f"sensors.feet.{side}_frame")
+                for side, frame in zip(("left", "right"), feet, strict=True)
+            )
         self.model, self.data = model, model.createData()
         self.joint_count = model.nv - 6
         self.mass = robot.mass
         self._q = pin.neutral(model)
         self._v = np.zeros(model.nv)
         self._soles = (robot.left_sole_id, robot.right_sole_id)
-        self._imu = None if imu_frame is None else _frame(model, imu_frame, "imu_frame")
+        self._imu = imu_frame
         self.leg_joints = (self._leg(robot.left_sole_id), self._leg(robot.right_sole_id))
         self._leg_columns = np.array(self.leg_joints) + 6
         standing = model.createData()  # for the fixed placements, at half-sitting
@@ -64,27 +74,27 @@ class PinocchioKinematics:
         # An IMU on the base's own body has a fixed placement: read once.
         self._imu_fixed: FrameMotion | None = None
         if self._imu is None:
-            self._imu_fixed = FrameMotion(_AT_REST, (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0), _AT_REST)
+            self._imu_fixed = FrameMotion(_AT_REST, (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0), _AT_REST, _AT_REST)
         elif model.frames[self._imu].parentJoint == _ROOT:
             placement = model.frames[self._imu].placement
             self._imu_fixed = FrameMotion(
-                tuple(placement.translation.tolist()), tuple(placement.rotation.ravel().tolist()), _AT_REST
+                tuple(placement.translation.tolist()), tuple(placement.rotation.ravel().tolist()), _AT_REST, _AT_REST
             )
         # Views of the data's arrays that the forward kinematics rewrite in place: the COM, its velocity, the frames'
-        # translations and rotations (column-major, flattened without a copy); the frame velocities are new each tick.
+        # translations and rotations (column-major, flattened without a copy); the frames' velocities (linear then
+        # angular) are new arrays each tick. Each frame takes 18 values of the buffer.
         data = self.data
         frames = (robot.left_sole_id, robot.right_sole_id) + (() if self._imu_fixed is not None else (self._imu,))
         self._frames = (*frames[:2], frames[2] if len(frames) == 3 else -1)
         self._parts: list[np.ndarray] = [data.com[0], data.vcom[0]]
         for frame in frames:
             placement = data.oMf[frame]
-            self._parts += [placement.translation, placement.rotation.T.reshape(9), np.zeros(3)]
+            self._parts += [placement.translation, placement.rotation.T.reshape(9), np.zeros(6)]
         self._buffer = np.empty(sum(part.size for part in self._parts))
         self.foot_sensors: tuple[ForceSensorMount, ForceSensorMount] | None = None
-        if foot_sensor_frames is not None:
+        if sensor_frames is not None:
             self.foot_sensors = tuple(  # type: ignore[assignment]
-                self._mount(standing, sole, _frame(model, name, f"foot_sensor_frames[{i}]"))
-                for i, (sole, name) in enumerate(zip(self._soles, foot_sensor_frames, strict=True))
+                self._mount(standing, sole, sensor) for sole, sensor in zip(self._soles, sensor_frames, strict=True)
             )
 
     def update(self, joint_positions: np.ndarray, joint_velocities: np.ndarray) -> BodyKinematics:
@@ -97,22 +107,20 @@ class PinocchioKinematics:
         pin.updateFramePlacement(model, data, left)
         pin.updateFramePlacement(model, data, right)
         parts, world = self._parts, pin.LOCAL_WORLD_ALIGNED
-        parts[4] = pin.getFrameVelocity(model, data, left, world).linear
-        parts[7] = pin.getFrameVelocity(model, data, right, world).linear
+        parts[4] = pin.getFrameVelocity(model, data, left, world).vector
+        parts[7] = pin.getFrameVelocity(model, data, right, world).vector
         fixed = self._imu_fixed
         if fixed is None:
             pin.updateFramePlacement(model, data, imu)
-            parts[10] = pin.getFrameVelocity(model, data, imu, world).linear
-        # One copy of every value into a buffer and one conversion to Python floats; the rotations are Pinocchio's
-        # column-major storage, turned row-major by slicing.
+            parts[10] = pin.getFrameVelocity(model, data, imu, world).vector
+        # One copy of every value into a buffer and one conversion to Python floats.
         values = np.concatenate(parts, out=self._buffer).tolist()
         if fixed is None:
-            fixed = _new_tuple(
-                FrameMotion, (tuple(values[36:39]), _row_major(values, 39), tuple(values[48:51]))
-            )  # fmt: skip
-        sole_left = _new_tuple(FrameMotion, (tuple(values[6:9]), _row_major(values, 9), tuple(values[18:21])))
-        sole_right = _new_tuple(FrameMotion, (tuple(values[21:24]), _row_major(values, 24), tuple(values[33:36])))
-        return _new_tuple(BodyKinematics, (tuple(values[0:3]), tuple(values[3:6]), sole_left, sole_right, fixed))
+            fixed = _frame_motion(values, 42)
+        return _new_tuple(
+            BodyKinematics,
+            (tuple(values[0:3]), tuple(values[3:6]), _frame_motion(values, 6), _frame_motion(values, 24), fixed),
+        )
 
     def leg_statics(self, gravity: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
         """The soles' Jacobians (sole frame, rows linear then angular) with respect to each leg's joints, shape
@@ -147,20 +155,30 @@ class PinocchioKinematics:
             )
         in_sole = data.oMf[sole].actInv(data.oMf[sensor])
         joint = model.frames[sole].parentJoint
-        # The subtree of the foot's joint: its mass and COM (Pinocchio's data.mass/com per joint subtree, world frame).
+        # The subtree of the foot's joint: its mass and COM (Pinocchio's data.mass and data.com per joint subtree, the
+        # COM in the joint's frame), the COM then in the sole frame.
         mass = float(data.mass[joint])
-        com = data.oMf[sole].actInv(data.com[joint])
+        com = model.frames[sole].placement.actInv(data.com[joint])
         return ForceSensorMount(
             tuple(in_sole.translation.tolist()), tuple(in_sole.rotation.ravel().tolist()), mass, tuple(com.tolist())
         )
 
 
-def _frame(model: pin.Model, name: str, field: str) -> int:
-    if not model.existFrame(name):
-        raise RobotError(f"{field}: the robot's model has no frame {name!r}")
-    return int(model.getFrameId(name))
+def _add_frame(model: pin.Model, name: str, frame: SensorFrame, field: str) -> int:
+    """A frame ``name`` at a sensor's frame (its link's axes, the offset in the link's frame) added to ``model``."""
+    if not model.existFrame(frame.link):
+        raise RobotError(f"{field}: the robot's model has no frame {frame.link!r}")
+    link_id = model.getFrameId(frame.link)
+    link = model.frames[link_id]
+    placement = link.placement * pin.SE3(np.eye(3), np.asarray(frame.offset, dtype=float))
+    return int(model.addFrame(pin.Frame(name, link.parentJoint, link_id, placement, pin.FrameType.OP_FRAME)))
 
 
-def _row_major(values: list[float], start: int) -> tuple[float, ...]:
-    """The row-major tuple of a 3x3 matrix stored column-major at ``values[start:start + 9]``."""
-    return tuple(values[start : start + 9 : 3] + values[start + 1 : start + 9 : 3] + values[start + 2 : start + 9 : 3])
+def _frame_motion(values: list[float], k: int) -> FrameMotion:
+    """The frame whose 18 values start at ``values[k]``: position, rotation (Pinocchio's column-major storage, turned
+    row-major by slicing), linear and angular velocity."""
+    rotation = values[k + 3 : k + 12 : 3] + values[k + 4 : k + 12 : 3] + values[k + 5 : k + 12 : 3]
+    return _new_tuple(
+        FrameMotion,
+        (tuple(values[k : k + 3]), tuple(rotation), tuple(values[k + 12 : k + 15]), tuple(values[k + 15 : k + 18])),
+    )
