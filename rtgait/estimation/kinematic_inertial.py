@@ -19,7 +19,9 @@ Each tick, with the base frame's kinematics (:class:`~rtgait.estimation.kinemati
    do not turn; ``yaw="imu"`` keeps the IMU's yaw, turned once at the start into the world frame. The gyro measures
    the IMU's body, so the base's angular velocity is ``R_BI w_I`` less the IMU's turn relative to the base.
 2. **Feet wrenches.** The ground's wrench on each sole (:mod:`rtgait.estimation.sole_wrenches`): from the foot
-   force sensors when the readings have them, else from the legs' joint torques (``J^T`` statics).
+   force sensors when the readings have them, else from the legs' joint torques (``J^T`` statics); from joint torques,
+   a foot the load detection has in the air is reported without load (a swinging leg's quasi-static wrench is its
+   own dynamics).
 3. **Base position.** ``p = sum_i w_i (a_i - R p_i)`` over the feet anchors ``a_i``, weighted by the feet's vertical
    forces (:mod:`rtgait.estimation.anchors`).
 4. **Velocity.** With ``w`` the gyro's angular velocity in the world, a foot ``i`` held still gives the base
@@ -48,7 +50,7 @@ from rtgait.estimation.kinematics import RobotKinematics
 from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
 from rtgait.estimation.rotations import mat_mul, mat_mul_t, mat_vec, quat_matrix, turned, yaw_of
 from rtgait.estimation.sole_wrenches import SoleWrench, sensor_wrench, torque_wrenches
-from rtgait.estimation.state import Landing, Measurement
+from rtgait.estimation.state import FootState, Landing, Measurement
 from rtgait.estimation.velocity_filter import DEFAULT_VELOCITY_CUTOFF, ComplementaryVelocity
 from rtgait.interface.readings import SensorReadings
 from rtgait.interface.truth import GroundTruth
@@ -66,6 +68,8 @@ quasi-static estimate's error on a swinging leg (up to 11 % of the weight on G1'
 so that a swing is not taken for a landing."""
 
 _NO_LANDINGS: tuple[Landing, ...] = ()
+_ZERO3 = (0.0, 0.0, 0.0)
+_NAN2 = (math.nan, math.nan)
 _new_tuple = tuple.__new__  # a NamedTuple made from a tuple at once, without its generated __new__'s argument parsing
 
 
@@ -143,8 +147,16 @@ class KinematicInertialEstimator:
         self.velocity = ComplementaryVelocity(velocity_cutoff)
         self.attitude = AttitudeFilter(attitude_cutoff)
         self.anchors = FootAnchors()
-        self._legs = np.array(kinematics.leg_joints, dtype=int)
+        legs = [list(leg) for leg in kinematics.leg_joints]
+        if len(legs) != 2 or len(legs[0]) != len(legs[1]) or not legs[0]:
+            raise ValueError(f"leg_joints must be two legs of as many joints, got {kinematics.leg_joints!r}")
+        # One slice of the joint torques for both legs when the right leg's joints follow the left's, else indices.
+        both = legs[0] + legs[1]
+        consecutive = both == list(range(both[0], both[0] + len(both)))
+        self._legs = slice(both[0], both[0] + len(both)) if consecutive else np.array(both)
+        self._leg_shape = (2, len(legs[0]))
         self._mounts = kinematics.foot_sensors if wrenches == "sensors" else None
+        self._torques = wrenches == "torques"
         self._kinematics_update = kinematics.update
         self.reset()
 
@@ -241,6 +253,13 @@ class KinematicInertialEstimator:
         sole_foot, release = self.feet.sole_foot, self._release
         left, left_landing = sole_foot(0, t, wrench_left, 1 if fz_left > release else 0, left_pos, r_left)
         right, right_landing = sole_foot(1, t, wrench_right, 1 if fz_right > release else 0, right_pos, r_right)
+        if self._torques:
+            # A foot the load detection has in the air carries nothing: what the quasi-static statics give a swinging
+            # leg is its own dynamics, not a contact (it would move the ZMP by that force times the foot's distance).
+            if not left.loaded:
+                left = _new_tuple(FootState, (_ZERO3, _ZERO3, 0.0, _NAN2, _NAN2, *left[5:10], 0))
+            if not right.loaded:
+                right = _new_tuple(FootState, (_ZERO3, _ZERO3, 0.0, _NAN2, _NAN2, *right[5:10], 0))
         self._loaded = (left.loaded, right.loaded)
         landings = _NO_LANDINGS
         if left_landing is not None or right_landing is not None:
@@ -270,5 +289,5 @@ class KinematicInertialEstimator:
         if readings.joint_torques is None:
             raise ValueError("the estimator reads the joint torques, the readings have none")
         jacobians, holding = self.kinematics.leg_statics((-g * r_base[6], -g * r_base[7], -g * r_base[8]))
-        left, right = torque_wrenches(jacobians, holding, readings.joint_torques[self._legs])
+        left, right = torque_wrenches(jacobians, holding, readings.joint_torques[self._legs].reshape(self._leg_shape))
         return left, right

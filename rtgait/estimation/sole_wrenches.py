@@ -70,7 +70,7 @@ def torque_wrenches(jacobians: np.ndarray, gravity_torques: np.ndarray, torques:
         The left and right soles' wrenches.
     """
     rhs = gravity_torques - torques
-    jt = np.swapaxes(jacobians, 1, 2)
+    jt = jacobians.transpose(0, 2, 1)
     if jt.shape[1] == 6:
         wrenches = np.linalg.solve(jt, rhs[..., None])[..., 0]
     else:  # a leg of other than six joints: the least-squares (or least-norm) wrench

@@ -67,7 +67,11 @@ class PinocchioKinematics:
         self._soles = (robot.left_sole_id, robot.right_sole_id)
         self._imu = imu_frame
         self.leg_joints = (self._leg(robot.left_sole_id), self._leg(robot.right_sole_id))
-        self._leg_columns = np.array(self.leg_joints) + 6
+        # Each leg's columns of the velocity vector: a slice where they follow each other (no copy to index them).
+        self._leg_columns = tuple(_columns(leg, 6) for leg in self.leg_joints)
+        self._jacobians = np.empty((2, 6, len(self.leg_joints[0])))
+        self._holding = np.empty((2, len(self.leg_joints[0])))
+        self._gravity = model.gravity.linear  # a view of the model's gravity, set by leg_statics
         standing = model.createData()  # for the fixed placements, at half-sitting
         pin.centerOfMass(model, standing, robot.q_half_sitting)
         pin.framesForwardKinematics(model, standing, robot.q_half_sitting)
@@ -125,15 +129,18 @@ class PinocchioKinematics:
     def leg_statics(self, gravity: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
         """The soles' Jacobians (sole frame, rows linear then angular) with respect to each leg's joints, shape
         ``(2, 6, n_leg)``, and the torques holding each leg against ``gravity`` (m/s^2, base frame), shape
-        ``(2, n_leg)``, at the configuration of the last :meth:`update`."""
+        ``(2, n_leg)``, at the configuration of the last :meth:`update` (arrays the next call overwrites)."""
         model, data, q = self.model, self.data, self._q
-        model.gravity.linear = np.asarray(gravity, dtype=float)
+        self._gravity[:] = gravity
         holding = pin.computeGeneralizedGravity(model, data, q)
         pin.computeJointJacobians(model, data, q)
-        columns = self._leg_columns
-        left = pin.getFrameJacobian(model, data, self._soles[0], pin.LOCAL)[:, columns[0]]
-        right = pin.getFrameJacobian(model, data, self._soles[1], pin.LOCAL)[:, columns[1]]
-        return np.stack((left, right)), holding[columns]
+        (left, right), jacobians, legs = self._soles, self._jacobians, self._holding
+        columns_left, columns_right = self._leg_columns
+        jacobians[0] = pin.getFrameJacobian(model, data, left, pin.LOCAL)[:, columns_left]
+        jacobians[1] = pin.getFrameJacobian(model, data, right, pin.LOCAL)[:, columns_right]
+        legs[0] = holding[columns_left]
+        legs[1] = holding[columns_right]
+        return jacobians, legs
 
     # ----- construction --------------------------------------------------------------------------------------------
     def _leg(self, sole: int) -> tuple[int, ...]:
@@ -182,3 +189,11 @@ def _frame_motion(values: list[float], k: int) -> FrameMotion:
         FrameMotion,
         (tuple(values[k : k + 3]), tuple(rotation), tuple(values[k + 12 : k + 15]), tuple(values[k + 15 : k + 18])),
     )
+
+
+def _columns(indices: tuple[int, ...], offset: int) -> slice | np.ndarray:
+    """``indices + offset`` as a slice when they follow each other, else as an index array."""
+    first = indices[0] + offset
+    if list(indices) == list(range(indices[0], indices[0] + len(indices))):
+        return slice(first, first + len(indices))
+    return np.array(indices) + offset
