@@ -41,6 +41,8 @@ class SimRobot:
 
     Attributes:
         joint_names: the moving joints, the order of every per-joint array read or written.
+        sensors: the sensors' noise, biases and latency behind :meth:`read` (:class:`~rtgait.sim.sensors.SensorModel`,
+            with the settings of ``sim.config.sensors``).
     """
 
     def __init__(self, sim: SimModel, data: mujoco.MjData, joints: np.ndarray) -> None:
@@ -57,7 +59,8 @@ class SimRobot:
     # ----- RobotInterface ------------------------------------------------------------------------------------------
     def read(self) -> SensorReadings:
         """The sensors' readings now (:mod:`rtgait.sim.sensors`: after a physics step, of the state it started
-        from, like :meth:`ground_truth`), stamped ``data.time``."""
+        from, like :meth:`ground_truth`), sampled at ``data.time``. Each call is one control tick of the noise's
+        walks and the latency: call it once a tick."""
         data = self.data
         return self.sensors.read(data.sensordata, float(data.time))
 
