@@ -15,6 +15,8 @@ about which the net moment of all foot forces is vertical: with ``tau_O = sum_fe
     zmp = (-tau_O,y / F_z, tau_O,x / F_z)                                                 (m)
 
 which for feet flat on the ground is the force-weighted mean of their CoPs; NaN when no foot carries ``min_force``.
+A foot's wrench may also be given in its sole frame (``f``, ``t`` about the sole origin, as a force sensor's turned
+there): then ``F = R f``, ``tau_o = R t``.
 The sole's orientation is read as ``R = Rz(yaw) Ry(pitch) Rx(roll)``; its tilt is the angle between the sole normal
 and the vertical. All on Python floats: a tick's few numbers cost less so than as numpy arrays.
 """
@@ -50,7 +52,7 @@ class FeetFromWrenches:
     def foot(
         self, index: int, t: float, fx: float, fy: float, fz: float, mx: float, my: float, mz: float, count: int,
         position: list[float], m: list[float],
-    ) -> tuple[FootState, Landing | None]:
+    ) -> tuple[FootState, Landing | None]:  # fmt: skip
         """One foot's state from its summed force ``(fx, fy, fz)`` (N) and moment about the world origin (N m), and
         its sole frame's position and row-major rotation; and its landing at this tick, if it landed."""
         ox, oy, oz = position
@@ -61,9 +63,35 @@ class FeetFromWrenches:
         # The sole frame's components: R^T v, R row-major (m[3 r + c] = R[r][c]).
         m0, m1, m2, m3, m4, m5, m6, m7, m8 = m
         lfz = m2 * fx + m5 * fy + m8 * fz
+        ltx = m0 * tx + m3 * ty + m6 * tz
+        lty = m1 * tx + m4 * ty + m7 * tz
+        return self._state(index, t, fx, fy, fz, tx, ty, tz, lfz, ltx, lty, count, position, m)
+
+    def sole_foot(
+        self, index: int, t: float, wrench: tuple[float, float, float, float, float, float], count: int,
+        position: tuple[float, float, float], m: tuple[float, ...],
+    ) -> tuple[FootState, Landing | None]:  # fmt: skip
+        """One foot's state from the ground's wrench on it in its sole frame, ``(fx, fy, fz, tx, ty, tz)`` (N, N m,
+        about the sole origin), and its sole frame's world position and row-major rotation (as :meth:`foot`)."""
+        lfx, lfy, lfz, ltx, lty, ltz = wrench
+        m0, m1, m2, m3, m4, m5, m6, m7, m8 = m
+        # The world components: R v.
+        return self._state(
+            index, t, m0 * lfx + m1 * lfy + m2 * lfz, m3 * lfx + m4 * lfy + m5 * lfz, m6 * lfx + m7 * lfy + m8 * lfz,
+            m0 * ltx + m1 * lty + m2 * ltz, m3 * ltx + m4 * lty + m5 * ltz, m6 * ltx + m7 * lty + m8 * ltz,
+            lfz, ltx, lty, count, position, m,
+        )  # fmt: skip
+
+    def _state(
+        self, index: int, t: float, fx: float, fy: float, fz: float, tx: float, ty: float, tz: float, lfz: float,
+        ltx: float, lty: float, count: int, position: list[float] | tuple[float, float, float], m: list[float] |
+        tuple[float, ...],
+    ) -> tuple[FootState, Landing | None]:  # fmt: skip
+        """The foot's state from its force and moment about the sole origin in the world (N, N m), their sole-frame
+        normal force and tangential moment, and its sole frame's pose."""
+        ox, oy, oz = position
+        m0, m1, _, m3, m4, _, m6, m7, m8 = m
         if lfz > self.min_force:
-            ltx = m0 * tx + m3 * ty + m6 * tz
-            lty = m1 * tx + m4 * ty + m7 * tz
             cx, cy = -lty / lfz, ltx / lfz
             cop_local = (cx, cy)
             cop = (ox + m0 * cx + m1 * cy, oy + m3 * cx + m4 * cy)

@@ -4,8 +4,11 @@ per control period.
 
 Every control tick (``sim.control_dt``: 1 ms for Talos, 2 ms for G1) of the walk, at time ``t`` on the walk's clock:
 
-1. **estimate** (:class:`~rtgait.estimation.ground_truth.GroundTruthEstimator` on the simulator's truth,
-   :mod:`rtgait.sim.ground_truth`): per-foot contact wrench, centre of pressure and pose, the ZMP, the COM and its
+1. **estimate** (:attr:`LoopOptions.state`: ``"truth"``, the
+   :class:`~rtgait.estimation.ground_truth.GroundTruthEstimator` on the simulator's truth,
+   :mod:`rtgait.sim.ground_truth`; ``"estimated"``, the
+   :class:`~rtgait.estimation.kinematic_inertial.KinematicInertialEstimator` on the simulated sensors' readings,
+   :mod:`rtgait.sim.sensors`): per-foot contact wrench, centre of pressure and pose, the ZMP, the COM and its
    velocity, the DCM, and the landings since the last tick. They are read from the kinematics and contact forces the
    last physics step computed, i.e. of the state one physics step before ``t``: a real robot's sensors lag by a
    sample too, and reading them costs no extra ``mj_forward`` (with one physics step a period, its contacts as the
@@ -58,7 +61,6 @@ from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.geometry.support import SUPPORT_CODES, SUPPORT_NAMES
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.push import Push
-from rtgait.estimation.ground_truth import GroundTruthEstimator
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.ik import WholeBodyIK
@@ -80,6 +82,7 @@ from rtgait.sim.result import SimResult
 from rtgait.sim.robot import SimRobot
 from rtgait.sim.row_packing import row_packer
 from rtgait.sim.tick_log import TickLog
+from rtgait.stack.estimators import make_estimator
 from rtgait.stack.setup import start_pose
 from rtgait.stack.walking_stack import WalkingStack
 
@@ -203,9 +206,13 @@ class ClosedLoop:
         """The pushes of the run: the scheduled ones and those given to :meth:`push`."""
         self._live = LivePush(sim, data, planner.config.cog_height, self.gravity)  # push(), from a live session
         # The robot behind its interface, and the stack that drives it: the ground-truth estimator reads the
-        # simulator's truth (the DCM with the planner's w, the thresholds scaled to the robot's weight).
+        # simulator's truth, the kinematic-inertial one the robot's sensors, its world frame the walk's standing feet
+        # (the DCM with the planner's w, the thresholds scaled to the robot's weight).
         self.robot = SimRobot(sim, data, q[7:])
-        estimator = GroundTruthEstimator(planner.w, robot.mass * float(-model.opt.gravity[2]))
+        estimator = make_estimator(
+            options.state, robot, planner.w, gravity=self.gravity,
+            start_feet=(tuple(self._left_start), tuple(self._right_start)),
+        )  # fmt: skip
         self.stack = WalkingStack(estimator, controller, ik, q)
         self.landings = Landings(max(min(planner.config.timing.double_support, LANDING_WINDOW), dt), self.threshold)
 
@@ -225,7 +232,8 @@ class ClosedLoop:
             stack.estimate, stack.control, stack.hold, robot_.ground_truth, robot_.write, robot_.first_substep,
             robot_.substep, self.contacts, self.landings, self._pushes.update, self._live.update, data, data.qpos,
             data.subtree_com[sim.base_body], data.site_xpos, data.actuator_force, sim.left_sole_site,
-            sim.right_sole_site, sim.substeps, dt, k0, -1 if n_ticks is None else n_ticks,
+            sim.right_sole_site, sim.substeps, estimator.reads_truth, robot_.read, dt, k0,
+            -1 if n_ticks is None else n_ticks,
         )  # fmt: skip
         r = self.record
         # The rows of Python numbers are written by struct packing into the arrays' bytes (the same float64s for
@@ -273,8 +281,8 @@ class ClosedLoop:
         if self._over:
             raise RuntimeError("the closed loop is over (fallen or at its last tick): make its result()")
         (estimate, control, hold, ground_truth, write, first_substep, substep, contacts, landings, pushes, live_push,
-         data, qpos, base_com, site_xpos, actuator_force, left_site, right_site, n_sub, dt, k0,
-         n_ticks) = self._hot  # fmt: skip
+         data, qpos, base_com, site_xpos, actuator_force, left_site, right_site, n_sub, estimator_reads_truth, read,
+         dt, k0, n_ticks) = self._hot  # fmt: skip
         ((pack_planned, planned_bytes, planned_row), (pack_cog, cog_bytes, cog_row), cog, bases, support, torque,
          commanded, replay_qpos, replay_soles, capacity, replay_every, replay_capacity) = self._rows  # fmt: skip
         if self._began is None:
@@ -298,8 +306,12 @@ class ClosedLoop:
             out = measurement = None  # no controller during the transition
             made = hold(_new_tuple(IKTargets, (target_cog, left_foot, right_foot, None)))
         else:
-            # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
-            measurement = estimate(None, ground_truth(t, self.log is not None))
+            if estimator_reads_truth:
+                # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
+                measurement = estimate(None, ground_truth(t, self.log is not None))
+            else:  # the sensors' readings, stamped on the walk's clock (their sampling time, latency kept)
+                readings = read()
+                measurement = estimate(readings._replace(t=readings.t - (data.time - t)), None)
             if k == k0:
                 self.stack.start(0.0, measurement)
                 self._inputs.start()

@@ -13,6 +13,7 @@ from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.push import Push
 from rtgait.sim.contact import FallLimits
+from rtgait.stack.estimators import StateSource, check_state
 
 __all__ = [
     "LANDING_WINDOW", "LoopOptions", "end_tick", "minimum_jerk", "run_length", "timing_headroom",
@@ -50,6 +51,9 @@ class LoopOptions:
         replay_period: the robot's whole configuration is recorded every this many seconds (rounded to whole
             control ticks) for the 3D replay (:attr:`SimResult.replay_q`); 0.04 s is the replay's 25 frames per
             second, and keeps a minute of walking to 1500 rows.
+        state: what the controller acts on: ``"truth"``, the simulator's ground truth; ``"estimated"``, the
+            kinematic-inertial estimator on the simulated robot's sensor readings
+            (:func:`rtgait.stack.estimators.make_estimator`).
     """
 
     start_ramp: float = 1.0
@@ -64,8 +68,10 @@ class LoopOptions:
     replay_period: float = 0.04
     on_tick: Callable[[float, mujoco.MjData], None] | None = None
     duration: float | None = None
+    state: StateSource = "truth"
 
     def __post_init__(self) -> None:
+        check_state(self.state, "LoopOptions.state")
         if self.duration is not None and not (math.isfinite(self.duration) and self.duration > 0.0):
             raise ValueError(f"duration must be > 0 s, got {self.duration}")
         if not (math.isfinite(self.replay_period) and self.replay_period > 0.0):

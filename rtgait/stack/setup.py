@@ -6,10 +6,10 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from rtgait.control.controller import make_controller
-from rtgait.estimation.ground_truth import GroundTruthEstimator
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.ik import WholeBodyIK
+from rtgait.stack.estimators import StateSource, check_state, make_estimator
 from rtgait.stack.walking_stack import WalkingStack
 
 if TYPE_CHECKING:
@@ -43,6 +43,7 @@ def walking_stack(
     level: Controller = "adaptive",
     options: ControllerOptions | None = None,
     estimator: Estimator | None = None,
+    state: StateSource = "truth",
 ) -> WalkingStack:
     """The stack that walks ``walk`` on ``robot`` at control period ``dt`` (s).
 
@@ -53,11 +54,15 @@ def walking_stack(
         dt: the control period (s).
         level: the controller level (:mod:`rtgait.control.controller`).
         options: the controller's settings; default :class:`~rtgait.control.settings.ControllerOptions`.
-        estimator: readings -> walking state; default the ground-truth estimator, for a simulator's truth.
+        estimator: readings -> walking state; default the one ``state`` names.
+        state: ``"truth"`` (the ground-truth estimator, on a simulator's truth) or ``"estimated"`` (the
+            kinematic-inertial estimator on the robot's sensors, its world frame the walk's standing feet):
+            :func:`rtgait.stack.estimators.make_estimator`.
 
     The stack's configuration :attr:`WalkingStack.q` is the walk's standing start: the COG between the first two
     footprints at the walking height, the soles level (the IK solved from half-sitting). Start the robot there.
     """
+    check_state(state)
     controller = make_controller(
         level, walk.planner_config(), walk.strides(), walk.sole, robot_info(robot), dt=dt, options=options
     )
@@ -65,6 +70,7 @@ def walking_stack(
     cog, left, right = start_pose(controller.planner)
     q, _ = ik.solve(IKTargets(cog, left, right), robot.q_half_sitting, 200, 1e-9)
     if estimator is None:
-        weight = robot.mass * controller.planner.config.gravity
-        estimator = GroundTruthEstimator(controller.planner.w, weight)
+        planner = controller.planner
+        feet = (tuple(left), tuple(right))
+        estimator = make_estimator(state, robot, planner.w, gravity=planner.config.gravity, start_feet=feet)
     return WalkingStack(estimator, controller, ik, q)

@@ -1,0 +1,95 @@
+"""The kinematic-inertial estimator's cost per update, on the readings of a walk.
+
+Records the simulated sensors' readings of ``--seconds`` of the robot's fig8 walk (driven on the simulator's truth),
+then times :meth:`KinematicInertialEstimator.update` over them, and apart the Pinocchio kinematics it calls and the
+estimator's own work (the kinematics' outputs replayed). Each is run in blocks of the whole recording; a block's
+median per update is taken, and the least of the blocks is printed (JSON, microseconds): on a shared machine the
+other blocks are those another process interrupted. ::
+
+    python benchmarks/estimator.py --robot talos
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+
+from rtgait.io.sim_run import _controller, robot_and_scenario_options
+from rtgait.robot.model import RobotModel
+from rtgait.robot.motion import robot_scenario
+from rtgait.scenario import load_scenario
+from rtgait.sim.config import SimConfig
+from rtgait.sim.loop import ClosedLoop, LoopOptions
+from rtgait.sim.model import build_sim_model
+from rtgait.stack.estimators import kinematic_inertial_estimator
+from rtgait.stack.setup import start_pose
+
+
+def record(robot_name: str, seconds: float) -> tuple[list, object, object]:
+    """The readings of the walk's first ``seconds`` (walk clock) and the estimator for them."""
+    robot = RobotModel.load(robot_name)
+    sim = build_sim_model(robot, SimConfig(meshes=False))
+    scenario = load_scenario("fig8")
+    walk = robot_scenario(scenario, robot)
+    level, changes, stop_after = _controller(walk, None, "adaptive", sim, robot_and_scenario_options(robot, scenario))
+    loop = ClosedLoop(sim, level, LoopOptions(changes=changes, stop_after_steps=stop_after))
+    _, left, right = start_pose(level.planner)
+    readings = []
+    while loop.step() and not loop.done:
+        t = loop.time_of(loop.k)
+        if loop.k >= loop.k0:
+            reading = loop.robot.read()
+            readings.append(reading._replace(t=reading.t - (loop.data.time - t)))
+        if t > seconds:
+            break
+    estimator = kinematic_inertial_estimator(robot, level.planner.w, start_feet=(tuple(left), tuple(right)))
+    return readings, estimator, robot
+
+
+def blocks(run, items: list, repeats: int) -> float:
+    """The least over ``repeats`` blocks of the median time of ``run(item)`` over ``items`` (us)."""
+    best = float("inf")
+    clock = time.perf_counter
+    for _ in range(repeats):
+        times = []
+        for item in items:
+            start = clock()
+            run(item)
+            times.append(clock() - start)
+        best = min(best, statistics.median(times))
+    return best * 1e6
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robot", default="talos", help="built-in robot (default talos)")
+    parser.add_argument("--seconds", type=float, default=3.0, help="walk recorded, s (default 3)")
+    parser.add_argument("--repeats", type=int, default=10, help="blocks timed (default 10)")
+    args = parser.parse_args()
+    readings, estimator, _ = record(args.robot, args.seconds)
+    kinematics = estimator.kinematics
+    outputs = [kinematics.update(r.joint_positions, r.joint_velocities) for r in readings]
+
+    def update(reading):
+        return estimator.update(reading)
+
+    whole = blocks(update, readings, args.repeats)
+    alone = blocks(lambda r: kinematics.update(r.joint_positions, r.joint_velocities), readings, args.repeats)
+    # The estimator's own work: the kinematics' outputs of the same readings handed back without computing them.
+    replay = iter(())
+    estimator._kinematics_update = lambda q, v: next(replay)
+    own = float("inf")
+    for _ in range(args.repeats):
+        replay = iter(outputs)
+        estimator.reset()
+        own = min(own, blocks(update, readings, 1))
+    print(json.dumps({
+        "robot": args.robot, "updates": len(readings), "wrenches": estimator.wrenches,
+        "update_us": round(whole, 2), "kinematics_us": round(alone, 2), "own_us": round(own, 2),
+    }))  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,293 @@
+"""A kinematic-inertial state estimator: the walking state from the robot's own sensors (encoders, IMU, the feet's
+force sensors or the joints' torques), for a robot without the simulator's truth.
+
+**Which estimator, and why.** It is the kinematic-inertial kind the walking controllers that carry real humanoids
+use (mc_rtc's KinematicInertial observer with lipm_walking_controller and BWC, auto_stabilizer's): the IMU's filter
+gives the tilt, the feet in contact anchor the base through the leg kinematics, a complementary filter blends the
+kinematic velocity with the integrated accelerometer. A contact-aided invariant EKF (Hartley 2020) estimates the same
+quantities plus the IMU's biases, with covariances to tune and a 15-state update a tick; for a position-controlled
+robot on flat, no-slip contact whose IMU filter already gives roll and pitch, the simpler observer reaches the
+accuracy the controller needs (``docs/estimation.md``) in a fraction of the cost, and each of its parts can be
+checked against the simulator's truth on its own.
+
+Each tick, with the base frame's kinematics (:class:`~rtgait.estimation.kinematics.RobotKinematics`):
+
+1. **Orientation.** The IMU's ``R_WI`` and its mount ``R_BI`` give the base's ``R' = R_WI R_BI^T``; roll and pitch
+   are the IMU filter's, smoothed with the gyro (:mod:`rtgait.estimation.attitude_filter`, 0.8 Hz). Yaw
+   (``yaw="feet"``, default) is anchored on the feet in contact, whose sole headings are remembered from their
+   landings (:mod:`rtgait.estimation.anchors`): an IMU's yaw drifts without a magnetometer and the feet on the ground
+   do not turn; ``yaw="imu"`` keeps the IMU's yaw, turned once at the start into the world frame. The gyro measures
+   the IMU's body, so the base's angular velocity is ``R_BI w_I`` less the IMU's turn relative to the base.
+2. **Feet wrenches.** The ground's wrench on each sole (:mod:`rtgait.estimation.sole_wrenches`): from the foot
+   force sensors when the readings have them, else from the legs' joint torques (``J^T`` statics); from joint torques,
+   a foot the load detection has in the air is reported without load (a swinging leg's quasi-static wrench is its
+   own dynamics).
+3. **Base position.** ``p = sum_i w_i (a_i - R p_i)`` over the feet anchors ``a_i``, weighted by the feet's vertical
+   forces (:mod:`rtgait.estimation.anchors`).
+4. **Velocity.** With ``w`` the gyro's angular velocity in the world, a foot ``i`` held still gives the base
+   origin's velocity ``-(w x R p_i) - R p_i'`` (``p_i'`` from the joint velocities); their force-weighted mean, moved
+   to the IMU (``+ w x R p_I + R p_I'``), is blended with the IMU's acceleration ``R_WI f + g`` by the complementary
+   filter of :mod:`rtgait.estimation.velocity_filter` (3.5 Hz).
+5. **COM and DCM.** ``c = p + R c_B``, ``c' = v_B + w x R c_B + R c_B'`` (``c_B``, ``c_B'`` from the joints),
+   ``xi = c + c'/w0`` with the planner's ``w0``.
+6. **Feet states, ZMP, landings** from the soles' estimated poses and wrenches (:mod:`rtgait.estimation.feet`,
+   :mod:`rtgait.estimation.load`), with the ground-truth estimator's thresholds. ``contacts`` is 1 for a foot that
+   carries more than the release force (a force sensor does not count contact points), ``other_contacts`` 0 (not
+   sensed).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+
+from rtgait.estimation.anchors import FootAnchors, Pose
+from rtgait.estimation.attitude_filter import DEFAULT_ATTITUDE_CUTOFF, AttitudeFilter
+from rtgait.estimation.feet import FeetFromWrenches
+from rtgait.estimation.kinematics import RobotKinematics
+from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
+from rtgait.estimation.rotations import mat_mul, mat_mul_t, mat_vec, quat_matrix, turned, yaw_of
+from rtgait.estimation.sole_wrenches import SoleWrench, sensor_wrench, torque_wrenches
+from rtgait.estimation.state import FootState, Landing, Measurement
+from rtgait.estimation.velocity_filter import DEFAULT_VELOCITY_CUTOFF, ComplementaryVelocity
+from rtgait.interface.readings import SensorReadings
+from rtgait.interface.truth import GroundTruth
+
+__all__ = ["TORQUE_LANDING_FRACTION", "WRENCH_SOURCES", "YAW_SOURCES", "KinematicInertialEstimator"]
+
+YawSource = Literal["feet", "imu"]
+YAW_SOURCES: tuple[YawSource, ...] = ("feet", "imu")
+WrenchSource = Literal["sensors", "torques"]
+WRENCH_SOURCES: tuple[WrenchSource, ...] = ("sensors", "torques")
+
+TORQUE_LANDING_FRACTION = 0.15
+"""Landing threshold, as a fraction of the weight, of feet wrenches estimated from joint torques: above the
+quasi-static estimate's error on a swinging leg (up to 11 % of the weight on G1's fig8 walk, ``docs/estimation.md``),
+so that a swing is not taken for a landing."""
+
+_NO_LANDINGS: tuple[Landing, ...] = ()
+_ZERO3 = (0.0, 0.0, 0.0)
+_NAN2 = (math.nan, math.nan)
+_new_tuple = tuple.__new__  # a NamedTuple made from a tuple at once, without its generated __new__'s argument parsing
+
+
+class KinematicInertialEstimator:
+    """The walking state from the robot's sensors (module docstring).
+
+    Args:
+        kinematics: the robot's kinematics (:class:`~rtgait.estimation.kinematics.RobotKinematics`).
+        omega: pendulum frequency ``w = sqrt(g / z_c)`` of the planner (1/s), for the DCM.
+        gravity: the gravity's magnitude (m/s^2).
+        wrenches: where the feet's wrenches come from: ``"sensors"`` (the feet's force sensors) or ``"torques"`` (the
+            legs' joint torques); default the sensors when the kinematics place them.
+        landing_force, release_force, min_unloaded_time, min_force, ground_height: as the ground-truth estimator's
+            (:class:`~rtgait.estimation.ground_truth.GroundTruthEstimator`), the weight ``kinematics.mass * gravity``;
+            the landing force's default is :data:`TORQUE_LANDING_FRACTION` of the weight for ``"torques"``, the release
+            force's the ground-truth estimator's for both sources (at most the landing force).
+        velocity_cutoff: the complementary velocity filter's cut-off (Hz); ``inf``: kinematics alone.
+        attitude_cutoff: the attitude filter's cut-off (Hz); ``inf``: the IMU filter's attitude as it is.
+        yaw: where the base's yaw comes from: ``"feet"`` (the feet in contact) or ``"imu"``.
+        start_feet: the standing soles' world poses ``(x, y, z, yaw)``, left then right, that fix the world frame
+            at the first update (the plan's standing feet); ``None``: the feet's midpoint at the origin.
+    """
+
+    reads_truth = False
+
+    def __init__(
+        self,
+        kinematics: RobotKinematics,
+        omega: float,
+        *,
+        gravity: float = 9.81,
+        wrenches: WrenchSource | None = None,
+        landing_force: float | None = None,
+        release_force: float | None = None,
+        min_unloaded_time: float = DEFAULT_MIN_UNLOADED_TIME,
+        min_force: float | None = None,
+        ground_height: float = 0.0,
+        velocity_cutoff: float = DEFAULT_VELOCITY_CUTOFF,
+        attitude_cutoff: float = DEFAULT_ATTITUDE_CUTOFF,
+        yaw: YawSource = "feet",
+        start_feet: tuple[Pose, Pose] | None = None,
+    ) -> None:
+        if not (math.isfinite(omega) and omega > 0.0):
+            raise ValueError(f"omega must be > 0 (1/s), got {omega}")
+        if not (math.isfinite(gravity) and gravity > 0.0):
+            raise ValueError(f"gravity must be > 0 m/s^2, got {gravity}")
+        weight = kinematics.mass * gravity
+        if not (math.isfinite(weight) and weight > 0.0):
+            raise ValueError(f"the robot's weight must be > 0 N, got {weight}")
+        if yaw not in YAW_SOURCES:
+            raise ValueError(f"yaw must be one of {', '.join(YAW_SOURCES)}, got {yaw!r}")
+        if start_feet is not None and (
+            len(start_feet) != 2 or any(len(f) != 4 or not all(map(math.isfinite, f)) for f in start_feet)
+        ):
+            raise ValueError(f"start_feet must be two finite poses (x, y, z, yaw), got {start_feet!r}")
+        self.kinematics, self.omega, self.gravity, self.yaw = kinematics, float(omega), float(gravity), yaw
+        self.start_feet = start_feet
+        if wrenches is None:
+            wrenches = "torques" if kinematics.foot_sensors is None else "sensors"
+        if wrenches not in WRENCH_SOURCES:
+            raise ValueError(f"wrenches must be one of {', '.join(WRENCH_SOURCES)}, got {wrenches!r}")
+        if wrenches == "sensors" and kinematics.foot_sensors is None:
+            raise ValueError("wrenches='sensors' needs the kinematics to place the feet's force sensors")
+        self.wrenches: WrenchSource = wrenches
+        fraction = DEFAULT_LANDING_FRACTION if wrenches == "sensors" else TORQUE_LANDING_FRACTION
+        landing = fraction * weight if landing_force is None else float(landing_force)
+        # The release force is the ground-truth estimator's by default (half its landing force), from either source:
+        # the quasi-static estimate of an unloading stance leg is as good as a sensor's; only a swinging leg's errs.
+        release = 0.5 * DEFAULT_LANDING_FRACTION * weight if release_force is None else float(release_force)
+        release = min(release, landing)
+        self.load = LoadHysteresis(landing, release, min_unloaded_time)
+        self._release = release
+        self.min_force = 1e-3 * weight if min_force is None else float(min_force)
+        self.feet = FeetFromWrenches(self.load, self.min_force, ground_height)
+        self.velocity = ComplementaryVelocity(velocity_cutoff)
+        self.attitude = AttitudeFilter(attitude_cutoff)
+        self.anchors = FootAnchors()
+        legs = [list(leg) for leg in kinematics.leg_joints]
+        if len(legs) != 2 or len(legs[0]) != len(legs[1]) or not legs[0]:
+            raise ValueError(f"leg_joints must be two legs of as many joints, got {kinematics.leg_joints!r}")
+        # One slice of the joint torques for both legs when the right leg's joints follow the left's, else indices.
+        both = legs[0] + legs[1]
+        consecutive = both == list(range(both[0], both[0] + len(both)))
+        self._legs = slice(both[0], both[0] + len(both)) if consecutive else np.array(both)
+        self._leg_shape = (2, len(legs[0]))
+        self._mounts = kinematics.foot_sensors if wrenches == "sensors" else None
+        self._torques = wrenches == "torques"
+        self._kinematics_update = kinematics.update
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every state: the next update starts the world frame, the filter and the feet's loads afresh."""
+        self.load.reset()
+        self.velocity.reset()
+        self.attitude.reset()
+        self.anchors.reset()
+        self._loaded = (True, True)  # the first tick's feet anchor the world frame
+        self._weight_left = 0.5
+        self._yaw_offset = 0.0
+        self._t: float | None = None
+
+    def update(self, readings: SensorReadings | None, truth: GroundTruth | None = None) -> Measurement:
+        """The walking state from this tick's ``readings`` (``truth`` is not read).
+
+        Raises:
+            ValueError: no readings, no IMU reading, or readings without the wrenches' source.
+        """
+        if readings is None or readings.imu is None:
+            raise ValueError("the kinematic-inertial estimator needs the robot's readings with an IMU")
+        t, imu = readings.t, readings.imu
+        kin = self._kinematics_update(readings.joint_positions, readings.joint_velocities)
+        left_sole, right_sole, imu_frame = kin.left_sole, kin.right_sole, kin.imu
+        dt = 0.0 if self._t is None else t - self._t
+        self._t = t
+        # 1. The base's orientation as the IMU has it (its yaw the IMU's), R' = R_WI R_BI^T, the IMU filter's attitude
+        # smoothed with the gyro.
+        r_imu = quat_matrix(*self.attitude.update(dt, imu.orientation, imu.angular_velocity))
+        r_base = mat_mul_t(r_imu, imu_frame.rotation)
+        r_left, r_right = mat_mul(r_base, left_sole.rotation), mat_mul(r_base, right_sole.rotation)
+        # 2. The ground's wrenches on the soles, in the sole frames.
+        wrench_left, wrench_right = self._wrenches(readings, r_base, r_left, r_right)
+        # The vertical forces (yaw does not change them) and the weights of the feet in contact (loaded at the last
+        # tick): a swinging foot, whatever its estimated force, anchors nothing.
+        fz_left = r_left[6] * wrench_left[0] + r_left[7] * wrench_left[1] + r_left[8] * wrench_left[2]
+        fz_right = r_right[6] * wrench_right[0] + r_right[7] * wrench_right[1] + r_right[8] * wrench_right[2]
+        loaded_left, loaded_right = self._loaded
+        positive_left = fz_left if loaded_left and fz_left > 0.0 else 0.0
+        positive_right = fz_right if loaded_right and fz_right > 0.0 else 0.0
+        if positive_left + positive_right > self.min_force:
+            self._weight_left = positive_left / (positive_left + positive_right)
+        wl = self._weight_left
+        # 3. Yaw and base position from the anchors.
+        anchors = self.anchors
+        if anchors.poses is None:
+            self._yaw_offset = anchors.start(
+                mat_vec(r_base, left_sole.position), mat_vec(r_base, right_sole.position),
+                (yaw_of(r_left), yaw_of(r_right)), self.start_feet,
+            )  # fmt: skip
+        feet_yaw = self.yaw == "feet"
+        delta = anchors.yaw_correction(wl, yaw_of(r_left), yaw_of(r_right)) if feet_yaw else self._yaw_offset
+        c, s = math.cos(delta), math.sin(delta)
+        rot, r_left, r_right = turned(c, s, r_base), turned(c, s, r_left), turned(c, s, r_right)
+        lx, ly, lz = left_rel = mat_vec(rot, left_sole.position)
+        rx, ry, rz = right_rel = mat_vec(rot, right_sole.position)
+        px, py, pz = anchors.base_position(wl, left_rel, right_rel)
+        left_pos = (px + lx, py + ly, pz + lz)
+        right_pos = (px + rx, py + ry, pz + rz)
+        # Without a foot on the ground (a flight, a fall), no anchor holds: both follow their soles, and the base keeps
+        # the yaw and place the last tick gave it.
+        standing = loaded_left or loaded_right
+        anchors.settle(wl, (*left_pos, yaw_of(r_left)), (*right_pos, yaw_of(r_right)), standing)
+        # 4. Velocity, worked out in the base frame (B) and turned into the world once: the base origin's with each
+        # stance foot held still, u = -sum_i w_i (w_B x p_i + p_i'), moved to the IMU (+ w_B x p_I + p_I'), blended
+        # with the IMU's acceleration.
+        # The gyro measures the IMU's body: the base turns at w_B = R_BI w_I less the IMU's turn relative to the base.
+        mount = imu_frame.rotation
+        wx, wy, wz = mat_vec(mount, imu.angular_velocity)
+        rwx, rwy, rwz = imu_frame.angular_velocity
+        wx, wy, wz = wx - rwx, wy - rwy, wz - rwz
+        (lx, ly, lz), (lvx, lvy, lvz) = left_sole.position, left_sole.velocity
+        (rx, ry, rz), (rvx, rvy, rvz) = right_sole.position, right_sole.velocity
+        (ox, oy, oz), (ovx, ovy, ovz) = imu_frame.position, imu_frame.velocity
+        wr = 1.0 - wl
+        kinematic = mat_vec(rot, (
+            wy * oz - wz * oy + ovx - wl * (wy * lz - wz * ly + lvx) - wr * (wy * rz - wz * ry + rvx),
+            wz * ox - wx * oz + ovy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy),
+            wx * oy - wy * ox + ovz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz),
+        ))  # fmt: skip
+        fx, fy, fz = mat_vec(rot, mat_vec(mount, imu.linear_acceleration))
+        vix, viy, viz = self.velocity.update(dt, kinematic, (fx, fy, fz - self.gravity))
+        # 5. COM and its velocity: c = p + R c_B, c' = v_I + R (w_B x (c_B - p_I) + c_B' - p_I').
+        (cx, cy, cz), (cvx, cvy, cvz) = kin.com, kin.com_velocity
+        dx, dy, dz = cx - ox, cy - oy, cz - oz
+        ux, uy, uz = mat_vec(rot, (wy * dz - wz * dy + cvx - ovx, wz * dx - wx * dz + cvy - ovy,
+                                   wx * dy - wy * dx + cvz - ovz))  # fmt: skip
+        cx, cy, cz = mat_vec(rot, kin.com)
+        com = (px + cx, py + cy, pz + cz)
+        com_vel = (vix + ux, viy + uy, viz + uz)
+        # 6. The feet's states, the ZMP and the landings.
+        # A force sensor does not count contact points: 1 while the foot carries more than the release force.
+        sole_foot, release = self.feet.sole_foot, self._release
+        left, left_landing = sole_foot(0, t, wrench_left, 1 if fz_left > release else 0, left_pos, r_left)
+        right, right_landing = sole_foot(1, t, wrench_right, 1 if fz_right > release else 0, right_pos, r_right)
+        if self._torques:
+            # A foot the load detection has in the air carries nothing: what the quasi-static statics give a swinging
+            # leg is its own dynamics, not a contact (it would move the ZMP by that force times the foot's distance).
+            if not left.loaded:
+                left = _new_tuple(FootState, (_ZERO3, _ZERO3, 0.0, _NAN2, _NAN2, *left[5:10], 0))
+            if not right.loaded:
+                right = _new_tuple(FootState, (_ZERO3, _ZERO3, 0.0, _NAN2, _NAN2, *right[5:10], 0))
+        self._loaded = (left.loaded, right.loaded)
+        landings = _NO_LANDINGS
+        if left_landing is not None or right_landing is not None:
+            landings = tuple(landing for landing in (left_landing, right_landing) if landing is not None)
+        self.load.prime()
+        zmp, total = self.feet.zmp(left, right)
+        w = self.omega
+        dcm = (com[0] + com_vel[0] / w, com[1] + com_vel[1] / w)
+        return _new_tuple(Measurement, (t, com, com_vel, dcm, zmp, total, left, right, landings, 0))
+
+    def _wrenches(
+        self, readings: SensorReadings, r_base: tuple[float, ...], r_left: tuple[float, ...],
+        r_right: tuple[float, ...],
+    ) -> tuple[SoleWrench, SoleWrench]:  # fmt: skip
+        """The ground's wrenches on the soles in their frames: from the feet's force sensors or the legs' joint
+        torques (:attr:`wrenches`)."""
+        g = self.gravity
+        mounts = self._mounts
+        if mounts is not None:  # the kinematics place them when the sensors are the source
+            if readings.left_foot is None or readings.right_foot is None:
+                raise ValueError("the estimator reads the feet's force sensors, the readings have none")
+            # Gravity in each sole frame: R_WS^T (0, 0, -g), the third row of R_WS times -g (yaw does not change it).
+            return (
+                sensor_wrench(readings.left_foot, mounts[0], (-g * r_left[6], -g * r_left[7], -g * r_left[8])),
+                sensor_wrench(readings.right_foot, mounts[1], (-g * r_right[6], -g * r_right[7], -g * r_right[8])),
+            )
+        if readings.joint_torques is None:
+            raise ValueError("the estimator reads the joint torques, the readings have none")
+        jacobians, holding = self.kinematics.leg_statics((-g * r_base[6], -g * r_base[7], -g * r_base[8]))
+        left, right = torque_wrenches(jacobians, holding, readings.joint_torques[self._legs].reshape(self._leg_shape))
+        return left, right

@@ -1,0 +1,53 @@
+"""What the kinematic-inertial estimator needs of a robot's model, as a protocol: the frames of
+:class:`~rtgait.interface.body_kinematics.BodyKinematics` for the encoders' joint positions and velocities, the
+mounts of the feet's force sensors, and, for a robot without foot force sensors, each leg's statics.
+
+A leg's statics are what turns its joint torques into the wrench of the ground on its sole
+(:mod:`rtgait.estimation.sole_wrenches`): the sole frame's Jacobian with respect to the leg's joints and the torques
+those joints need to hold the leg against gravity. Implemented with Pinocchio by
+:class:`rtgait.robot.kinematics.PinocchioKinematics`; the estimator itself imports no robot-model library.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from rtgait.interface.body_kinematics import BodyKinematics, ForceSensorMount
+
+__all__ = ["RobotKinematics"]
+
+
+@runtime_checkable
+class RobotKinematics(Protocol):
+    """A robot's kinematics for an estimator (module docstring).
+
+    Attributes:
+        joint_count: how many joints the readings carry (the robot's joint order).
+        mass: the robot's mass (kg).
+        leg_joints: each leg's joints, left then right, as indices into the joint order, hip to ankle.
+        foot_sensors: the left and right feet's force sensor mounts; ``None`` for a robot without them.
+    """
+
+    joint_count: int
+    mass: float
+    leg_joints: tuple[Sequence[int], Sequence[int]]
+    foot_sensors: tuple[ForceSensorMount, ForceSensorMount] | None
+
+    def update(self, joint_positions: np.ndarray, joint_velocities: np.ndarray) -> BodyKinematics:
+        """The frames for joint positions (rad) and velocities (rad/s), shape ``(joint_count,)`` each, base frame,
+        base at rest."""
+        ...
+
+    def leg_statics(self, gravity: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Each leg's statics at the configuration of the last :meth:`update`, gravity ``gravity`` (m/s^2, in the
+        base frame).
+
+        Returns:
+            ``(jacobians, torques)``: the sole frames' Jacobians with respect to each leg's joints, shape
+            ``(2, 6, n_leg)``, rows ``(linear; angular)`` in the sole frame; and the torques (N m) that hold each
+            leg's joints against gravity with the sole free, shape ``(2, n_leg)``, in :attr:`leg_joints` order.
+        """
+        ...

@@ -1,0 +1,79 @@
+"""The ground's wrench on each sole, in the sole frame about its origin, from a foot force/torque sensor or, on a
+robot without one, from the leg's joint torques.
+
+**From a force/torque sensor** mounted at ``p`` with rotation ``R_s`` in the sole frame
+(:class:`~rtgait.interface.body_kinematics.ForceSensorMount`), reading ``(f, t)`` in its own frame: the wrench the
+sensor passes to the leg, moved to the sole origin, is ``f_s = R_s f``, ``t_s = R_s t + p x f_s``. Between sensor
+and ground hangs a mass ``m`` centred at ``c`` (the foot below an ankle sensor), whose weight the sensor also
+carries. At rest (a foot in contact is), the ground's wrench is the sensor's minus that weight, ``g_S`` the gravity
+vector in the sole frame (m/s^2):
+
+    f_ground = f_s - m g_S,        t_ground = t_s - c x (m g_S)                             (N, N m)
+
+A swinging foot's acceleration times its mass is left out: a few newtons, well below the landing threshold.
+
+**From joint torques** (a leg without a force sensor, the G1's). The dynamics of a leg's joints,
+``M_l q'' + h_l = tau_l + J^T F``, with ``J`` the sole frame's 6 x n Jacobian with respect to the leg's joints
+(rows linear then angular, sole frame) and ``F = (f, t)`` the ground's wrench on the sole in that frame, give at
+rest, where ``h_l`` is the leg's gravity torques ``g_l`` (the torques that hold the links below each joint),
+
+    J^T F = g_l - tau_l        =>        F = J^-T (g_l - tau_l)                              (N, N m)
+
+for a six-joint leg (least squares otherwise). It is quasi-static: the leg's inertial and velocity terms
+``M_l q'' + C_l q'`` are left out. They are small for a stance leg (its links hardly move) and of a few newton-metres
+for a swinging leg, which is why a robot estimated this way needs a landing threshold above the swing's error; the
+Jacobian is singular for a straight knee, where ``F`` is not observable along the leg's axis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rtgait.interface.body_kinematics import ForceSensorMount
+from rtgait.interface.readings import Wrench
+
+__all__ = ["SoleWrench", "sensor_wrench", "torque_wrenches"]
+
+SoleWrench = tuple[float, float, float, float, float, float]
+"""``(fx, fy, fz, tx, ty, tz)``: the ground's force on a sole (N) and its moment about the sole origin (N m), in the
+sole frame."""
+
+
+def sensor_wrench(reading: Wrench, mount: ForceSensorMount, gravity: tuple[float, float, float]) -> SoleWrench:
+    """The ground's wrench on a sole from its force sensor's ``reading`` (module docstring); ``gravity`` is the gravity
+    vector in the sole frame (m/s^2)."""
+    (fx, fy, fz), (tx, ty, tz) = reading
+    (px, py, pz), r, m, (cx, cy, cz) = mount
+    # In the sole frame: f_s = R_s f, t_s = R_s t + p x f_s.
+    ax = r[0] * fx + r[1] * fy + r[2] * fz
+    ay = r[3] * fx + r[4] * fy + r[5] * fz
+    az = r[6] * fx + r[7] * fy + r[8] * fz
+    bx = r[0] * tx + r[1] * ty + r[2] * tz + (py * az - pz * ay)
+    by = r[3] * tx + r[4] * ty + r[5] * tz + (pz * ax - px * az)
+    bz = r[6] * tx + r[7] * ty + r[8] * tz + (px * ay - py * ax)
+    if m == 0.0:
+        return ax, ay, az, bx, by, bz
+    wx, wy, wz = m * gravity[0], m * gravity[1], m * gravity[2]  # the weight below the sensor
+    return (ax - wx, ay - wy, az - wz, bx - (cy * wz - cz * wy), by - (cz * wx - cx * wz), bz - (cx * wy - cy * wx))
+
+
+def torque_wrenches(jacobians: np.ndarray, gravity_torques: np.ndarray, torques: np.ndarray) -> list[SoleWrench]:
+    """The ground's wrench on each sole from its leg's joint torques (module docstring).
+
+    Args:
+        jacobians: the soles' Jacobians with respect to their legs' joints, shape ``(2, 6, n)``, rows linear then
+            angular, sole frame.
+        gravity_torques: the torques holding each leg against gravity (N m), shape ``(2, n)``.
+        torques: the legs' measured joint torques (N m), shape ``(2, n)``.
+
+    Returns:
+        The left and right soles' wrenches.
+    """
+    rhs = gravity_torques - torques
+    jt = jacobians.transpose(0, 2, 1)
+    if jt.shape[1] == 6:
+        wrenches = np.linalg.solve(jt, rhs[..., None])[..., 0]
+    else:  # a leg of other than six joints: the least-squares (or least-norm) wrench
+        wrenches = np.stack([np.linalg.lstsq(jt[i], rhs[i], rcond=None)[0] for i in (0, 1)])
+    left, right = wrenches.tolist()
+    return [tuple(left), tuple(right)]  # type: ignore[list-item]

@@ -1,0 +1,73 @@
+"""A complementary filter on a point's velocity: the leg kinematics' velocity at low frequencies, the integrated
+accelerometer at high frequencies.
+
+With ``v_k`` the kinematic velocity (from the joints, the stance foot held still) and ``a`` the accelerometer's
+acceleration in the world (gravity removed), each tick of ``dt`` makes
+
+    v^_k = alpha (v^_k-1 + dt (a_k-1 + a_k) / 2) + (1 - alpha) v_k,      alpha = exp(-dt / tau),  tau = 1 / (2 pi f_c)
+
+which is, in continuous time, ``V^(s) = 1 / (tau s + 1) V(s) + tau s / (tau s + 1) A(s) / s``: a first-order
+low-pass on the kinematics plus the complementary high-pass on the integrated acceleration. Where both sources
+agree (``a = v'``) the output is the velocity itself, without lag; where they disagree, each is trusted on its own
+side of the cut-off ``f_c``. The kinematic velocity carries the impacts, the foot's rolling on its edge and the
+encoders' differentiation noise; the integrated acceleration drifts with the accelerometer's bias and with the
+gravity that an orientation error leaks in (``b tau`` of velocity error for a bias ``b``: 4.5 mm/s for 0.1 m/s^2 at
+3.5 Hz). auto_stabilizer settled on 3.5 Hz on its robots (4 Hz oscillated after impacts, 3 Hz lagged): the default
+:data:`DEFAULT_VELOCITY_CUTOFF`.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["DEFAULT_VELOCITY_CUTOFF", "ComplementaryVelocity"]
+
+DEFAULT_VELOCITY_CUTOFF = 3.5
+"""Cut-off of the complementary velocity filter (Hz), auto_stabilizer's."""
+
+
+class ComplementaryVelocity:
+    """The filter of the module docstring, on three axes, Python floats.
+
+    Args:
+        cutoff: the cut-off frequency ``f_c`` (Hz), > 0; ``inf``: the kinematic velocity alone.
+    """
+
+    def __init__(self, cutoff: float = DEFAULT_VELOCITY_CUTOFF) -> None:
+        if not cutoff > 0.0:
+            raise ValueError(f"the velocity filter's cut-off must be > 0 Hz, got {cutoff}")
+        self.cutoff = float(cutoff)
+        self.tau = 0.0 if math.isinf(cutoff) else 1.0 / (2.0 * math.pi * cutoff)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the state: the next update returns its kinematic velocity."""
+        self._state: tuple[float, float, float] | None = None
+        self._acceleration = (0.0, 0.0, 0.0)
+        self._dt = -1.0
+        self._alpha = 0.0
+
+    def update(
+        self, dt: float, velocity: tuple[float, float, float], acceleration: tuple[float, float, float]
+    ) -> tuple[float, float, float]:
+        """The filtered velocity (m/s) after ``dt`` (s) from the kinematic ``velocity`` (m/s) and the
+        ``acceleration`` (m/s^2, gravity removed) at this tick; ``dt <= 0`` (a repeated reading) keeps the state."""
+        state, (ax, ay, az) = self._state, acceleration
+        if state is None:
+            out = velocity
+        elif dt <= 0.0:
+            return state
+        else:
+            if dt != self._dt:  # alpha for this period, recomputed only when the period changes
+                self._dt, self._alpha = dt, (math.exp(-dt / self.tau) if self.tau > 0.0 else 0.0)
+            a, h = self._alpha, 0.5 * dt
+            bx, by, bz = self._acceleration
+            sx, sy, sz = state
+            vx, vy, vz = velocity
+            out = (
+                a * (sx + h * (bx + ax)) + (1.0 - a) * vx,
+                a * (sy + h * (by + ay)) + (1.0 - a) * vy,
+                a * (sz + h * (bz + az)) + (1.0 - a) * vz,
+            )
+        self._state, self._acceleration = out, acceleration
+        return out

@@ -1,0 +1,199 @@
+"""A robot's kinematics for the state estimator, with Pinocchio: the frames of
+:class:`~rtgait.interface.body_kinematics.BodyKinematics` relative to the floating base, the feet's force sensor
+mounts and the legs' statics (the protocol :class:`rtgait.estimation.kinematics.RobotKinematics`).
+
+The reduced model's configuration is the base at the origin, unrotated, and the encoders' joints; its velocity the
+joints' alone. One ``centerOfMass(q, v)`` a tick runs the forward kinematics (positions and velocities) and the COM
+with its velocity; the sole frames and the IMU's are read off it (the IMU's only when a joint moves it relative to
+the base). The legs' statics (for a robot without foot force sensors) cost a generalized-gravity pass and the joint
+Jacobians, with the gravity turned into the base frame.
+
+A foot force sensor on frame ``s`` measures the wrench between the body it is on and that body's parent (as a
+simulator's force sensor at a site does, and an ankle sensor between shin and foot): the mass it carries besides
+the ground's force is that of the subtree of the frame's joint (the foot), centred where that subtree's COM is.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from rtgait.interface.body_kinematics import BodyKinematics, ForceSensorMount, FrameMotion
+from rtgait.interface.sensor_spec import SensorFrame
+from rtgait.robot.description import RobotError
+from rtgait.robot.model import RobotModel
+
+__all__ = ["PinocchioKinematics"]
+
+_ROOT = 1  # the free flyer's joint id in Pinocchio's models (0 is the universe)
+_AT_REST = (0.0, 0.0, 0.0)
+_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
+
+
+class PinocchioKinematics:
+    """The estimator's kinematics of ``robot`` (module docstring).
+
+    Args:
+        robot: the loaded robot; its reduced model (the joints the readings carry).
+        imu: the IMU's frame (a link or joint of the model and an offset in it, the link's axes); ``None``: the
+            base's own frame.
+        feet: the left and right feet's force sensor frames; ``None``: a robot without foot force sensors (its feet's
+            wrenches come from the joint torques).
+
+    Raises:
+        RobotError: a frame the model does not have, a foot sensor not on its sole's body, or a leg whose joints are
+            not all one-coordinate joints.
+    """
+
+    def __init__(
+        self,
+        robot: RobotModel,
+        imu: SensorFrame | None = None,
+        feet: tuple[SensorFrame, SensorFrame] | None = None,
+    ) -> None:
+        model = pin.Model(robot.model)  # its own copy: leg_statics sets its gravity, the sensors add frames
+        imu_frame = None if imu is None else _add_frame(model, "rtgait_imu", imu, "sensors.imu.frame")
+        sensor_frames = None
+        if feet is not None:
+            sensor_frames = tuple(
+                _add_frame(model, f"rtgait_{side}_foot_sensor", frame, f"sensors.feet.{side}_frame")
+                for side, frame in zip(("left", "right"), feet, strict=True)
+            )
+        self.model, self.data = model, model.createData()
+        self.joint_count = model.nv - 6
+        self.mass = robot.mass
+        self._q = pin.neutral(model)
+        self._v = np.zeros(model.nv)
+        self._soles = (robot.left_sole_id, robot.right_sole_id)
+        self._imu = imu_frame
+        self.leg_joints = (self._leg(robot.left_sole_id), self._leg(robot.right_sole_id))
+        # Each leg's columns of the velocity vector: a slice where they follow each other (no copy to index them).
+        self._leg_columns = tuple(_columns(leg, 6) for leg in self.leg_joints)
+        self._jacobians = np.empty((2, 6, len(self.leg_joints[0])))
+        self._holding = np.empty((2, len(self.leg_joints[0])))
+        self._gravity = model.gravity.linear  # a view of the model's gravity, set by leg_statics
+        standing = model.createData()  # for the fixed placements, at half-sitting
+        pin.centerOfMass(model, standing, robot.q_half_sitting)
+        pin.framesForwardKinematics(model, standing, robot.q_half_sitting)
+        # An IMU on the base's own body has a fixed placement: read once.
+        self._imu_fixed: FrameMotion | None = None
+        if self._imu is None:
+            self._imu_fixed = FrameMotion(_AT_REST, (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0), _AT_REST, _AT_REST)
+        elif model.frames[self._imu].parentJoint == _ROOT:
+            placement = model.frames[self._imu].placement
+            self._imu_fixed = FrameMotion(
+                tuple(placement.translation.tolist()), tuple(placement.rotation.ravel().tolist()), _AT_REST, _AT_REST
+            )
+        # Views of the data's arrays that the forward kinematics rewrite in place: the COM, its velocity, the frames'
+        # translations and rotations (column-major, flattened without a copy); the frames' velocities (linear then
+        # angular) are new arrays each tick. Each frame takes 18 values of the buffer.
+        data = self.data
+        frames = (robot.left_sole_id, robot.right_sole_id) + (() if self._imu_fixed is not None else (self._imu,))
+        self._frames = (*frames[:2], frames[2] if len(frames) == 3 else -1)
+        self._parts: list[np.ndarray] = [data.com[0], data.vcom[0]]
+        for frame in frames:
+            placement = data.oMf[frame]
+            self._parts += [placement.translation, placement.rotation.T.reshape(9), np.zeros(6)]
+        self._buffer = np.empty(sum(part.size for part in self._parts))
+        self.foot_sensors: tuple[ForceSensorMount, ForceSensorMount] | None = None
+        if sensor_frames is not None:
+            self.foot_sensors = tuple(  # type: ignore[assignment]
+                self._mount(standing, sole, sensor) for sole, sensor in zip(self._soles, sensor_frames, strict=True)
+            )
+
+    def update(self, joint_positions: np.ndarray, joint_velocities: np.ndarray) -> BodyKinematics:
+        """The frames for the joints' positions (rad) and velocities (rad/s), base frame, base at rest."""
+        model, data, q, v = self.model, self.data, self._q, self._v
+        q[7:] = joint_positions
+        v[6:] = joint_velocities
+        pin.centerOfMass(model, data, q, v, False)  # forward kinematics (positions, velocities), COM, COM velocity
+        left, right, imu = self._frames
+        pin.updateFramePlacement(model, data, left)
+        pin.updateFramePlacement(model, data, right)
+        parts, world = self._parts, pin.LOCAL_WORLD_ALIGNED
+        parts[4] = pin.getFrameVelocity(model, data, left, world).vector
+        parts[7] = pin.getFrameVelocity(model, data, right, world).vector
+        fixed = self._imu_fixed
+        if fixed is None:
+            pin.updateFramePlacement(model, data, imu)
+            parts[10] = pin.getFrameVelocity(model, data, imu, world).vector
+        # One copy of every value into a buffer and one conversion to Python floats.
+        values = np.concatenate(parts, out=self._buffer).tolist()
+        if fixed is None:
+            fixed = _frame_motion(values, 42)
+        return _new_tuple(
+            BodyKinematics,
+            (tuple(values[0:3]), tuple(values[3:6]), _frame_motion(values, 6), _frame_motion(values, 24), fixed),
+        )
+
+    def leg_statics(self, gravity: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """The soles' Jacobians (sole frame, rows linear then angular) with respect to each leg's joints, shape
+        ``(2, 6, n_leg)``, and the torques holding each leg against ``gravity`` (m/s^2, base frame), shape
+        ``(2, n_leg)``, at the configuration of the last :meth:`update` (arrays the next call overwrites)."""
+        model, data, q = self.model, self.data, self._q
+        self._gravity[:] = gravity
+        holding = pin.computeGeneralizedGravity(model, data, q)
+        pin.computeJointJacobians(model, data, q)
+        (left, right), jacobians, legs = self._soles, self._jacobians, self._holding
+        columns_left, columns_right = self._leg_columns
+        jacobians[0] = pin.getFrameJacobian(model, data, left, pin.LOCAL)[:, columns_left]
+        jacobians[1] = pin.getFrameJacobian(model, data, right, pin.LOCAL)[:, columns_right]
+        legs[0] = holding[columns_left]
+        legs[1] = holding[columns_right]
+        return jacobians, legs
+
+    # ----- construction --------------------------------------------------------------------------------------------
+    def _leg(self, sole: int) -> tuple[int, ...]:
+        """The joints from the base to a sole's body, as indices into the joint order."""
+        model = self.model
+        chain = [j for j in model.supports[model.frames[sole].parentJoint] if j > _ROOT]
+        if any(model.joints[j].nv != 1 for j in chain):
+            raise RobotError(f"the leg of frame {model.frames[sole].name!r} has joints of more than one coordinate")
+        return tuple(model.joints[j].idx_v - 6 for j in chain)
+
+    def _mount(self, data: pin.Data, sole: int, sensor: int) -> ForceSensorMount:
+        """A force sensor's mount in its sole frame at half-sitting (both fixed on the foot), and the foot's mass below
+        it (module docstring)."""
+        model = self.model
+        if model.frames[sensor].parentJoint != model.frames[sole].parentJoint:
+            raise RobotError(
+                f"the foot force sensor frame {model.frames[sensor].name!r} is not on the body of the sole frame "
+                f"{model.frames[sole].name!r}"
+            )
+        in_sole = data.oMf[sole].actInv(data.oMf[sensor])
+        joint = model.frames[sole].parentJoint
+        # The subtree of the foot's joint: its mass and COM (Pinocchio's data.mass and data.com per joint subtree, the
+        # COM in the joint's frame), the COM then in the sole frame.
+        mass = float(data.mass[joint])
+        com = model.frames[sole].placement.actInv(data.com[joint])
+        return ForceSensorMount(
+            tuple(in_sole.translation.tolist()), tuple(in_sole.rotation.ravel().tolist()), mass, tuple(com.tolist())
+        )
+
+
+def _add_frame(model: pin.Model, name: str, frame: SensorFrame, field: str) -> int:
+    """A frame ``name`` at a sensor's frame (its link's axes, the offset in the link's frame) added to ``model``."""
+    if not model.existFrame(frame.link):
+        raise RobotError(f"{field}: the robot's model has no frame {frame.link!r}")
+    link_id = model.getFrameId(frame.link)
+    link = model.frames[link_id]
+    placement = link.placement * pin.SE3(np.eye(3), np.asarray(frame.offset, dtype=float))
+    return int(model.addFrame(pin.Frame(name, link.parentJoint, link_id, placement, pin.FrameType.OP_FRAME)))
+
+
+def _frame_motion(values: list[float], k: int) -> FrameMotion:
+    """The frame whose 18 values start at ``values[k]``: position, rotation (Pinocchio's column-major storage, turned
+    row-major by slicing), linear and angular velocity."""
+    rotation = values[k + 3 : k + 12 : 3] + values[k + 4 : k + 12 : 3] + values[k + 5 : k + 12 : 3]
+    return _new_tuple(
+        FrameMotion,
+        (tuple(values[k : k + 3]), tuple(rotation), tuple(values[k + 12 : k + 15]), tuple(values[k + 15 : k + 18])),
+    )
+
+
+def _columns(indices: tuple[int, ...], offset: int) -> slice | np.ndarray:
+    """``indices + offset`` as a slice when they follow each other, else as an index array."""
+    first = indices[0] + offset
+    if list(indices) == list(range(indices[0], indices[0] + len(indices))):
+        return slice(first, first + len(indices))
+    return np.array(indices) + offset

@@ -1,0 +1,72 @@
+"""The estimator a stack runs, by name: ``"truth"`` (the simulator's ground truth, for comparison) or
+``"estimated"`` (the kinematic-inertial estimator on the robot's own sensors, with the robot's kinematics and the
+sensors of its description's ``[sensors]``)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Literal
+
+from rtgait.estimation.ground_truth import GroundTruthEstimator
+from rtgait.estimation.kinematic_inertial import KinematicInertialEstimator
+from rtgait.robot.kinematics import PinocchioKinematics
+
+if TYPE_CHECKING:
+    from rtgait.estimation.anchors import Pose
+    from rtgait.estimation.estimator import Estimator
+    from rtgait.interface.sensor_spec import SensorSpec
+    from rtgait.robot.model import RobotModel
+
+__all__ = ["STATE_SOURCES", "StateSource", "check_state", "kinematic_inertial_estimator", "make_estimator"]
+
+StateSource = Literal["truth", "estimated"]
+STATE_SOURCES: tuple[StateSource, ...] = ("truth", "estimated")
+
+
+def check_state(state: str, name: str = "state") -> None:
+    """Raise a ``ValueError`` naming ``name`` unless ``state`` is one of :data:`STATE_SOURCES`."""
+    if state not in STATE_SOURCES:
+        raise ValueError(f"{name} must be one of {', '.join(STATE_SOURCES)}, got {state!r}")
+
+
+def kinematic_inertial_estimator(
+    robot: RobotModel,
+    omega: float,
+    *,
+    gravity: float = 9.81,
+    start_feet: tuple[Pose, Pose] | None = None,
+    sensors: SensorSpec | None = None,
+    **options: object,
+) -> KinematicInertialEstimator:
+    """The kinematic-inertial estimator of ``robot`` (:mod:`rtgait.estimation.kinematic_inertial`).
+
+    Args:
+        robot: the loaded robot (its reduced model's joints are the readings').
+        omega: the planner's pendulum frequency (1/s), for the DCM.
+        gravity: the gravity's magnitude (m/s^2).
+        start_feet: the standing soles' world poses ``(x, y, z, yaw)`` that fix the world frame.
+        sensors: where the IMU and the feet's force sensors are; default the description's ``[sensors]``.
+        options: further settings of :class:`~rtgait.estimation.kinematic_inertial.KinematicInertialEstimator`.
+
+    Raises:
+        ValueError: the robot has no IMU.
+    """
+    spec = robot.description.sensors if sensors is None else sensors
+    if spec.imu is None:
+        raise ValueError(f"{robot.name} has no IMU in its [sensors]: the kinematic-inertial estimator needs one")
+    feet = None if spec.feet is None else (spec.feet.left, spec.feet.right)
+    kinematics = PinocchioKinematics(robot, spec.imu.frame, feet)
+    settings = {"gravity": gravity, "start_feet": start_feet, **options}
+    return KinematicInertialEstimator(kinematics, omega, **settings)  # type: ignore[arg-type]
+
+
+def make_estimator(
+    state: StateSource, robot: RobotModel, omega: float, *, gravity: float = 9.81,
+    start_feet: tuple[Pose, Pose] | None = None,
+) -> Estimator:  # fmt: skip
+    """The estimator of ``state`` for ``robot``: ``"truth"``, the ground-truth estimator (the thresholds scaled to
+    the robot's weight); ``"estimated"``, :func:`kinematic_inertial_estimator` from the standing feet
+    ``start_feet``. ``omega`` (1/s) and ``gravity`` (m/s^2) are the planner's."""
+    check_state(state)
+    if state == "truth":
+        return GroundTruthEstimator(omega, robot.mass * gravity)
+    return kinematic_inertial_estimator(robot, omega, gravity=gravity, start_feet=start_feet)
