@@ -14,6 +14,7 @@ Reading needs pyarrow only (:func:`read_sim_log`); writing is done from a :class
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from collections.abc import Sequence
@@ -66,6 +67,7 @@ def _vector(prefix: str, unit: str, what: str, axes: Sequence[str] = _XYZ, sep: 
 
 
 _WRENCH_TIME = "controller's measurement, one physics step before t"
+_MEASURED = "controller's measurement, one physics step before t; NaN in the transition"
 
 
 def _foot_columns(side: str) -> list[LogColumn]:
@@ -82,9 +84,7 @@ def _foot_columns(side: str) -> list[LogColumn]:
         *_vector(f"{s}_target", "m", f"the IK's {s} sole target (planned foot with the controller's heights)"),
         LogColumn(f"{s}_target_yaw", "rad", f"the IK's {s} sole target heading"),
         *_vector(f"{s}_force", "N", f"contact force of the ground on the {s} foot, world frame ({_WRENCH_TIME})"),
-        *_vector(
-            f"{s}_torque", "N m", f"its moment about the {s} sole frame's origin, world frame ({_WRENCH_TIME})"
-        ),
+        *_vector(f"{s}_torque", "N m", f"its moment about the {s} sole frame's origin, world frame ({_WRENCH_TIME})"),
         *_vector(f"{s}_cop", "m", f"{s} centre of pressure on the ground; NaN unloaded ({_WRENCH_TIME})", "xy"),
         LogColumn(f"{s}_loaded", "", f"the {s} foot is loaded, after the landing hysteresis ({_WRENCH_TIME})"),
     ]
@@ -104,8 +104,11 @@ def log_columns(joint_names: Sequence[str]) -> list[LogColumn]:
         *_vector("zmp_planned", "m", "the planner's ZMP (in the transition: the COM target's projection)", "xy"),
         *_vector("zmp_command", "m", "ZMP asked of the feet (the DCM law's; the plan's in open-loop)", "xy"),
         *_vector(
-            "zmp_motion", "m", "multibody ZMP of the commanded motion (Pinocchio; not differentiated across a "
-            "retargeting); NaN off the ground and over re-anchored swings", "xy"
+            "zmp_motion",
+            "m",
+            "multibody ZMP of the commanded motion (Pinocchio; not differentiated across a "
+            "retargeting); NaN off the ground and over re-anchored swings",
+            "xy",
         ),
         *_vector("cog", "m", "measured COM, at t"),
         *_vector("cog_planned", "m", "the IK's COM target: the plan's COM plus the controller's correction"),
@@ -115,11 +118,19 @@ def log_columns(joint_names: Sequence[str]) -> list[LogColumn]:
         *_vector("dcm", "m", "measured DCM c + c'/w from the measured COM and its velocity, at t", "xy"),
         *_vector("dcm_planned", "m", "the plan's DCM; NaN in the transition", "xy"),
         *_vector("dcm_control", "m", f"the DCM the controller acted on ({_WRENCH_TIME}); NaN in the transition", "xy"),
+        *_vector("cog_control", "m", f"the COM the controller acted on ({_MEASURED})"),
+        *_vector("cog_vel_control", "m/s", f"the COM velocity the controller acted on ({_MEASURED})"),
+        *_vector("cog_true", "m", f"the simulator's COM at the instant of the {_MEASURED}"),
+        *_vector("cog_vel_true", "m/s", f"the simulator's COM velocity at the instant of the {_MEASURED}"),
+        *_vector("dcm_true", "m", f"the simulator's DCM c + c'/w at the instant of the {_MEASURED}", "xy"),
         *_vector("base", "m", "floating-base position, at t"),
         *_vector("base_q", "", "floating-base orientation, unit quaternion", ("x", "y", "z", "w"), sep=""),
         *_vector(
-            "base_q_command", "", "the IK's floating-base orientation (leaned by the hip strategy), unit quaternion",
-            ("x", "y", "z", "w"), sep="",
+            "base_q_command",
+            "",
+            "the IK's floating-base orientation (leaned by the hip strategy), unit quaternion",
+            ("x", "y", "z", "w"),
+            sep="",
         ),
         *_vector("base_v", "m/s", "floating-base velocity at its origin, world frame, at t", sep=""),
         *_vector("base_w", "rad/s", "floating-base angular velocity, world frame, at t", sep=""),
@@ -212,6 +223,8 @@ def log_metadata(
         "mass": result.mass,
         "gravity": result.gravity,
         "controller": result.controller,
+        "state": result.state,
+        "sensors": None if result.sensors is None else dataclasses.asdict(result.sensors),
         "control_dt": result.control_dt,
         "physics_dt": result.physics_dt,
         "contact_lag": None if log is None else log.contact_lag,
@@ -269,6 +282,11 @@ def _columns(result: SimResult, events: list[dict[str, Any]]) -> dict[str, np.nd
     put("dcm", dcm, "xy")
     put("dcm_planned", result.dcm_planned, "xy")
     put("dcm_control", result.dcm, "xy")
+    put("cog_control", log.estimate.com)
+    put("cog_vel_control", log.estimate.com_velocity)
+    put("cog_true", log.truth.com)
+    put("cog_vel_true", log.truth.com_velocity)
+    put("dcm_true", log.truth.dcm, "xy")
     put("base", result.base_position)
     put("base_q", result.base_quaternion, ("x", "y", "z", "w"), sep="")
     put("base_q_command", result.commanded_q[:, 3:7], ("x", "y", "z", "w"), sep="")  # Pinocchio's order: x, y, z, w

@@ -303,15 +303,18 @@ class ClosedLoop:
             planned_y = command_y = target_cog[1]
             code, phase = 0, -1
             dcm = dcm_planned = (math.nan, math.nan)
-            out = measurement = None  # no controller during the transition
+            out = measurement = truth = None  # no controller during the transition
             made = hold(_new_tuple(IKTargets, (target_cog, left_foot, right_foot, None)))
         else:
+            # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
             if estimator_reads_truth:
-                # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
-                measurement = estimate(None, ground_truth(t, self.log is not None))
+                truth = ground_truth(t, self.log is not None)
+                measurement = estimate(None, truth)
             else:  # the sensors' readings, stamped on the walk's clock (their sampling time, latency kept)
                 readings = read()
                 measurement = estimate(readings._replace(t=readings.t - (data.time - t)), None)
+                # The truth of the same instant, for the log's estimation errors only (a live ring keeps no log).
+                truth = ground_truth(t, True) if self.log is not None else None
             if k == k0:
                 self.stack.start(0.0, measurement)
                 self._inputs.start()
@@ -352,7 +355,7 @@ class ClosedLoop:
         cog[i] = base_com
         zx, zy, fl, fr = contacts.record(i, t, sums, snapshot)
         if self.log is not None:
-            self.log.record(i, left_foot, right_foot, out, measurement, self.controller.level)
+            self.log.record(i, left_foot, right_foot, out, measurement, self.controller.level, truth)
         for j in range(1, n_sub):
             substep(j)
             tau += actuator_force

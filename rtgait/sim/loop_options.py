@@ -13,7 +13,7 @@ from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.push import Push
 from rtgait.sim.contact import FallLimits
-from rtgait.stack.estimators import StateSource, check_state
+from rtgait.stack.estimators import DEFAULT_STATE, StateSource, check_state
 
 __all__ = [
     "LANDING_WINDOW", "LoopOptions", "end_tick", "minimum_jerk", "run_length", "timing_headroom",
@@ -51,8 +51,9 @@ class LoopOptions:
         replay_period: the robot's whole configuration is recorded every this many seconds (rounded to whole
             control ticks) for the 3D replay (:attr:`SimResult.replay_q`); 0.04 s is the replay's 25 frames per
             second, and keeps a minute of walking to 1500 rows.
-        state: what the controller acts on: ``"truth"``, the simulator's ground truth; ``"estimated"``, the
-            kinematic-inertial estimator on the simulated robot's sensor readings
+        state: what the controller acts on: ``"estimated"`` (default), the kinematic-inertial estimator on the
+            simulated robot's sensor readings (with their noise, bias and latency: ``SimConfig.sensors``), as on a
+            robot; ``"truth"``, the simulator's ground truth, to tell the controller's doing from the estimator's
             (:func:`rtgait.stack.estimators.make_estimator`).
     """
 
@@ -68,7 +69,7 @@ class LoopOptions:
     replay_period: float = 0.04
     on_tick: Callable[[float, mujoco.MjData], None] | None = None
     duration: float | None = None
-    state: StateSource = "truth"
+    state: StateSource = DEFAULT_STATE
 
     def __post_init__(self) -> None:
         check_state(self.state, "LoopOptions.state")

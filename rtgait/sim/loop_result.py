@@ -20,6 +20,7 @@ Nothing here runs per tick: it is read once the run is over, or whenever a live 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Protocol
@@ -34,6 +35,7 @@ if TYPE_CHECKING:
     from rtgait.sim.loop_options import LoopOptions
     from rtgait.sim.loop_record import TickRecord
     from rtgait.sim.model import SimModel
+    from rtgait.sim.robot import SimRobot
     from rtgait.sim.tick_log import TickLog
 
 __all__ = ["RunState", "loop_result"]
@@ -50,6 +52,7 @@ class RunState(Protocol):
     contacts: ContactMonitor
     landings: Landings
     log: TickLog | None
+    robot: SimRobot
     events: Sequence[ControlEvent]
     pushes: Sequence[Push]
     k: int
@@ -118,4 +121,6 @@ def loop_result(loop: RunState, wall_time: float, n_steps: int, walk_end: float)
         gravity=loop.gravity,
         log=loop.log.finish(ticks) if loop.log is not None else None,
         model_error=sim.model_error,
+        state=options.state,
+        sensors=dataclasses.replace(sim.config.sensors, latency=loop.robot.sensors.latency),
     )

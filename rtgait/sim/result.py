@@ -28,6 +28,7 @@ largest over all stances: a robot that walks keeps it at a millimetre or two; on
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
@@ -44,6 +45,8 @@ if TYPE_CHECKING:
 
     from rtgait.control.controller import ControlEvent
     from rtgait.core.laws.stepping import StepDecision
+    from rtgait.sim.config import SensorSettings
+    from rtgait.sim.estimation_errors import EstimationErrors
     from rtgait.sim.model_error import ModelError
     from rtgait.sim.tick_log import CompleteLog
 
@@ -199,6 +202,10 @@ class SimResult:
         log: the rest of the per-tick record (joint and base velocities, per-foot wrench, feet targets, ...:
             :class:`~rtgait.sim.tick_log.CompleteLog`), or ``None`` for a result made without it.
         model_error: how the simulated robot differed from its model (:mod:`rtgait.sim.model_error`), or ``None``.
+        state: what the controller acted on: ``"estimated"``, the kinematic-inertial estimator on the simulated
+            sensors; ``"truth"``, the simulator's truth (:attr:`rtgait.sim.loop_options.LoopOptions.state`).
+        sensors: the simulated sensors' noise factor, latency (control periods, the description's when not set)
+            and seed, or ``None`` when not known.
         at_rest_speed: mean horizontal COM speed over the run's last 0.1 s (m/s).
     """
 
@@ -250,6 +257,8 @@ class SimResult:
     gravity: float = 9.81
     log: CompleteLog | None = field(default=None, repr=False)
     model_error: ModelError | None = field(default=None, repr=False)
+    state: str = "estimated"
+    sensors: SensorSettings | None = None
 
     # ----- time ------------------------------------------------------------------------------------------------------
     @property
@@ -410,9 +419,25 @@ class SimResult:
             },
         }
 
+    # ----- the estimate --------------------------------------------------------------------------------------------
+    @functools.cached_property
+    def estimation_errors(self) -> EstimationErrors | None:
+        """How far the estimate the controller acted on was from the simulator's truth
+        (:mod:`rtgait.sim.estimation_errors`), over the walk's ticks (from its start, and up to
+        :data:`FALL_MARGIN` before a fall, as the ZMP errors); ``None`` on the truth or without the tick log."""
+        if self.state != "estimated" or self.log is None:
+            return None
+        from rtgait.sim.estimation_errors import estimation_errors
+
+        end = math.inf if self.fall_time is None else self.fall_time - FALL_MARGIN
+        rows = (self.times >= 0.0) & (self.times <= end) & np.isfinite(self.log.estimate.com[:, 0])
+        rows &= np.isfinite(self.log.truth.com[:, 0])
+        return estimation_errors(self.times, self.log.estimate, self.log.truth, self.mass * self.gravity, rows)
+
     def summary(self) -> dict[str, Any]:
         """The outcome as JSON-ready values (SI units; times on the walk's clock); with a model error, its compact
-        record (:meth:`~rtgait.sim.model_error.ModelError.summary`) as ``model_error``."""
+        record (:meth:`~rtgait.sim.model_error.ModelError.summary`) as ``model_error``; the state the controller
+        acted on, the sensors' settings and, on the estimate, its errors (:attr:`estimation_errors`)."""
         worst = max(self.stances, key=lambda s: s.slip, default=None)
         summary: dict[str, Any] = {
             "model": "mujoco",
@@ -446,6 +471,9 @@ class SimResult:
             "legs_touched": self.legs_touched,
             "control_dt": self.control_dt,
             "physics_dt": self.physics_dt,
+            "state": self.state,
+            "sensors": None if self.sensors is None else dataclasses.asdict(self.sensors),
+            "estimation": None if self.estimation_errors is None else self.estimation_errors.summary(),
         }
         if self.model_error is not None:
             summary["model_error"] = self.model_error.summary()

@@ -43,11 +43,13 @@ import numpy as np
 from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.core.geometry.support import SUPPORT_CODES
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
+from rtgait.sim.estimation_errors import StateTrack
 from rtgait.sim.row_packing import row_packer
 
 if TYPE_CHECKING:
     from rtgait.control.settings import ControlTargets
     from rtgait.estimation.state import Measurement
+    from rtgait.interface.truth import GroundTruth
     from rtgait.sim.actuation import ReferenceInterpolator
     from rtgait.sim.model import SimModel
 
@@ -60,16 +62,22 @@ LEVEL_CODES = {level: code for code, level in enumerate(CONTROLLER_LEVELS)}
 # The per-tick scalars, packed into one row of a float64 table with one ``struct`` call (a numpy assignment from a
 # tuple of Python floats costs several times more): COM velocity (3), base spatial velocity (6), IK sole targets
 # (2 x 4), per foot force (3), torque (3), CoP (2) and load (1), then COM correction (2), planned COM velocity (2),
-# the planner's phase, support code, level code.
+# the planner's phase, support code, level code; then the estimate's COM (3), COM velocity (3), DCM (2) and sole
+# positions (2 x 3), and the truth's COM, COM velocity and sole positions of the same instant with the feet's true
+# vertical forces (2).
 _COG_VELOCITY = 0
 _BASE_VELOCITY = 3
 _TARGETS = 9
 _FEET = 17
 _FOOT = 9
 _PLAN = _FEET + 2 * _FOOT
-_SCALARS = _PLAN + 7
+_ESTIMATE = _PLAN + 7
+_TRUTH = _ESTIMATE + 14
+_SCALARS = _TRUTH + 14
 _NAN_FEET = (math.nan,) * (2 * _FOOT)
 _NAN_PLAN = (math.nan,) * 4
+_NAN_ESTIMATE = (math.nan,) * 14
+_NAN_TRUTH = (math.nan,) * 14
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,6 +108,12 @@ class CompleteLog:
             :data:`~rtgait.core.geometry.support.SUPPORT_CODES`,
             shape ``(k,)``; double during the start transition.
         level: the controller level, codes :data:`LEVEL_CODES`, shape ``(k,)``.
+        estimate: the controller's measurement of the COM, its velocity, the DCM, the soles' positions, the feet's
+            vertical forces and load states (:class:`~rtgait.sim.estimation_errors.StateTrack`), one physics step
+            before the tick like the wrench; NaN during the start transition. The estimator's, or with
+            ``state="truth"`` the simulator's.
+        truth: the simulator's truth of that same instant (its load states are not recorded: the comparison
+            derives them from its forces); NaN during the start transition.
         sole: the robot's sole rectangle around the sole frame (m).
         omega: the planner's ``w = sqrt(g / z_c)`` (1/s), for the measured DCM ``c + c'/w``.
         contact_lag: how long before the tick the contact wrench was measured (s): one physics step.
@@ -121,6 +135,8 @@ class CompleteLog:
     phase: np.ndarray
     support_control: np.ndarray
     level: np.ndarray
+    estimate: StateTrack
+    truth: StateTrack
     sole: SoleRect
     omega: float
     contact_lag: float
@@ -184,9 +200,11 @@ class TickLog:
         targets: ControlTargets | None,
         measurement: Measurement | None,
         level: str,
+        truth: GroundTruth | None = None,
     ) -> None:
         """Record tick ``k``, right after its first physics step: the IK's sole targets ``(x, y, z, yaw)`` (m, rad),
-        the controller's output and measurement (``None`` during the start transition) and its level."""
+        the controller's output and measurement (``None`` during the start transition), its level and the
+        simulator's truth of the measurement's instant (``None``: not known, NaN)."""
         rows = self._joints[k]
         rows[0] = self._length
         rows[1] = self._actuator_velocity
@@ -195,10 +213,18 @@ class TickLog:
         self._sites_rotation[k] = self._site_xmat
         mujoco.mj_subtreeVel(self._model, self._data)
         if measurement is None:
-            feet = _NAN_FEET
+            feet, estimate = _NAN_FEET, _NAN_ESTIMATE
         else:
             lf, rf = measurement.left, measurement.right
             feet = (*lf.force, *lf.torque, *lf.cop, lf.loaded, *rf.force, *rf.torque, *rf.cop, rf.loaded)
+            (lx, ly, lz, _), (rx, ry, rz, _) = lf.pose, rf.pose
+            estimate = (*measurement.com, *measurement.com_vel, *measurement.dcm, lx, ly, lz, rx, ry, rz)
+        if truth is None:
+            true: tuple[float, ...] = _NAN_TRUTH
+        else:
+            left, right = truth.left, truth.right
+            true = (*truth.com, *truth.com_vel, *left.sole_position, *right.sole_position, left.force[2],
+                    right.force[2])  # fmt: skip
         if targets is None:
             plan: tuple[float, ...] = _NAN_PLAN
             phase, support = -1, 0
@@ -210,7 +236,7 @@ class TickLog:
             phase, support = targets.phase, SUPPORT_CODES[targets.support]
         self._pack(
             self._buffer, k * self._row_bytes, *self._base_linvel.tolist(), *self._base_cvel.tolist(),
-            *left_foot, *right_foot, *feet, *plan, phase, support, LEVEL_CODES[level],
+            *left_foot, *right_foot, *feet, *plan, phase, support, LEVEL_CODES[level], *estimate, *true,
         )  # fmt: skip
 
     def finish(self, ticks: int) -> CompleteLog:
@@ -221,7 +247,7 @@ class TickLog:
         feet = scalars[:, _FEET:_PLAN].reshape(ticks, 2, _FOOT)
         sites = list(self._sites)
         position, rotation = self._sites_position[:ticks, sites], self._sites_rotation[:ticks, sites]
-        plan = scalars[:, _PLAN:]
+        plan = scalars[:, _PLAN:_ESTIMATE]
         return CompleteLog(
             joint_position=joints[:, 0] / gear,
             joint_velocity=joints[:, 1] / gear,
@@ -239,7 +265,33 @@ class TickLog:
             phase=plan[:, 4].astype(np.int32),
             support_control=plan[:, 5].astype(np.int8),
             level=plan[:, 6].astype(np.int8),
+            estimate=self._estimate(scalars[:, _ESTIMATE:_TRUTH], feet),
+            truth=self._truth(scalars[:, _TRUTH:]),
             sole=self.sole,
             omega=self.omega,
             contact_lag=self.physics_dt,
+        )
+
+    def _estimate(self, columns: np.ndarray, feet: np.ndarray) -> StateTrack:
+        """The controller's measurement's track from its columns and the feet's wrench columns."""
+        return StateTrack(
+            com=columns[:, 0:3].copy(),
+            com_velocity=columns[:, 3:6].copy(),
+            dcm=columns[:, 6:8].copy(),
+            soles=columns[:, 8:14].reshape(-1, 2, 3).copy(),
+            normal_force=feet[:, :, 2].copy(),
+            loaded=feet[:, :, 8] == 1.0,
+        )
+
+    def _truth(self, columns: np.ndarray) -> StateTrack:
+        """The truth's track; its load states are left to the comparison, which starts the hysteresis where it
+        starts comparing (:func:`~rtgait.sim.estimation_errors.estimation_errors`)."""
+        com, velocity = columns[:, 0:3].copy(), columns[:, 3:6].copy()
+        return StateTrack(
+            com=com,
+            com_velocity=velocity,
+            dcm=com[:, 0:2] + velocity[:, 0:2] / self.omega,
+            soles=columns[:, 6:12].reshape(-1, 2, 3).copy(),
+            normal_force=columns[:, 12:14].copy(),
+            loaded=None,
         )

@@ -16,10 +16,15 @@ if TYPE_CHECKING:
     from rtgait.interface.sensor_spec import SensorSpec
     from rtgait.robot.model import RobotModel
 
-__all__ = ["STATE_SOURCES", "StateSource", "check_state", "kinematic_inertial_estimator", "make_estimator"]
+__all__ = [
+    "DEFAULT_STATE", "STATE_SOURCES", "StateSource", "check_state", "kinematic_inertial_estimator", "make_estimator",
+]  # fmt: skip
 
 StateSource = Literal["truth", "estimated"]
 STATE_SOURCES: tuple[StateSource, ...] = ("truth", "estimated")
+DEFAULT_STATE: StateSource = "estimated"
+"""What a controller acts on unless told otherwise, in the stack, the MuJoCo loop and the command line: the estimate
+from the robot's own sensors, as on a robot (the simulator's truth is for comparison)."""
 
 
 def check_state(state: str, name: str = "state") -> None:

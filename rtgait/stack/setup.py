@@ -9,7 +9,7 @@ from rtgait.control.controller import make_controller
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.ik import WholeBodyIK
-from rtgait.stack.estimators import StateSource, check_state, make_estimator
+from rtgait.stack.estimators import DEFAULT_STATE, StateSource, check_state, make_estimator
 from rtgait.stack.walking_stack import WalkingStack
 
 if TYPE_CHECKING:
@@ -43,7 +43,7 @@ def walking_stack(
     level: Controller = "adaptive",
     options: ControllerOptions | None = None,
     estimator: Estimator | None = None,
-    state: StateSource = "truth",
+    state: StateSource = DEFAULT_STATE,
 ) -> WalkingStack:
     """The stack that walks ``walk`` on ``robot`` at control period ``dt`` (s).
 
@@ -55,8 +55,8 @@ def walking_stack(
         level: the controller level (:mod:`rtgait.control.controller`).
         options: the controller's settings; default :class:`~rtgait.control.settings.ControllerOptions`.
         estimator: readings -> walking state; default the one ``state`` names.
-        state: ``"truth"`` (the ground-truth estimator, on a simulator's truth) or ``"estimated"`` (the
-            kinematic-inertial estimator on the robot's sensors, its world frame the walk's standing feet):
+        state: ``"estimated"`` (default: the kinematic-inertial estimator on the robot's sensors, its world frame
+            the walk's standing feet) or ``"truth"`` (the ground-truth estimator, on a simulator's truth):
             :func:`rtgait.stack.estimators.make_estimator`.
 
     The stack's configuration :attr:`WalkingStack.q` is the walk's standing start: the COG between the first two

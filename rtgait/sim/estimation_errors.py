@@ -1,0 +1,197 @@
+"""How far an estimated walking state was from the simulator's truth over a run, computed at once from per-tick
+columns (numpy; nothing runs per tick).
+
+Both sides are of the same instant at each tick (the state the estimator measured, one physics step before the
+tick's time, :mod:`rtgait.sim.loop`). Over the ticks compared (``k`` of them), with ``e`` the estimate and ``g`` the
+truth:
+
+* ``com_rms``: ``sqrt(mean |c_e - c_g|^2)``, the COM's absolute error (m); the estimate's world frame is anchored on
+  the feet, so it carries their slips;
+* ``com_relative_rms``: the COM relative to the stance sole, ``(c_e - s_e) - (c_g - s_g)`` with ``s`` the sole frame's
+  origin of the foot that carries more of the true load (m): what the balance controller feeds back;
+* ``com_velocity_rms`` (m/s), ``dcm_rms`` and ``dcm_max`` (m, the horizontal ``xi = c + c'/w``);
+* ``contact_agreement``: the share of ticks at which both feet's load states (loaded or not, after the landing
+  hysteresis) are the truth's. The truth's are the ground-truth estimator's: the true vertical forces through
+  :class:`~rtgait.estimation.load.LoadHysteresis` with its default thresholds (:func:`loaded_states`);
+* landings: a foot's load state turning on after at least ``min_unloaded_time`` in the air (the rule of
+  :mod:`rtgait.estimation.load`), on each side. In time order, each true landing is matched with the estimate's
+  nearest landing of the same foot within :data:`LANDING_WINDOW` not matched yet; its delay is the estimate's time
+  minus the truth's (s, negative: seen early). ``landing_delay_worst`` is the delay of largest magnitude,
+  ``landings_missed`` the true landings without a match, ``landings_extra`` the estimate's without one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME
+
+__all__ = ["LANDING_WINDOW", "EstimationErrors", "StateTrack", "estimation_errors", "landing_times", "loaded_states"]
+
+LANDING_WINDOW = (-0.05, 0.3)
+"""How much earlier and later than a true landing (s) an estimated landing of the same foot may come to be its
+detection: a landing seen 0.3 s late is a missed one in all but name, and the next step's is further away."""
+
+
+@dataclass(frozen=True, eq=False)
+class StateTrack:
+    """One side of the comparison, one row per tick (world frame, SI units).
+
+    Attributes:
+        com: centre of mass (m), shape ``(k, 3)``.
+        com_velocity: its velocity (m/s), shape ``(k, 3)``.
+        dcm: horizontal DCM (m), shape ``(k, 2)``.
+        soles: each sole frame's origin, left then right (m), shape ``(k, 2, 3)``.
+        normal_force: each foot's vertical contact force (N), shape ``(k, 2)``.
+        loaded: each foot's load state after the landing hysteresis, shape ``(k, 2)``; ``None`` for the truth's
+            from its forces (:func:`loaded_states`, from the first tick compared on).
+    """
+
+    com: np.ndarray
+    com_velocity: np.ndarray
+    dcm: np.ndarray
+    soles: np.ndarray
+    normal_force: np.ndarray
+    loaded: np.ndarray | None
+
+
+@dataclass(frozen=True)
+class EstimationErrors:
+    """The errors of the module docstring (m, m/s, s; the contact agreement a fraction).
+
+    Attributes:
+        ticks: ticks compared.
+        com_rms, com_relative_rms, com_velocity_rms, dcm_rms, dcm_max: the state's errors.
+        contact_agreement: share of ticks with both feet's load states right.
+        landings: true landings.
+        landings_missed: true landings the estimate did not see within :data:`LANDING_WINDOW` (a foot that bounces,
+            landing twice, and is seen to land once counts one).
+        landings_extra: the estimate's landings matched with none of the truth's.
+        landing_delay_worst: the detection delay of largest magnitude (s), ``None`` without a matched landing.
+        landing_delay_median: the median detection delay (s), ``None`` likewise.
+    """
+
+    ticks: int
+    com_rms: float
+    com_relative_rms: float
+    com_velocity_rms: float
+    dcm_rms: float
+    dcm_max: float
+    contact_agreement: float
+    landings: int
+    landings_missed: int
+    landings_extra: int
+    landing_delay_worst: float | None
+    landing_delay_median: float | None
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready values (``summary.json``'s ``estimation``): NaN (no tick compared) as ``None``."""
+        return {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in asdict(self).items()}
+
+
+def loaded_states(
+    normal_force: np.ndarray, weight: float, landing_fraction: float = DEFAULT_LANDING_FRACTION
+) -> np.ndarray:
+    """Each foot's load state, shape ``(k, 2)``, from its vertical forces ``normal_force`` (N, ``(k, 2)``): loaded
+    above ``landing_fraction`` of ``weight`` (N), unloaded below half of that, kept in between, unloaded before the
+    first decision: the ground-truth estimator's :class:`~rtgait.estimation.load.LoadHysteresis`, tick by tick from
+    the first row."""
+    landing = landing_fraction * weight
+    release = 0.5 * landing
+    n = len(normal_force)
+    decided = np.where(normal_force > landing, 1, np.where(normal_force < release, 0, -1))
+    ticks = np.arange(n)[:, None]
+    last = np.maximum.accumulate(np.where(decided >= 0, ticks, -1), axis=0)  # the last tick that decided
+    states = np.take_along_axis(decided, np.maximum(last, 0), axis=0) == 1
+    return states & (last >= 0)
+
+
+def landing_times(
+    times: np.ndarray, loaded: np.ndarray, min_unloaded_time: float = DEFAULT_MIN_UNLOADED_TIME
+) -> list[tuple[float, int]]:
+    """The landings in a run of load states ``loaded`` (``(k, 2)`` at ``times``, s): ``(t, side)`` with side 0 left,
+    1 right, in time order. The first tick's states are taken as they are (no landing); a foot unloaded at the first
+    tick has been in the air since then."""
+    found = []
+    for side in (0, 1):
+        states = loaded[:, side].astype(np.int8)
+        change = np.diff(states)
+        rises = np.flatnonzero(change == 1) + 1
+        falls = np.flatnonzero(change == -1) + 1
+        for rise in rises:
+            before = falls[falls < rise]
+            lifted = times[before[-1]] if len(before) else times[0]
+            if times[rise] - lifted >= min_unloaded_time:
+                found.append((float(times[rise]), side))
+    return sorted(found)
+
+
+def _rms(error: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.sum(error * error, axis=1)))) if len(error) else math.nan
+
+
+def estimation_errors(
+    times: np.ndarray, estimate: StateTrack, truth: StateTrack, weight: float, rows: np.ndarray | None = None
+) -> EstimationErrors:
+    """The errors of ``estimate`` against ``truth`` (module docstring) over the ticks ``rows`` (indices or a mask;
+    default all) of the tracks at ``times`` (s). ``weight`` (N) sets the thresholds of the truth's load states when
+    its track has none.
+
+    Raises:
+        ValueError: the estimate has no load states, or a track's length differs from ``times``'.
+    """
+    if estimate.loaded is None:
+        raise ValueError("the estimate's track needs its load states")
+    for name, track in (("estimate", estimate), ("truth", truth)):
+        columns = (track.com, track.com_velocity, track.dcm, track.soles, track.normal_force)
+        if any(len(a) != len(times) for a in (*columns, *([] if track.loaded is None else [track.loaded]))):
+            raise ValueError(f"the {name}'s columns must have one row per tick ({len(times)})")
+    if rows is not None:
+        times, estimate, truth = times[rows], _take(estimate, rows), _take(truth, rows)
+    if truth.loaded is None:
+        truth = replace(truth, loaded=loaded_states(truth.normal_force, weight))
+    assert estimate.loaded is not None and truth.loaded is not None
+    n = len(times)
+    dcm = estimate.dcm - truth.dcm
+    ticks = np.arange(n)
+    # The stance sole: the foot with more of the true load (the left one on a tie).
+    stance = np.where(truth.normal_force[:, 0] >= truth.normal_force[:, 1], 0, 1)
+    relative = (estimate.com - estimate.soles[ticks, stance]) - (truth.com - truth.soles[ticks, stance])
+    agree = np.all(estimate.loaded == truth.loaded, axis=1)
+    true_landings = landing_times(times, truth.loaded)
+    seen = landing_times(times, estimate.loaded)
+    delays, used = [], set()
+    low, high = LANDING_WINDOW
+    for t, side in true_landings:  # in time order, each estimated landing matched at most once
+        near = [(abs(s - t), i) for i, (s, other) in enumerate(seen) if other == side and low < s - t < high]
+        near = [pair for pair in near if pair[1] not in used]
+        if near:
+            i = min(near)[1]
+            used.add(i)
+            delays.append(seen[i][0] - t)
+    distance = np.hypot(dcm[:, 0], dcm[:, 1])
+    return EstimationErrors(
+        ticks=n,
+        com_rms=_rms(estimate.com - truth.com),
+        com_relative_rms=_rms(relative),
+        com_velocity_rms=_rms(estimate.com_velocity - truth.com_velocity),
+        dcm_rms=_rms(dcm),
+        dcm_max=float(distance.max()) if n else math.nan,
+        contact_agreement=float(np.mean(agree)) if n else math.nan,
+        landings=len(true_landings),
+        landings_missed=len(true_landings) - len(delays),
+        landings_extra=len(seen) - len(used),
+        landing_delay_worst=float(max(delays, key=abs)) if delays else None,
+        landing_delay_median=float(np.median(delays)) if delays else None,
+    )
+
+
+def _take(track: StateTrack, rows: np.ndarray) -> StateTrack:
+    """The track at ``rows`` only."""
+    loaded = None if track.loaded is None else track.loaded[rows]
+    return StateTrack(track.com[rows], track.com_velocity[rows], track.dcm[rows], track.soles[rows],
+                      track.normal_force[rows], loaded)  # fmt: skip
