@@ -11,11 +11,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
 from rtgait.core.limits import MAX_ROLLOUT_TICKS
+from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
 from rtgait.scenario.scenario import Scenario, ScenarioError
 from rtgait.viz.run_data import FIGURE_FORMATS
 
 if TYPE_CHECKING:
+    from rtgait.estimation.estimator import StateSource
     from rtgait.robot.model import RobotModel
+    from rtgait.sim.config import SensorSettings
 
 PROG = "rtgait"
 
@@ -149,7 +152,72 @@ def check_run_length(seconds: float, timestep: float) -> None:
         )
 
 
+MAX_LATENCY = 1000
+"""Largest ``--latency`` (control periods): the robot descriptions' own limit for ``sensors.latency``."""
+
+
+def add_state_options(parser: argparse.ArgumentParser) -> None:
+    """``--state``, ``--sensor-noise``, ``--sensor-seed``, ``--latency`` and ``--model-error``: what the controller
+    acts on, how the simulated sensors report and how the simulated robot differs from its model (read back by
+    :func:`state_settings`)."""
+    parser.add_argument(
+        "--state",
+        choices=STATE_SOURCES,
+        default=DEFAULT_STATE,
+        help="what the controller acts on: estimated (default), the state estimated from the simulated robot's "
+        "sensors (IMU, encoders, foot force sensors or joint torques), as on a robot; truth, the simulator's own "
+        "state (COM, velocities, contact forces), to tell the controller's doing from the estimator's",
+    )
+    parser.add_argument(
+        "--sensor-noise",
+        metavar="SCALE",
+        type=float,
+        default=1.0,
+        help="factor on every noise, bias and offset of the robot description's [sensors] (default 1; 0: the "
+        "readings are the simulator's truth)",
+    )
+    parser.add_argument(
+        "--sensor-seed", metavar="N", type=int, default=0, help="seed of the sensors' noise (integer >= 0, default 0)"
+    )
+    parser.add_argument(
+        "--latency",
+        metavar="TICKS",
+        type=int,
+        help=f"control periods between the sensors' sampling and the controller's reading (0 to {MAX_LATENCY}; "
+        "default the robot description's sensors.latency)",
+    )
+    parser.add_argument(
+        "--model-error",
+        metavar="SEED",
+        type=int,
+        help="simulate a robot that differs from the controller's model: masses +-5 %%, centres of mass +-10 mm, "
+        "joint zeros +-0.5 deg, drawn from SEED (integer >= 0; default none: the robot is its model)",
+    )
+
+
+def check_state_options(args: argparse.Namespace) -> None:
+    """Refuse a bad value of :func:`add_state_options`' options, one line each (nothing is imported)."""
+    noise, seed, latency, model_error = args.sensor_noise, args.sensor_seed, args.latency, args.model_error
+    if not (math.isfinite(noise) and noise >= 0.0):
+        raise ScenarioError(f"--sensor-noise must be a finite factor >= 0, got {noise:g}")
+    if seed < 0:
+        raise ScenarioError(f"--sensor-seed must be an integer >= 0, got {seed}")
+    if latency is not None and not 0 <= latency <= MAX_LATENCY:
+        raise ScenarioError(f"--latency must be a whole number of control periods in [0, {MAX_LATENCY}], got {latency}")
+    if model_error is not None and model_error < 0:
+        raise ScenarioError(f"--model-error must be an integer seed >= 0, got {model_error}")
+
+
+def state_settings(args: argparse.Namespace) -> tuple[StateSource, SensorSettings, int | None]:
+    """The state, sensor settings and model error seed of :func:`add_state_options`, checked
+    (:func:`check_state_options`; needs MuJoCo)."""
+    check_state_options(args)
+    from rtgait.sim.config import SensorSettings
+
+    sensors = SensorSettings(noise=args.sensor_noise, latency=args.latency, seed=args.sensor_seed)
+    return args.state, sensors, args.model_error
+
+
 def print_error(message: str) -> None:
     # One line, whatever the message: scripts grep stderr and humans read the first line only.
     print(f"{PROG}: error: {' '.join(message.split())}", file=sys.stderr)
-

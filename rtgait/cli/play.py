@@ -3,11 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rtgait.cli.common import PROG, RunError, load_robot, robot_walk
+from rtgait.cli.common import (
+    PROG,
+    RunError,
+    add_state_options,
+    check_state_options,
+    load_robot,
+    robot_walk,
+    state_settings,
+)
 from rtgait.cli.control_file import controller_settings
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.io.summary_json import summary_text
@@ -64,11 +73,13 @@ def add_parser(commands: Any) -> None:
         "--push-force", metavar="N", type=float, help="force of the push key's 0.1 s push on the base (N; default "
         f"the robot's mass times {PUSH_SPEED / 0.1:g} m/s^2)",
     )  # fmt: skip
+    add_state_options(play)
     play.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
 
 def _check_options(args: argparse.Namespace) -> None:
     """The options that can be refused before anything loads: one line each."""
+    check_state_options(args)
     if args.exit_after is not None and not (math.isfinite(args.exit_after) and 0.0 < args.exit_after <= 3600.0):
         raise ScenarioError(f"--exit-after must be a time in (0, 3600] s, got {args.exit_after:g}")
     if args.push_force is not None and not (math.isfinite(args.push_force) and 0.0 < args.push_force <= 5000.0):
@@ -112,22 +123,25 @@ def _scenario(name: str | None) -> tuple[Scenario, bool]:
     return scenario, False
 
 
-def _live_walk(scenario: Scenario, by_command: bool, robot: RobotModel, level: str, push_force: float | None) -> tuple[
-    LiveWalk, Scenario
-]:  # fmt: skip
-    """The controller, the closed loop and the live walk of ``scenario`` on ``robot``."""
+def _live_walk(
+    scenario: Scenario, by_command: bool, robot: RobotModel, level: str, push_force: float | None,
+    args: argparse.Namespace,
+) -> tuple[LiveWalk, Scenario]:  # fmt: skip
+    """The controller, the closed loop and the live walk of ``scenario`` on ``robot``, with the state, sensors and
+    model error of ``args`` (:func:`~rtgait.cli.common.state_settings`)."""
     from rtgait.control.controller import make_controller
     from rtgait.io.sim_run import planned_walk
     from rtgait.robot.motion import whole_body_motion
     from rtgait.sim.live import LiveWalk
     from rtgait.sim.loop import ClosedLoop, LoopOptions
-    from rtgait.sim.model import build_sim_model
+    from rtgait.sim.model import SimConfig, build_sim_model
 
+    state, sensors, model_error = state_settings(args)
     walk = robot_walk(scenario, robot)
     settings, _ = controller_settings(robot.description, scenario, None, ())  # their [control] tables, as simulate
     if not by_command:  # as simulate does: a walk the robot cannot reach is refused before it starts
         whole_body_motion(robot, planned_walk(scenario, robot))
-    sim = build_sim_model(robot)
+    sim = build_sim_model(robot, SimConfig(sensors=sensors, model_error=model_error))
     strides = None if by_command else walk.strides()
     controller = make_controller(
         level,
@@ -138,7 +152,7 @@ def _live_walk(scenario: Scenario, by_command: bool, robot: RobotModel, level: s
         dt=sim.control_dt,
         options=settings,
     )
-    options = LoopOptions(changes=() if by_command else walk.changes)
+    options = LoopOptions(changes=() if by_command else walk.changes, state=state)
     loop = ClosedLoop(sim, controller, options, keep=KEEP)
     force = push_force if push_force is not None else robot.mass * PUSH_SPEED / 0.1
     return LiveWalk(loop, by_command, force), walk
@@ -159,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
         raise RunError(str(error)) from None
     from rtgait.io.sim_run import mujoco_messages
 
-    live, walk = _live_walk(scenario, by_command, robot, args.controller, args.push_force)
+    live, walk = _live_walk(scenario, by_command, robot, args.controller, args.push_force, args)
     if not args.quiet:
         what = "by velocity command" if by_command else f"{scenario.name} as planned"
         print(f"{PROG}: play: {robot.name}, {args.controller}, walking {what}; close the window to end", flush=True)
@@ -169,8 +183,12 @@ def run(args: argparse.Namespace) -> int:
         except DisplayError as error:
             raise RunError(str(error)) from None
     summary = live.summary(outcome.wall_time, outcome.pacer)
+    sensors = live.loop.sim.config.sensors
     summary.update(
         scenario=None if by_command else scenario.name, end=outcome.reason, mujoco_warnings=messages,
+        state=live.loop.options.state,
+        sensors={**dataclasses.asdict(sensors), "latency": live.loop.robot.sensors.latency},
+        model_error=None if live.loop.sim.model_error is None else live.loop.sim.model_error.summary(),
         screenshot=None if outcome.screenshot is None else str(outcome.screenshot),
     )  # fmt: skip
     if args.summary is not None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import itertools
 import math
 import sys
@@ -17,17 +18,21 @@ from rtgait.cli.common import (
     RunError,
     add_format_option,
     add_replay_background_option,
+    add_state_options,
     check_run_length,
+    check_state_options,
     load_robot,
     numbers,
     out_folder,
     progress_printer,
     require_extras,
     robot_walk,
+    state_settings,
 )
 from rtgait.cli.control_file import controller_settings, read_control_file
 from rtgait.core.geometry.footsteps import Timeline
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
+from rtgait.estimation.estimator import DEFAULT_STATE
 from rtgait.io.plan_files import pendulum_report
 from rtgait.io.summary_json import summary_text
 from rtgait.outputs import check_destination, staged_outputs
@@ -38,6 +43,7 @@ from rtgait.viz.walk_title import velocity_commands, velocity_facts, walk_title
 if TYPE_CHECKING:
     from rtgait.control.settings import ControllerOptions
     from rtgait.core.push import Push
+    from rtgait.estimation.estimator import StateSource
     from rtgait.robot.model import RobotModel
     from rtgait.sim.loop import SimResult
     from rtgait.sim.model import SimConfig
@@ -101,6 +107,7 @@ def add_parser(commands: Any) -> None:
         type=float,
         help="--model mujoco: physics step (s, default 0.001); at most the control period and dividing it",
     )
+    add_state_options(simulate)
     simulate.add_argument("--out", metavar="DIR", type=out_folder, help="output folder (default: out/<scenario>-sim)")
     simulate.add_argument(
         "--velocity",
@@ -186,6 +193,7 @@ def run(args: argparse.Namespace) -> int:
     if args.mass is not None:
         raise ScenarioError("--mass is for --model lipm (the robot's mass is its model's)")
     _check_periods(args.control_dt, args.physics_dt)
+    check_state_options(args)
     args.robot = args.robot or "talos"
     controller = args.controller or "adaptive"
     velocity, schedule = _velocities(args.velocity)
@@ -195,11 +203,14 @@ def run(args: argparse.Namespace) -> int:
         from rtgait.robot.motion import whole_body_motion
     except ImportError:
         raise RunError("simulate needs MuJoCo and Pinocchio: pip install 'rtgait[robot,sim]'") from None
+    state, sensors, model_error = state_settings(args)
     pushes = _check_simulation(args, scenario, velocity, out)
     robot = load_robot(args.robot)
     walk = robot_walk(scenario, robot)
     options, chosen = controller_settings(robot.description, scenario, args.control, control_pairs)
-    config = _physics_config(robot, args.control_dt, args.physics_dt)
+    config = dataclasses.replace(
+        _physics_config(robot, args.control_dt, args.physics_dt), sensors=sensors, model_error=model_error
+    )
     for push in pushes:
         try:
             push.check(robot.mass, walk.cog_height, walk.gravity)
@@ -218,7 +229,7 @@ def run(args: argparse.Namespace) -> int:
         extra["velocity"] = velocity_facts(commands)
     with mujoco_messages() as messages:  # else MuJoCo appends them to MUJOCO_LOG.TXT in the working folder
         result = _physics(
-            scenario, walk, robot, config, controller, options, schedule or velocity, pushes, progress, extra
+            scenario, walk, robot, config, controller, options, schedule or velocity, pushes, progress, extra, state
         )
     extra["mujoco_warnings"] = messages
     if show:
@@ -327,6 +338,11 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path, 
     for option, why in (("velocity", "walks by command"), ("html", "the 3D replay"), ("physics_dt", "its step")):
         if getattr(args, option):
             raise ScenarioError(f"--{option.replace('_', '-')} ({why}) is for --model mujoco")
+    for option, default in (("state", DEFAULT_STATE), ("sensor_noise", 1.0), ("sensor_seed", 0), ("latency", None),
+                            ("model_error", None)):  # fmt: skip
+        if getattr(args, option) != default:
+            raise ScenarioError(f"--{option.replace('_', '-')} is for --model mujoco: the point mass has no sensors, "
+                                "its controller acts on its own state")  # fmt: skip
     if scenario.guide is not None:
         raise ScenarioError(f"{scenario.name} is led by the hand ([guide]): that needs --model mujoco")
     mass = args.mass
@@ -419,19 +435,23 @@ def _physics(
     pushes: list[Push],
     progress: Callable[[float], None] | None,
     extra: dict[str, Any],
+    state: StateSource,
 ) -> SimResult:
-    """Walk ``scenario`` (as ``robot`` walks it: ``walk``) in MuJoCo; a guided walk's outcome goes into ``extra``."""
+    """Walk ``scenario`` (as ``robot`` walks it: ``walk``) in MuJoCo, the controller on ``state``; a guided walk's
+    outcome goes into ``extra``."""
     from rtgait.io.sim_run import loop_options, simulate
+    from rtgait.sim.loop_options import LoopOptions
     from rtgait.sim.model import build_sim_model
 
     sim = build_sim_model(robot, config)
     if scenario.guide is None or velocity is not None:
         return simulate(scenario, robot, controller=controller, controller_options=options, velocity=velocity,
-                        push=pushes or None, sim=sim, progress=progress)  # type: ignore[arg-type]  # fmt: skip
+                        push=pushes or None, sim=sim, progress=progress,
+                        options=LoopOptions(state=state))  # type: ignore[arg-type]  # fmt: skip
     # Led by the hand: the outcome (where the person led the robot) goes into the summary too.
     from rtgait.sim.guided import simulate_guided
 
-    loop = loop_options(pushes or None)
+    loop = loop_options(pushes or None, LoopOptions(state=state))
     result, led = simulate_guided(
         sim, walk, loop, controller=controller, controller_options=options, progress=progress  # type: ignore[arg-type]
     )  # fmt: skip

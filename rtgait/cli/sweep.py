@@ -1,4 +1,5 @@
-"""``rtgait sweep SPEC --out DIR [--physics [--robot R] [--controller C]] [--workers N | --scheduler ADDRESS]``.
+"""``rtgait sweep SPEC --out DIR [--physics [--robot R] [--controller C] [--state S]]
+[--workers N | --scheduler ADDRESS]``.
 
 Runs every case of the sweep file ``SPEC`` (:mod:`rtgait.sweep.spec`, ``docs/sweeps.md``): at the pendulum level in
 this process, batched (:mod:`rtgait.sweep.pendulum`); with ``--physics`` also in MuJoCo, in worker processes
@@ -27,6 +28,7 @@ from typing import Any
 
 from rtgait.cli.common import RunError
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
+from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
 from rtgait.outputs import OutputError, check_destination, create_folder, write_text_atomic
 from rtgait.sweep.spec import MAX_PHYSICS_CASES, SweepError, SweepSpec, case_id, load_spec
 from rtgait.sweep.store import CSV_FILE, JOURNAL, PARQUET_FILE, ResultStore
@@ -53,6 +55,10 @@ def add_parser(subparsers: Any) -> None:
     sweep.add_argument("--physics", action="store_true", help="also walk every case in MuJoCo")
     sweep.add_argument("--robot", metavar="NAME_OR_FILE", help="robot for --physics (default talos)")
     sweep.add_argument("--controller", metavar="C", choices=CONTROLLER_LEVELS, help="controller level for --physics")
+    sweep.add_argument(
+        "--state", choices=STATE_SOURCES, help="what the controller acts on in --physics: estimated (default), the "
+        "state estimated from the simulated sensors; truth, the simulator's own",
+    )  # fmt: skip
     sweep.add_argument("--workers", metavar="N", type=int, help="physics cases at a time (default: one per core)")
     sweep.add_argument("--scheduler", metavar="ADDRESS", help="run physics cases on this Dask scheduler ('local': a "
                        "LocalCluster of --workers processes)")  # fmt: skip
@@ -122,7 +128,7 @@ def _writing(out: Path) -> Iterator[None]:
 
 def _check_options(args: argparse.Namespace, spec: SweepSpec) -> None:
     if not args.physics:
-        for option in ("robot", "controller", "workers", "scheduler"):
+        for option in ("robot", "controller", "state", "workers", "scheduler"):
             if getattr(args, option) is not None:
                 raise SweepError(f"--{option} is for the physics cases: add --physics")
     if args.workers is not None and args.workers < 1:
@@ -211,7 +217,8 @@ def _physics_stage(spec: SweepSpec, cases, store: ResultStore, executor, args: a
     store.append("physics", skipped)
     robot = args.robot or "talos"
     jobs = [{"id": key, "document": spec.base_document, "values": values, "robot": robot,
-             "controller": args.controller} for key, values in todo if key not in skipped]  # fmt: skip
+             "controller": args.controller, "state": args.state} for key, values in todo
+            if key not in skipped]  # fmt: skip
     if not jobs:
         return
     bar = _bar(len(jobs), "physics", args.quiet)
@@ -247,6 +254,7 @@ def _description(spec: SweepSpec, args: argparse.Namespace) -> dict[str, Any]:
         "physics": bool(args.physics),
         "robot": (args.robot or "talos") if args.physics else None,
         "controller": args.controller,
+        "state": (args.state or DEFAULT_STATE) if args.physics else None,
     }
 
 

@@ -3,13 +3,27 @@ walking state a controller acts on out (:class:`~rtgait.estimation.state.Measure
 
 from __future__ import annotations
 
-from typing import Protocol, runtime_checkable
+from typing import Literal, Protocol, runtime_checkable
 
 from rtgait.estimation.state import Measurement
 from rtgait.interface.readings import SensorReadings
 from rtgait.interface.truth import GroundTruth
 
-__all__ = ["Estimator"]
+__all__ = ["DEFAULT_STATE", "STATE_SOURCES", "Estimator", "StateSource", "check_state"]
+
+StateSource = Literal["truth", "estimated"]
+"""What a controller acts on: ``"estimated"``, an estimate from the robot's own sensors; ``"truth"``, a simulator's
+ground truth (for comparison)."""
+STATE_SOURCES: tuple[StateSource, ...] = ("truth", "estimated")
+DEFAULT_STATE: StateSource = "estimated"
+"""What a controller acts on unless told otherwise, in the stack, the MuJoCo loop and the command line: the estimate
+from the robot's own sensors, as on a robot."""
+
+
+def check_state(state: str, name: str = "state") -> None:
+    """Raise a ``ValueError`` naming ``name`` unless ``state`` is one of :data:`STATE_SOURCES`."""
+    if state not in STATE_SOURCES:
+        raise ValueError(f"{name} must be one of {', '.join(STATE_SOURCES)}, got {state!r}")
 
 
 @runtime_checkable

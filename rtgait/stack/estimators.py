@@ -4,8 +4,9 @@ sensors of its description's ``[sensors]``)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING
 
+from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES, StateSource, check_state
 from rtgait.estimation.ground_truth import GroundTruthEstimator
 from rtgait.estimation.kinematic_inertial import KinematicInertialEstimator
 from rtgait.robot.kinematics import PinocchioKinematics
@@ -19,18 +20,6 @@ if TYPE_CHECKING:
 __all__ = [
     "DEFAULT_STATE", "STATE_SOURCES", "StateSource", "check_state", "kinematic_inertial_estimator", "make_estimator",
 ]  # fmt: skip
-
-StateSource = Literal["truth", "estimated"]
-STATE_SOURCES: tuple[StateSource, ...] = ("truth", "estimated")
-DEFAULT_STATE: StateSource = "estimated"
-"""What a controller acts on unless told otherwise, in the stack, the MuJoCo loop and the command line: the estimate
-from the robot's own sensors, as on a robot (the simulator's truth is for comparison)."""
-
-
-def check_state(state: str, name: str = "state") -> None:
-    """Raise a ``ValueError`` naming ``name`` unless ``state`` is one of :data:`STATE_SOURCES`."""
-    if state not in STATE_SOURCES:
-        raise ValueError(f"{name} must be one of {', '.join(STATE_SOURCES)}, got {state!r}")
 
 
 def kinematic_inertial_estimator(

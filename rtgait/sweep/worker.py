@@ -2,7 +2,8 @@
 it in MuJoCo with :func:`rtgait.io.sim_run.simulate` and prints the outcome as one JSON line on stdout.
 
 A job is ``{"document": <base scenario's TOML document>, "values": <axis values>, "robot": NAME, "controller":
-NAME or null}``: the scenario travels whole, so a worker on another machine needs rtgait, not the sweep's files.
+NAME or null, "state": "estimated", "truth" or null}``: the scenario travels whole, so a worker on another machine
+needs rtgait, not the sweep's files.
 A case that cannot be walked (the robot cannot reach it, a bad value) prints ``{"error": ...}`` and exits with
 :data:`CASE_ERROR`; anything else that ends the process (a crash in the simulator, a kill) is the executor's to see.
 """
@@ -17,9 +18,15 @@ CASE_ERROR = 3
 """Exit code of a case that failed for a reason of its own (retrying it would fail the same way)."""
 
 
-def simulate_options(controller: str | None) -> dict[str, Any]:
-    """Keyword arguments of :func:`rtgait.io.sim_run.simulate` for ``controller`` (``None``: its default level)."""
-    return {} if controller is None else {"controller": controller}
+def simulate_options(controller: str | None, state: str | None = None) -> dict[str, Any]:
+    """Keyword arguments of :func:`rtgait.io.sim_run.simulate` for ``controller`` and ``state`` (``None``: their
+    defaults)."""
+    options: dict[str, Any] = {} if controller is None else {"controller": controller}
+    if state is not None:
+        from rtgait.sim.loop_options import LoopOptions
+
+        options["options"] = LoopOptions(state=state)  # type: ignore[arg-type]  # checked by LoopOptions
+    return options
 
 
 def run_job(job: dict[str, Any]) -> dict[str, Any]:
@@ -30,7 +37,7 @@ def run_job(job: dict[str, Any]) -> dict[str, Any]:
 
     scenario = case_scenario(scenario_from_document(job["document"]), job["values"])
     with mujoco_messages():
-        result = simulate(scenario, job["robot"], **simulate_options(job.get("controller")))
+        result = simulate(scenario, job["robot"], **simulate_options(job.get("controller"), job.get("state")))
     return {
         "fell": bool(result.fell),
         "tipped": bool(result.tipped),

@@ -1,5 +1,10 @@
-"""A walking controller's CI: short scripted walks in physics with the default (adaptive) controller, for Talos and
-G1, each judged on what a robot must do (not fall, stay upright, end where it was sent), and bad input refused."""
+"""A walking controller's CI: short scripted walks in physics with the default (adaptive) controller on the default
+state (estimated from the simulated sensors, with their noise), for Talos and G1, each judged on what a robot must
+do (not fall, stay upright, end where it was sent), and bad input refused.
+
+Where a walk falls on the estimate (G1 pushed in single support: ``docs/estimation.md``) it runs on the simulator's
+truth, as do the tests of what the controller does at its limits given the true state (the hip strategy's push, the
+in-place bound)."""
 
 from __future__ import annotations
 
@@ -28,12 +33,16 @@ rad) to answer a push the feet cannot (rtgait.core.laws.hip_strategy); a robot t
 LEAN_LIMIT = 0.25 * math.sqrt(2.0) + 0.05
 """Largest tilt from upright the controller may command (rad): the hip strategy's lean, at most 0.25 rad on each
 heading axis (both at once: sqrt(2) x 0.25), and the walk's own few hundredths."""
-ENDED_OVER_THE_FEET = 0.005
-"""Largest distance (m) of the base's end from where the walk's final footprints put it (:func:`end_errors`): 1.6 mm
-after the 61 N s push, at most 0.7 mm in every other walk below, for Talos and G1, at the physics step as configured
-and at half of it."""
+ENDED_OVER_THE_FEET = {"truth": 0.005, "estimated": 0.015}
+"""Largest distance (m) of the base's end from where the walk's final footprints put it (:func:`end_errors`), by the
+state the controller acted on. On the truth: 1.6 mm after the 61 N s push, at most 0.7 mm in every other walk below,
+for Talos and G1, at the physics step as configured and at half of it. On the estimate the footprints are
+re-anchored on the estimated landings, so the estimate's drift is in it: at most 5.8 mm (Talos sideways, 3.6 mm at
+half the step), 3.4 mm in the other walks."""
 QUICK = LoopOptions(start_ramp=0.5, start_hold=0.3, after=0.3)
 """A shorter start transition than the default's 1.5 s: the robots settle within it."""
+ON_TRUTH = dataclasses.replace(QUICK, state="truth")
+""":data:`QUICK` with the controller on the simulator's truth."""
 
 
 @pytest.fixture(scope="module")
@@ -101,7 +110,8 @@ def check_walk(result: Any, displacement: tuple[float, float], name: str, tolera
     assert commanded_tilt(result).max() < LEAN_LIMIT, f"{name}: commanded a lean of {commanded_tilt(result).max():.3f}"
     assert result.ended_at_rest, name
     over_feet, from_sent = end_errors(result, displacement)
-    assert over_feet < ENDED_OVER_THE_FEET, f"{name}: base ended {over_feet * 1e3:.1f} mm off its final footprints"
+    limit = ENDED_OVER_THE_FEET[result.state]
+    assert over_feet < limit, f"{name}: base ended {over_feet * 1e3:.1f} mm off its final footprints"
     assert from_sent < tolerance, f"{name}: base ended {from_sent * 1e3:.1f} mm from where it was sent"
     assert result.foot_slip_max < 0.01, f"{name}: a stance foot slipped {result.foot_slip_max * 1e3:.1f} mm"
 
@@ -111,9 +121,11 @@ def test_a_few_steps(robots, robot):
     model, sim = robots[robot]
     # Three 0.1 m steps and the closing one: 0.3 m forward.
     result = simulate(short(3, 0.1), model, sim=sim, options=QUICK)
-    assert result.controller == "adaptive"
-    # Ended 3.7 mm (Talos) and 12.4 mm (G1) from there; 2.5 and 11.4 mm at half the physics step.
-    check_walk(result, (0.3, 0.0), f"{robot}, three steps", 0.03)
+    assert result.controller == "adaptive" and result.state == "estimated"
+    assert result.sensors is not None and result.sensors.noise == 1.0
+    # Ended 2.0 mm (Talos) and 1.4 mm (G1) from there; 1.9 and 5.9 mm at half the physics step (on the truth: 3.7 and
+    # 12.4 mm; 2.5 and 11.4).
+    check_walk(result, (0.3, 0.0), f"{robot}, three steps", 0.015)
 
 
 @pytest.mark.parametrize("robot", ROBOTS)
@@ -125,24 +137,29 @@ def test_a_velocity_walk_that_turns(robots, robot):
     qx, qy, qz, qw = result.base_quaternion[-1]
     yaw = math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
     assert 0.2 < yaw < 1.0, f"{robot} turned {yaw:.2f} rad"
-    # Heading as the last footprints: 1.9 mrad (Talos) and 9.8 mrad (G1) off, 0.9 and 7.7 at half the physics step.
+    # Heading as the last footprints: 0.0 mrad (Talos) and 8.8 mrad (G1) off, 1.2 and 9.2 at half the physics step
+    # (on the truth: 1.9 and 9.8; 0.9 and 7.7).
     _, heading = _midpoint_and_heading(result.footprints[-2:])
-    assert abs(yaw - heading) < 0.03, f"{robot} ended heading {yaw:.3f} rad, its feet {heading:.3f} rad"
-    # Two strides of 0.08 m before the turn, then stepping round on the spot. Ended 7.8 mm (Talos) and 17.1 mm (G1)
-    # from there; 4.8 and 15.5 mm at half the physics step.
-    check_walk(result, (0.16, 0.0), f"{robot}, velocity walk", 0.04)
+    assert abs(yaw - heading) < 0.025, f"{robot} ended heading {yaw:.3f} rad, its feet {heading:.3f} rad"
+    # Two strides of 0.08 m before the turn, then stepping round on the spot. Ended 3.6 mm (Talos) and 12.9 mm (G1)
+    # from there; 3.4 and 12.4 mm at half the physics step (on the truth: 7.8 and 17.1; 4.8 and 15.5).
+    check_walk(result, (0.16, 0.0), f"{robot}, velocity walk", 0.03)
 
 
-# The distance from where the walk was sent: Talos 59.9 mm (75.6 mm at half the physics step), G1 16.9 mm (14.2 mm).
-# Talos's tolerance is not 2-3 times its distance: the push moves its landings (step adjustment, then the re-anchoring
-# at each landing); where they put its feet, the base ends within 0.7 mm (check_walk's ENDED_OVER_THE_FEET).
-@pytest.mark.parametrize(("robot", "impulse", "tolerance"), [("talos", 25.0, 0.1), ("g1", 6.0, 0.04)])
-def test_a_moderate_push_forward_in_single_support(robots, robot, impulse, tolerance):
+# The distance from where the walk was sent: Talos 77.1 mm on the estimate (76.3 mm at half the physics step; 59.9 and
+# 75.6 mm on the truth), G1 16.9 mm on the truth (14.2 mm). Talos's tolerance is not 2-3 times its distance: the push
+# moves its landings (step adjustment, then the re-anchoring at each landing); where they put its feet, the base ends
+# within 3.4 mm (check_walk's ENDED_OVER_THE_FEET). G1 falls at this push on the estimate (at 2.8 s, at both physics
+# steps, with the sensors' noise and without: docs/estimation.md), so it is pushed on the truth.
+@pytest.mark.parametrize(
+    ("robot", "impulse", "tolerance", "options"), [("talos", 25.0, 0.1, QUICK), ("g1", 6.0, 0.04, ON_TRUTH)]
+)
+def test_a_moderate_push_forward_in_single_support(robots, robot, impulse, tolerance, options):
     model, sim = robots[robot]
     scenario = short(4, 0.1)
     single = scenario.timing.start + scenario.timing.single_support + scenario.timing.double_support  # step 2
     push = Push(single + 0.3, 0.1, (impulse / 0.1, 0.0, 0.0))  # mid single support of step 2
-    result = simulate(scenario, model, sim=sim, options=QUICK, push=push)
+    result = simulate(scenario, model, sim=sim, options=options, push=push)
     assert result.pushes == (push,) and result.summary()["pushes"][0]["impulse_norm"] == pytest.approx(impulse)
     check_walk(result, (0.4, 0.0), f"{robot}, pushed {impulse} N s", tolerance)
 
@@ -183,14 +200,19 @@ def test_talos_walks_sideways_without_its_body_rising(robots):
         0.5 * (last[0].y + last[1].y - first[0].y - first[1].y),
     )
     assert sent[1] > 0.3
-    check_walk(result, sent, "talos, sideways", ENDED_OVER_THE_FEET)
+    check_walk(result, sent, "talos, sideways", ENDED_OVER_THE_FEET[result.state])
 
 
-# The distance from where the walk was sent: Talos 17.9 mm (15.1 mm at half the physics step), G1 79.1 mm (79.3 mm):
-# G1's held stance and landings moved its feet (its base ends within 0.3 mm of where they put it), so its tolerance
-# stays at 0.1 m.
-@pytest.mark.parametrize(("robot", "impulse", "tolerance"), [("talos", 20.0, 0.05), ("g1", 6.0, 0.1)])
-def test_an_outward_push_in_single_support_is_stood_on_the_stance_foot_held_longer(robots, robot, impulse, tolerance):
+# The distance from where the walk was sent: Talos 18.1 mm on the estimate (18.6 mm at half the physics step; 17.9
+# and 15.1 mm on the truth), G1 79.1 mm on the truth (79.3 mm): G1's held stance and landings moved its feet (its base
+# ends within 0.3 mm of where they put it), so its tolerance stays at 0.1 m. G1 falls at this push on the estimate (at
+# 3.0 s, at both physics steps), so it is pushed on the truth.
+@pytest.mark.parametrize(
+    ("robot", "impulse", "tolerance", "options"), [("talos", 20.0, 0.05, QUICK), ("g1", 6.0, 0.1, ON_TRUTH)]
+)
+def test_an_outward_push_in_single_support_is_stood_on_the_stance_foot_held_longer(
+    robots, robot, impulse, tolerance, options
+):
     # An outward push in single support: no landing on the swing foot's side can catch it (the helpful one would
     # cross the stance foot); the ankle can, given time. Step timing adaptation holds the stance longer (up to the
     # [stepping] table's max_single_support) while the sole's centre of pressure at its outer edge brings the DCM
@@ -202,34 +224,35 @@ def test_an_outward_push_in_single_support_is_stood_on_the_stance_foot_held_long
     # Step 2's single support stands on the foot that lands at step 1, F[2]: the right one (fig8 starts left).
     push = Push(single + 0.3, 0.1, (0.0, -impulse / 0.1, 0.0))
     # The ankle's answer alone: without the hip strategy, which would otherwise take part of it (test below).
-    options = ControllerOptions(hip_strategy=False)
-    result = simulate(scenario, model, sim=sim, options=QUICK, push=push, controller_options=options)
+    settings = ControllerOptions(hip_strategy=False)
+    result = simulate(scenario, model, sim=sim, options=options, push=push, controller_options=settings)
     check_walk(result, (0.4, 0.0), f"{robot}, pushed outward {impulse} N s", tolerance)
     held = [d for d in result.step_adjustments if d.single_support > d.nominal_single_support + 1e-6]
     assert held and held[0].step == 2, [d.reason for d in result.step_adjustments]
     # The walk got longer, and so did the run: it goes on until the walk as it ended up has come to rest.
     assert result.walk_end > scenario.duration + 0.05
-    assert result.times[-1] >= result.walk_end + QUICK.after - 2.0 * result.control_dt
+    assert result.times[-1] >= result.walk_end + options.after - 2.0 * result.control_dt
 
 
 def test_the_hip_strategy_stands_a_forward_push_the_feet_alone_do_not(robots):
     # 61 N s forward in Talos's single support: with the feet alone (the DCM law's ZMP at the toe edge, the step
     # moved and sooner) it falls at this and every push from 60 to 63 N s, at 1 and 0.5 ms physics steps; leaning its
-    # upper body forward as well (rtgait.core.laws.hip_strategy), it walks 61 and 62 N s through at both.
+    # upper body forward as well (rtgait.core.laws.hip_strategy), it walks 61 and 62 N s through at both. What the
+    # controller does given the true state: on the estimate, this push is beyond what Talos walks (it falls at 1 ms).
     model, sim = robots["talos"]
     scenario = short(4, 0.1)
     single = scenario.timing.start + scenario.timing.single_support + scenario.timing.double_support
     push = Push(single + 0.3, 0.1, (610.0, 0.0, 0.0))
-    alone = simulate(scenario, model, sim=sim, options=QUICK, push=push,
+    alone = simulate(scenario, model, sim=sim, options=ON_TRUTH, push=push,
                      controller_options=ControllerOptions(hip_strategy=False))  # fmt: skip
     assert alone.fell or not alone.ended_at_rest
-    leaning = simulate(scenario, model, sim=sim, options=QUICK, push=push)
+    leaning = simulate(scenario, model, sim=sim, options=ON_TRUTH, push=push)
     # Not check_walk's 6 degrees: at this push the body tips 0.12 rad off its command before it comes back.
     assert not leaning.fell and leaning.steps_completed == leaning.steps_planned and leaning.ended_at_rest
     # Where its landings went depends on the physics step (its base ends 45 mm from where the walk was sent, 256 mm
     # at half the step): it must end over its final footprints (1.6 and 0.5 mm off).
     over_feet, _ = end_errors(leaning, (0.4, 0.0))
-    assert over_feet < ENDED_OVER_THE_FEET, f"the base ended {over_feet * 1e3:.1f} mm off its final footprints"
+    assert over_feet < ENDED_OVER_THE_FEET["truth"], f"the base ended {over_feet * 1e3:.1f} mm off its footprints"
     assert tilt(leaning).max() < 0.2 and tilt(leaning)[-1] < 0.01
     assert 0.1 < commanded_tilt(leaning).max() < LEAN_LIMIT  # it did lean, within its limit
 
@@ -258,7 +281,8 @@ def test_an_outward_push_past_the_in_place_bound_falls_and_one_within_the_sole_s
     # Outward in single support no step can help (it would cross the stance foot): past the sole's bound plus what
     # the upper body's lean adds at most, the DCM leaves the sole whatever the controller does. Here Talos walks
     # 33 N s and falls at 35 (bound 32.7 + 4.7), G1 walks 9 N s and falls at 11 (10.1 + 1.6; at 10 N s with a 0.25 ms
-    # physics step), at both physics steps; so 80 % of the sole's bound walks and 110 % of the whole falls.
+    # physics step), at both physics steps; so 80 % of the sole's bound walks and 110 % of the whole falls. The bound
+    # is that of a controller that knows the state: on the truth (on the estimate G1 falls at 80 % of it).
     model, sim = robots[robot]
     scenario = short(4, 0.1)
     single = scenario.timing.start + scenario.timing.single_support + scenario.timing.double_support  # step 2
@@ -268,6 +292,6 @@ def test_an_outward_push_past_the_in_place_bound_falls_and_one_within_the_sole_s
     assert 0.05 < lean / sole < 0.25  # the lean's share is a fraction of the sole's
     for impulse, survives in ((0.8 * sole, True), (1.1 * (sole + lean), False)):
         push = Push(single + 0.3, 0.1, (0.0, -impulse / 0.1, 0.0))
-        result = simulate(scenario, model, sim=sim, options=QUICK, push=push)
+        result = simulate(scenario, model, sim=sim, options=ON_TRUTH, push=push)
         walked = not result.fell and result.ended_at_rest and result.steps_completed == result.steps_planned
         assert walked == survives, f"{robot}: {impulse:.1f} N s (bound {sole:.1f} + {lean:.1f}), walked {walked}"

@@ -27,8 +27,10 @@ from rtgait.robot.motion import robot_scenario
 from rtgait.sim.config import SensorSettings, SimConfig
 from rtgait.sim.loop import ClosedLoop, LoopOptions
 from rtgait.sim.model import build_sim_model
+from rtgait.sim.robot import SimRobot
 from rtgait.stack.estimators import kinematic_inertial_estimator
 from rtgait.stack.setup import start_pose, walking_stack
+from rtgait.stack.walking_stack import WalkingStack
 
 
 @pytest.fixture(scope="module")
@@ -130,22 +132,54 @@ def test_g1_estimate_from_joint_torques(g1, scenario):
 
 
 @pytest.mark.parametrize("name", ["talos", "g1"])
-def test_the_closed_loop_walks_on_the_estimate(request, scenario, name):
+def test_the_closed_loop_walks_on_the_estimate_and_reports_its_errors(request, monkeypatch, scenario, name):
     robot = request.getfixturevalue(name)
+    # Each tick, the estimate the controller acts on and the ground-truth estimator's state of the same instant,
+    # tick by tick, to check the errors the run reports from its log at the end.
+    pairs: list = []
+    estimates: list = []
+    shadow: list = []  # the ground-truth estimator, made with the planner's omega once the loop is
+    stack_estimate, read_truth = WalkingStack.estimate, SimRobot.ground_truth
+
+    def estimate(stack, readings, truth_=None):
+        estimates.append(stack_estimate(stack, readings, truth_))
+        return estimates[-1]
+
+    def ground_truth(sim_robot, t=None, velocities=False):
+        value = read_truth(sim_robot, t, velocities)
+        pairs.append((estimates[-1], shadow[0].update(None, value)))
+        return value
+
+    monkeypatch.setattr(WalkingStack, "estimate", estimate)
+    monkeypatch.setattr(SimRobot, "ground_truth", ground_truth)
     loop = _loop(robot, scenario, 1.0, state="estimated")
+    shadow.append(GroundTruthEstimator(loop.planner.w, robot.mass * 9.81))
     assert isinstance(loop.stack.estimator, KinematicInertialEstimator)
     while loop.step() and not loop.done:
         pass
     result = loop.result()
     assert not result.fell
     assert loop.steps_completed >= 4
+    relative, velocity, dcm, agree, delays = _errors(pairs)
+    errors = result.estimation_errors
+    assert errors is not None and errors.ticks == len(pairs) == len(estimates)
+    assert errors.com_relative_rms == pytest.approx(relative, rel=1e-9)
+    assert errors.com_velocity_rms == pytest.approx(velocity, rel=1e-9)
+    assert errors.dcm_rms == pytest.approx(dcm, rel=1e-9)
+    assert errors.contact_agreement == pytest.approx(agree, rel=1e-12)
+    assert errors.landings == len(delays) and errors.landings >= 4
+    summary = result.summary()
+    assert summary["state"] == "estimated" and summary["sensors"] == {"noise": 1.0, "latency": 0, "seed": 0}
+    assert summary["estimation"]["dcm_rms"] == errors.dcm_rms
 
 
 def test_the_stack_and_the_loop_take_the_state_by_name(talos, scenario):
     walk = robot_scenario(scenario, talos)
     stack = walking_stack(talos, walk, dt=0.001, state="estimated")
     assert isinstance(stack.estimator, KinematicInertialEstimator)
-    assert isinstance(walking_stack(talos, walk, dt=0.001).estimator, GroundTruthEstimator)
+    assert isinstance(walking_stack(talos, walk, dt=0.001).estimator, KinematicInertialEstimator)  # the default
+    assert isinstance(walking_stack(talos, walk, dt=0.001, state="truth").estimator, GroundTruthEstimator)
+    assert LoopOptions().state == "estimated"
     with pytest.raises(ValueError, match="state must be one of truth, estimated"):
         walking_stack(talos, walk, dt=0.001, state="guessed")
     with pytest.raises(ValueError, match=r"LoopOptions\.state"):
