@@ -3,8 +3,10 @@
 fig8's footsteps without its step change (a loop of yours hands changes to ``stack.controller.planner``).
 
 The robot here is Talos in MuJoCo (:class:`rtgait.sim.robot.SimRobot`); a real robot's driver implements the same
-two calls, ``read()`` (its sensor readings) and ``write(command)`` (its joint references), and brings its own
-estimator in place of the simulator's ground truth (:class:`rtgait.estimation.estimator.Estimator`).
+two calls, ``read()`` (its sensor readings: encoders, IMU, force sensors or joint torques) and ``write(command)`` (its
+joint references). The stack estimates the walking state from those readings alone (the kinematic-inertial estimator,
+``docs/estimation.md``); ``walking_stack(..., state="truth")`` would read the simulator's ground truth instead, passed
+as ``stack.tick(t, body.read(), body.ground_truth(t=t))``, a channel no robot has.
 
 Run: ``python examples/own_loop.py [--seconds S]``; it prints where the COM and the feet are each second.
 """
@@ -28,18 +30,20 @@ def walk(seconds: float) -> SimRobot:
     stack = walking_stack(robot, robot_scenario(load_scenario("fig8"), robot), dt=sim.control_dt)
     body = SimRobot(sim, sim.new_data(q=stack.q), stack.q[7:])  # standing at the walk's start
 
-    stack.start(0.0, stack.estimate(body.read(), body.ground_truth(t=0.0)))
+    stack.start(0.0, stack.estimate(body.read()))
     for k in range(round(seconds / sim.control_dt)):
         t = k * sim.control_dt
-        out = stack.tick(t, body.read(), body.ground_truth(t=t))  # sensors -> estimate -> control -> IK -> joints
+        out = stack.tick(t, body.read())  # sensors -> estimate -> control -> IK -> joints
         body.write(out.command)
         body.first_substep()  # the physics of one control period (a real robot just runs)
         for i in range(1, body.substeps):
             body.substep(i)
         if k % round(1.0 / sim.control_dt) == 0:
             com, planned = out.measurement.com, out.targets.com
-            print(f"t {t:5.2f} s  COM ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m, "
-                  f"planned ({planned[0]:+.3f}, {planned[1]:+.3f}) m, support {out.targets.support}")
+            print(
+                f"t {t:5.2f} s  COM ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m, "
+                f"planned ({planned[0]:+.3f}, {planned[1]:+.3f}) m, support {out.targets.support}"
+            )
     return body
 
 

@@ -122,6 +122,10 @@ def test_without_a_display_it_says_so_in_one_line():
         (["--summary", "no/such/folder/s.json"], "its folder does not exist"),
         (["--push-force", "0"], "--push-force must be a force"),
         (["--controller", "closed"], "invalid choice"),
+        (["--state", "guessed"], "invalid choice: 'guessed'"),
+        (["--sensor-noise", "nan"], "--sensor-noise must be a finite factor >= 0"),
+        (["--latency", "-1"], "--latency must be a whole number"),
+        (["--model-error", "-1"], "--model-error must be an integer seed >= 0"),
         (["guided"], "led by the hand"),
         (["no-such-scenario"], "no-such-scenario"),
     ],
@@ -203,6 +207,7 @@ def test_the_robot_walks_where_the_keys_say(tmp_path):
     actions = [key["action"] for key in result["keys"]]
     assert actions[:4] == ["forward"] * 4 and actions.count("turn-left") == 4, actions
     assert not result["fell"] and result["end"] == "exit-after"
+    assert result["state"] == "estimated" and result["sensors"] == {"noise": 1.0, "latency": 0, "seed": 0}
     assert result["command"] == pytest.approx([0.2, 0.0, 0.2])
     turned_at = next(key["t"] for key in result["keys"] if key["action"] == "turn-left")
     # Until the turn: forward at 0.2 m/s (from the walk's start), not sideways, heading kept.

@@ -32,6 +32,10 @@ def test_simulate_writes_csv_summary_and_figure(
     assert set(keys) <= set(summary)
     assert summary["fell"] is False and summary["scenario"] == "short"
     assert summary["distance_walked"] == pytest.approx(0.16, abs=0.03)  # two 8 cm steps, then the feet close
+    # By default on the state estimated from the simulated sensors, at the description's noise: its errors reported.
+    assert summary["state"] == "estimated" and summary["sensors"] == {"noise": 1.0, "latency": 0, "seed": 0}
+    assert 0.0 < summary["estimation"]["com_relative_rms"] < 0.005 and summary["estimation"]["landings"] >= 3
+    assert "model_error" not in summary
     with open(out / "sim.csv", encoding="utf-8") as stream:
         header = next(csv.reader(stream))
     assert header[:5] == ["t", "zmp_x", "zmp_y", "zmp_planned_x", "zmp_planned_y"]
@@ -249,6 +253,17 @@ def test_a_negative_velocity_command_walks_backward(
         (["--push", "1,0.1,nan,0"], "--push needs 4 finite"),
         (["--push", "1,0.1,1e9,0"], "exceeds"),  # 10^8 N s: a unit error, not a push
         (["--mass", "50"], "--mass is for --model lipm"),
+        (["--state", "guessed"], "invalid choice: 'guessed'"),
+        (["--sensor-noise", "-1"], "--sensor-noise must be a finite factor >= 0"),
+        (["--sensor-noise", "inf"], "--sensor-noise must be a finite factor >= 0"),
+        (["--sensor-seed", "-1"], "--sensor-seed must be an integer >= 0"),
+        (["--latency", "-1"], "--latency must be a whole number of control periods in [0, 1000]"),
+        (["--latency", "1001"], "--latency must be a whole number of control periods in [0, 1000]"),
+        (["--latency", "1.5"], "invalid int value"),
+        (["--model-error", "-2"], "--model-error must be an integer seed >= 0"),
+        (["--model-error", "one"], "invalid int value"),
+        (["--model", "lipm", "--state", "truth"], "--state is for --model mujoco"),
+        (["--model", "lipm", "--sensor-noise", "0"], "--sensor-noise is for --model mujoco"),
     ],
 )
 @pytest.mark.usefixtures("no_physics")
@@ -334,3 +349,26 @@ def test_the_control_tables_reach_the_walking_controller(
     with pytest.raises(_LoopStartedError):
         run.simulate(load_scenario(scenario), str(robot))
     assert started.pop().feedback.gains.k_p == 2.5
+
+
+@pytest.mark.parametrize(
+    ("extra", "state", "sensors", "seed"),
+    [
+        (["--state", "truth"], "truth", {"noise": 1.0, "latency": 0, "seed": 0}, None),
+        (["--sensor-noise", "2", "--sensor-seed", "4", "--latency", "1", "--model-error", "3"], "estimated",
+         {"noise": 2.0, "latency": 1, "seed": 4}, 3),
+    ],
+)  # fmt: skip
+def test_the_state_sensors_and_model_error_reach_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], write_scenario, extra, state, sensors, seed
+) -> None:
+    scenario = write_scenario(name="one", connection="quasi-real-time", single_support=0.7, double_support=0.1,
+                              dt=0.005, steps=1, step_length=0.05, short_ends=True)  # fmt: skip
+    out = tmp_path / "sim"
+    assert main(["simulate", str(scenario), "--out", str(out), "--no-figures", "--quiet", *extra]) == 0
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["fell"] is False
+    assert summary["state"] == state and summary["sensors"] == sensors
+    assert (summary["estimation"] is None) == (state == "truth")
+    assert (summary.get("model_error") or {}).get("seed") == seed
+    assert (out / "model_error.json").exists() == (seed is not None)

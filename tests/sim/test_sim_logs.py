@@ -2,7 +2,8 @@
 (the replay's configurations, the integrator's kinematics), the contact record and Pinocchio.
 
 One short walk (one step of 0.08 m with short start and end phases, 5 N s pushed at 1 s) on Talos, about 5 s of
-physics; every test reads it.
+physics, the controller on the simulator's truth so that what it measured is MuJoCo's state; every test reads it.
+The same walk on the estimate checks the truth the log keeps beside the estimate.
 """
 
 from __future__ import annotations
@@ -33,23 +34,28 @@ DOCS = Path(__file__).resolve().parents[2] / "docs" / "logs.md"
 PUSH_START, PUSH_DURATION, PUSH_FORCE = 1.0, 0.1, (50.0, 0.0, 0.0)
 
 
-@pytest.fixture(scope="module")
-def logged(talos: Any, talos_sim: Any, tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Path]:
-    """The short walk in memory, and the folder its outputs were written to."""
+def _walk(talos: Any, sim: Any, folder: Path, state: str) -> tuple[Any, Path]:
+    """The short walk on ``state`` in memory, and the folder its outputs were written to."""
     from rtgait.core.push import Push
     from rtgait.io.sim_run import simulate, write_sim_outputs
+    from rtgait.sim.loop_options import LoopOptions
 
-    folder = tmp_path_factory.mktemp("logged")
     path = folder / "short.toml"
     path.write_text(scenario_text(name="short", connection="quasi-real-time", single_support=0.7, double_support=0.1,
                                   dt=0.005, steps=1, step_length=0.08, short_ends=True), encoding="utf-8")  # fmt: skip
     scenario = load_scenario(str(path))
     push = Push(start=PUSH_START, duration=PUSH_DURATION, force=PUSH_FORCE)
-    result = simulate(scenario, talos, sim=talos_sim, push=push)
+    result = simulate(scenario, talos, sim=sim, push=push, options=LoopOptions(state=state))  # type: ignore[arg-type]
     out = folder / "out"
     extra = {"scenario": scenario.name, "connection": scenario.connection}
     write_sim_outputs(result, out, figure=False, title="short (quasi-real-time)", extra=extra)
     return result, out
+
+
+@pytest.fixture(scope="module")
+def logged(talos: Any, talos_sim: Any, tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Path]:
+    """The short walk on the truth."""
+    return _walk(talos, talos_sim, tmp_path_factory.mktemp("logged"), "truth")
 
 
 @pytest.fixture(scope="module")
@@ -243,6 +249,52 @@ def test_the_dcm_the_controller_acted_on_is_that_of_mujoco_s_state(
     np.testing.assert_allclose(logged_dcm, truth, rtol=0, atol=1e-9)
     # The walk moves the DCM both ways sideways and forward: a test of both components and their signs.
     assert truth[:, 1].min() < -0.02 < 0.02 < truth[:, 1].max() and np.ptp(truth[:, 0]) > 0.05
+    # On the truth, the COM the controller acted on and the truth kept beside it are the same values.
+    for what in ("cog_control", "cog_vel_control", "dcm_true"):
+        other = what.replace("control", "true") if what != "dcm_true" else "dcm_control"
+        for axis in "xy" if what.startswith("dcm") else "xyz":
+            assert np.array_equal(c[f"{what}_{axis}"], c[f"{other}_{axis}"], equal_nan=True), (what, axis)
+    assert log.metadata["state"] == "truth" and result.summary()["estimation"] is None
+
+
+@pytest.fixture(scope="module")
+def estimated(talos: Any, talos_sim: Any, tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Any, Path]:
+    """The short walk on the estimate, its log and its outputs' folder."""
+    result, out = _walk(talos, talos_sim, tmp_path_factory.mktemp("estimated"), "estimated")
+    return result, read_sim_log(out / "sim.parquet"), out
+
+
+def test_the_truth_beside_the_estimate_is_that_of_mujoco_s_state(
+    estimated: tuple[Any, Any, Path], talos_sim: Any
+) -> None:
+    """On the estimate, ``cog_true``, ``cog_vel_true`` and ``dcm_true`` at tick k are MuJoCo's COM, COM velocity and
+    ``c + c'/w`` of the state the estimator measured (tick k - 1's, one physics step a tick), rebuilt from the log;
+    the estimate differs from them by millimetres, and the summary's errors are those of these columns."""
+    result, log, out = estimated
+    c = log.columns
+    walking = np.flatnonzero(result.times >= 0.0)
+    base = talos_sim.base_body
+    w = log.metadata["omega"]
+    rebuilt = np.array([
+        np.r_[data.subtree_com[base], data.subtree_linvel[base]]
+        for _, data in _replayed(log, result, talos_sim, walking - 1)
+    ])  # fmt: skip
+    true = np.column_stack([c[f"cog_true_{a}"] for a in "xyz"] + [c[f"cog_vel_true_{a}"] for a in "xyz"])[walking]
+    np.testing.assert_allclose(true, rebuilt, rtol=0, atol=1e-9)
+    dcm_true = np.column_stack([c["dcm_true_x"], c["dcm_true_y"]])[walking]
+    np.testing.assert_allclose(dcm_true, rebuilt[:, 0:2] + rebuilt[:, 3:5] / w, rtol=0, atol=1e-12)
+    estimate = np.column_stack([c[f"cog_control_{a}"] for a in "xyz"])[walking]
+    error = np.linalg.norm(estimate - true[:, 0:3], axis=1)
+    assert 0.0 < error.max() < 0.01  # an estimate: not the truth, millimetres from it
+    dcm_error = np.column_stack([c["dcm_control_x"], c["dcm_control_y"]])[walking] - dcm_true
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["state"] == log.metadata["state"] == "estimated"
+    assert summary["sensors"] == log.metadata["sensors"] == {"noise": 1.0, "latency": 0, "seed": 0}
+    estimation = summary["estimation"]
+    assert estimation["ticks"] == len(walking)
+    assert estimation["com_rms"] == pytest.approx(math.sqrt(np.mean(error**2)), rel=1e-12)
+    assert estimation["dcm_rms"] == pytest.approx(math.sqrt(np.mean(np.sum(dcm_error**2, axis=1))), rel=1e-12)
+    assert np.isnan(c["cog_true_x"][: walking[0]]).all() and np.isnan(c["cog_control_x"][: walking[0]]).all()
 
 
 def test_the_soles_orientation_columns_are_mujoco_s_sole_frames(
