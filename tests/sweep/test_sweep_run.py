@@ -129,8 +129,12 @@ def fake_worker(monkeypatch, tmp_path, body: str) -> Path:
         ("os.kill(os.getpid(), signal.SIGKILL)", 2, "died 2 times: worker killed by SIGKILL"),
         ("time.sleep(30)", 1, "timed out after 0.5 s"),
         ("print(json.dumps({'error': 'unreachable'})); sys.exit(3)", 1, "unreachable"),
-        ("sys.stdin.read(); print(json.dumps({'fell': True, 'tipped': False, 'fall_time': 1.5, "
-         "'steps_completed': 2, 'steps_planned': 3}))", 1, ""),
+        (
+            "sys.stdin.read(); print(json.dumps({'fell': True, 'tipped': False, 'fall_time': 1.5, "
+            "'steps_completed': 2, 'steps_planned': 3}))",
+            1,
+            "",
+        ),
     ],
 )
 def test_dying_cases_are_retried_once_and_hanging_ones_killed(monkeypatch, tmp_path, body, runs, reason):
@@ -146,11 +150,31 @@ def test_dying_cases_are_retried_once_and_hanging_ones_killed(monkeypatch, tmp_p
         assert fields["physics"] == "ok" and fields["fell"] is True and fields["fall_time"] == 1.5
 
 
+@pytest.mark.parametrize(("option", "state"), [([], None), (["--state", "truth"], "truth")])
+def test_the_state_reaches_every_physics_case(monkeypatch, spec_file, tmp_path, option, state):
+    # The case processes replaced by one that keeps the job it is given and answers a walk.
+    jobs = tmp_path / "jobs"
+    answer = {"fell": False, "tipped": False, "fall_time": None, "steps_completed": 3, "steps_planned": 3}
+    body = f"open({str(jobs)!r}, 'a').write(sys.stdin.read() + '\\n'); print(json.dumps({answer!r}))"
+    fake_worker(monkeypatch, tmp_path, body)
+    path = spec_file('base = "tiny.toml"\n[axes]\n"change.length" = [0.05, 0.12]\n')
+    out = tmp_path / "out"
+    sweep([str(path), "--out", str(out), "--physics", "--workers", "1", "--no-figures", "--quiet", *option])
+    sent = [json.loads(line) for line in jobs.read_text().splitlines()]
+    assert len(sent) == 2 and all(job["state"] == state for job in sent)
+    assert json.loads((out / "sweep.json").read_text())["state"] == (state or "estimated")
+    # The worker hands it to the loop (the default's when none).
+    from rtgait.sweep.worker import simulate_options
+
+    options = simulate_options(None, state).get("options")
+    assert (options is None) if state is None else options.state == state
+
+
 def test_the_map_is_drawn(spec_file, tmp_path):
     pytest.importorskip("matplotlib")
     from rtgait.sweep.maps import plot_map
 
-    path = spec_file(SMALL.replace('[0.1, 0.2]', '[0.05, 0.1, 0.2, 0.5]'))
+    path = spec_file(SMALL.replace("[0.1, 0.2]", "[0.05, 0.1, 0.2, 0.5]"))
     sweep([str(path), "--out", str(tmp_path / "out"), "--quiet"])
     for name in ("map.png", "map.pdf"):
         assert (tmp_path / "out" / name).stat().st_size > 10_000
@@ -161,5 +185,6 @@ def test_the_map_is_drawn(spec_file, tmp_path):
     figure = plot_map(rows, {**meta, "physics": True})
     markers = [c for ax in figure.axes for c in ax.collections if c.get_offsets().shape[0]]
     assert len(markers) >= 3  # walked and fell markers on the method panels
-    np.testing.assert_array_equal(sorted({r["connection"] for r in rows}), sorted(
-        ["auto", "preview", "quasi-real-time", "real-time"]))
+    np.testing.assert_array_equal(
+        sorted({r["connection"] for r in rows}), sorted(["auto", "preview", "quasi-real-time", "real-time"])
+    )
