@@ -34,7 +34,8 @@ def record(robot_name: str, seconds: float) -> tuple[list, object, object]:
     scenario = load_scenario("fig8")
     walk = robot_scenario(scenario, robot)
     level, changes, stop_after = _controller(walk, None, "adaptive", sim, robot_and_scenario_options(robot, scenario))
-    loop = ClosedLoop(sim, level, LoopOptions(changes=changes, stop_after_steps=stop_after))
+    # On the truth: the loop then reads no sensor, and each tick's readings are read here once.
+    loop = ClosedLoop(sim, level, LoopOptions(changes=changes, stop_after_steps=stop_after, state="truth"))
     _, left, right = start_pose(level.planner)
     readings = []
     while loop.step() and not loop.done:

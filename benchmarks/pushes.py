@@ -42,7 +42,10 @@ Writes ``pushes.csv``, ``pushes.json`` and ``pushes.png`` (a polar plot per phas
 in-place bound dashed) into ``--out`` (default ``out/pushes-<robot>``), and prints the table (or, with ``--json``,
 the JSON document).
 
-Usage: ``python benchmarks/pushes.py [--robot R] [--controller C ...] [--json] [--scenario fig8]
+The controller acts on ``--state``: ``estimated`` (the default), the state estimated from the simulated sensors;
+``truth``, the simulator's own (the in-place bounds are those of a controller that knows the state).
+
+Usage: ``python benchmarks/pushes.py [--robot R] [--controller C ...] [--state S] [--json] [--scenario fig8]
 [--phase single|double ...] [--directions 8] [--tolerance 1.0] [--workers 2] [--out DIR] [--physics-dt S]
 [--option NAME=JSON ...] [--bounds-only]``
 """
@@ -162,10 +165,13 @@ _CACHE: dict[str, Any] = {}
 
 PHYSICS_DT: dict[str, float | None] = {"value": None}
 """The physics step of the runs (s; ``--physics-dt``), handed to every worker by :func:`_init_worker`."""
+STATE: dict[str, str | None] = {"value": None}
+"""What the controller acts on (``--state``; ``None``: the loop's default), handed to every worker likewise."""
 
 
-def _init_worker(physics_dt: float | None) -> None:
+def _init_worker(physics_dt: float | None, state: str | None = None) -> None:
     PHYSICS_DT["value"] = physics_dt
+    STATE["value"] = state
 
 
 def _setup(robot_name: str, scenario_name: str) -> tuple[Any, Any, Any]:
@@ -195,12 +201,15 @@ def survives(
     from rtgait.control.controller import ControllerOptions
     from rtgait.core.push import Push
     from rtgait.io.sim_run import mujoco_messages, simulate
+    from rtgait.sim.loop_options import LoopOptions
 
     robot, sim, scenario = _setup(robot_name, scenario_name)
     pushes = None if push is None else Push(push[0], PUSH_DURATION, (push[1], push[2], 0.0))
     level = ControllerOptions(**options) if options else None
+    loop = LoopOptions() if STATE["value"] is None else LoopOptions(state=STATE["value"])  # type: ignore[arg-type]
     with mujoco_messages():
-        result = simulate(scenario, robot, sim=sim, controller=controller, push=pushes, controller_options=level)  # type: ignore[arg-type]
+        result = simulate(scenario, robot, sim=sim, controller=controller, push=pushes, controller_options=level,  # type: ignore[arg-type]
+                          options=loop)  # fmt: skip
     return not result.fell and result.ended_at_rest
 
 
@@ -261,13 +270,16 @@ def run(
     progress: bool = True,
     options: dict[str, Any] | None = None,
     physics_dt: float | None = None,
+    state: str | None = None,
 ) -> tuple[list[dict[str, Any]], dict[str, Any]]:
     """Every bisection of the benchmark; returns the cases and the settings. ``options``: controller options
     (:class:`~rtgait.control.controller.ControllerOptions` fields) for the closed-loop levels; ``physics_dt``: the
-    physics step (s)."""
+    physics step (s); ``state``: what the controller acts on (default the loop's)."""
     from tqdm import tqdm
 
-    _init_worker(physics_dt)
+    from rtgait.estimation.estimator import DEFAULT_STATE
+
+    _init_worker(physics_dt, state)
     robot, _, scenario = _setup(robot_name, scenario_name)
     w = math.sqrt(scenario.gravity / robot.description.cog_height)
     first = START_DCM_SHIFT * robot.mass * w
@@ -275,7 +287,7 @@ def run(
     angles = [360.0 * i / directions for i in range(directions)]
     max_lean = (options or {}).get("max_lean")
     bounds = {phase: in_place_bounds(scenario, robot, site, angles, max_lean) for phase, site in sites.items()}
-    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(physics_dt,)) as pool:
+    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(physics_dt, state)) as pool:
         options = options or {}
         levels = {c: (options if c != "open-loop" else {}) for c in controllers}
         unpushed = dict(pool.map(_unpushed, [(robot_name, scenario_name, c, levels[c]) for c in controllers]))
@@ -304,6 +316,7 @@ def run(
         "push_body": "floating base", "tolerance_Ns": tolerance, "first_impulse_Ns": first, "workers": workers,
         "sites": {phase: dataclasses.asdict(site) for phase, site in sites.items()}, "controller_options": options,
         "physics_dt": physics_dt if physics_dt is not None else robot.description.actuation.physics_dt,
+        "state": state or DEFAULT_STATE,
     }  # fmt: skip
     return cases, settings
 
@@ -390,7 +403,9 @@ def plot(cases: list[dict[str, Any]], settings: dict[str, Any], path: Path) -> P
         ax.set_xticklabels(labels, fontsize=8)
     handles, labels = figure.axes[0].get_legend_handles_labels()
     figure.legend(handles, labels, loc="outside lower center", ncol=len(labels), fontsize=8, frameon=False)
-    figure.suptitle(f"{settings['robot']} in MuJoCo, {settings['scenario']}: 0.1 s pushes on the base", fontsize=10)
+    state = settings.get("state")
+    on = f", the controller on the {state} state" if state else ""
+    figure.suptitle(f"{settings['robot']} in MuJoCo, {settings['scenario']}{on}: 0.1 s pushes on the base", fontsize=10)
     return save(figure, path)
 
 
@@ -422,10 +437,12 @@ def print_bounds(
 
 def main(argv: Sequence[str] | None = None) -> None:
     from rtgait.core.planner.levels import CONTROLLER_LEVELS
+    from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robot", default="talos", help="built-in robot or description file (default talos)")
     parser.add_argument("--controller", action="append", choices=CONTROLLER_LEVELS, help="level(s) (default adaptive)")
+    parser.add_argument("--state", choices=STATE_SOURCES, help=f"what the controller acts on (default {DEFAULT_STATE})")
     parser.add_argument("--json", action="store_true", help="print the JSON document instead of the table")
     parser.add_argument("--scenario", default="fig8", help="built-in scenario or TOML file (default fig8)")
     parser.add_argument("--phase", action="append", choices=PHASES, help="push instant(s) (default both)")
@@ -458,7 +475,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         return
     cases, settings = run(args.robot, args.scenario, controllers, phases, args.directions, args.tolerance,
                           args.workers, progress=sys.stderr.isatty(), options=options,
-                          physics_dt=args.physics_dt)  # fmt: skip
+                          physics_dt=args.physics_dt, state=args.state)  # fmt: skip
     settings["seconds"] = time.perf_counter() - began
     out = args.out or Path("out") / f"pushes-{settings['robot']}"
     write_outputs(cases, settings, out)
@@ -466,7 +483,8 @@ def main(argv: Sequence[str] | None = None) -> None:
         json.dump({"settings": settings, "cases": cases}, sys.stdout, indent=2)
         print()
         return
-    print(f"{settings['robot']} ({settings['mass']:.1f} kg) in MuJoCo, {settings['scenario']}: 0.1 s pushes on the "
+    print(f"{settings['robot']} ({settings['mass']:.1f} kg) in MuJoCo, {settings['scenario']}, on the "
+          f"{settings['state']} state: 0.1 s pushes on the "
           f"base, step {cases[0]['step'] if cases else '-'}, bisection to {args.tolerance:g} N s, "
           f"{settings['seconds']:.0f} s on {args.workers} workers; written to {out}{os.sep}")  # fmt: skip
     print(table(cases))

@@ -25,10 +25,14 @@ slip, the share of ticks at which the legs' collision boxes touched and the real
 processes (``--workers``, default 2). ``--sim-option NAME=JSON`` sets a field of the MuJoCo model's
 :class:`~rtgait.sim.model.SimConfig` (e.g. ``leg_collisions=false``, to see what the legs' collision boxes cost).
 
+Every run's controller acts on ``--state`` (``estimated``, the default: the state estimated from the simulated
+sensors; ``truth``: the simulator's own); with ``--walks`` on the estimate, each walk's row has its estimation
+errors (``summary.json``'s ``estimation``).
+
 Usage: ``python benchmarks/sim.py [--json] [--robot NAME] [--scenario NAME] [--repeat N] [--control-dt S]
-[--physics-dt S] [--controller C]`` or ``python benchmarks/sim.py --walks [--velocity-walks] [--robot NAME ...]
-[--velocity-only] [--controller C ...] [--walk-time S] [--workers N] [--physics-dt S] [--option NAME=JSON ...]
-[--sim-option NAME=JSON ...] [--json]``
+[--physics-dt S] [--controller C] [--state S]`` or ``python benchmarks/sim.py --walks [--velocity-walks]
+[--robot NAME ...] [--velocity-only] [--controller C ...] [--state S] [--walk-time S] [--workers N] [--physics-dt S]
+[--option NAME=JSON ...] [--sim-option NAME=JSON ...] [--json]``
 """
 
 from __future__ import annotations
@@ -49,13 +53,16 @@ import mujoco
 import numpy as np
 
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
 from rtgait.interface.task_targets import IKTargets
 from rtgait.io.sim_run import simulate
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.loading import load_scenario
+from rtgait.sim.config import SensorSettings
 from rtgait.sim.contact_reading import ContactReader
+from rtgait.sim.loop_options import LoopOptions
 from rtgait.sim.model import SimConfig, build_sim_model
 
 
@@ -133,7 +140,7 @@ IN_LOOP_PARTS = (
 )  # fmt: skip
 
 
-def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: Any) -> dict[str, float]:
+def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: Any, state: str) -> dict[str, float]:
     """Mean wall time per tick (us) of each part of :meth:`~rtgait.sim.loop.ClosedLoop.step` inside one real run:
     each callable the tick calls is wrapped in a timer (a tenth of a microsecond each, counted in ``rest``), so the
     parts add up to the tick and ``rest`` is the loop's own bookkeeping (the record, references, fall checks)."""
@@ -181,7 +188,7 @@ def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: A
     mujoco.mj_step = timed("mj_step", original_mj_step)
     try:
         gc.collect()
-        simulate(load_scenario(scenario_name), robot, sim=sim, controller=controller)
+        simulate(load_scenario(scenario_name), robot, sim=sim, controller=controller, options=LoopOptions(state=state))
     finally:
         ClosedLoop.__init__, ClosedLoop.step = original_init, original_step  # type: ignore[method-assign]
         mujoco.mj_step = original_mj_step
@@ -244,6 +251,8 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
 
     robot = RobotModel.load(job["robot"])
     sim_options = job.get("sim_options") or {}
+    if "sensors" in sim_options and isinstance(sim_options["sensors"], dict):  # from JSON
+        sim_options = {**sim_options, "sensors": SensorSettings(**sim_options["sensors"])}
     sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=job["physics_dt"], **sim_options))
     scenario = load_scenario(job["scenario"])
     velocity = None
@@ -256,8 +265,9 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
         warnings.simplefilter("always", CommandClampedWarning)
         options = ControllerOptions(**job["options"]) if job["options"] else None
         result = simulate(
-            scenario, robot, sim=sim, controller=job["controller"], velocity=velocity, controller_options=options
-        )
+            scenario, robot, sim=sim, controller=job["controller"], velocity=velocity, controller_options=options,
+            options=LoopOptions(state=job.get("state", DEFAULT_STATE)),
+        )  # fmt: skip
     clamped = any(issubclass(w.category, CommandClampedWarning) for w in caught)
     asked = walked = None
     if velocity is not None and len(velocity) == 1:
@@ -285,13 +295,17 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
         "legs_touch_share": float(np.mean(result.legs_touch)),
         "simulated_time": result.duration,
         "real_time_factor": result.real_time_factor,
+        "state": result.state,
+        "sensors": result.summary()["sensors"],
+        "estimation": result.summary()["estimation"],
     }
 
 
 def walks(args: argparse.Namespace) -> list[dict[str, Any]]:
     """The outcome table of ``--walks`` (module docstring)."""
     controllers = args.controller or ["open-loop", "stabilized", "adaptive"]
-    common = {"physics_dt": args.physics_dt, "options": args.options, "sim_options": args.sim_options}
+    common = {"physics_dt": args.physics_dt, "options": args.options, "sim_options": args.sim_options,
+              "state": args.state}  # fmt: skip
     jobs = [
         {"robot": robot, "scenario": case, "controller": c, "velocity": None, "seconds": 0.0, **common}
         for robot in args.robots or ["talos"]
@@ -321,10 +335,15 @@ def print_walks(rows: list[dict[str, Any]]) -> None:
             return "-"
         return "nan" if math.isnan(walked[0]) else "{:.3f},{:.3f},{:.3f}".format(*walked)
 
-    print(f"{'robot':<7} {'walk':<18} {'controller':<11} {'outcome':<26} {'clamped':<7} {'walked vx,vy,wz':<19} "
-          f"{'ZMP-plan':>8} {'ZMP-mb':>7} {'slip':>5} {'legs':>5} {'adj':>4} {'RTF':>5}")  # fmt: skip
-    print(f"{'':<7} {'':<18} {'':<11} {'':<26} {'':<7} {'m/s,m/s,rad/s':<19} {'mm RMS':>8} {'mm RMS':>7} "
-          f"{'mm':>5} {'touch':>5} {'':>4} {'':>5}")  # fmt: skip
+    def dcm_error(r: dict[str, Any]) -> str:
+        estimation = r.get("estimation")
+        return "-" if not estimation or estimation["dcm_rms"] is None else f"{estimation['dcm_rms'] * 1e3:.1f}"
+
+    print(f"{'robot':<7} {'walk':<18} {'controller':<11} {'state':<9} {'outcome':<26} {'clamped':<7} "
+          f"{'walked vx,vy,wz':<19} {'ZMP-plan':>8} {'ZMP-mb':>7} {'slip':>5} {'legs':>5} {'adj':>4} {'DCM-est':>7} "
+          f"{'RTF':>5}")  # fmt: skip
+    print(f"{'':<7} {'':<18} {'':<11} {'':<9} {'':<26} {'':<7} {'m/s,m/s,rad/s':<19} {'mm RMS':>8} {'mm RMS':>7} "
+          f"{'mm':>5} {'touch':>5} {'':>4} {'mm RMS':>7} {'':>5}")  # fmt: skip
     for r in rows:
         if r["fell"]:
             outcome = f"FELL at {r['fall_time']:.1f} s ({r['steps_completed']}/{r['steps_planned']})"
@@ -332,10 +351,10 @@ def print_walks(rows: list[dict[str, Any]]) -> None:
             outcome = f"{'walked' if r['walked'] else 'stood'} {r['steps_completed']}/{r['steps_planned']}"
             outcome += ", tipped" if r["tipped"] else ""
         clamped = "yes" if r.get("clamped") else "no"
-        print(f"{r['robot']:<7} {r['walk']:<18} {r['controller']:<11} {outcome:<26} {clamped:<7} {speed(r):<19} "
-              f"{mm(r['zmp_vs_plan_rms']):>8} {mm(r['zmp_vs_commanded_motion_rms']):>7} "
+        print(f"{r['robot']:<7} {r['walk']:<18} {r['controller']:<11} {r.get('state', ''):<9} {outcome:<26} "
+              f"{clamped:<7} {speed(r):<19} {mm(r['zmp_vs_plan_rms']):>8} {mm(r['zmp_vs_commanded_motion_rms']):>7} "
               f"{r['foot_slip_max'] * 1e3:>5.1f} {r.get('legs_touch_share', 0.0):>5.2f} {r['step_adjustments']:>4} "
-              f"{r['real_time_factor']:>5.1f}")  # fmt: skip
+              f"{dcm_error(r):>7} {r['real_time_factor']:>5.1f}")  # fmt: skip
 
 
 def main() -> None:
@@ -348,6 +367,8 @@ def main() -> None:
     parser.add_argument("--physics-dt", type=float, default=None, help="physics step (s); default: the robot's")
     parser.add_argument("--controller", action="append", choices=("open-loop", "stabilized", "adaptive"),
                         help="controller level(s); the speed report takes the first (default adaptive)")  # fmt: skip
+    parser.add_argument("--state", choices=STATE_SOURCES, default=DEFAULT_STATE,
+                        help=f"what the controller acts on (default {DEFAULT_STATE})")  # fmt: skip
     parser.add_argument("--walks", action="store_true", help="report the outcomes of fig6/7/8 instead of speed")
     parser.add_argument("--velocity-walks", action="store_true", help="with --walks: the walks by command too")
     parser.add_argument("--velocity-only", action="store_true", help="with --walks: the walks by command alone")
@@ -391,25 +412,27 @@ def main() -> None:
     reference_before = machine_reference_us()
     for _ in range(args.repeat):
         gc.collect()
-        result = simulate(scenario, robot, sim=sim, controller=controller)
+        result = simulate(scenario, robot, sim=sim, controller=controller, options=LoopOptions(state=args.state))
         factors.append(result.real_time_factor)
         per_tick.append(result.wall_time / len(result.times) * 1e6)
     report = {
         "robot": robot.name,
         "controller": controller,
+        "state": args.state,
         "scenario": args.scenario,
         "simulated_time_s": result.duration,
         "real_time_factor": factors,
         "tick_us_median_of_runs": statistics.median(per_tick),
         "fell": result.fell,
         **parts(robot, args.scenario, dataclasses.replace(config, meshes=False)),
-        **in_loop_parts(robot, args.scenario, controller, sim),
+        **in_loop_parts(robot, args.scenario, controller, sim, args.state),
     }
     report["machine_reference_us"] = [reference_before, machine_reference_us()]
     if args.json:
         print(json.dumps(report))
         return
-    print(f"{robot.name}, {args.scenario}, {controller}: {report['simulated_time_s']:.1f} s simulated per run")
+    print(f"{robot.name}, {args.scenario}, {controller} on the {args.state} state: {report['simulated_time_s']:.1f} s "
+          "simulated per run")  # fmt: skip
     print("real-time factor per run: " + ", ".join(f"{f:.1f}" for f in factors))
     control, physics = report["control_dt_s"] * 1000, report["physics_dt_s"] * 1000
     tick = f"{control:g} ms tick, {report['substeps']} physics step(s) of {physics:g} ms"

@@ -1,0 +1,239 @@
+"""The estimated state in closed loop: its errors against the simulator's truth, per robot and walk, and how the walks
+degrade as the sensors get noisier and later (run on demand).
+
+Every walk here is the adaptive controller acting on the state the kinematic-inertial estimator makes from the
+simulated sensors (``state="estimated"``), each robot at its own physics step; the errors are ``summary.json``'s
+``estimation`` (:mod:`rtgait.sim.estimation_errors`: RMS over the walk's ticks of the COM, the COM relative to the
+stance sole, the COM velocity and the DCM; the largest DCM error; the share of ticks whose feet's load states are
+right; the landings missed and the worst detection delay).
+
+* **Walks**: fig8 and, with ``--velocity-walks``, the walks by velocity command of ``benchmarks/sim.py --walks
+  --velocity-walks`` (0.3 m/s forward, 0.1 m/s backward, 0.1 m/s sideways, 0.3 rad/s turning, and one changing
+  between them), ``--walk-time`` seconds each (default 60; ``--quick``: 20), at the robot description's sensors
+  (noise x1, its latency, seed 0).
+* **Degradation**: fig8 at every sensor noise factor of ``--noise`` (default 0, 1, 2, 4: a factor on every noise,
+  bias and offset of the description) and every latency of ``--latency`` (default 0 to 3 control periods): walked
+  or not (no fall, every step landed, ended at rest), and the errors.
+
+The runs are spread over ``--workers`` processes (default 2) with a progress bar on stderr; the result is a table,
+or with ``--json`` one JSON document.
+
+``--shadow`` measures the estimator alone instead, as a tuning bench: fig8 walked on the simulator's truth (the same
+walk for every estimator setting) with the estimator updated in the shadow from the sensors each tick, with
+``--yaw feet|imu`` and ``--velocity-cutoff HZ``; the same errors, at ``--noise`` (its first value) and ``--seed``.
+
+Usage: ``python benchmarks/estimation.py [--robot R ...] [--velocity-walks] [--quick] [--walk-time S]
+[--noise F ...] [--latency L ...] [--no-degradation] [--workers N] [--json]`` or ``python benchmarks/estimation.py
+--shadow [--robot R] [--scenario fig8] [--noise F] [--seed N] [--yaw feet|imu] [--velocity-cutoff HZ]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/sim.py, for its walks
+
+NOISE = (0.0, 1.0, 2.0, 4.0)
+"""The sensor noise factors of the degradation table."""
+LATENCY = (0, 1, 2, 3)
+"""Its latencies (control periods)."""
+
+
+def _job(robot: str, walk: str, seconds: float, noise: float = 1.0, latency: int | None = None) -> dict[str, Any]:
+    """A walk of ``benchmarks/sim.py``'s :func:`walk_case`, on the estimate, at these sensor settings."""
+    velocity = None if walk == "fig8" else walk
+    sensors = {"noise": noise, "latency": latency, "seed": 0}
+    return {"robot": robot, "scenario": "fig8", "controller": "adaptive", "velocity": velocity, "seconds": seconds,
+            "physics_dt": None, "options": {}, "sim_options": {"sensors": sensors}, "state": "estimated"}  # fmt: skip
+
+
+def _row(case: dict[str, Any]) -> dict[str, Any]:
+    """The fields reported of one walk."""
+    estimation = case["estimation"] or {}
+    return {
+        "robot": case["robot"],
+        "walk": case["walk"],
+        "noise": case["sensors"]["noise"],
+        "latency": case["sensors"]["latency"],
+        "walked": case["walked"],
+        "fell": case["fell"],
+        "fall_time": case["fall_time"],
+        "steps": f"{case['steps_completed']}/{case['steps_planned']}",
+        "zmp_vs_plan_rms": case["zmp_vs_plan_rms"],
+        "real_time_factor": case["real_time_factor"],
+        **estimation,
+    }
+
+
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Every walk of the benchmark (module docstring), in worker processes with a progress bar."""
+    from sim import VELOCITY_WALKS, walk_case
+    from tqdm import tqdm
+
+    seconds = args.walk_time if args.walk_time is not None else (20.0 if args.quick else 60.0)
+    names = ["fig8"] + ([*VELOCITY_WALKS, "changes"] if args.velocity_walks else [])
+    jobs = [("walks", _job(robot, walk, seconds)) for robot in args.robots for walk in names]
+    if not args.no_degradation:
+        jobs += [("degradation", _job(robot, "fig8", seconds, noise, latency))
+                 for robot in args.robots for noise in args.noise for latency in args.latency]  # fmt: skip
+    rows: dict[str, list[dict[str, Any]]] = {"walks": [], "degradation": []}
+    order = {id(job): i for i, (_, job) in enumerate(jobs)}
+    done: list[tuple[int, str, dict[str, Any]]] = []
+    with ProcessPoolExecutor(args.workers) as pool:
+        futures = {pool.submit(walk_case, job): (table, job) for table, job in jobs}
+        bar = tqdm(total=len(futures), desc="walks on the estimate", unit=" walk", disable=None, file=sys.stderr)
+        for future in as_completed(futures):
+            table, job = futures[future]
+            done.append((order[id(job)], table, _row(future.result())))
+            bar.update(1)
+        bar.close()
+    for _, table, row in sorted(done, key=lambda item: item[0]):
+        rows[table].append(row)
+    return {"walk_time": seconds, **rows}
+
+
+def _mm(value: float | None, scale: float = 1e3, digits: int = 1) -> str:
+    return "-" if value is None or not math.isfinite(value) else f"{value * scale:.{digits}f}"
+
+
+def _errors(row: dict[str, Any]) -> str:
+    """The error columns of a row."""
+    delay = row.get("landing_delay_worst")
+    return (
+        f"{_mm(row.get('com_rms'), digits=2):>6} {_mm(row.get('com_relative_rms'), digits=2):>6} "
+        f"{_mm(row.get('com_velocity_rms')):>7} {_mm(row.get('dcm_rms'), digits=2):>6} {_mm(row.get('dcm_max')):>6} "
+        f"{_mm(row.get('contact_agreement'), 100.0, 2):>7} {row.get('landings_missed', '-')!s:>6} "
+        f"{_mm(delay):>6}"
+    )
+
+
+HEADER = f"{'COM':>6} {'rel.':>6} {'vel.':>7} {'DCM':>6} {'max':>6} {'contact':>7} {'missed':>6} {'delay':>6}"
+UNITS = f"{'mm':>6} {'mm':>6} {'mm/s':>7} {'mm':>6} {'mm':>6} {'%':>7} {'':>6} {'ms':>6}"
+
+
+def print_tables(report: dict[str, Any]) -> None:
+    """The walks, then the degradation table, as text."""
+
+    def outcome(row: dict[str, Any]) -> str:
+        if row["fell"]:
+            return f"FELL at {row['fall_time']:.1f} s ({row['steps']})"
+        return f"{'walked' if row['walked'] else 'stood'} {row['steps']}"
+
+    if report["walks"]:
+        print(f"walks on the estimate (walks by command: {report['walk_time']:g} s), sensors as described")
+        print(f"{'robot':<6} {'walk':<18} {'outcome':<22} {HEADER}")
+        print(f"{'':<6} {'':<18} {'':<22} {UNITS}")
+        for row in report["walks"]:
+            print(f"{row['robot']:<6} {row['walk']:<18} {outcome(row):<22} {_errors(row)}")
+    if report["degradation"]:
+        print("\nfig8 with noisier sensors (a factor on the description's noise and bias) and later ones (periods)")
+        print(f"{'robot':<6} {'noise':>5} {'late':>4} {'outcome':<22} {HEADER}")
+        print(f"{'':<6} {'':>5} {'':>4} {'':<22} {UNITS}")
+        for row in report["degradation"]:
+            print(f"{row['robot']:<6} {row['noise']:>5g} {row['latency']:>4} {outcome(row):<22} {_errors(row)}")
+
+
+# ----- the estimator alone, in the shadow of a walk on the truth ----------------------------------------------------
+def shadow(robot_name: str, scenario_name: str, noise: float, seed: int, **settings: object) -> dict[str, Any]:
+    """The errors of the estimator with ``settings`` (:class:`~rtgait.estimation.kinematic_inertial.
+    KinematicInertialEstimator`'s) updated each tick from the sensors of a walk driven on the truth (module
+    docstring), against the ground-truth estimator's state of the same instant."""
+    import numpy as np
+
+    from rtgait.estimation.ground_truth import GroundTruthEstimator
+    from rtgait.io.sim_run import _controller, robot_and_scenario_options
+    from rtgait.robot.model import RobotModel
+    from rtgait.robot.motion import robot_scenario
+    from rtgait.scenario import load_scenario
+    from rtgait.sim.config import SensorSettings, SimConfig
+    from rtgait.sim.estimation_errors import StateTrack, estimation_errors
+    from rtgait.sim.loop import ClosedLoop, LoopOptions
+    from rtgait.sim.model import build_sim_model
+    from rtgait.stack.estimators import kinematic_inertial_estimator
+    from rtgait.stack.setup import start_pose
+
+    robot = RobotModel.load(robot_name)
+    sim = build_sim_model(robot, SimConfig(meshes=False, sensors=SensorSettings(noise=noise, seed=seed)))
+    scenario = load_scenario(scenario_name)
+    walk = robot_scenario(scenario, robot)
+    level, changes, stop_after = _controller(walk, None, "adaptive", sim, robot_and_scenario_options(robot, scenario))
+    # On the truth: the loop reads no sensor, so each tick's readings are read here once.
+    loop = ClosedLoop(sim, level, LoopOptions(changes=changes, stop_after_steps=stop_after, state="truth"))
+    _, left, right = start_pose(level.planner)
+    estimator = kinematic_inertial_estimator(
+        robot, level.planner.w, start_feet=(tuple(left), tuple(right)), **settings
+    )  # fmt: skip
+    weight = robot.mass * float(-sim.model.opt.gravity[2])
+    truth = GroundTruthEstimator(level.planner.w, weight)
+    times, pairs = [], []
+    while loop.step() and not loop.done:
+        if loop.k < loop.k0:
+            continue
+        t = loop.time_of(loop.k)
+        readings = loop.robot.read()
+        readings = readings._replace(t=readings.t - (loop.data.time - t))
+        pairs.append((estimator.update(readings), truth.update(None, loop.robot.ground_truth(t))))
+        times.append(t)
+
+    def track(side: int) -> StateTrack:
+        states = [pair[side] for pair in pairs]
+        return StateTrack(
+            com=np.array([m.com for m in states]),
+            com_velocity=np.array([m.com_vel for m in states]),
+            dcm=np.array([m.dcm for m in states]),
+            soles=np.array([[m.left.pose[:3], m.right.pose[:3]] for m in states]),
+            normal_force=np.array([[m.left.normal_force, m.right.normal_force] for m in states]),
+            loaded=np.array([[m.left.loaded, m.right.loaded] for m in states]),
+        )
+
+    errors = estimation_errors(np.array(times), track(0), track(1), weight)
+    return {"robot": robot_name, "scenario": scenario_name, "noise": noise, "seed": seed, **settings,
+            "fell": loop.fell, **errors.summary()}  # fmt: skip
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robot", action="append", dest="robots", help="robot(s) (default talos and g1)")
+    parser.add_argument("--velocity-walks", action="store_true", help="the walks by velocity command too")
+    parser.add_argument("--quick", action="store_true", help="walks by command of 20 s instead of 60")
+    parser.add_argument("--walk-time", type=float, help="length of a walk by command (s)")
+    parser.add_argument("--noise", type=float, action="append", help=f"noise factor(s) (default {NOISE})")
+    parser.add_argument("--latency", type=int, action="append", help=f"latency(ies), periods (default {LATENCY})")
+    parser.add_argument("--no-degradation", action="store_true", help="the walks only")
+    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument("--json", action="store_true", help="print one JSON document")
+    parser.add_argument("--shadow", action="store_true", help="the estimator alone, beside a walk on the truth")
+    parser.add_argument("--scenario", default="fig8", help="--shadow: built-in scenario (default fig8)")
+    parser.add_argument("--seed", type=int, default=0, help="--shadow: the sensors' seed (default 0)")
+    parser.add_argument("--yaw", choices=("feet", "imu"), default="feet", help="--shadow: the base's yaw source")
+    parser.add_argument("--velocity-cutoff", type=float, default=3.5, help="--shadow: velocity filter cut-off, Hz")
+    args = parser.parse_args()
+    args.robots = args.robots or ["talos", "g1"]
+    args.noise = args.noise or list(NOISE)
+    args.latency = args.latency or list(LATENCY)
+    if any(not (math.isfinite(n) and n >= 0.0) for n in args.noise) or any(n < 0 for n in args.latency):
+        parser.error("--noise must be finite factors >= 0 and --latency whole periods >= 0")
+    if args.shadow:
+        report = shadow(args.robots[0], args.scenario, args.noise[0], args.seed, yaw=args.yaw,
+                        velocity_cutoff=args.velocity_cutoff)  # fmt: skip
+        print(json.dumps(report))
+        return
+    began = time.perf_counter()
+    report = run(args)
+    report["seconds"] = time.perf_counter() - began
+    if args.json:
+        print(json.dumps(report))
+        return
+    print_tables(report)
+    print(f"({report['seconds']:.0f} s on {args.workers} workers)")
+
+
+if __name__ == "__main__":
+    main()
