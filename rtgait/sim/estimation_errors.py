@@ -9,7 +9,10 @@ truth:
   the feet, so it carries their slips;
 * ``com_relative_rms``: the COM relative to the stance sole, ``(c_e - s_e) - (c_g - s_g)`` with ``s`` the sole frame's
   origin of the foot that carries more of the true load (m): what the balance controller feeds back;
-* ``com_velocity_rms`` (m/s), ``dcm_rms`` and ``dcm_max`` (m, the horizontal ``xi = c + c'/w``);
+* ``com_velocity_rms`` (m/s), ``dcm_rms`` and ``dcm_max`` (m, the horizontal ``xi = c + c'/w``), and
+  ``dcm_relative_rms``, the DCM relative to the stance sole likewise: on a long walk the absolute errors grow with the
+  estimate's drift (its landings are placed by the legs' kinematics, step after step), which the controller, whose
+  plan is re-anchored on those landings, does not feel;
 * ``contact_agreement``: the share of ticks at which both feet's load states (loaded or not, after the landing
   hysteresis) are the truth's. The truth's are the ground-truth estimator's: the true vertical forces through
   :class:`~rtgait.estimation.load.LoadHysteresis` with its default thresholds (:func:`loaded_states`);
@@ -65,7 +68,7 @@ class EstimationErrors:
 
     Attributes:
         ticks: ticks compared.
-        com_rms, com_relative_rms, com_velocity_rms, dcm_rms, dcm_max: the state's errors.
+        com_rms, com_relative_rms, com_velocity_rms, dcm_rms, dcm_relative_rms, dcm_max: the state's errors.
         contact_agreement: share of ticks with both feet's load states right.
         landings: true landings.
         landings_missed: true landings the estimate did not see within :data:`LANDING_WINDOW` (a foot that bounces,
@@ -80,6 +83,7 @@ class EstimationErrors:
     com_relative_rms: float
     com_velocity_rms: float
     dcm_rms: float
+    dcm_relative_rms: float
     dcm_max: float
     contact_agreement: float
     landings: int
@@ -160,7 +164,9 @@ def estimation_errors(
     ticks = np.arange(n)
     # The stance sole: the foot with more of the true load (the left one on a tie).
     stance = np.where(truth.normal_force[:, 0] >= truth.normal_force[:, 1], 0, 1)
-    relative = (estimate.com - estimate.soles[ticks, stance]) - (truth.com - truth.soles[ticks, stance])
+    estimated_sole, true_sole = estimate.soles[ticks, stance], truth.soles[ticks, stance]
+    relative = (estimate.com - estimated_sole) - (truth.com - true_sole)
+    dcm_relative = dcm - (estimated_sole[:, 0:2] - true_sole[:, 0:2])
     agree = np.all(estimate.loaded == truth.loaded, axis=1)
     true_landings = landing_times(times, truth.loaded)
     seen = landing_times(times, estimate.loaded)
@@ -180,6 +186,7 @@ def estimation_errors(
         com_relative_rms=_rms(relative),
         com_velocity_rms=_rms(estimate.com_velocity - truth.com_velocity),
         dcm_rms=_rms(dcm),
+        dcm_relative_rms=_rms(dcm_relative),
         dcm_max=float(distance.max()) if n else math.nan,
         contact_agreement=float(np.mean(agree)) if n else math.nan,
         landings=len(true_landings),

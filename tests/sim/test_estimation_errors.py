@@ -78,6 +78,7 @@ def test_errors_of_known_offsets():
     assert errors.com_velocity_rms == pytest.approx(0.012)
     assert errors.dcm_rms == pytest.approx(math.hypot(0.003, 0.004 + 0.012 / 3.4))
     assert errors.dcm_max == pytest.approx(errors.dcm_rms)
+    assert errors.dcm_relative_rms == pytest.approx(0.012 / 3.4)  # the soles took the offset of the COM along
     assert errors.contact_agreement == 1.0 and errors.landings == 0 and errors.landing_delay_worst is None
     # Only the sole of the foot that carries more counts: the left one moved alone, half the ticks see it.
     moved = _track(n, com_offset=(0.0, 0.0, 0.0))
