@@ -1,8 +1,9 @@
 """Ticks of the MuJoCo closed loop for instruction counts: a deterministic measure of a control tick's cost.
 
-Builds Talos's fig8 walk with the adaptive controller, runs the 1.5 s start transition and 0.1 s of walking, then
-``--ticks`` more ticks, and prints JSON (the ticks run and the walk's time). Wall times on a shared machine vary
-by tens of per cent; instructions do not. Run it twice under callgrind and take the difference::
+Builds Talos's fig8 walk with the adaptive controller (on ``--state``, default the estimate), runs the 1.5 s start
+transition and 0.1 s of walking, then ``--ticks`` more ticks, and prints JSON (the ticks run and the walk's time).
+Wall times on a shared machine vary by tens of per cent; instructions do not. Run it twice under callgrind and take
+the difference::
 
     valgrind --tool=callgrind --callgrind-out-file=/dev/null python benchmarks/loop_ticks.py --ticks 0
     valgrind --tool=callgrind --callgrind-out-file=/dev/null python benchmarks/loop_ticks.py --ticks 1000
@@ -16,12 +17,13 @@ import argparse
 import json
 
 from rtgait.control.controller import make_controller
+from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.description import load_robot
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario import load_scenario
-from rtgait.sim.loop import ClosedLoop
+from rtgait.sim.loop import ClosedLoop, LoopOptions
 from rtgait.sim.model import build_sim_model
 
 WARM_UP_TICKS = 1600
@@ -31,6 +33,8 @@ WARM_UP_TICKS = 1600
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ticks", type=int, default=1000, help="ticks after the warm-up (default 1000)")
+    parser.add_argument("--state", choices=STATE_SOURCES, default=DEFAULT_STATE,
+                        help=f"what the controller acts on (default {DEFAULT_STATE})")  # fmt: skip
     args = parser.parse_args()
     if not 0 <= args.ticks <= 10000:
         parser.error(f"--ticks must be within 0..10000 (the walk lasts about 13,000 ticks), got {args.ticks}")
@@ -40,7 +44,7 @@ def main() -> None:
     controller = make_controller(
         "adaptive", walk.planner_config(), walk.strides(), walk.sole, robot_info(robot), dt=sim.control_dt
     )
-    loop = ClosedLoop(sim, controller)
+    loop = ClosedLoop(sim, controller, LoopOptions(state=args.state))
     for _ in range(WARM_UP_TICKS + args.ticks):
         loop.step()
     print(json.dumps({"ticks": args.ticks, "warm_up_ticks": WARM_UP_TICKS, "walk_time_s": loop.t}))

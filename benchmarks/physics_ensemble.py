@@ -24,8 +24,11 @@ since an outcome that changes when only the step is refined belongs to the discr
 ``--per-setting`` prints, after the summary, one row per setting: its values and each case's outcome, with the
 time of the first tip-over (``t``) or of the fall (``f``) on the walk's clock (s).
 
-Usage: ``python benchmarks/physics_ensemble.py [--json] [--per-setting] [--robot R] [--controller C] [--quick]
-[--settings N] [--seed S] [--refine N] [--workers W] [--cases fig4,fig6,...]``
+``--state estimated|truth`` says what the closed-loop levels act on (default the estimate from the simulated sensors;
+``open-loop`` acts on the plan alone either way).
+
+Usage: ``python benchmarks/physics_ensemble.py [--json] [--per-setting] [--robot R] [--controller C] [--state S]
+[--quick] [--settings N] [--seed S] [--refine N] [--workers W] [--cases fig4,fig6,...]``
 """
 
 from __future__ import annotations
@@ -43,6 +46,8 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
 
 import numpy as np
+
+from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
 
 CASES = ("fig4", "fig6", "fig7", "fig8")
 EXPECTED = {"fig4": "loses balance", "fig6": "walks", "fig7": "walks", "fig8": "walks"}
@@ -101,17 +106,21 @@ def _sim(robot_name: str, setting: tuple[tuple[str, float], ...]) -> Any:
     return build_sim_model(_robot(robot_name), SimConfig(meshes=False, **dict(setting)))
 
 
-def run_one(robot_name: str, controller: str, scenario_name: str, index: int, setting: dict[str, float]) -> dict:
-    """Walk one case under one setting (in a worker process); returns its outcome and a few numbers."""
+def run_one(
+    robot_name: str, controller: str, scenario_name: str, index: int, setting: dict[str, float], state: str
+) -> dict:
+    """Walk one case under one setting, the controller on ``state`` (in a worker process); returns its outcome and a
+    few numbers."""
     from rtgait.io.sim_run import mujoco_messages, simulate
     from rtgait.scenario.loading import load_scenario
+    from rtgait.sim.loop_options import LoopOptions
 
     robot = _robot(robot_name)
     sim = _sim(robot_name, tuple(sorted(setting.items())))
     scenario = load_scenario(scenario_name)
     began = time.perf_counter()
     with mujoco_messages() as warnings:
-        result = simulate(scenario, robot, sim=sim, controller=controller)  # type: ignore[arg-type]
+        result = simulate(scenario, robot, sim=sim, controller=controller, options=LoopOptions(state=state))  # type: ignore[arg-type]
     rms = result.zmp_tracking_error_rms
     return {
         "scenario": scenario_name,
@@ -130,10 +139,12 @@ def run_one(robot_name: str, controller: str, scenario_name: str, index: int, se
 
 
 def run_ensemble(
-    robot: str, controller: str, cases: tuple[str, ...], settings: list[dict[str, float]], workers: int, quiet: bool
-) -> list[dict]:
-    """Every case under every setting, in ``workers`` processes; progress on stderr unless ``quiet``."""
-    tasks = [(robot, controller, case, i, setting) for i, setting in enumerate(settings) for case in cases]
+    robot: str, controller: str, cases: tuple[str, ...], settings: list[dict[str, float]], workers: int, quiet: bool,
+    state: str = DEFAULT_STATE,
+) -> list[dict]:  # fmt: skip
+    """Every case under every setting, the controller on ``state``, in ``workers`` processes; progress on stderr
+    unless ``quiet``."""
+    tasks = [(robot, controller, case, i, setting, state) for i, setting in enumerate(settings) for case in cases]
     runs: list[dict] = []
     began = time.perf_counter()
     with ProcessPoolExecutor(max_workers=workers) as pool:
@@ -194,6 +205,8 @@ def main() -> None:
     parser.add_argument("--refine", type=int, default=1, help="divide every setting's physics step by this (default 1)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--cases", default=",".join(CASES), help="comma-separated cases (default: the paper's four)")
+    parser.add_argument("--state", choices=STATE_SOURCES, default=DEFAULT_STATE,
+                        help=f"what the controller acts on (default {DEFAULT_STATE})")  # fmt: skip
     args = parser.parse_args()
     cases = tuple(case for case in args.cases.split(",") if case)
     unknown = [case for case in cases if case not in EXPECTED]
@@ -206,7 +219,7 @@ def main() -> None:
     for setting in settings:
         setting["physics_dt"] /= args.refine
     began = time.perf_counter()
-    runs = run_ensemble(args.robot, args.controller, cases, settings, args.workers, quiet=False)
+    runs = run_ensemble(args.robot, args.controller, cases, settings, args.workers, quiet=False, state=args.state)
     wall = time.perf_counter() - began
     table = summarize(args.robot, args.controller, cases, runs)
     if args.json:
@@ -214,13 +227,15 @@ def main() -> None:
             "cases": table,
             "seed": args.seed,
             "refine": args.refine,
+            "state": args.state,
             "ensemble": settings,
             "runs": runs,
             "wall_time": wall,
         }
         print(json.dumps(report))
         return
-    print(f"{args.robot}, {args.controller}: {n} physics settings (seed {args.seed}), {len(runs)} runs in {wall:.0f} s")
+    print(f"{args.robot}, {args.controller} on the {args.state} state: {n} physics settings (seed {args.seed}), "
+          f"{len(runs)} runs in {wall:.0f} s")  # fmt: skip
     for name, (low, high) in RANGES.items():
         print(f"  {name}: {low:g} to {high:g}")
     print(f"  physics_dt: {', '.join(f'{dt / args.refine:g}' for dt in PHYSICS_DTS)} s")
