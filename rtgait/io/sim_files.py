@@ -258,9 +258,26 @@ def _left_out(stats: dict[str, Any]) -> str:
     return f" ({count} ticks of re-anchored swings left out)" if count else ""
 
 
+def _state(summary: dict[str, Any]) -> str:
+    """What the controller acted on, and the sensors' settings and model error it was estimated through."""
+    sensors = summary.get("sensors")
+    if summary.get("state") != "estimated" or sensors is None:
+        text = "the controller on the simulator's truth"
+    else:
+        text = (
+            f"the controller on the state estimated from the sensors (noise x{sensors['noise']:g}, latency "
+            f"{sensors['latency']} period(s), seed {sensors['seed']})"
+        )
+    model_error = summary.get("model_error")
+    if model_error:
+        text += f"; the robot off its model (model error seed {model_error['seed']})"
+    return text
+
+
 def sim_report(summary: dict[str, Any], out: Path) -> str:
     """The lines ``rtgait simulate`` prints for a MuJoCo run written to ``out``: the walk and where its settings
-    came from, the outcome, the ZMP errors, slip and steps, speed, MuJoCo's warnings if any, the outputs."""
+    came from, the state the controller acted on (and on the estimate, its errors), the outcome, the ZMP errors,
+    slip and steps, speed, MuJoCo's warnings if any, the outputs."""
     if summary["fell"]:
         outcome = f"FELL at {summary['fall_time']:.2f} s ({summary['fall_cause']})"
     else:
@@ -277,6 +294,7 @@ def sim_report(summary: dict[str, Any], out: Path) -> str:
         f"robot       {summary['robot']} in MuJoCo, {summary['controller']}, control period {control:g} ms, physics "
         f"step {physics:g} ms",
     ]
+    lines.append(f"state       {_state(summary)}")
     walk = summary.get("walk")
     if walk:
         sole = walk["sole"]
@@ -295,6 +313,15 @@ def sim_report(summary: dict[str, Any], out: Path) -> str:
         f"            vs the multibody ZMP of the commanded motion: {_spread(errors['vs_commanded_motion'])}"
         + _left_out(errors["vs_commanded_motion"]),
     ]
+    estimation = summary.get("estimation")
+    if estimation and estimation["ticks"]:
+        e = estimation
+        lines.append(
+            f"estimate    vs the truth: DCM {_mm(e['dcm_rms'])} RMS ({_mm(e['dcm_max'])} at most), COM "
+            f"{_mm(e['com_relative_rms'])} RMS relative to the stance sole, the feet's contact states right at "
+            f"{100.0 * e['contact_agreement']:.1f} % of the ticks, {e['landings_missed']} of {e['landings']} landings "
+            "missed"
+        )
     if pushes:
         lines.append("pushes      " + ", ".join(f"{p['impulse_norm']:.1f} N s at {p['start']:.2f} s" for p in pushes))
     lines.append(

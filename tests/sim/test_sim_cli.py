@@ -27,6 +27,8 @@ def test_simulate_writes_csv_summary_and_figure(
     assert main(["simulate", str(scenario), "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "walked 3 of 3 steps without falling" in printed
+    assert "the controller on the state estimated from the sensors (noise x1, latency 0 period(s), seed 0)" in printed
+    assert "\nestimate    vs the truth: DCM " in printed
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     keys = ("fell", "fall_time", "steps_completed", "distance_walked", "zmp_tracking_error_rms", "real_time_factor")
     assert set(keys) <= set(summary)
@@ -224,6 +226,8 @@ def test_a_negative_velocity_command_walks_backward(
     assert main(["simulate", str(scenario), "--velocity", "-0.1,0,0", "--out", str(out), "--no-figures"]) == 0
     printed = capsys.readouterr().out
     assert "walked 3 of 3 steps without falling" in printed
+    assert "the controller on the state estimated from the sensors (noise x1, latency 0 period(s), seed 0)" in printed
+    assert "\nestimate    vs the truth: DCM " in printed
     # It says it is a velocity walk, with its command: in the printed summary, and in the title the log keeps for
     # the figure and the replay (rtgait plot draws the figure from it).
     title = "velocity walk 0.1 m/s backward (back's timing, quasi-real-time)"
