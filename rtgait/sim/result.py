@@ -45,6 +45,7 @@ if TYPE_CHECKING:
     from rtgait.control.controller import ControlEvent
     from rtgait.core.laws.stepping import StepDecision
     from rtgait.sim.tick_log import CompleteLog
+    from rtgait.stack.safety import SafetyEvent
 
 __all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SimResult", "Stance", "stances"]
 
@@ -195,6 +196,10 @@ class SimResult:
         model: the reduced Pinocchio model of :attr:`commanded_q` (for the multibody ZMP), or ``None``.
         log: the rest of the per-tick record (joint and base velocities, per-foot wrench, feet targets, ...:
             :class:`~rtgait.sim.tick_log.CompleteLog`), or ``None`` for a result made without it.
+        safety_events: the faults that tripped the stack's safety layer into damping
+            (:class:`~rtgait.stack.safety.SafetyEvent`).
+        safety: the safety layer's record (:meth:`~rtgait.stack.safety.SafetyLayer.summary`: damping, events per
+            kind, the first event, clipped ticks per joint), or ``None`` for a result made without it.
         at_rest_speed: mean horizontal COM speed over the run's last 0.1 s (m/s).
     """
 
@@ -245,6 +250,8 @@ class SimResult:
     model: pin.Model | None = field(default=None, repr=False)
     gravity: float = 9.81
     log: CompleteLog | None = field(default=None, repr=False)
+    safety_events: tuple[SafetyEvent, ...] = ()
+    safety: dict[str, Any] | None = None
 
     # ----- time ------------------------------------------------------------------------------------------------------
     @property
@@ -440,4 +447,5 @@ class SimResult:
             "legs_touched": self.legs_touched,
             "control_dt": self.control_dt,
             "physics_dt": self.physics_dt,
+            "safety": self.safety,
         }
