@@ -15,6 +15,7 @@ pytest.importorskip("pinocchio")
 
 from rtgait.control.controller import make_controller
 from rtgait.interface.command import JointCommand
+from rtgait.io.sim_files import sim_report, write_sim_outputs
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario import load_scenario
@@ -152,7 +153,9 @@ class FailingEstimator:
         return self.estimator.update(readings, truth)
 
 
-def test_a_fault_in_the_closed_loop_damps_and_goes_to_the_runs_outputs(talos, talos_sim, shorten):
+@pytest.fixture(scope="module")
+def damped_run(talos, talos_sim, shorten):
+    """A short fig8 walk whose estimator raises from 1 s on, run to its end or a fall."""
     walk = robot_scenario(shorten("fig8", 3), talos)
     level = make_controller("adaptive", walk.planner_config(), walk.strides(), walk.sole, robot_info(talos),
                             dt=talos_sim.control_dt)  # fmt: skip
@@ -160,7 +163,11 @@ def test_a_fault_in_the_closed_loop_damps_and_goes_to_the_runs_outputs(talos, ta
     loop.stack.estimator = FailingEstimator(loop.stack.estimator, after=1.0)
     while loop.step() and not loop.done:  # no exception: the run goes on, in damping, to its end or a fall
         pass
-    result = loop.result()
+    return loop.result()
+
+
+def test_a_fault_in_the_closed_loop_damps_and_goes_to_the_runs_outputs(damped_run):
+    result = damped_run
     assert result.safety["damping"] and result.safety["counts"]["error"] == 1
     first = result.safety["first_event"]
     assert first["kind"] == "error" and first["t"] == pytest.approx(1.0)
@@ -170,6 +177,18 @@ def test_a_fault_in_the_closed_loop_damps_and_goes_to_the_runs_outputs(talos, ta
     assert damping["t"] == pytest.approx(1.0) and damping["detail"].startswith("error: ValueError")
     after = result.times >= 1.0
     assert np.isnan(result.cog_planned[after]).all() and not np.isnan(result.cog_planned[~after]).any()
+
+
+def test_a_damped_runs_files_say_so(damped_run, talos, tmp_path):
+    """summary.json's safety record and the report line; the figure and the 3D replay draw a run without a plan after
+    the trip."""
+    pytest.importorskip("meshcat")
+    extra = {"scenario": "fig8", "connection": "auto"}
+    summary = write_sim_outputs(damped_run, tmp_path, replay=talos, extra=extra)
+    assert {"zmp_sim.png", "replay.html", "summary.json"} <= set(summary["files"])
+    written = json.loads((tmp_path / "summary.json").read_text())
+    assert written["safety"]["first_event"]["kind"] == "error" and written["safety"]["damping"]
+    assert "DAMPING from 1.000 s (error: ValueError" in sim_report(summary, tmp_path)
 
 
 def test_a_normal_walk_never_trips(short_walk):
