@@ -163,7 +163,9 @@ class SafetyLayer:
 
     def reset(self) -> None:
         """Leave damping and forget the watchdog's memory (the last stamp, the IMU's upright attitude, the last
-        COM); the events, their counts and the clipped-tick counts stay."""
+        COM); the events, their counts and the clipped-tick counts stay. The estimator and the controller are not
+        reset here: restart the walk (:meth:`rtgait.stack.walking_stack.WalkingStack.start`) from the robot as it
+        is then."""
         self.damping = False
         self._stamp = -math.inf
         self._still = 0  # ticks in a row the stamp has not advanced
