@@ -36,6 +36,11 @@ def walk(seconds: float) -> SimRobot:
         body.first_substep()  # the physics of one control period (a real robot just runs)
         for i in range(1, body.substeps):
             body.substep(i)
+        if out.targets is None:  # the safety layer tripped: its damping command from then on (rtgait.stack.safety)
+            event = stack.safety.events[-1]
+            if event.t == t:
+                print(f"t {t:5.2f} s  damping: {event.kind}, {event.detail}")
+            continue
         if k % round(1.0 / sim.control_dt) == 0:
             com, planned = out.measurement.com, out.targets.com
             print(f"t {t:5.2f} s  COM ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m, "

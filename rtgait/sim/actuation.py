@@ -41,8 +41,9 @@ from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
-import pinocchio as pin
 
+from rtgait.robot.joint_inertia import carried_inertia
+from rtgait.robot.joint_limits import urdf_limit
 from rtgait.robot.model import RobotModel
 
 __all__ = ["Actuation", "ReferenceInterpolator", "add_actuators", "carried_inertia", "resolve_actuation", "substeps"]
@@ -73,35 +74,6 @@ def substeps(control_dt: float, physics_dt: float) -> int:
             f"(a whole number of physics steps per control period), got {ratio:.6g} steps"
         )
     return n
-
-
-def carried_inertia(robot: RobotModel) -> tuple[np.ndarray, np.ndarray]:
-    """The inertia each moving joint moves, about its own axis at half-sitting (kg m^2).
-
-    Returns:
-        ``(distal, carried)`` per joint of ``robot.joint_names``: ``distal`` is the inertia of everything beyond
-        the joint (its subtree, from the root link); ``carried`` is ``distal``, or for a joint whose subtree holds
-        a sole the larger of ``distal`` and the rest of the robot's inertia about the same axis (the foot on the
-        ground). Armature excluded.
-    """
-    model = robot.model
-    data = model.createData()
-    q = robot.q_half_sitting
-    pin.computeJointJacobians(model, data, q)
-    mass_matrix = pin.crba(model, data, q)
-    pin.ccrba(model, data, q, np.zeros(model.nv))
-    whole = data.oYcrb[1].matrix()  # the whole robot's spatial inertia (world frame, at the origin)
-    soles = {model.frames[robot.left_sole_id].parentJoint, model.frames[robot.right_sole_id].parentJoint}
-    distal, carried = [], []
-    for joint in range(2, model.njoints):
-        v = model.joints[joint].idx_v
-        axis = data.J[:, v]  # the joint's unit motion, world frame at the origin
-        own = float(mass_matrix[v, v])  # the subtree's composite inertia about the axis
-        rest = float(axis @ whole @ axis) - own
-        holds_sole = any(joint in model.supports[s] for s in soles)
-        distal.append(own)
-        carried.append(max(own, rest) if holds_sole else own)
-    return np.array(distal), np.array(carried)
 
 
 @dataclass(frozen=True, eq=False)
@@ -188,11 +160,6 @@ class Actuation:
         ]
 
 
-def _effort_limit(value: float) -> float:
-    """A URDF effort limit as a torque limit: missing (Pinocchio's huge default), 0 or not finite means none."""
-    return value if math.isfinite(value) and 0.0 < value < 1e30 else math.inf
-
-
 def resolve_actuation(robot: RobotModel, control_dt: float | None = None, physics_dt: float = 0.001) -> Actuation:
     """Every moving joint's actuation: the description's values, else defaults derived from the URDF (see the
     module docstring).
@@ -215,7 +182,9 @@ def resolve_actuation(robot: RobotModel, control_dt: float | None = None, physic
     for i, name in enumerate(robot.joint_names):
         spec = description.joint_actuation(name)
         joint = model.joints[model.getJointId(name)]
-        limit = spec.effort_limit if spec.effort_limit is not None else _effort_limit(model.effortLimit[joint.idx_v])
+        limit = spec.effort_limit
+        if limit is None:
+            limit = urdf_limit(float(model.effortLimit[joint.idx_v]))
         rotor = spec.armature
         if rotor is None:
             rotor = spec.armature_per_torque * limit if math.isfinite(limit) else 0.0

@@ -35,6 +35,7 @@ if TYPE_CHECKING:
     from rtgait.sim.loop_record import TickRecord
     from rtgait.sim.model import SimModel
     from rtgait.sim.tick_log import TickLog
+    from rtgait.stack.walking_stack import WalkingStack
 
 __all__ = ["RunState", "loop_result"]
 
@@ -45,6 +46,7 @@ class RunState(Protocol):
     sim: SimModel
     planner: OnlinePlanner
     controller: WalkingController
+    stack: WalkingStack
     options: LoopOptions
     record: TickRecord
     contacts: ContactMonitor
@@ -118,4 +120,6 @@ def loop_result(loop: RunState, wall_time: float, n_steps: int, walk_end: float)
         gravity=loop.gravity,
         log=loop.log.finish(ticks) if loop.log is not None else None,
         model_error=sim.model_error,
+        safety_events=tuple(e for e in loop.stack.safety.events if e.t >= first),
+        safety=loop.stack.safety.summary(),
     )

@@ -46,6 +46,7 @@ if TYPE_CHECKING:
     from rtgait.core.laws.stepping import StepDecision
     from rtgait.sim.model_error import ModelError
     from rtgait.sim.tick_log import CompleteLog
+    from rtgait.stack.safety import SafetyEvent
 
 __all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SimResult", "Stance", "stances"]
 
@@ -199,6 +200,10 @@ class SimResult:
         log: the rest of the per-tick record (joint and base velocities, per-foot wrench, feet targets, ...:
             :class:`~rtgait.sim.tick_log.CompleteLog`), or ``None`` for a result made without it.
         model_error: how the simulated robot differed from its model (:mod:`rtgait.sim.model_error`), or ``None``.
+        safety_events: the faults that tripped the stack's safety layer into damping
+            (:class:`~rtgait.stack.safety.SafetyEvent`).
+        safety: the safety layer's record (:meth:`~rtgait.stack.safety.SafetyLayer.summary`: damping, events per
+            kind, the first event, clipped ticks per joint), or ``None`` for a result made without it.
         at_rest_speed: mean horizontal COM speed over the run's last 0.1 s (m/s).
     """
 
@@ -250,6 +255,8 @@ class SimResult:
     gravity: float = 9.81
     log: CompleteLog | None = field(default=None, repr=False)
     model_error: ModelError | None = field(default=None, repr=False)
+    safety_events: tuple[SafetyEvent, ...] = ()
+    safety: dict[str, Any] | None = None
 
     # ----- time ------------------------------------------------------------------------------------------------------
     @property
@@ -446,6 +453,7 @@ class SimResult:
             "legs_touched": self.legs_touched,
             "control_dt": self.control_dt,
             "physics_dt": self.physics_dt,
+            "safety": self.safety,
         }
         if self.model_error is not None:
             summary["model_error"] = self.model_error.summary()
