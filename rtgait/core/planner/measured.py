@@ -19,9 +19,10 @@ from typing import Literal
 
 import numpy as np
 
-from rtgait.core.geometry.footsteps import Footstep, Side, Stride
+from rtgait.core.geometry.footsteps import SIDES, Footstep, Side, Stride
 from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.support import support_polygon
+from rtgait.core.input_bounds import InputOutOfBoundsError, check_position
 from rtgait.core.laws.stepping import (
     StepAdjustment,
     StepDecision,
@@ -64,31 +65,50 @@ class MeasuredPlanning:
 
         With ``feedback="measured"`` each new plan connects from it, propagated to the connection instant by the
         pendulum (the planned ZMP drives both, so the deviation from the plan evolves as the free pendulum).
+
+        Bounds (:mod:`rtgait.core.input_bounds`): every value finite; ``cog`` within
+        ``COM_REACH_HEIGHTS * cog_height`` (plus half the feet's distance) of the midpoint of the feet on the
+        ground; ``|cog_vel|`` at most ``COM_SPEED_FROUDE * sqrt(gravity * cog_height)``; any ``t`` (an observation
+        more than :data:`OBSERVATION_MAX_AGE` from a connection is not used), but a replan it triggers (a DCM error,
+        only for ``t`` not before the latest sample) takes ``t`` as :meth:`replan_now` does.
         """
         t, cx, cy, vx, vy = values = (float(t), float(cog[0]), float(cog[1]), float(cog_vel[0]), float(cog_vel[1]))
-        # One finiteness test of the sum first (every tick): a NaN or an infinity makes it non-finite, and only
-        # then (or on an overflow of huge finite values) are the values tested one by one.
-        if not math.isfinite(t + cx + cy + vx + vy) and not all(
-            math.isfinite(v) for v in values
+        # The per-tick path: a few float comparisons. A NaN or an infinity makes the sum non-finite (and so may an
+        # overflow of huge finite values: the values are then tested one by one); the centre of reach is kept per
+        # phase sampled.
+        reach = self._reach
+        phase = self._phase
+        if phase is None or reach is None or reach[0] is not phase:
+            reach = self._reach_now()
+        dx, dy = cx - reach[1], cy - reach[2]
+        if (
+            not math.isfinite(t + cx + cy + vx + vy)
+            or dx * dx + dy * dy > reach[3]
+            or vx * vx + vy * vy > self._max_com_speed2
         ):
-            raise ValueError(f"observe needs a finite time, COG and COG velocity, got {values}")
-        self._observed = values
+            self._refuse_observation(values)
         threshold = self.config.replan_dcm_error
         plan = self._plan
         if threshold is None or plan is None or self.config.feedback != "measured" or t < self._latest:
+            self._observed = values
             return
         w = self.w
         planned = plan.cog_at(t, w)
-        self._observed_on_plan = (plan, t, planned)  # the connection from this observation needs it again
         px, py, pvx, pvy = planned
         ex = cx + vx / w - px - pvx / w
         ey = cy + vy / w - py - pvy / w
         if ex * ex + ey * ey > threshold * threshold and t - self._last_auto_replan >= AUTO_REPLAN_INTERVAL:
-            phase, rel = self._phase, t - self._t0
-            if phase is not None and phase.start <= rel < phase.end and phase.end - rel < AUTO_MIN_REMAINDER:
-                return  # a free segment this short would need wild ZMP swings: the next phase's first tick replans
-            self._last_auto_replan = t
-            self.replan_now(t, "dcm-error")
+            rel = t - self._t0
+            if not (phase is not None and phase.start <= rel < phase.end and phase.end - rel < AUTO_MIN_REMAINDER):
+                # Not within the last moments of a phase (a free segment that short would need wild ZMP swings:
+                # the next phase's first tick replans): replan now, all of it undone if the replan refuses t.
+                with self._atomic():
+                    self._observed, self._observed_on_plan = values, (plan, t, planned)
+                    self._last_auto_replan = t
+                    self.replan_now(t, "dcm-error")
+                return
+        self._observed = values
+        self._observed_on_plan = (plan, t, planned)  # the connection from this observation needs it again
 
     def touchdown(self, t: float, side: Side, x: float, y: float, yaw: float) -> int:
         """A foot is on the ground at ``(x, y)`` (m) with heading ``yaw`` (rad): where a swing foot really landed,
@@ -98,11 +118,31 @@ class MeasuredPlanning:
         The plan under way is remade at once from its own state at ``t`` (:meth:`replan_now`, reason
         ``"touchdown"``), so the ZMP rests on the new footprint from the end of the phase under way on (unless the
         phase ends within :data:`MIN_REMAINDER`: then the replan at the next double-support start does it).
+
+        Bounds (:mod:`rtgait.core.input_bounds`): ``t`` finite, not before the latest sample and, like a sample's,
+        at most :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` double supports ahead; ``x``, ``y`` within
+        :data:`~rtgait.core.input_bounds.MAX_POSITION`; the footprint within the landing box
+        (:class:`~rtgait.core.input_bounds.LandingBounds`, :func:`~rtgait.core.planner.bounded.landing_bounds`) of
+        the foot it stepped from: turned less than a quarter turn, within the walk's and step adjustment's stride
+        limits (or the stride planned there, if longer) plus :data:`~rtgait.core.input_bounds.LANDING_TOLERANCE`.
         """
         if not self.started:
             raise RuntimeError("call start() before touchdown()")
-        footprint = Footstep(float(x), float(y), float(yaw), side)
-        if self._plan is not None and t >= self._latest:
+        t = float(t)
+        self._check_time("t", t)
+        self._check_not_before_latest("t", t)
+        if side not in SIDES:
+            raise InputOutOfBoundsError(f"side must be 'left' or 'right', got {side!r}")
+        x, y, yaw = float(x), float(y), float(yaw)
+        check_position("touchdown (x, y)", x, y)
+        if not math.isfinite(yaw):
+            raise InputOutOfBoundsError(f"yaw must be finite, got {yaw}")
+        with self._atomic():  # which footprint landed is known once t is sampled: a refused landing undoes that
+            return self._touchdown(t, Footstep(x, y, yaw, side))
+
+    def _touchdown(self, t: float, footprint: Footstep) -> int:
+        side = footprint.side
+        if self._plan is not None:
             self.sample_values(t)  # the landing may begin a double support: make its plan, then re-anchor it
         q = self._walk.latest_phase or 0
         kind = self.timeline.kind(q)
@@ -113,11 +153,12 @@ class MeasuredPlanning:
             n = self.n_steps
             i = q // 2 if n is None else min(q // 2, n)
             index = i if self._walk.footprint(i).side == side else i + 1
+        self._check_landing(index, footprint)
         if kind == "single" and index == (q + 1) // 2 + 1:
             self._freeze_swing(t)
         self._walk.retarget(index, footprint)
         self._phase = None
-        if self._plan is not None and t >= self._latest and self._next_replan_time > t:
+        if self._plan is not None and self._next_replan_time > t:
             self.replan_now(t, "touchdown")  # re-anchor now, unless the replan due at t will
         return index
 
@@ -194,24 +235,36 @@ class MeasuredPlanning:
 
         Returns the new plan's record, or ``None`` when the phase ends within :data:`MIN_REMAINDER` (the regular
         replan at the next double-support start is imminent) or the walk is settling.
+
+        Bounds: ``t`` finite, not before the latest sample and at most
+        :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` double supports ahead (as a sample's).
         """
         began = time.perf_counter()
+        t = float(t)
         if not math.isfinite(t):
-            raise ValueError(f"t must be finite, got {t}")
+            raise InputOutOfBoundsError(f"t must be finite, got {t}")
         if feedback is None:
             feedback = self.config.feedback
         elif feedback not in FEEDBACK_MODES:
-            raise ValueError(f"feedback must be one of {FEEDBACK_MODES} or None, got {feedback!r}")
+            raise InputOutOfBoundsError(f"feedback must be one of {FEEDBACK_MODES} or None, got {feedback!r}")
         if step_adjustment is None:
             adjust = self.config.step_adjustment
         elif step_adjustment is False or isinstance(step_adjustment, StepAdjustment):
             adjust = step_adjustment or None
         else:
-            raise ValueError(f"step_adjustment must be a StepAdjustment, False or None, got {step_adjustment!r}")
+            raise InputOutOfBoundsError(
+                f"step_adjustment must be a StepAdjustment, False or None, got {step_adjustment!r}"
+            )
         if self._plan is None:
             raise RuntimeError("replan_now needs a plan under way: call start() and sample() first")
-        if t < self._latest:
-            raise ValueError(f"replan_now at t={t} s is before the latest sample ({self._latest} s)")
+        self._check_not_before_latest("t", t)
+        self._check_time("t", t)
+        with self._atomic():  # nothing is left to refuse: undone only if the replanning itself fails
+            return self._replan_now(t, reason, feedback, adjust, began)
+
+    def _replan_now(
+        self, t: float, reason: str, feedback: FeedbackMode, adjust: StepAdjustment | None, began: float
+    ) -> PlanRecord | None:
         self.sample_values(t)  # replans up to t if due, and fixes the phase
         phase = self._phase
         assert phase is not None
@@ -265,8 +318,10 @@ class MeasuredPlanning:
             return None
         timings = None
         if self._adapts_timing(adjust):
+
             def timings(k: int, swinging: bool) -> TimingOptions | None:
                 return self._timing_options(k, swinging, adjust)
+
         proposal = propose_landing(
             adjust, walk, q, t, self.phase_start, rows, zmp, halfplanes, plan.layout.anchor_phases,
             lambda: self._freeze_swing(t)[:2], timings,
@@ -387,8 +442,13 @@ class MeasuredPlanning:
         q, elapsed = plan.phase0, plan.elapsed
         if self._next_replan_phase is not None:
             self._prepare_layouts(self._next_replan_phase)
+        first = plan.durations[0] if layout is None else layout.durations[0]
+        if layout is not None:
+            timeline, last = self.timeline, self._plan_span(q)
+            if layout.kinds != tuple(timeline.kind(p) for p in range(q, last + 1)):
+                layout = None  # a timing variant of the walk before an emergency stop shortened it: remade below
         if layout is None and elapsed == 0.0 and self.timeline.kind(q) in MOVING_KINDS:
             layout = self._layout(q, self._plan_span(q))
         elif layout is None:
-            layout = self._midphase_layout(q, plan.durations[0])
+            layout = self._midphase_layout(q, first)
         self._connect(plan.t_start, q, layout, plan.y[:4].ravel().tolist() if state is None else state, elapsed)
