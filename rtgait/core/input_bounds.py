@@ -16,7 +16,8 @@ Why these numbers, for a COM at height ``zc`` (m) under gravity ``g`` (m/s^2):
   (faster, a pendulum leg leaves the ground), and a COM falling from ``zc`` hits the ground at ``sqrt(2 g zc)``.
 * Landings (:class:`LandingBounds`): the stride box from the stance foot that the walk's and step adjustment's limits
   allow, widened by :data:`LANDING_TOLERANCE` for where a foot really lands, turned less than a quarter turn.
-* Positions within :data:`MAX_POSITION` of the origin, where double precision still resolves 1e-10 m.
+* Positions within :data:`MAX_POSITION` of the origin, where double precision still resolves 1e-10 m, and times within
+  :data:`MAX_TIME` of zero.
 """
 
 from __future__ import annotations
@@ -47,6 +48,10 @@ MAX_TURN = math.pi / 2
 LANDING_TOLERANCE = 0.2
 """How far beyond the planned stride box a foot may really land (m): a foot dragged by a push, a slip, a capture
 step's tracking error. Beyond it the reading is a sensor fault, not a step."""
+
+MAX_TIME = 1e10
+"""Largest ``|t|`` of any time given to the planner (s): 317 years, room for a UNIX time stamp (1.7e9 s), where a time
+still resolves 2e-6 s, well within a control tick. Beyond it a phase's duration is lost in round-off."""
 
 MAX_POSITION = 1e6
 """Largest ``|x|`` or ``|y|`` of a footprint or a measured COM (m): 1000 km from the origin, farther than any walk,
@@ -119,6 +124,6 @@ def check_position(name: str, x: float, y: float) -> None:
 
 
 __all__ = [
-    "COM_REACH_HEIGHTS", "COM_SPEED_FROUDE", "LANDING_TOLERANCE", "MAX_POSITION", "MAX_TURN", "InputOutOfBoundsError",
-    "LandingBounds", "check_position", "stride_components",
+    "COM_REACH_HEIGHTS", "COM_SPEED_FROUDE", "LANDING_TOLERANCE", "MAX_POSITION", "MAX_TIME", "MAX_TURN",
+    "InputOutOfBoundsError", "LandingBounds", "check_position", "stride_components",
 ]  # fmt: skip

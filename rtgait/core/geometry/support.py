@@ -53,8 +53,12 @@ def signed_margin(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     the Euclidean distance to the nearest edge segment, negated.
     """
     points = np.atleast_2d(np.asarray(points, dtype=float))
-    if len(polygon) == 1:  # a point support: only the point itself is on it
-        return -np.linalg.norm(points - polygon[0], axis=1)
+    if len(polygon) <= 2:  # a point or segment support (no area): minus the distance to it, 0 on it
+        a, b = polygon[0], polygon[-1]
+        edge = b - a
+        length2 = float(edge @ edge)
+        along = np.clip((points - a) @ edge / length2, 0.0, 1.0) if length2 > 0.0 else np.zeros(len(points))
+        return -np.linalg.norm(points - (a + along[:, None] * edge), axis=1)
     start = polygon
     edge = np.roll(polygon, -1, axis=0) - polygon
     length = np.linalg.norm(edge, axis=1)

@@ -17,13 +17,14 @@ from __future__ import annotations
 
 import contextlib
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.input_bounds import (
     COM_REACH_HEIGHTS,
     COM_SPEED_FROUDE,
     LANDING_TOLERANCE,
+    MAX_TIME,
     InputOutOfBoundsError,
     LandingBounds,
     check_position,
@@ -82,10 +83,11 @@ class BoundedCalls:
 
     # ----- times --------------------------------------------------------------------------------------------
     def _check_time(self, name: str, t: float) -> None:
-        """``t`` (s) must be finite and less than :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` double
-        supports past the next replan (one call makes at most that many)."""
-        if not math.isfinite(t):
-            raise InputOutOfBoundsError(f"{name} must be finite, got {t}")
+        """``t`` (s) must be within :data:`~rtgait.core.input_bounds.MAX_TIME` of zero (so finite) and less than
+        :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` double supports past the next replan (one call makes at
+        most that many)."""
+        if not abs(t) <= MAX_TIME:  # also refuses NaN
+            raise InputOutOfBoundsError(f"{name} must be finite and within +-{MAX_TIME:g} s, got {t}")
         q = self._next_replan_phase
         if q is None or t < self._next_replan_time:
             return
@@ -210,4 +212,16 @@ class BoundedCalls:
             self._atomic_depth = 0
 
 
-__all__ = ["DEFAULT_STEPPING_HEIGHT", "BoundedCalls", "landing_bounds"]
+def measured_pair(
+    name: str, value: Sequence[float] | None, default: tuple[float, float] | None
+) -> tuple[float, float] | None:
+    """``value`` as two floats (``default`` when ``None``), refused unless finite (``name`` in the message)."""
+    if value is None:
+        return default
+    pair = (float(value[0]), float(value[1]))
+    if not all(math.isfinite(v) for v in pair):
+        raise InputOutOfBoundsError(f"{name} must be finite, got {pair}")
+    return pair
+
+
+__all__ = ["DEFAULT_STEPPING_HEIGHT", "BoundedCalls", "landing_bounds", "measured_pair"]

@@ -19,10 +19,11 @@ Connection modes (method.md section 5), for a change of step ``k``:
   decision, with the predictions and the reason, is in :attr:`OnlinePlanner.change_log`.
 
 The walk's footprints, strides, velocity command and deadlines live in :class:`~rtgait.core.walk.walk.Walk`. The
-planner's methods are in four modules: this one makes plans and samples them (the per-tick path,
+planner's methods are in six modules: this one makes plans and samples them (the per-tick path,
 :meth:`OnlinePlanner.sample_values`, and the replans it triggers); :mod:`rtgait.core.planner.planner_walk` tells of the
 walk and takes the changes; :mod:`rtgait.core.planner.measured` plans from the measured state;
-:mod:`rtgait.core.planner.layouts` builds the plan shapes ahead.
+:mod:`rtgait.core.planner.adjusting` adjusts steps after a replan; :mod:`rtgait.core.planner.layouts` builds the plan
+shapes ahead; :mod:`rtgait.core.planner.bounded` checks the closed-loop calls' arguments and undoes a refused call.
 """
 
 from __future__ import annotations
@@ -36,15 +37,16 @@ import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride, check_step_timings, midpoint
 from rtgait.core.geometry.support import signed_margin, support_polygon
-from rtgait.core.input_bounds import MAX_TURN, InputOutOfBoundsError, check_position
+from rtgait.core.input_bounds import MAX_TIME, MAX_TURN, InputOutOfBoundsError, check_position
 from rtgait.core.laws.stepping import StepDecision
 from rtgait.core.limits import MAX_STEPS
 from rtgait.core.lipm.closed_form import CogTrajectory, omega
 from rtgait.core.lipm.pattern import DEGREE, MOVING_KINDS, PatternKey
 from rtgait.core.lipm.spline import PiecewisePolynomial
 from rtgait.core.planner.active_plan import ActivePlan, PlanLayout
+from rtgait.core.planner.adjusting import StepAdjusting
 from rtgait.core.planner.auto import AutoConnection, ChangeRecord
-from rtgait.core.planner.bounded import BoundedCalls
+from rtgait.core.planner.bounded import BoundedCalls, measured_pair
 from rtgait.core.planner.config import (
     ALL_CONNECTION_MODES,
     CONNECTION_MODES,
@@ -65,7 +67,7 @@ from rtgait.core.walk.walk import Walk
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 
 
-class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes, BoundedCalls):
+class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, BoundedCalls):
     """Walking pattern generator that replans at every double-support start and can change steps on the fly.
 
     Args:
@@ -168,8 +170,8 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes, BoundedCalls):
 
         The first plan starts with the ZMP under the COG (at rest, they coincide).
         """
-        if not math.isfinite(t0):
-            raise InputOutOfBoundsError(f"t0 must be finite, got {t0}")
+        if not abs(t0) <= MAX_TIME:  # also refuses NaN
+            raise InputOutOfBoundsError(f"t0 must be finite and within +-{MAX_TIME:g} s, got {t0}")
         walk = self._walk
         if feet is not None:
             left, right = feet
@@ -187,8 +189,8 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes, BoundedCalls):
             ordered = (left, right) if self.config.first_side == "left" else (right, left)
         else:
             ordered = None
-        c = _pair("cog", cog, None)
-        v = _pair("cog_vel", cog_vel, (0.0, 0.0))
+        c = measured_pair("cog", cog, None)
+        v = measured_pair("cog_vel", cog_vel, (0.0, 0.0))
         if c is not None or v != (0.0, 0.0):
             self._check_com(c if c is not None else midpoint(*(ordered or walk.standing)), v, ordered or walk.standing)
         walk.restart(ordered)  # after every check: a refused start changes nothing
@@ -312,7 +314,7 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes, BoundedCalls):
     def sample_values(self, t: float) -> tuple[SampleValues, str, int]:
         """As :meth:`sample` but returns the values as a :class:`SampleValues` of plain floats, read by field (for
         tight loops), with the support and the phase."""
-        if t >= self._commit_time or t >= self._next_replan_time:
+        if t >= self._commit_time or t >= self._next_replan_time or t > MAX_TIME:
             self._catch_up(t)
         plan = self._plan
         if plan is None or not t >= plan.t_start:  # also rejects NaN
@@ -379,15 +381,6 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes, BoundedCalls):
         """Signed distance (m) of the sample's planned ZMP to its support polygon; negative = outside."""
         polygon = support_polygon(self.contact_feet(sample.phase), sole)
         return float(signed_margin(sample.zmp, polygon)[0])
-
-
-def _pair(name: str, value: Sequence[float] | None, default: tuple[float, float] | None) -> tuple[float, float] | None:
-    if value is None:
-        return default
-    pair = (float(value[0]), float(value[1]))
-    if not all(math.isfinite(v) for v in pair):
-        raise InputOutOfBoundsError(f"{name} must be finite, got {pair}")
-    return pair
 
 
 def straight_walk(config: PlannerConfig, steps: int, step_length: float) -> list[Stride]:
