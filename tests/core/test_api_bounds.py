@@ -32,11 +32,19 @@ from rtgait.core.input_bounds import (
     InputOutOfBoundsError,
 )
 from rtgait.core.laws.stepping import StepAdjustment
-from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, StepChangeTooLateError, straight_walk
+from rtgait.core.planner.online import (
+    CommandClampedWarning,
+    OnlinePlanner,
+    PlannerConfig,
+    StepChangeTooLateError,
+    StopCancelledWarning,
+    straight_walk,
+)
 
 SOLE = SoleRect(0.13, 0.10, 0.07, 0.07)
 DT = 0.001
 DOCUMENTED = (InputOutOfBoundsError, StepChangeTooLateError)
+WARNINGS = (CommandClampedWarning, StopCancelledWarning)
 
 
 def _observable(planner: OnlinePlanner) -> tuple:
@@ -211,6 +219,15 @@ def test_start_bounds():
     assert planner.sample(0.0).cog[:2] == pytest.approx([0.05, 0.0])
 
 
+def test_a_walk_whose_history_was_trimmed_cannot_start_again():
+    """Its first strides are gone: starting again would ask for footprints no longer kept (an IndexError)."""
+    config = PlannerConfig(timing=Timing(0.3, 0.1, start=0.3), history_steps=8)
+    planner, t = _walked(config, 12.0, steps=40)
+    assert planner.walk.base > 0
+    _refused(planner, lambda: planner.start(t), "history was trimmed")
+    assert np.all(np.isfinite(planner.sample(t).values))
+
+
 def test_time_bounds_of_sample_touchdown_and_replan_now():
     planner = OnlinePlanner(PlannerConfig(), None)  # a walk by command: no end to clamp a far time to
     planner.start(0.0)
@@ -263,8 +280,8 @@ def test_walk_changes_refuse_with_the_bounds_error_and_change_nothing():
 
 # ----- random call streams -----------------------------------------------------------------------------------------
 WILD = (math.nan, math.inf, -math.inf, 1e300, -1e300, 1e9, -1e9)
-STREAM_SEEDS = range(4)
-STREAM_TICKS = 2500
+STREAM_SEEDS = range(6)
+STREAM_TICKS = 4000
 CALL_SECONDS = 0.5
 """Longest one call may take before it counts as a hang (s): the slowest, an auto change's predictions, takes ~1 ms."""
 
@@ -332,7 +349,9 @@ def _random_call(planner: OnlinePlanner, rng: np.random.Generator, t: float, s):
             x, y, yaw = _value(rng, f.x, 0.02), _value(rng, f.y, 0.02), _value(rng, f.yaw, 0.1)
             moved.append(Footstep(x, y, yaw, f.side) if all(map(math.isfinite, (x, y, yaw))) else f)
         return "set_footsteps", lambda p: p.set_footsteps(moved)
-    if r < 0.067:
+    if r < 0.066:
+        return "stop", lambda p: p.stop()
+    if r < 0.068:
         when = float(rng.choice([math.nan, math.inf, 1e300, t - 1.0, t + 0.5]))
         return "sample", lambda p: p.sample(when)
     return None
@@ -357,17 +376,22 @@ def _watchdog(seconds: float):
         signal.signal(signal.SIGALRM, previous)
 
 
-def _run_stream(seed: int) -> dict[str, int]:
-    rng = np.random.default_rng(seed)
-    config, by_command = _stream_config(seed)
+def _twins(config: PlannerConfig, by_command: bool, t0: float) -> list[OnlinePlanner]:
+    """Two planners of the same walk, started at ``t0`` (s)."""
     twins = []
     for _ in range(2):
         planner = OnlinePlanner(config, None if by_command else straight_walk(config, 12, 0.1))
-        planner.start(0.0)
+        planner.start(t0)
         if by_command:
             planner.set_velocity(0.2)
         twins.append(planner)
-    a, b = twins
+    return twins
+
+
+def _run_stream(seed: int) -> dict[str, int]:
+    rng = np.random.default_rng(seed)
+    config, by_command = _stream_config(seed)
+    a, b = twins = _twins(config, by_command, 0.0)
     counts = {"accepted": 0, "refused": 0}
     s = a.sample(0.0)
     b.sample(0.0)
@@ -386,9 +410,10 @@ def _run_stream(seed: int) -> dict[str, int]:
             before = _observable(a)
             began = time.perf_counter()
             try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")  # clamped commands and cancelled stops are said, not errors
+                with warnings.catch_warnings(record=True) as said:
+                    warnings.simplefilter("always")
                     result = call(a)
+                assert all(issubclass(w.category, WARNINGS) for w in said), [str(w.message) for w in said]
             except DOCUMENTED:
                 counts["refused"] += 1
                 assert _observable(a) == before, f"a refused {name} changed the planner (seed {seed}, t={t})"
@@ -405,9 +430,10 @@ def _run_stream(seed: int) -> dict[str, int]:
         twin = b.sample(t)
         assert np.all(np.isfinite(s.values)), f"a sample is not finite (seed {seed}, t={t})"
         assert s.values.tolist() == twin.values.tolist(), f"a refused call left a trace (seed {seed}, t={t})"
-        if t > a.end_time + 0.5:  # the walk is over (a far time accepted, a stop): both walk again from here
-            for planner in twins:
-                planner.start(t)
+        if t > a.end_time + 0.5:  # the walk is over (a far time accepted, a stop): a new walk from here
+            a, b = twins = _twins(config, by_command, t)
+            s = a.sample(t)
+            b.sample(t)
     return counts
 
 

@@ -307,7 +307,11 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
 
     # ----- sampling -------------------------------------------------------------------------------------
     def sample(self, t: float) -> GaitSample:
-        """COG (pos, vel, acc), ZMP, reference ZMP, feet poses, DCM and support at absolute time ``t`` (s)."""
+        """COG (pos, vel, acc), ZMP, reference ZMP, feet poses, DCM and support at absolute time ``t`` (s).
+
+        ``t`` must be finite, within :data:`~rtgait.core.input_bounds.MAX_TIME`, not before the plan under way and
+        less than :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` double supports past the next replan
+        (:class:`~rtgait.core.input_bounds.InputOutOfBoundsError` otherwise, nothing changed)."""
         values, support, phase = self.sample_values(t)
         return GaitSample(t, np.fromiter(values, float, len(values)), support, phase)
 

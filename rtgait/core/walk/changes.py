@@ -265,10 +265,14 @@ class WalkChanges:
 
     def restart(self, feet: tuple[Footstep, Footstep] | None = None) -> None:
         """Forget what was reached (a new start); with ``feet``, the walk starts from them: ``(F[0], F[1])``, the
-        foot that swings first, then the other. Strides are kept, so the footprints follow the new feet."""
+        foot that swings first, then the other. Strides are kept, so the footprints follow the new feet. A walk whose
+        first footprints are no longer kept (:attr:`base` > 0) cannot start again: its first strides are gone."""
+        if self.base:
+            raise InputOutOfBoundsError(
+                f"a walk whose history was trimmed (history_steps = {self.history_steps}) cannot start again: "
+                f"make a new planner"
+            )
         if feet is not None:
-            if self.base:
-                raise InputOutOfBoundsError("a walk whose history was trimmed cannot start again from new feet")
             self.standing = check_feet(feet)
             del self._prints[2:]
             self._prints[0:2] = self.standing
