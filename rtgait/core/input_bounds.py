@@ -16,8 +16,8 @@ Why these numbers, for a COM at height ``zc`` (m) under gravity ``g`` (m/s^2):
   (faster, a pendulum leg leaves the ground), and a COM falling from ``zc`` hits the ground at ``sqrt(2 g zc)``.
 * Landings (:class:`LandingBounds`): the stride box from the stance foot that the walk's and step adjustment's limits
   allow, widened by :data:`LANDING_TOLERANCE` for where a foot really lands, turned less than a quarter turn.
-* Positions within :data:`MAX_POSITION` of the origin, where double precision still resolves 1e-10 m, and times within
-  :data:`MAX_TIME` of zero.
+* Positions within :data:`MAX_POSITION` of the origin, where double precision still resolves 1e-10 m, headings within
+  :data:`MAX_YAW` and times within :data:`MAX_TIME` of zero.
 """
 
 from __future__ import annotations
@@ -56,6 +56,11 @@ still resolves 2e-6 s, well within a control tick. Beyond it a phase's duration 
 MAX_POSITION = 1e6
 """Largest ``|x|`` or ``|y|`` of a footprint or a measured COM (m): 1000 km from the origin, farther than any walk,
 where a coordinate still resolves 1e-10 m (double precision, relative 2.2e-16)."""
+
+MAX_YAW = 1e6
+"""Largest ``|yaw|`` of a footprint given to the planner (rad): an estimator may hand over an unwrapped heading, but
+not 160,000 turns of it; up to here a heading still resolves 1e-10 rad, while beyond ~1e16 wrapping it (and so
+the turn between two feet) is lost in round-off."""
 
 
 class _Pose(Protocol):
@@ -116,6 +121,14 @@ class LandingBounds(NamedTuple):
             )
 
 
+def check_footstep(name: str, footstep: _Pose) -> None:
+    """Raise :class:`InputOutOfBoundsError` naming ``name`` unless ``footstep``'s position is within
+    :data:`MAX_POSITION` (m) and its yaw within :data:`MAX_YAW` (rad)."""
+    check_position(name, footstep.x, footstep.y)
+    if not abs(footstep.yaw) <= MAX_YAW:
+        raise InputOutOfBoundsError(f"{name} yaw must be finite and within +-{MAX_YAW:g} rad, got {footstep.yaw}")
+
+
 def check_position(name: str, x: float, y: float) -> None:
     """Raise :class:`InputOutOfBoundsError` naming ``name`` unless ``x`` and ``y`` are finite and within
     :data:`MAX_POSITION` (m)."""
@@ -125,5 +138,5 @@ def check_position(name: str, x: float, y: float) -> None:
 
 __all__ = [
     "COM_REACH_HEIGHTS", "COM_SPEED_FROUDE", "LANDING_TOLERANCE", "MAX_POSITION", "MAX_TIME", "MAX_TURN",
-    "InputOutOfBoundsError", "LandingBounds", "check_position", "stride_components",
+    "MAX_YAW", "InputOutOfBoundsError", "LandingBounds", "check_footstep", "check_position", "stride_components",
 ]  # fmt: skip

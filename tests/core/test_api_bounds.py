@@ -129,13 +129,16 @@ def test_a_landing_turned_a_quarter_turn_or_more_is_refused_however_it_is_wrappe
     planner, t = _walked(PlannerConfig(), 1.3)
     stance = planner.walk.footprint(1)  # the swing foot lands on F[2] from F[1]
     landing = planner.walk.footprint(2)
-    for yaw in (2.5, -2.0, 2.5 + 2.0 * math.pi * 1e8):
+    for yaw in (2.5, -2.0, 2.5 + 2.0 * math.pi * 1e4):
         _refused(planner, lambda yaw=yaw: planner.touchdown(t, landing.side, landing.x, landing.y, yaw), "turns")
     assert planner.walk.footprint(1) == stance
-    # A heading of 1e9 rad is 0.577 rad once wrapped: a real (unwrapped) heading, accepted.
-    assert math.remainder(1e9, math.tau) == pytest.approx(0.5774, abs=1e-4)
-    planner.touchdown(t, landing.side, landing.x, landing.y, 1e9)
+    # An unwrapped heading is a heading: 1000 turns and 0.1 rad is accepted, but not 1e9 rad (0.577 rad once
+    # wrapped, yet beyond MAX_YAW), nor 1e300 rad, whose turn from the stance foot is lost in round-off.
+    for yaw in (1e9, -1e300):
+        _refused(planner, lambda yaw=yaw: planner.touchdown(t, landing.side, landing.x, landing.y, yaw), "yaw must be")
+    planner.touchdown(t, landing.side, landing.x, landing.y, 2000.0 * math.pi + 0.1)
     assert np.all(np.isfinite(planner.sample(t + 0.1).values))
+    assert planner.walk.footprint(3).yaw == pytest.approx(0.1, abs=1e-9), "the next footprint turns from 0.1 rad"
 
 
 def test_a_refused_landing_leaves_no_replan_behind():
@@ -272,6 +275,9 @@ def test_walk_changes_refuse_with_the_bounds_error_and_change_nothing():
     _refused(planner, lambda: planner.change_step(step, turn=2.0), "turn")
     _refused(planner, lambda: planner.set_velocity(math.inf), "vx")
     _refused(planner, lambda: planner.set_strides([]), "at least one stride")
+    nominal = planner.walk.footprint(step + 1)
+    unwound = [*planner.footprints()[2 : step + 1], Footstep(nominal.x, nominal.y, -1e300, nominal.side)]
+    _refused(planner, lambda: planner.set_footsteps(unwound), "footsteps.* yaw")
     prints = planner.footprints()  # F[i + 1] is where step i lands: steps before `step` are walked
     nominal = prints[step + 1]
     wild = [*prints[2 : step + 1], Footstep(nominal.x + 5.0, nominal.y, nominal.yaw, nominal.side)]
@@ -391,7 +397,7 @@ def _twins(config: PlannerConfig, by_command: bool, t0: float) -> list[OnlinePla
 def _run_stream(seed: int) -> dict[str, int]:
     rng = np.random.default_rng(seed)
     config, by_command = _stream_config(seed)
-    a, b = twins = _twins(config, by_command, 0.0)
+    a, b = _twins(config, by_command, 0.0)
     counts = {"accepted": 0, "refused": 0}
     s = a.sample(0.0)
     b.sample(0.0)
@@ -431,7 +437,7 @@ def _run_stream(seed: int) -> dict[str, int]:
         assert np.all(np.isfinite(s.values)), f"a sample is not finite (seed {seed}, t={t})"
         assert s.values.tolist() == twin.values.tolist(), f"a refused call left a trace (seed {seed}, t={t})"
         if t > a.end_time + 0.5:  # the walk is over (a far time accepted, a stop): a new walk from here
-            a, b = twins = _twins(config, by_command, t)
+            a, b = _twins(config, by_command, t)
             s = a.sample(t)
             b.sample(t)
     return counts

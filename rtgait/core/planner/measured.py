@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from typing import Literal
 
 from rtgait.core.geometry.footsteps import SIDES, Footstep, Side
-from rtgait.core.input_bounds import InputOutOfBoundsError, check_position
+from rtgait.core.input_bounds import MAX_YAW, InputOutOfBoundsError, check_position
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.lipm.pattern import PatternKey, PlanOperator
 from rtgait.core.planner.active_plan import PlanLayout
@@ -108,9 +108,9 @@ class MeasuredPlanning:
         ``"touchdown"``), so the ZMP rests on the new footprint from the end of the phase under way on (unless the
         phase ends within :data:`MIN_REMAINDER`: then the replan at the next double-support start does it).
 
-        Bounds (:mod:`rtgait.core.input_bounds`): ``t`` finite, not before the latest sample and, like a sample's,
-        at most :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` double supports ahead; ``x``, ``y`` within
-        :data:`~rtgait.core.input_bounds.MAX_POSITION`; the footprint within the landing box
+        Bounds (:mod:`rtgait.core.input_bounds`): ``t`` within ``MAX_TIME``, not before the latest sample and, like
+        a sample's, at most :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` double supports ahead; ``x``, ``y``
+        within ``MAX_POSITION``, ``yaw`` within ``MAX_YAW``; the footprint within the landing box
         (:class:`~rtgait.core.input_bounds.LandingBounds`, :func:`~rtgait.core.planner.bounded.landing_bounds`) of
         the foot it stepped from: turned less than a quarter turn, within the walk's and step adjustment's stride
         limits (or the stride planned there, if longer) plus :data:`~rtgait.core.input_bounds.LANDING_TOLERANCE`.
@@ -124,8 +124,8 @@ class MeasuredPlanning:
             raise InputOutOfBoundsError(f"side must be 'left' or 'right', got {side!r}")
         x, y, yaw = float(x), float(y), float(yaw)
         check_position("touchdown (x, y)", x, y)
-        if not math.isfinite(yaw):
-            raise InputOutOfBoundsError(f"yaw must be finite, got {yaw}")
+        if not abs(yaw) <= MAX_YAW:  # also refuses NaN
+            raise InputOutOfBoundsError(f"yaw must be finite and within +-{MAX_YAW:g} rad, got {yaw}")
         with self._atomic():  # which footprint landed is known once t is sampled: a refused landing undoes that
             return self._touchdown(t, Footstep(x, y, yaw, side))
 

@@ -37,7 +37,7 @@ import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride, check_step_timings, midpoint
 from rtgait.core.geometry.support import signed_margin, support_polygon
-from rtgait.core.input_bounds import MAX_TIME, MAX_TURN, InputOutOfBoundsError, check_position
+from rtgait.core.input_bounds import MAX_TIME, MAX_TURN, InputOutOfBoundsError, check_footstep
 from rtgait.core.laws.stepping import StepDecision
 from rtgait.core.limits import MAX_STEPS
 from rtgait.core.lipm.closed_form import CogTrajectory, omega
@@ -161,8 +161,9 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
 
         Args:
             feet: the measured standing feet, ``(left, right)`` as :class:`Footstep`s at any position and heading
-                (within :data:`~rtgait.core.input_bounds.MAX_POSITION` of the origin, at most 2 m apart, turned less
-                than a quarter turn from each other); default: side by side at the origin heading +x. The walk
+                (within :data:`~rtgait.core.input_bounds.MAX_POSITION` of the origin, headings within
+                :data:`~rtgait.core.input_bounds.MAX_YAW`, at most 2 m apart, turned less than a quarter turn from
+                each other); default: side by side at the origin heading +x. The walk
                 heads where the feet point: strides and velocity commands are relative to them.
             cog: the measured horizontal COG position (m), within reach of the feet (``docs/closed_loop.md``);
                 default: between the feet.
@@ -180,7 +181,7 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
             if left.side != "left" or right.side != "right":
                 raise InputOutOfBoundsError(f"feet must be (left, right), got ({left.side}, {right.side})")
             for foot in (left, right):
-                check_position(f"feet ({foot.side})", foot.x, foot.y)
+                check_footstep(f"feet ({foot.side})", foot)
             if not abs(math.remainder(left.yaw - right.yaw, math.tau)) < MAX_TURN:
                 raise InputOutOfBoundsError(
                     f"feet must be turned less than {MAX_TURN:.4f} rad from each other, got yaws {left.yaw} and "

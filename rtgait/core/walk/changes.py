@@ -27,7 +27,7 @@ from collections.abc import Iterator, Sequence
 from typing import TypeVar
 
 from rtgait.core.geometry.footsteps import Footstep, Stride, Timeline, stride_between
-from rtgait.core.input_bounds import InputOutOfBoundsError
+from rtgait.core.input_bounds import InputOutOfBoundsError, check_footstep
 from rtgait.core.limits import MAX_STEPS
 from rtgait.core.walk.velocity_command import VelocityCommand, warn_if_clamped
 
@@ -163,6 +163,8 @@ class WalkChanges:
             raise InputOutOfBoundsError("set_footsteps needs at least one footstep")
         if not all(isinstance(f, Footstep) for f in footsteps):
             raise InputOutOfBoundsError("set_footsteps needs Footstep values")
+        for k, footstep in enumerate(footsteps):
+            check_footstep(f"footsteps[{k}]", footstep)
         check_walk_length(len(footsteps))
         self._check_not_ending()
         first_open = self.first_open_step()
