@@ -97,8 +97,8 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
     ``docs/closed_loop.md``) before anything changes: a refused call raises
     :class:`~rtgait.core.input_bounds.InputOutOfBoundsError` (a ``ValueError``) naming the argument and the bound, or
     :class:`StepChangeTooLateError` past a deadline, and leaves the planner exactly as it was. Calls out of order
-    (``observe``'s replan, ``touchdown`` or ``replan_now`` before :meth:`start`) raise ``RuntimeError``: a
-    programming error, not a measurement.
+    (``sample`` or ``touchdown`` before :meth:`start`, ``replan_now`` before the first sample) raise
+    ``RuntimeError``: a programming error, not a measurement.
     """
 
     def __init__(self, config: PlannerConfig, strides: Sequence[Stride] | None = None) -> None:
@@ -163,8 +163,8 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
             feet: the measured standing feet, ``(left, right)`` as :class:`Footstep`s at any position and heading
                 (within :data:`~rtgait.core.input_bounds.MAX_POSITION` of the origin, headings within
                 :data:`~rtgait.core.input_bounds.MAX_YAW`, at most 2 m apart, turned less than a quarter turn from
-                each other); default: side by side at the origin heading +x. The walk
-                heads where the feet point: strides and velocity commands are relative to them.
+                each other); default: side by side at the origin heading +x. The walk heads where the feet point:
+                strides and velocity commands are relative to them.
             cog: the measured horizontal COG position (m), within reach of the feet (``docs/closed_loop.md``);
                 default: between the feet.
             cog_vel: the measured horizontal COG velocity (m/s), below the speed bound; default: at rest.
