@@ -43,6 +43,7 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
+from rtgait.robot.drives import joint_drives
 from rtgait.robot.model import RobotModel
 
 __all__ = ["Actuation", "ReferenceInterpolator", "add_actuators", "carried_inertia", "resolve_actuation", "substeps"]
@@ -188,11 +189,6 @@ class Actuation:
         ]
 
 
-def _effort_limit(value: float) -> float:
-    """A URDF effort limit as a torque limit: missing (Pinocchio's huge default), 0 or not finite means none."""
-    return value if math.isfinite(value) and 0.0 < value < 1e30 else math.inf
-
-
 def resolve_actuation(robot: RobotModel, control_dt: float | None = None, physics_dt: float = 0.001) -> Actuation:
     """Every moving joint's actuation: the description's values, else defaults derived from the URDF (see the
     module docstring).
@@ -210,15 +206,11 @@ def resolve_actuation(robot: RobotModel, control_dt: float | None = None, physic
         control_dt = description.actuation.control_dt
     substeps(control_dt, physics_dt)
     distal, carried = carried_inertia(robot)
-    model = robot.model
-    kp, kd, armature, limits = [], [], [], []
+    limits, armature = joint_drives(robot)
+    kp, kd = [], []
     for i, name in enumerate(robot.joint_names):
         spec = description.joint_actuation(name)
-        joint = model.joints[model.getJointId(name)]
-        limit = spec.effort_limit if spec.effort_limit is not None else _effort_limit(model.effortLimit[joint.idx_v])
-        rotor = spec.armature
-        if rotor is None:
-            rotor = spec.armature_per_torque * limit if math.isfinite(limit) else 0.0
+        rotor = float(armature[i])
         omega = 2.0 * math.pi * spec.natural_frequency
         joint_kp = spec.kp if spec.kp is not None else omega * omega * (rotor + float(carried[i]))
         kp.append(joint_kp)
@@ -227,14 +219,12 @@ def resolve_actuation(robot: RobotModel, control_dt: float | None = None, physic
             if spec.kd is not None
             else 2.0 * spec.damping_ratio * math.sqrt(joint_kp * (rotor + float(distal[i])))
         )
-        armature.append(rotor)
-        limits.append(limit)
     return Actuation(
         joint_names=robot.joint_names,
         kp=np.array(kp),
         kd=np.array(kd),
-        armature=np.array(armature),
-        effort_limit=np.array(limits),
+        armature=armature,
+        effort_limit=limits,
         carried_inertia=carried,
         control_dt=float(control_dt),
         physics_dt=float(physics_dt),
