@@ -24,7 +24,7 @@ accelerometer's reading is, :mod:`rtgait.estimation.velocity_filter`), the torqu
 then errs by the torque's change over half a period.
 
 Leaving the dynamics out (``tau_id`` the gravity torques alone, the quasi-static estimate) errs on a swinging G1 leg
-by 14 N RMS and up to 36 N, and by up to 80 N as the leg stops after an impact (``docs/estimation.md``); the base's
+by 16 N RMS and up to 33 N, and by up to 86 N as the leg stops after an impact (``docs/estimation.md``); the base's
 angular acceleration matters most at impacts, when the pelvis pitches and rolls with the swing leg hanging from it.
 
 **Filter.** ``F^_k = beta F^_k-1 + (1 - beta) F_k``, ``beta = exp(-2 pi f_c dt)``: a first-order low-pass, which is
