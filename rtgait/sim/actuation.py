@@ -42,8 +42,8 @@ from dataclasses import dataclass, replace
 import mujoco
 import numpy as np
 
+from rtgait.robot.drives import joint_drives
 from rtgait.robot.joint_inertia import carried_inertia
-from rtgait.robot.joint_limits import urdf_limit
 from rtgait.robot.model import RobotModel
 
 __all__ = ["Actuation", "ReferenceInterpolator", "add_actuators", "carried_inertia", "resolve_actuation", "substeps"]
@@ -177,17 +177,11 @@ def resolve_actuation(robot: RobotModel, control_dt: float | None = None, physic
         control_dt = description.actuation.control_dt
     substeps(control_dt, physics_dt)
     distal, carried = carried_inertia(robot)
-    model = robot.model
-    kp, kd, armature, limits = [], [], [], []
+    limits, armature = joint_drives(robot)
+    kp, kd = [], []
     for i, name in enumerate(robot.joint_names):
         spec = description.joint_actuation(name)
-        joint = model.joints[model.getJointId(name)]
-        limit = spec.effort_limit
-        if limit is None:
-            limit = urdf_limit(float(model.effortLimit[joint.idx_v]))
-        rotor = spec.armature
-        if rotor is None:
-            rotor = spec.armature_per_torque * limit if math.isfinite(limit) else 0.0
+        rotor = float(armature[i])
         omega = 2.0 * math.pi * spec.natural_frequency
         joint_kp = spec.kp if spec.kp is not None else omega * omega * (rotor + float(carried[i]))
         kp.append(joint_kp)
@@ -196,14 +190,12 @@ def resolve_actuation(robot: RobotModel, control_dt: float | None = None, physic
             if spec.kd is not None
             else 2.0 * spec.damping_ratio * math.sqrt(joint_kp * (rotor + float(distal[i])))
         )
-        armature.append(rotor)
-        limits.append(limit)
     return Actuation(
         joint_names=robot.joint_names,
         kp=np.array(kp),
         kd=np.array(kd),
-        armature=np.array(armature),
-        effort_limit=np.array(limits),
+        armature=armature,
+        effort_limit=limits,
         carried_inertia=carried,
         control_dt=float(control_dt),
         physics_dt=float(physics_dt),
