@@ -117,7 +117,7 @@ def add_friction(spec: mujoco.MjSpec, motors: MotorModel) -> None:
     for i, name in enumerate(motors.joint_names):
         joint = spec.joint(name)
         joint.frictionloss = float(motors.coulomb_friction[i])
-        joint.damping = float(motors.viscous_friction[i])
+        joint.damping = [float(motors.viscous_friction[i]), 0.0, 0.0]  # linear; no polynomial terms
         actuator = spec.actuator(name)
         actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
         actuator.forcerange = [float(ranges[i, 0]), float(ranges[i, 1])]
