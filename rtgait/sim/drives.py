@@ -77,7 +77,8 @@ class Drives:
         self._pending: deque[_Entry] = deque()
         self._motors = sim.motors
         if sim.motors is not None:
-            self._velocity_index, self._qvel = sim.dof_index, data.qvel
+            ranges = sim.model.actuator_forcerange
+            self._bounds = (sim.motors.bounds, *_velocities(data, sim.dof_index), ranges[:, 0], ranges[:, 1])
         self._gains(*self._own)
         if sim.motors is not None:
             sim.motors.standstill(sim.model.actuator_forcerange)
@@ -189,9 +190,18 @@ class Drives:
             ctrl[:] = self._ctrl  # the last substep reaches the new command exactly
         else:
             np.add(self._ctrl_previous, (i + 1) * self._ctrl_step, out=ctrl)
-        motors = self._motors
-        if motors is not None:
-            motors.bounds(self._qvel[self._velocity_index], self._model.actuator_forcerange)
+        if self._motors is not None:
+            bounds, qvel, index, lower, upper = self._bounds
+            bounds(qvel if index is None else qvel[index], lower, upper)
+
+
+def _velocities(data: mujoco.MjData, index: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """The joints' velocities in ``data.qvel``: a view when their addresses follow one another (no index needed),
+    else ``qvel`` and the index to take."""
+    start = int(index[0])
+    if np.array_equal(index, np.arange(start, start + len(index))):
+        return data.qvel[start : start + len(index)], None
+    return data.qvel, index
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:

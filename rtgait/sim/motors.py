@@ -56,26 +56,32 @@ class MotorModel:
     effort_limit: np.ndarray
 
     def __post_init__(self) -> None:
-        # The slope's inverse and the capped braking torque, computed once for the per-step bounds.
+        # What the per-step bounds need, computed once: the slope, the driving torque's cap and the braking torques.
         object.__setattr__(self, "_per_speed", self.peak_torque / (self.no_load_speed - self.corner_speed))
-        object.__setattr__(self, "_brake", np.minimum(self.braking_torque, self.effort_limit))
+        object.__setattr__(self, "_drive_cap", np.minimum(self.peak_torque, self.effort_limit))
+        brake = np.minimum(self.braking_torque, self.effort_limit)
+        object.__setattr__(self, "_brake", (brake, -brake))
 
     def driving_torque(self, velocity: np.ndarray) -> np.ndarray:
-        """``min(T_max, T_drive(|dq|))`` per joint at joint velocities ``velocity`` (rad/s), in N m."""
-        fall = self._per_speed * (self.no_load_speed - np.abs(velocity))  # type: ignore[attr-defined]
-        return np.minimum(np.clip(fall, 0.0, self.peak_torque), self.effort_limit)
+        """``min(T_max, T_drive(|dq|))`` per joint at joint velocities ``velocity`` (rad/s), in N m (a new array)."""
+        torque = np.abs(velocity)
+        np.subtract(self.no_load_speed, torque, out=torque)
+        np.multiply(torque, self._per_speed, out=torque)  # type: ignore[attr-defined]
+        np.minimum(torque, self._drive_cap, out=torque)  # type: ignore[attr-defined]
+        return np.maximum(torque, 0.0, out=torque)
 
-    def bounds(self, velocity: np.ndarray, out: np.ndarray) -> None:
-        """Write the actuators' force ranges at joint velocities ``velocity`` (rad/s) into ``out`` (shape ``(n, 2)``,
-        e.g. ``model.actuator_forcerange``), in N m: the module docstring's ``lower`` and ``upper``."""
+    def bounds(self, velocity: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> None:
+        """Write the actuators' force bounds at joint velocities ``velocity`` (rad/s) into ``lower`` and ``upper``
+        (e.g. the columns of ``model.actuator_forcerange``), in N m: the module docstring's."""
         drive = self.driving_torque(velocity)
-        brake = self._brake  # type: ignore[attr-defined]
-        out[:, 1] = np.where(velocity >= 0.0, drive, brake)
-        out[:, 0] = -np.where(velocity <= 0.0, drive, brake)
+        brake, against = self._brake  # type: ignore[attr-defined]
+        upper[:] = np.where(velocity >= 0.0, drive, brake)
+        lower[:] = np.where(velocity <= 0.0, np.negative(drive, out=drive), against)
 
     def standstill(self, out: np.ndarray) -> None:
-        """Write the force ranges at standstill (``+-min(T_max, T_peak)``) into ``out`` (shape ``(n, 2)``)."""
-        self.bounds(np.zeros(len(self.joint_names)), out)
+        """Write the force ranges at standstill (``+-min(T_max, T_peak)``) into ``out`` (shape ``(n, 2)``, e.g.
+        ``model.actuator_forcerange``)."""
+        self.bounds(np.zeros(len(self.joint_names)), out[:, 0], out[:, 1])
 
 
 def resolve_motors(robot: RobotModel, actuation: Actuation) -> MotorModel:
