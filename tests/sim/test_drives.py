@@ -261,3 +261,55 @@ def test_the_motor_model_needs_a_motor_for_every_joint_and_robot_gains_need_gain
         SimConfig(gains="soft")
     with pytest.raises(ValueError, match=r"SimConfig\.command_delay must be"):
         SimConfig(command_delay=-1)
+
+
+def test_the_default_drives_compute_the_position_servos_controls_bit_for_bit(shorten, monkeypatch):
+    """The default settings (stiff gains, no motor model, no delay) keep the runs' outputs: the model's actuators are
+    the position servos as built (gain kp, bias -kp q - kd dq, the torque limits, the URDF's joint friction), and
+    every physics step's control is the servos' arithmetic, replayed here bit for bit: ``c = q_ref + (kd / kp) dq_ref
+    - o`` per command, ``c_prev + (i + 1) ((c - c_prev) / n)`` at substep ``i < n - 1``, ``c`` at the last. G1: four
+    substeps; a model error: encoder offsets."""
+    from rtgait.io.sim_run import simulate
+    from rtgait.robot.model import RobotModel
+    from rtgait.sim.loop import LoopOptions
+    from rtgait.sim.model import SETTLE_TIME
+
+    robot = RobotModel.load("g1")
+    sim = build_sim_model(robot, SimConfig(meshes=False, model_error=5))
+    model, actuation = sim.model, sim.actuation
+    assert sim.motors is None and sim.command_delay == 0 and actuation.gains == "stiff"
+    np.testing.assert_array_equal(model.actuator_gainprm[:, 0], actuation.kp)
+    np.testing.assert_array_equal(model.actuator_biasprm[:, 1:3], np.column_stack([-actuation.kp, -actuation.kd]))
+    np.testing.assert_array_equal(model.actuator_forcerange[:, 1], actuation.effort_limit)
+    assert not model.dof_frictionloss[sim.dof_index].any() and not model.dof_damping[sim.dof_index].any()
+    written, controls = [], []
+    write, step = SimRobot.write, mujoco.mj_step
+
+    def recording_write(robot_, command):
+        written.append((command.positions.copy(), command.velocities.copy()))
+        write(robot_, command)
+
+    def recording_step(model_, data):
+        controls.append(data.ctrl.copy())
+        step(model_, data)
+
+    monkeypatch.setattr(SimRobot, "write", recording_write)
+    monkeypatch.setattr(mujoco, "mj_step", recording_step)
+    result = simulate(
+        shorten("fig8", 1), robot, sim=sim, options=LoopOptions(start_ramp=0.3, start_hold=0.0, after=0.0)
+    )
+    monkeypatch.undo()
+    n = sim.substeps
+    periods = np.array(controls[round(SETTLE_TIME / sim.timestep) :]).reshape(len(written), n, -1)
+    assert len(written) == len(result.times) and n == 4
+    lead, offsets = actuation.kd / actuation.kp, sim.encoder_offsets
+    previous = None
+    for (q_ref, dq_ref), period in zip(written, periods, strict=True):
+        control = q_ref + lead * dq_ref
+        control -= offsets
+        if previous is not None:
+            increment = (control - previous) * (1.0 / n)
+            for i in range(n - 1):
+                np.testing.assert_array_equal(period[i], previous + (i + 1) * increment)
+        np.testing.assert_array_equal(period[-1], control)
+        previous = control
