@@ -219,7 +219,7 @@ class ClosedLoop:
 
         # ----- loop state ----------------------------------------------------------------------------------------
         # The complete per-tick record (sim.parquet) of a whole run; a ring run (a live session) keeps none.
-        self.log = TickLog(sim, data, self.robot.servo, capacity, planner.w) if keep is None else None
+        self.log = TickLog(sim, data, self.robot.drives, capacity, planner.w) if keep is None else None
         # The hook, footstep changes, velocity commands and stop of the walk, at their times (loop_inputs.py).
         on_stop = self._follow_walk_end if self._can_grow else None  # steps held longer before the walk had an end
         self._inputs = WalkInputs(planner, options, stop_after, on_stop)

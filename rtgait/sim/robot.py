@@ -1,22 +1,18 @@
 """The simulated robot behind :class:`~rtgait.interface.robot.RobotInterface`: MuJoCo's state read as the robot's
-encoders and drives report it, joint commands written to its position-controlled drives, and the simulator's truth
-on its own channel (:class:`~rtgait.interface.robot.GroundTruthSource`).
+encoders and drives report it, joint commands written to its drives, and the simulator's truth on its own channel
+(:class:`~rtgait.interface.robot.GroundTruthSource`).
 
-The drives are MuJoCo position actuators with the gains of the robot description's ``[actuation]``
-(:mod:`rtgait.sim.actuation`): a command's ``q_ref`` and ``dq_ref`` are interpolated linearly over the control
-period's physics substeps. A **damping** command (``kp`` all 0, ``kd`` given, no torque or all 0: Unitree's damping
-mode, the one the stack's safety layer sends, :mod:`rtgait.stack.safety`) switches each drive to
-
-    tau = kd (dq_ref - dq)                                                             (N m)
-
-within its torque limit: the actuator's gain becomes ``kd`` on ``ctrl = dq_ref`` and its bias ``-kd dq``, integrated
-implicitly like the servos' damping. MuJoCo has no per-data gains: they are set in the model's actuator parameters,
-so one :class:`SimRobot` drives a model at a time; a new one, and the next position command, put the servo gains
-back (that command is interpolated from the last one before the damping). What it does not simulate yet is refused,
-not ignored: other gains, feed-forward torques. The readings are those of the robot description's ``[sensors]``
-(:mod:`rtgait.sim.sensors`): encoders, joint torques, the IMU and the feet's force sensors where the robot has them.
-With a model error (:mod:`rtgait.sim.model_error`) the encoders read the joints plus their zero offsets, and the
-drives servo those readings to the commanded references.
+The drives take the whole :class:`~rtgait.interface.command.JointCommand`, as G1's motors and a ros_control joint do:
+``tau = tau_ff + kp (q_ref - q) + kd (dq_ref - dq)`` at every physics step, within the torque limit or the motor's
+envelope, the gains left out of a command the description's (``SimConfig.gains``), a command applied
+``SimConfig.command_delay`` periods after it is written (:mod:`rtgait.sim.drives`). A **damping** command (``kp`` all
+0, ``kd`` given: Unitree's damping mode, the one the stack's safety layer sends, :mod:`rtgait.stack.safety`) is one
+of them: ``tau = kd (dq_ref - dq)``. MuJoCo has no per-data gains: the drives set them in the model's actuator
+parameters, so one :class:`SimRobot` drives a model at a time; a new one puts the model's own gains back. The
+readings are those of the robot description's ``[sensors]`` (:mod:`rtgait.sim.sensors`): encoders, joint torques (the
+drives'), the IMU and the feet's force sensors where the robot has them. With a model error
+(:mod:`rtgait.sim.model_error`) the encoders read the joints plus their zero offsets, and the drives servo those
+readings to the commanded references.
 """
 
 from __future__ import annotations
@@ -29,8 +25,8 @@ import numpy as np
 from rtgait.interface.command import JointCommand
 from rtgait.interface.readings import SensorReadings
 from rtgait.interface.truth import GroundTruth
-from rtgait.sim.actuation import ReferenceInterpolator
 from rtgait.sim.contact_reading import ContactSums
+from rtgait.sim.drives import Drives
 from rtgait.sim.ground_truth import GroundTruthReader
 from rtgait.sim.sensors import SensorModel
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
@@ -51,6 +47,7 @@ class SimRobot:
 
     Attributes:
         joint_names: the moving joints, the order of every per-joint array read or written.
+        drives: the joints' drives (:class:`~rtgait.sim.drives.Drives`): the command they apply now, their gains.
         sensors: the sensors' noise, biases and latency behind :meth:`read` (:class:`~rtgait.sim.sensors.SensorModel`,
             with the settings of ``sim.config.sensors``).
     """
@@ -58,12 +55,12 @@ class SimRobot:
     def __init__(self, sim: SimModel, data: mujoco.MjData, joints: np.ndarray) -> None:
         self.sim, self.data = sim, data
         self.joint_names = sim.joint_names
-        self.servo = ReferenceInterpolator(sim.actuation, joints, sim.encoder_offsets)
+        self.drives = Drives(sim, data, joints)  # the model's own gains, whatever a robot before this one left
         self.reader = GroundTruthReader.for_sim(sim)
         self.sensors = SensorModel(sim)
         self.substeps = sim.substeps
         self._model, self._ctrl = sim.model, data.ctrl
-        self._servos()  # the model's actuators as built, whatever a robot before this one left
+        self._apply = self.drives.apply
         # The first substep's contacts and sites, decoded once, when they are also the next tick's truth.
         self._last: tuple[StepSnapshot, ContactSums] | None = None
 
@@ -76,59 +73,18 @@ class SimRobot:
         return self.sensors.read(data.sensordata, float(data.time))
 
     def write(self, command: JointCommand) -> None:
-        """The drives' references for the coming control period (the arrays are kept: pass new ones each period):
-        a position command, or a damping command (module docstring).
+        """The drives' command for the coming control period (module docstring; without a command delay the arrays
+        are kept: pass new ones each period).
 
         Raises:
-            ValueError: a command with other gains or with feed-forward torques, which the simulated drives do not
-                take; a damping command with gains that are not finite and >= 0, or a velocity that is not finite.
+            ValueError: an array of the wrong shape or not finite, or gains that are not >= 0.
         """
-        if command.kp is None and command.kd is None and command.torques is None:
-            if self._damping is not None:
-                self._servos()
-            self.servo.command(command.positions, command.velocities)
-            return
-        self._damp(command)
-
-    def _damp(self, command: JointCommand) -> None:
-        """Switch the drives to damping with ``command``'s ``kd`` and ``dq_ref`` (module docstring)."""
-        kp, kd, torques, n = command.kp, command.kd, command.torques, len(self.joint_names)
-        if kp is None or kd is None or np.any(kp != 0.0) or (torques is not None and np.any(torques != 0.0)):
-            raise ValueError(
-                "the simulated drives take position commands (JointCommand.kp, kd and torques None) or damping "
-                "commands (kp all 0, kd given, torques None or 0): other gains and feed-forward torques are not "
-                "simulated yet"
-            )
-        kd = np.asarray(kd, dtype=float)
-        velocity = np.asarray(command.velocities, dtype=float)
-        if kd.shape != (n,) or not (np.isfinite(kd).all() and (kd >= 0.0).all()):
-            raise ValueError(f"a damping command's kd must be {n} finite gains >= 0 N m s/rad, got {command.kd!r}")
-        if velocity.shape != (n,) or not np.isfinite(velocity).all():
-            raise ValueError(f"a damping command's velocities must be {n} finite values (rad/s)")
-        model = self._model
-        model.actuator_gainprm[:, 0] = kd  # force = kd ctrl - kd dq, ctrl = dq_ref
-        model.actuator_biasprm[:, 1] = 0.0
-        model.actuator_biasprm[:, 2] = -kd
-        self._damping = velocity.copy()
-        self._apply = self._damp_apply
-
-    def _damp_apply(self, i: int, ctrl: np.ndarray) -> None:
-        """Substep ``i``'s controls in damping: the velocity reference."""
-        ctrl[:] = self._damping
-
-    def _servos(self) -> None:
-        """The drives back to their position servos (:func:`rtgait.sim.actuation.add_actuators`'s parameters)."""
-        actuation, model = self.sim.actuation, self._model
-        model.actuator_gainprm[:, 0] = actuation.kp
-        model.actuator_biasprm[:, 1] = -actuation.kp
-        model.actuator_biasprm[:, 2] = -actuation.kd
-        self._damping: np.ndarray | None = None
-        self._apply = self.servo.apply
+        self.drives.command(command)
 
     @property
     def damping(self) -> bool:
-        """Whether the drives are in damping (the last command was a damping command)."""
-        return self._damping is not None
+        """Whether the drives hold no position (the command they apply has ``kp`` all 0: damping)."""
+        return self.drives.damping
 
     # ----- GroundTruthSource ---------------------------------------------------------------------------------------
     def ground_truth(self, t: float | None = None, velocities: bool = False) -> GroundTruth:

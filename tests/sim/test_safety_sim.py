@@ -123,18 +123,22 @@ def test_the_damping_drives_apply_kd_times_minus_the_joint_velocity(talos, talos
     np.testing.assert_array_equal(talos_sim.model.actuator_biasprm[:, 2], -actuation.kd)
 
 
-def test_the_drives_refuse_commands_they_do_not_simulate(talos_sim):
+def test_the_drives_refuse_bad_commands_and_change_nothing(talos_sim):
     data = talos_sim.new_data()
     q = data.qpos[talos_sim.qpos_index].copy()
     body = SimRobot(talos_sim, data, q)
     n = len(q)
-    with pytest.raises(ValueError, match="not simulated yet"):
-        body.write(JointCommand(q, np.zeros(n), None, np.ones(n), np.ones(n)))  # kp > 0
-    with pytest.raises(ValueError, match="not simulated yet"):
-        body.write(JointCommand(q, np.zeros(n), np.ones(n), np.zeros(n), np.ones(n)))  # a torque
+    gains = talos_sim.model.actuator_gainprm[:, 0].copy()
     with pytest.raises(ValueError, match="kd must be"):
         body.write(JointCommand(q, np.zeros(n), None, np.zeros(n), -np.ones(n)))
+    with pytest.raises(ValueError, match="kp must be"):
+        body.write(JointCommand(q, np.zeros(n), None, np.ones(n - 1), np.ones(n)))
+    with pytest.raises(ValueError, match="torques must be"):
+        body.write(JointCommand(q, np.zeros(n), np.full(n, np.nan)))
+    with pytest.raises(ValueError, match="positions must be"):
+        body.write(JointCommand(np.full(n, np.inf), np.zeros(n), np.zeros(n)))
     assert not body.damping
+    np.testing.assert_array_equal(talos_sim.model.actuator_gainprm[:, 0], gains)
 
 
 class FailingEstimator:
