@@ -32,16 +32,17 @@ are the same in every frame, so the sum can be taken about the sole points' midp
 
     y = B^-1 r / 2,     f_1 = s_1 F + y x d,    f_2 = s_2 F - y x d,    tau_i = (c_i - p_i) x s_i F + L^2 y
 
-(no solver). When that leaves a cone (a CoP beyond its sole, friction beyond ``mu``, a pulling foot), or in single
-support when the stance foot's cone does not hold ``W``, a small QP runs instead, on the corner forces ``lambda >= 0``
-of the generators ``G_i`` (``w_i = G_i lambda_i``, so every wrench it gives is in its cone), the sum as rows of weight
-:data:`SUM_WEIGHT`:
+(no solver). When that leaves a cone (a CoP beyond its sole, friction beyond ``mu``, a pulling foot) and the split asks
+everything of one foot whose cone holds ``W`` (the commanded ZMP at the end of the segment between the feet), that foot
+takes it all. Otherwise, and in single support when the stance foot's cone does not hold ``W``, a small QP runs, on the
+corner forces ``lambda >= 0`` of the generators ``G_i`` (``w_i = G_i lambda_i``, so every wrench it gives is in its
+cone), the sum as rows of weight :data:`SUM_WEIGHT`:
 
     min  SUM_WEIGHT^2 |S (sum X_i G_i lambda_i - W)|^2 + sum |S (G_i lambda_i - w_i^d)|^2,   lambda >= 0
 
-(non-negative least squares, ``scipy.optimize.nnls``, some 50 us; in single support ``w^d`` is the exact wrench). A
-required wrench no cone can give (the motion's ZMP outside the support polygon) gets the nearest one they can; its
-:attr:`WrenchDistribution.residual` says how far.
+(non-negative least squares, ``scipy.optimize.nnls``: some 60 us a tick with the matrix; in single support ``w^d`` is
+the exact wrench). A required wrench no cone can give (the motion's ZMP outside the support polygon) gets the nearest
+one they can; its :attr:`WrenchDistribution.residual` says how far.
 """
 
 from __future__ import annotations
@@ -170,6 +171,8 @@ class WrenchDistributor:
         length = self.cones[0].length
         self._length2 = length * length
         self._scale = np.array([1.0, 1.0, 1.0, 1.0 / length, 1.0 / length, 1.0 / length])
+        self._sum_scale = SUM_WEIGHT * self._scale
+        self._scaled_generators = tuple(self._scale[:, None] * cone.generators for cone in self.cones)
         # Both cones' faces in one block matrix: one product checks both feet.
         self._faces = np.zeros((32, 12))
         self._faces[:16, :6] = self.cones[0].faces
@@ -222,6 +225,10 @@ class WrenchDistributor:
             wrenches = np.array((wl, wr))
             if float((self._faces @ wrenches.reshape(12)).max()) <= self._tolerance:
                 return WrenchDistribution(wrenches, "closed-form", 0.0)
+            if sl == 1.0 or sr == 1.0:  # all asked of one foot (the split at the segment's end): that foot alone?
+                alone = self._single(0 if sl == 1.0 else 1, frames, force, moment)
+                if alone.method == "single":
+                    return alone
             # The desired wrenches, for the QP (the closed form with y = 0).
             desired = np.array((
                 _local(left, sl * fx, sl * fy, sl * fz, cl, pl, sl, force, 0.0, (0.0, 0.0, 0.0)),
@@ -230,17 +237,26 @@ class WrenchDistributor:
             return self._qp(force, moment, frames, desired, (0, 1))
         if not (contact[0] or contact[1]):
             raise ValueError("at least one foot must be in contact to carry the robot")
-        i = 0 if contact[0] else 1
-        h = left if i == 0 else right
+        single = self._single(0 if contact[0] else 1, frames, force, moment)
+        if single.method == "single":
+            return single
+        return self._qp(force, moment, frames, single.wrenches, (0 if contact[0] else 1,))
+
+    def _single(
+        self, i: int, frames: Sequence[np.ndarray], force: Sequence[float], moment: Sequence[float]
+    ) -> WrenchDistribution:
+        """The whole wrench on foot ``i`` (0 left, 1 right): method ``"single"`` when its cone holds it, else
+        ``"outside"`` (the wrench as it is)."""
+        fx, fy, fz = force
+        nx, ny, nz = moment
+        h = frames[i].tolist()
         px, py, pz = h[0][3], h[1][3], h[2][3]
         # The whole wrench about the sole point: N - p x F.
         tx, ty, tz = nx - (py * fz - pz * fy), ny - (pz * fx - px * fz), nz - (px * fy - py * fx)
-        wrench = _rotate_back(h, fx, fy, fz) + _rotate_back(h, tx, ty, tz)
         wrenches = np.zeros((2, 6))
-        wrenches[i] = wrench
-        if float((self.cones[i].faces @ wrenches[i]).max()) <= self._tolerance:
-            return WrenchDistribution(wrenches, "single", 0.0)
-        return self._qp(force, moment, frames, wrenches, (i,))
+        wrenches[i] = _rotate_back(h, fx, fy, fz) + _rotate_back(h, tx, ty, tz)
+        inside = float((self.cones[i].faces @ wrenches[i]).max()) <= self._tolerance
+        return WrenchDistribution(wrenches, "single" if inside else "outside", 0.0)
 
     def _qp(
         self,
@@ -252,26 +268,22 @@ class WrenchDistributor:
     ) -> WrenchDistribution:
         """The corner-force QP of the module docstring for the feet ``feet``, ``desired`` of shape ``(2, 6)``."""
         self.qp_count += 1
-        scale, n = self._scale, 16
-        required = np.concatenate([np.asarray(force, dtype=float), np.asarray(moment, dtype=float)])
-        transforms = [force_transform(frames[i]) for i in (0, 1)]
+        n = 16
         rows = 6 * (1 + len(feet))
         matrix = np.zeros((rows, n * len(feet)))
         rhs = np.empty(rows)
-        rhs[0:6] = SUM_WEIGHT * scale * required
+        sum_scale = self._sum_scale
+        rhs[0:6] = sum_scale * np.array([*force, *moment])
         for k, i in enumerate(feet):
-            generators = self.cones[i].generators
             columns = slice(n * k, n * (k + 1))
-            matrix[0:6, columns] = SUM_WEIGHT * scale[:, None] * (transforms[i] @ generators)
-            matrix[6 * (k + 1) : 6 * (k + 2), columns] = scale[:, None] * generators
-            rhs[6 * (k + 1) : 6 * (k + 2)] = scale * desired[i]
+            matrix[0:6, columns] = (sum_scale[:, None] * force_transform(frames[i])) @ self.cones[i].generators
+            matrix[6 * (k + 1) : 6 * (k + 2), columns] = self._scaled_generators[i]
+            rhs[6 * (k + 1) : 6 * (k + 2)] = self._scale * desired[i]
         forces, _ = nnls(matrix, rhs)
         wrenches = np.zeros((2, 6))
-        total = np.zeros(6)
         for k, i in enumerate(feet):
             wrenches[i] = self.cones[i].generators @ forces[n * k : n * (k + 1)]
-            total += transforms[i] @ wrenches[i]
-        residual = float(np.linalg.norm(scale * (required - total)))
+        residual = float(np.linalg.norm(rhs[0:6] - matrix[0:6] @ forces)) / SUM_WEIGHT
         return WrenchDistribution(wrenches, "qp", residual)
 
 

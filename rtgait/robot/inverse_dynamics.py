@@ -134,9 +134,10 @@ class InverseDynamics:
         """The last :meth:`update`'s required wrench (``None`` before the first)."""
         return self._required
 
-    def sole_heights(self) -> tuple[float, float]:
-        """The soles' heights at the last :meth:`update` (m)."""
-        return float(self._frames[0][2, 3]), float(self._frames[1][2, 3])
+    @property
+    def sole_frames(self) -> tuple[np.ndarray, np.ndarray]:
+        """The left and right sole frames' placements at the last :meth:`update`, 4x4 homogeneous matrices (m)."""
+        return self._frames
 
     def distribute(
         self,

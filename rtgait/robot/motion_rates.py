@@ -72,10 +72,12 @@ class MotionRates:
         if previous is None:
             return self._v, self._a
         v, a, b, rate = self._v, self._a, self._blend, 1.0 / self.dt
-        step = pin.difference(self.model, previous, self._q) * rate
+        step = pin.difference(self.model, previous, self._q)
+        step *= rate
         step -= v
-        step *= b
-        # The acceleration's input is the change of the filtered velocity over the tick: step / dt.
-        a += b * (step * rate - a)
+        step *= b  # the filtered velocity's change over the tick
+        # a + b (step / dt - a), in place: the acceleration's input is that change over the tick.
+        a *= 1.0 - b
+        a += (b * rate) * step
         v += step
         return v, a

@@ -85,7 +85,8 @@ class FeedForward:
         left, right = targets.left_foot, targets.right_foot
         if out is None:
             support = "double"
-            zmp = required.zmp(0.5 * sum(dynamics.sole_heights()))
+            frames = dynamics.sole_frames
+            zmp = required.zmp(0.5 * float(frames[0][2, 3] + frames[1][2, 3]))
         else:
             support, zmp = out.support, out.zmp_command
         if not (math.isfinite(zmp[0]) and math.isfinite(zmp[1])):  # no upward force (a fall): split in the middle

@@ -37,7 +37,7 @@ def _state(robot, seed: int, speed: float = 1.0):
 
 def _total(dynamics: InverseDynamics, wrenches: np.ndarray) -> np.ndarray:
     """The feet's wrenches summed in world axes about the origin."""
-    return sum(force_transform(frame) @ wrench for frame, wrench in zip(dynamics._frames, wrenches, strict=True))
+    return sum(force_transform(frame) @ wrench for frame, wrench in zip(dynamics.sole_frames, wrenches, strict=True))
 
 
 @pytest.fixture(scope="module")
@@ -46,19 +46,21 @@ def dynamics(talos):
 
 
 # ----- inverse dynamics --------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_torques_are_pinocchio_rnea_with_the_wrenches_as_external_forces(talos, dynamics, seed):
+@pytest.mark.parametrize(("name", "seed"), [("talos", 0), ("talos", 1), ("g1", 2)])
+def test_torques_are_pinocchio_rnea_with_the_wrenches_as_external_forces(request, name, seed):
     # tau = RNEA - J^T w against Pinocchio's RNEA with the wrenches applied to the soles' joints: both the joints'
     # rows (the torques) and the base's (what the wrenches leave unbalanced).
-    q, v, a = _state(talos, seed)
+    robot = request.getfixturevalue(name)
+    dynamics = InverseDynamics(robot, robot_info(robot).sole)
+    q, v, a = _state(robot, seed)
     wrenches = np.random.default_rng(seed + 10).normal(scale=100.0, size=(2, 6))
     dynamics.update(q, v, a)
-    model = pin.Model(talos.model)
-    model.armature[6:] = drive_armature(talos)
+    model = pin.Model(robot.model)
+    model.armature[6:] = drive_armature(robot)
     forces = pin.StdVec_Force()
     for _ in range(model.njoints):
         forces.append(pin.Force.Zero())
-    for frame_id, wrench in zip((talos.left_sole_id, talos.right_sole_id), wrenches, strict=True):
+    for frame_id, wrench in zip((robot.left_sole_id, robot.right_sole_id), wrenches, strict=True):
         frame = model.frames[frame_id]
         forces[frame.parentJoint] += frame.placement.act(pin.Force(wrench))
     expected = pin.rnea(model, model.createData(), q, v, a, forces)
@@ -103,7 +105,7 @@ def test_double_support_wrenches_sum_to_the_required_one_and_are_the_nearest_to_
     q[7:] = talos.q_half_sitting[7:]  # level soles on the floor, the base moved and turned
     q[:7] = talos.q_half_sitting[:7]
     required = dynamics.update(q, v, a)
-    left, right = dynamics._frames[0][:2, 3], dynamics._frames[1][:2, 3]
+    left, right = dynamics.sole_frames[0][:2, 3], dynamics.sole_frames[1][:2, 3]
     cops = (left + np.array([0.02, -0.01]), right + np.array([-0.03, 0.01]))
     result = dynamics.distribute((True, True), 0.3, tuple(cops[0]), tuple(cops[1]))
     assert result.method == "closed-form" and result.residual == 0.0
@@ -112,13 +114,13 @@ def test_double_support_wrenches_sum_to_the_required_one_and_are_the_nearest_to_
     np.testing.assert_allclose(dynamics.base_residual(result.wrenches), 0.0, atol=1e-8)
     # The nearest wrenches to the desired ones that sum to W: the general weighted projection, with numpy's solver.
     desired = []
-    for frame, share, cop in zip(dynamics._frames, (0.3, 0.7), cops, strict=True):
+    for frame, share, cop in zip(dynamics.sole_frames, (0.3, 0.7), cops, strict=True):
         rotation, point = frame[:3, :3], frame[:3, 3]
         force = share * required.force
         arm = np.array([cop[0], cop[1], point[2]]) - point
         desired.append(np.concatenate([rotation.T @ force, rotation.T @ np.cross(arm, force)]))
     desired = np.concatenate(desired)
-    A = np.hstack([force_transform(frame) for frame in dynamics._frames])
+    A = np.hstack([force_transform(frame) for frame in dynamics.sole_frames])
     length = dynamics.distributor.cones[0].length
     inverse_weight = np.tile([1.0, 1.0, 1.0, length**2, length**2, length**2], 2)
     nearest = desired + inverse_weight * (A.T @ np.linalg.solve((A * inverse_weight) @ A.T, W - A @ desired))
@@ -131,14 +133,14 @@ def test_a_static_split_at_the_motion_s_zmp_is_kept_as_it_is(talos, dynamics):
     q = talos.q_half_sitting
     zero = np.zeros(talos.model.nv)
     required = dynamics.update(q, zero, zero)
-    left, right = dynamics._frames[0][:2, 3], dynamics._frames[1][:2, 3]
+    left, right = dynamics.sole_frames[0][:2, 3], dynamics.sole_frames[1][:2, 3]
     zmp = np.array(required.zmp())
     ratio = float((zmp - right) @ (left - right) / ((left - right) @ (left - right)))
     offset = zmp - (right + ratio * (left - right))
     result = dynamics.distribute((True, True), ratio, tuple(left + offset), tuple(right + offset))
     weight = talos.mass * 9.81
     np.testing.assert_allclose(result.wrenches[:, 2], [ratio * weight, (1.0 - ratio) * weight], rtol=1e-9)
-    for cone, wrench, frame in zip(dynamics.distributor.cones, result.wrenches, dynamics._frames, strict=True):
+    for cone, wrench, frame in zip(dynamics.distributor.cones, result.wrenches, dynamics.sole_frames, strict=True):
         np.testing.assert_allclose(cone.cop(wrench), frame[:2, :2].T @ offset, atol=1e-9)
 
 
@@ -218,6 +220,21 @@ def test_the_qp_keeps_each_cop_within_its_sole():
         cx, cy = cone.cop(wrench)
         assert -SOLE.back - 1e-9 <= cx <= SOLE.front + 1e-9 and low - 1e-9 <= cy <= high + 1e-9
     assert distributor.qp_count == 1
+
+
+def test_all_asked_of_one_foot_that_holds_it_is_given_to_that_foot():
+    # The COM 1 cm outside the left sole point, all the load asked of the left foot: the closed form would pull the
+    # right foot down; the left foot alone holds the wrench (its CoP 1 cm from its sole point), so it takes it all.
+    distributor = WrenchDistributor(SOLE)
+    frames = _level_frames()
+    com = frames[0][:3, 3] + frames[0][:3, :3] @ np.array([0.0, 0.01, 0.0])
+    force = np.array([0.0, 0.0, 800.0])
+    moment = np.cross(com, force)
+    result = distributor.distribute(force, moment, frames, (True, True), 1.0)
+    assert result.method == "single" and distributor.qp_count == 0
+    np.testing.assert_array_equal(result.wrenches[1], 0.0)
+    np.testing.assert_allclose(distributor.cones[0].cop(result.wrenches[0]), (0.0, 0.01), atol=1e-12)
+    np.testing.assert_allclose(_sum(frames, result.wrenches), np.r_[force, moment], atol=1e-9)
 
 
 def test_the_qp_respects_friction():
