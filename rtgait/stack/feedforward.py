@@ -36,7 +36,8 @@ if TYPE_CHECKING:
 
 __all__ = ["FeedForward"]
 
-_CONTACT = {"double": (True, True), "left": (True, False), "right": (False, True)}
+_CONTACT = {"double": (True, True), "left": (True, False), "right": (False, True)}  # the feet carrying load
+_INFEASIBLE = 1.0  # N: a residual beyond rounding and the QP's weighting (rtgait.robot.contact_wrenches.SUM_WEIGHT)
 
 
 class FeedForward:
@@ -98,6 +99,3 @@ class FeedForward:
         if distribution.residual > _INFEASIBLE:
             self.infeasible += 1
         return dynamics.torques(distribution.wrenches)
-
-
-_INFEASIBLE = 1.0  # N: a residual beyond rounding and the QP's weighting (rtgait.robot.contact_wrenches.SUM_WEIGHT)
