@@ -4,12 +4,16 @@
     Measurement + planner                     --controller--> ControlTargets (COM, feet, lean, foot tilts)
     ControlTargets                            --IK-------->   q (free flyer + joints)
     q + the feet's tilts at the ankles        ------------->  JointCommand (q_ref, dq_ref)
+    q + the controller's ZMP split            --feed-forward-> JointCommand.torques (when asked for)
 
 The velocity reference is the joints' finite difference over the control period, ``dq_ref = (q_ref,k - q_ref,k-1)
 / dt``. The IK makes one Gauss-Newton iteration a tick from the last tick's solution (the targets move little in a
-period). Between the estimate and the control a loop may act on the planner (footstep changes, velocity commands
-due at this tick): :meth:`WalkingStack.estimate` and :meth:`WalkingStack.control` are the two halves of
-:meth:`WalkingStack.tick`.
+period). With a :class:`~rtgait.stack.feedforward.FeedForward`, the command also carries the feed-forward torques of the
+IK's motion with the wrenches the controller asks of the feet (whole-body inverse dynamics); without one (the
+default) it carries none.
+
+Between the estimate and the control a loop may act on the planner (footstep changes, velocity commands due at this
+tick): :meth:`WalkingStack.estimate` and :meth:`WalkingStack.control` are the two halves of :meth:`WalkingStack.tick`.
 
 The safety layer (:mod:`rtgait.stack.safety`) sits at both ends: it checks the readings and the estimate before the
 controller acts on them, catches the ``ValueError`` and ``ArithmeticError`` the estimator, the controller, its planner
@@ -41,6 +45,7 @@ if TYPE_CHECKING:
     from rtgait.interface.readings import SensorReadings
     from rtgait.interface.truth import GroundTruth
     from rtgait.robot.ik import WholeBodyIK
+    from rtgait.stack.feedforward import FeedForward
 
 __all__ = ["StackOutput", "WalkingStack"]
 
@@ -80,6 +85,8 @@ class WalkingStack:
         safety: the safety layer; default one with the robot's joint limits and damping gains
             (:func:`rtgait.robot.joint_limits.joint_limits`, :func:`rtgait.robot.joint_inertia.damping_gains`), the
             planner's COM height and the default :class:`~rtgait.stack.safety.SafetySettings`.
+        feedforward: the feed-forward torques of each tick's command; ``None``: none (``JointCommand.torques`` is
+            ``None``).
 
     The controller acts on the measurement's DCM as the estimator made it, so an estimator that says its pendulum
     frequency (an ``omega`` attribute, 1/s) must make it with the planner's ``w``.
@@ -93,6 +100,7 @@ class WalkingStack:
         q: np.ndarray,
         ankles: AnkleJoints | None = None,
         safety: SafetyLayer | None = None,
+        feedforward: FeedForward | None = None,
     ) -> None:
         q = np.array(q, dtype=float)
         if q.shape != (ik.robot.model.nq,):
@@ -109,6 +117,7 @@ class WalkingStack:
             robot = ik.robot
             safety = SafetyLayer(joint_limits(robot), damping_gains(robot), controller.planner.config.cog_height)
         self.safety = safety
+        self.feedforward = feedforward
         self._fault: Fault | None = None  # found by estimate(), logged by the control() of the same tick
 
     @property
@@ -206,9 +215,15 @@ class WalkingStack:
         if clipped is not joints:  # the velocity reference follows the clipped positions
             joints, velocities = clipped, (clipped - previous) / self.dt
         velocities = clip.velocities(velocities)
+        torques = None
+        if self.feedforward is not None:
+            torques = self.feedforward.torques(q, targets, out)
+            if not math.isfinite(float(torques.sum())):
+                return self._damp(t, ("bad-command", "the feed-forward torques are NaN or infinite"))
+            torques = clip.torques(torques)
         self._q = q
         self._joints_previous = joints
-        return _new_tuple(StackOutput, (measurement, out, q, JointCommand(joints, velocities)))
+        return _new_tuple(StackOutput, (measurement, out, q, JointCommand(joints, velocities, torques)))
 
 
 def _error(error: Exception) -> Fault:
