@@ -2,9 +2,10 @@
 
 Records the simulated sensors' readings of ``--seconds`` of the robot's fig8 walk (driven on the simulator's truth),
 then times :meth:`KinematicInertialEstimator.update` over them, and apart the Pinocchio kinematics it calls and the
-estimator's own work (the kinematics' outputs replayed). Each is run in blocks of the whole recording; a block's
-median per update is taken, and the least of the blocks is printed (JSON, microseconds): on a shared machine the
-other blocks are those another process interrupted. ::
+estimator's own work (the kinematics' outputs replayed); for a robot whose feet's wrenches come from the joint
+torques, also the legs' inverse dynamics (Pinocchio, part of the own work). Each is run in blocks of the whole
+recording; a block's median per update is taken, and the least of the blocks is printed (JSON, microseconds): on a
+shared machine the other blocks are those another process interrupted. ::
 
     python benchmarks/estimator.py --robot talos
 """
@@ -15,6 +16,8 @@ import argparse
 import json
 import statistics
 import time
+
+import numpy as np
 
 from rtgait.io.sim_run import _controller, robot_and_scenario_options
 from rtgait.robot.model import RobotModel
@@ -78,6 +81,15 @@ def main() -> None:
 
     whole = blocks(update, readings, args.repeats)
     alone = blocks(lambda r: kinematics.update(r.joint_positions, r.joint_velocities), readings, args.repeats)
+    legs = {}
+    if estimator.wrenches == "torques":
+        upright, accelerations = (0.0, 0.0, 9.81, 0.0, 0.0, 0.0), np.zeros(kinematics.joint_count)
+
+        def with_legs(r):
+            kinematics.update(r.joint_positions, r.joint_velocities)
+            kinematics.leg_dynamics((0.0, 0.0, 0.0), upright, accelerations)
+
+        legs["leg_dynamics_us"] = round(blocks(with_legs, readings, args.repeats) - alone, 2)
     # The estimator's own work: the kinematics' outputs of the same readings handed back without computing them.
     replay = iter(())
     estimator._kinematics_update = lambda q, v: next(replay)
@@ -88,7 +100,7 @@ def main() -> None:
         own = min(own, blocks(update, readings, 1))
     print(json.dumps({
         "robot": args.robot, "updates": len(readings), "wrenches": estimator.wrenches,
-        "update_us": round(whole, 2), "kinematics_us": round(alone, 2), "own_us": round(own, 2),
+        "update_us": round(whole, 2), "kinematics_us": round(alone, 2), "own_us": round(own, 2), **legs,
     }))  # fmt: skip
 
 

@@ -12,7 +12,8 @@ replan connects a genuinely new plan (3-step horizon, both axes). Reported:
 * ``operator_build_us``: building one plan shape's operator, which ``start()`` does once per shape.
 
 With ``--feedback measured`` the planner is told the measured COG state before every sample (``observe``; here the
-plan's own state of the tick before, as a robot that follows it), so every replan connects from it.
+plan's own state of the tick before, as a robot that follows it), so every replan connects from it; ``observe_us`` is
+the wall time of one such call (its bounds checks included: :mod:`rtgait.core.input_bounds`).
 
 Wall times on a shared virtual machine vary from run to run by a factor of two or more: run it a few times.
 
@@ -54,6 +55,7 @@ def run(
         gc.disable()  # as real-time Python control loops commonly do: no collector pauses inside a tick
     n_ticks = int(planner.end_time / dt)
     sample_ns = np.empty(n_ticks)
+    observe_ns = np.empty(n_ticks if measured else 0)
     replanned = np.zeros(n_ticks, dtype=bool)
     clock = time.perf_counter_ns
     next_change_step = 2
@@ -65,7 +67,9 @@ def run(
                 planner.change_step(next_change_step, length=rng.uniform(0.0, 0.2), width=rng.uniform(0.17, 0.23))
             next_change_step += 1
         if measured:
+            began = clock()
             planner.observe(t, cog, vel)
+            observe_ns[k] = clock() - began
         plans_before = len(planner.plans)
         began = clock()
         sample = planner.sample(t)
@@ -75,7 +79,7 @@ def run(
         replanned[k] = len(planner.plans) != plans_before
     steady = np.array([p.compute_time for p in list(planner.plans)[1:]]) * 1e6  # all but the initial plan
     samples = sample_ns[~replanned] / 1e3
-    return {
+    result = {
         "replan_us": {"median": float(np.median(steady)), "p99": float(np.percentile(steady, 99))},
         "sample_us": {"median": float(np.median(samples)), "p99": float(np.percentile(samples, 99))},
         "replan_back_to_back_us": back_to_back(config, steps),
@@ -87,6 +91,10 @@ def run(
             "feedback": feedback,
         },
     }
+    if measured:
+        observe_us = observe_ns / 1e3
+        result["observe_us"] = {"median": float(np.median(observe_us)), "p99": float(np.percentile(observe_us, 99))}
+    return result
 
 
 def back_to_back(config: PlannerConfig, steps: int) -> dict:
@@ -143,6 +151,8 @@ def main() -> None:
           f"   ({result['replans']} replans)")
     print(f"sample : median {result['sample_us']['median']:7.2f} us   p99 {result['sample_us']['p99']:7.2f} us"
           f"   ({result['samples']} ticks)")
+    if "observe_us" in result:
+        print(f"observe: median {result['observe_us']['median']:7.2f} us   p99 {result['observe_us']['p99']:7.2f} us")
     print(f"replan back to back: median {result['replan_back_to_back_us']['median']:7.2f} us   "
           f"p99 {result['replan_back_to_back_us']['p99']:7.2f} us")
     print(f"operator build (once per plan shape, in start()): median {result['operator_build_us']['median']:.0f} us")

@@ -172,8 +172,8 @@ def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: A
         loop.contacts.record = timed("contact_monitor", loop.contacts.record)  # type: ignore[method-assign]
         if loop.log is not None:
             loop.log.record = timed("tick_log", loop.log.record)  # type: ignore[method-assign]
-        robot.servo.command = timed("servo", robot.servo.command)  # type: ignore[method-assign]
-        robot.servo.apply = timed("servo", robot.servo.apply)  # type: ignore[method-assign]
+        robot.drives.command = timed("servo", robot.drives.command)  # type: ignore[method-assign]
+        robot._apply = timed("servo", robot.drives.apply)  # the substeps call the drives through it
         loop._walk_inputs = timed("inputs", loop._walk_inputs)
 
     def step(loop: ClosedLoop) -> bool:

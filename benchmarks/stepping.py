@@ -95,9 +95,9 @@ def adjust_cost(grid: int, durations: int | None = None) -> dict:
         decision.append(time.perf_counter() - began)
         return result
 
-    import rtgait.core.planner.measured as measured  # the planner calls it through this module's name
+    import rtgait.core.planner.adjusting as adjusting  # the planner calls it through this module's name
 
-    measured.propose_landing = timed
+    adjusting.propose_landing = timed
     try:
         for angle in np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False):
             for speed in (0.12, 0.2):
@@ -113,7 +113,7 @@ def adjust_cost(grid: int, durations: int | None = None) -> dict:
                         last = planner.step_adjustments[-1]
                         retimed += last.single_support < last.nominal_single_support
     finally:
-        measured.propose_landing = original
+        adjusting.propose_landing = original
     whole = np.array([a for a, _ in total]) * 1e6
     alone = np.array([b for _, b in total]) * 1e6
     return {

@@ -1,14 +1,13 @@
 """rtgait's controller stack in a control loop of your own: read the sensors, tick the stack, write the joints.
 
-fig8's footsteps without its step change (a loop of yours hands changes to ``stack.controller.planner``).
+The stack estimates the walking state from the sensors alone (IMU, encoders, feet force sensors or joint torques:
+``state="estimated"``), plans and controls the walk, solves the whole-body IK and writes one joint command per
+period, through its safety layer. fig8's footsteps without its step change (a loop of yours hands changes to
+``stack.controller.planner``). The robot here is Talos in MuJoCo (:class:`rtgait.sim.robot.SimRobot`); a real robot's
+driver implements the same two calls, ``read()`` and ``write(command)`` (docs/on_your_robot.md maps them to Unitree's
+LowState/LowCmd and to ros2_control).
 
-The robot here is Talos in MuJoCo (:class:`rtgait.sim.robot.SimRobot`); a real robot's driver implements the same
-two calls, ``read()`` (its sensor readings: encoders, IMU, force sensors or joint torques) and ``write(command)`` (its
-joint references). The stack estimates the walking state from those readings alone (the kinematic-inertial estimator,
-``docs/estimation.md``); ``walking_stack(..., state="truth")`` would read the simulator's ground truth instead, passed
-as ``stack.tick(t, body.read(), body.ground_truth(t=t))``, a channel no robot has.
-
-Run: ``python examples/own_loop.py [--seconds S]``; it prints where the COM and the feet are each second.
+Run: ``python examples/own_loop.py [--robot talos|g1] [--seconds S]``; it prints the estimated COM each second.
 """
 
 from __future__ import annotations
@@ -24,30 +23,36 @@ from rtgait.sim.robot import SimRobot
 from rtgait.stack.setup import walking_stack
 
 
-def walk(seconds: float) -> SimRobot:
-    robot = RobotModel.load(load_robot("talos"))
+def walk(seconds: float, robot_name: str = "talos") -> SimRobot:
+    robot = RobotModel.load(load_robot(robot_name))
     sim = build_sim_model(robot)  # the simulated robot; on hardware, your driver
-    stack = walking_stack(robot, robot_scenario(load_scenario("fig8"), robot), dt=sim.control_dt)
-    body = SimRobot(sim, sim.new_data(q=stack.q), stack.q[7:])  # standing at the walk's start
+    dt = sim.control_dt
+    stack = walking_stack(robot, robot_scenario(load_scenario("fig8"), robot), dt=dt, state="estimated")
+    body = SimRobot(sim, sim.new_data(q=stack.q), stack.q[7:])  # standing at the walk's start, clock at 0
 
     stack.start(0.0, stack.estimate(body.read()))
-    for k in range(round(seconds / sim.control_dt)):
-        t = k * sim.control_dt
-        out = stack.tick(t, body.read())  # sensors -> estimate -> control -> IK -> joints
+    for k in range(round(seconds / dt)):
+        readings = body.read()  # encoders, IMU, force sensors: stamped with the robot's clock (s)
+        out = stack.tick(readings.t, readings)  # sensors -> estimate -> control -> IK -> safety -> joints
         body.write(out.command)
         body.first_substep()  # the physics of one control period (a real robot just runs)
         for i in range(1, body.substeps):
             body.substep(i)
-        if k % round(1.0 / sim.control_dt) == 0:
+        if out.targets is None:  # the safety layer tripped: its damping command from then on (rtgait.stack.safety)
+            event = stack.safety.events[-1]
+            if event.t == readings.t:
+                print(f"t {readings.t:5.2f} s  damping: {event.kind}, {event.detail}")
+            continue
+        if k % round(1.0 / dt) == 0:
             com, planned = out.measurement.com, out.targets.com
-            print(
-                f"t {t:5.2f} s  COM ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m, "
-                f"planned ({planned[0]:+.3f}, {planned[1]:+.3f}) m, support {out.targets.support}"
-            )
+            print(f"t {readings.t:5.2f} s  COM ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m, "
+                  f"planned ({planned[0]:+.3f}, {planned[1]:+.3f}) m, support {out.targets.support}")
     return body
 
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robot", default="talos", help="a built-in robot or a robot description file")
     parser.add_argument("--seconds", type=float, default=14.0, help="how long to walk (s, default 14: all of fig8)")
-    walk(parser.parse_args().seconds)
+    arguments = parser.parse_args()
+    walk(arguments.seconds, arguments.robot)

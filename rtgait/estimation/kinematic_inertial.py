@@ -19,9 +19,9 @@ Each tick, with the base frame's kinematics (:class:`~rtgait.estimation.kinemati
    do not turn; ``yaw="imu"`` keeps the IMU's yaw, turned once at the start into the world frame. The gyro measures
    the IMU's body, so the base's angular velocity is ``R_BI w_I`` less the IMU's turn relative to the base.
 2. **Feet wrenches.** The ground's wrench on each sole (:mod:`rtgait.estimation.sole_wrenches`): from the foot
-   force sensors when the readings have them, else from the legs' joint torques (``J^T`` statics); from joint torques,
-   a foot the load detection has in the air is reported without load (a swinging leg's quasi-static wrench is its
-   own dynamics).
+   force sensors when the readings have them, else from the legs' joint torques and inverse dynamics, low-passed
+   (:mod:`rtgait.estimation.torque_wrenches`); from joint torques, a foot the load detection has in the air is
+   reported without load (what is left of a swinging leg's wrench is the estimate's error).
 3. **Base position.** ``p = sum_i w_i (a_i - R p_i)`` over the feet anchors ``a_i``, weighted by the feet's vertical
    forces (:mod:`rtgait.estimation.anchors`).
 4. **Velocity.** With ``w`` the gyro's angular velocity in the world, a foot ``i`` held still gives the base
@@ -41,16 +41,15 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-import numpy as np
-
 from rtgait.estimation.anchors import FootAnchors, Pose
 from rtgait.estimation.attitude_filter import DEFAULT_ATTITUDE_CUTOFF, AttitudeFilter
 from rtgait.estimation.feet import FeetFromWrenches
 from rtgait.estimation.kinematics import RobotKinematics
 from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
 from rtgait.estimation.rotations import mat_mul, mat_mul_t, mat_vec, quat_matrix, turned, yaw_of
-from rtgait.estimation.sole_wrenches import SoleWrench, sensor_wrench, torque_wrenches
+from rtgait.estimation.sole_wrenches import SoleWrench, sensor_wrench
 from rtgait.estimation.state import FootState, Landing, Measurement
+from rtgait.estimation.torque_wrenches import DEFAULT_WRENCH_CUTOFF, TorqueWrenches
 from rtgait.estimation.velocity_filter import DEFAULT_VELOCITY_CUTOFF, ComplementaryVelocity
 from rtgait.interface.readings import SensorReadings
 from rtgait.interface.truth import GroundTruth
@@ -62,10 +61,10 @@ YAW_SOURCES: tuple[YawSource, ...] = ("feet", "imu")
 WrenchSource = Literal["sensors", "torques"]
 WRENCH_SOURCES: tuple[WrenchSource, ...] = ("sensors", "torques")
 
-TORQUE_LANDING_FRACTION = 0.15
+TORQUE_LANDING_FRACTION = 0.10
 """Landing threshold, as a fraction of the weight, of feet wrenches estimated from joint torques: above the
-quasi-static estimate's error on a swinging leg (up to 11 % of the weight on G1's fig8 walk, ``docs/estimation.md``),
-so that a swing is not taken for a landing."""
+estimate's error on a swinging leg with the sensors' noise (up to 7.7 % of the weight on G1's fig8 walk,
+``docs/estimation.md``), so that a swing is not taken for a landing."""
 
 _NO_LANDINGS: tuple[Landing, ...] = ()
 _ZERO3 = (0.0, 0.0, 0.0)
@@ -88,6 +87,7 @@ class KinematicInertialEstimator:
             force's the ground-truth estimator's for both sources (at most the landing force).
         velocity_cutoff: the complementary velocity filter's cut-off (Hz); ``inf``: kinematics alone.
         attitude_cutoff: the attitude filter's cut-off (Hz); ``inf``: the IMU filter's attitude as it is.
+        wrench_cutoff: the cut-off of the low-pass on wrenches from joint torques (Hz); ``inf``: none.
         yaw: where the base's yaw comes from: ``"feet"`` (the feet in contact) or ``"imu"``.
         start_feet: the standing soles' world poses ``(x, y, z, yaw)``, left then right, that fix the world frame
             at the first update (the plan's standing feet); ``None``: the feet's midpoint at the origin.
@@ -109,6 +109,7 @@ class KinematicInertialEstimator:
         ground_height: float = 0.0,
         velocity_cutoff: float = DEFAULT_VELOCITY_CUTOFF,
         attitude_cutoff: float = DEFAULT_ATTITUDE_CUTOFF,
+        wrench_cutoff: float = DEFAULT_WRENCH_CUTOFF,
         yaw: YawSource = "feet",
         start_feet: tuple[Pose, Pose] | None = None,
     ) -> None:
@@ -147,16 +148,8 @@ class KinematicInertialEstimator:
         self.velocity = ComplementaryVelocity(velocity_cutoff)
         self.attitude = AttitudeFilter(attitude_cutoff)
         self.anchors = FootAnchors()
-        legs = [list(leg) for leg in kinematics.leg_joints]
-        if len(legs) != 2 or len(legs[0]) != len(legs[1]) or not legs[0]:
-            raise ValueError(f"leg_joints must be two legs of as many joints, got {kinematics.leg_joints!r}")
-        # One slice of the joint torques for both legs when the right leg's joints follow the left's, else indices.
-        both = legs[0] + legs[1]
-        consecutive = both == list(range(both[0], both[0] + len(both)))
-        self._legs = slice(both[0], both[0] + len(both)) if consecutive else np.array(both)
-        self._leg_shape = (2, len(legs[0]))
         self._mounts = kinematics.foot_sensors if wrenches == "sensors" else None
-        self._torques = wrenches == "torques"
+        self._torques = TorqueWrenches(kinematics, wrench_cutoff) if wrenches == "torques" else None
         self._kinematics_update = kinematics.update
         self.reset()
 
@@ -166,6 +159,8 @@ class KinematicInertialEstimator:
         self.velocity.reset()
         self.attitude.reset()
         self.anchors.reset()
+        if self._torques is not None:
+            self._torques.reset()
         self._loaded = (True, True)  # the first tick's feet anchor the world frame
         self._weight_left = 0.5
         self._yaw_offset = 0.0
@@ -189,8 +184,24 @@ class KinematicInertialEstimator:
         r_imu = quat_matrix(*self.attitude.update(dt, imu.orientation, imu.angular_velocity))
         r_base = mat_mul_t(r_imu, imu_frame.rotation)
         r_left, r_right = mat_mul(r_base, left_sole.rotation), mat_mul(r_base, right_sole.rotation)
+        # The gyro measures the IMU's body: the base turns at w_B = R_BI w_I less the IMU's turn relative to the base;
+        # the accelerometer's specific force in the base frame, R_BI f_I.
+        mount = imu_frame.rotation
+        wx, wy, wz = mat_vec(mount, imu.angular_velocity)
+        rwx, rwy, rwz = imu_frame.angular_velocity
+        wx, wy, wz = wx - rwx, wy - rwy, wz - rwz
+        specific = mat_vec(mount, imu.linear_acceleration)
         # 2. The ground's wrenches on the soles, in the sole frames.
-        wrench_left, wrench_right = self._wrenches(readings, r_base, r_left, r_right)
+        torques = self._torques
+        if torques is None:
+            wrench_left, wrench_right = self._sensor_wrenches(readings, r_left, r_right)
+        else:
+            if readings.joint_torques is None:
+                raise ValueError("the estimator reads the joint torques, the readings have none")
+            wrench_left, wrench_right = torques.update(
+                dt, readings.joint_velocities, readings.joint_torques, (wx, wy, wz), specific, imu_frame.position,
+                imu_frame.velocity,
+            )  # fmt: skip
         # The vertical forces (yaw does not change them) and the weights of the feet in contact (loaded at the last
         # tick): a swinging foot, whatever its estimated force, anchors nothing.
         fz_left = r_left[6] * wrench_left[0] + r_left[7] * wrench_left[1] + r_left[8] * wrench_left[2]
@@ -224,11 +235,6 @@ class KinematicInertialEstimator:
         # 4. Velocity, worked out in the base frame (B) and turned into the world once: the base origin's with each
         # stance foot held still, u = -sum_i w_i (w_B x p_i + p_i'), moved to the IMU (+ w_B x p_I + p_I'), blended
         # with the IMU's acceleration.
-        # The gyro measures the IMU's body: the base turns at w_B = R_BI w_I less the IMU's turn relative to the base.
-        mount = imu_frame.rotation
-        wx, wy, wz = mat_vec(mount, imu.angular_velocity)
-        rwx, rwy, rwz = imu_frame.angular_velocity
-        wx, wy, wz = wx - rwx, wy - rwy, wz - rwz
         (lx, ly, lz), (lvx, lvy, lvz) = left_sole.position, left_sole.velocity
         (rx, ry, rz), (rvx, rvy, rvz) = right_sole.position, right_sole.velocity
         (ox, oy, oz), (ovx, ovy, ovz) = imu_frame.position, imu_frame.velocity
@@ -238,7 +244,7 @@ class KinematicInertialEstimator:
             wz * ox - wx * oz + ovy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy),
             wx * oy - wy * ox + ovz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz),
         ))  # fmt: skip
-        fx, fy, fz = mat_vec(rot, mat_vec(mount, imu.linear_acceleration))
+        fx, fy, fz = mat_vec(rot, specific)
         vix, viy, viz = self.velocity.update(dt, kinematic, (fx, fy, fz - self.gravity))
         # 5. COM and its velocity: c = p + R c_B, c' = v_I + R (w_B x (c_B - p_I) + c_B' - p_I').
         (cx, cy, cz), (cvx, cvy, cvz) = kin.com, kin.com_velocity
@@ -253,9 +259,9 @@ class KinematicInertialEstimator:
         sole_foot, release = self.feet.sole_foot, self._release
         left, left_landing = sole_foot(0, t, wrench_left, 1 if fz_left > release else 0, left_pos, r_left)
         right, right_landing = sole_foot(1, t, wrench_right, 1 if fz_right > release else 0, right_pos, r_right)
-        if self._torques:
-            # A foot the load detection has in the air carries nothing: what the quasi-static statics give a swinging
-            # leg is its own dynamics, not a contact (it would move the ZMP by that force times the foot's distance).
+        if torques is not None:
+            # A foot the load detection has in the air carries nothing: what the torques give a swinging leg is the
+            # estimate's error, not a contact (it would move the ZMP by that force times the foot's distance).
             if not left.loaded:
                 left = _new_tuple(FootState, (_ZERO3, _ZERO3, 0.0, _NAN2, _NAN2, *left[5:10], 0))
             if not right.loaded:
@@ -270,24 +276,16 @@ class KinematicInertialEstimator:
         dcm = (com[0] + com_vel[0] / w, com[1] + com_vel[1] / w)
         return _new_tuple(Measurement, (t, com, com_vel, dcm, zmp, total, left, right, landings, 0))
 
-    def _wrenches(
-        self, readings: SensorReadings, r_base: tuple[float, ...], r_left: tuple[float, ...],
-        r_right: tuple[float, ...],
-    ) -> tuple[SoleWrench, SoleWrench]:  # fmt: skip
-        """The ground's wrenches on the soles in their frames: from the feet's force sensors or the legs' joint
-        torques (:attr:`wrenches`)."""
-        g = self.gravity
-        mounts = self._mounts
-        if mounts is not None:  # the kinematics place them when the sensors are the source
-            if readings.left_foot is None or readings.right_foot is None:
-                raise ValueError("the estimator reads the feet's force sensors, the readings have none")
-            # Gravity in each sole frame: R_WS^T (0, 0, -g), the third row of R_WS times -g (yaw does not change it).
-            return (
-                sensor_wrench(readings.left_foot, mounts[0], (-g * r_left[6], -g * r_left[7], -g * r_left[8])),
-                sensor_wrench(readings.right_foot, mounts[1], (-g * r_right[6], -g * r_right[7], -g * r_right[8])),
-            )
-        if readings.joint_torques is None:
-            raise ValueError("the estimator reads the joint torques, the readings have none")
-        jacobians, holding = self.kinematics.leg_statics((-g * r_base[6], -g * r_base[7], -g * r_base[8]))
-        left, right = torque_wrenches(jacobians, holding, readings.joint_torques[self._legs].reshape(self._leg_shape))
-        return left, right
+    def _sensor_wrenches(
+        self, readings: SensorReadings, r_left: tuple[float, ...], r_right: tuple[float, ...]
+    ) -> tuple[SoleWrench, SoleWrench]:
+        """The ground's wrenches on the soles in their frames from the feet's force sensors."""
+        if readings.left_foot is None or readings.right_foot is None:
+            raise ValueError("the estimator reads the feet's force sensors, the readings have none")
+        g, mounts = self.gravity, self._mounts
+        assert mounts is not None  # the kinematics place them when the sensors are the source
+        # Gravity in each sole frame: R_WS^T (0, 0, -g), the third row of R_WS times -g (yaw does not change it).
+        return (
+            sensor_wrench(readings.left_foot, mounts[0], (-g * r_left[6], -g * r_left[7], -g * r_left[8])),
+            sensor_wrench(readings.right_foot, mounts[1], (-g * r_right[6], -g * r_right[7], -g * r_right[8])),
+        )

@@ -1,10 +1,10 @@
 """What the kinematic-inertial estimator needs of a robot's model, as a protocol: the frames of
 :class:`~rtgait.interface.body_kinematics.BodyKinematics` for the encoders' joint positions and velocities, the
-mounts of the feet's force sensors, and, for a robot without foot force sensors, each leg's statics.
+mounts of the feet's force sensors, and, for a robot without foot force sensors, each leg's dynamics.
 
-A leg's statics are what turns its joint torques into the wrench of the ground on its sole
-(:mod:`rtgait.estimation.sole_wrenches`): the sole frame's Jacobian with respect to the leg's joints and the torques
-those joints need to hold the leg against gravity. Implemented with Pinocchio by
+A leg's dynamics are what turns its joint torques into the wrench of the ground on its sole
+(:mod:`rtgait.estimation.torque_wrenches`): the sole frame's Jacobian with respect to the leg's joints and the torques
+those joints need to move the leg as it moves, the sole free (inverse dynamics). Implemented with Pinocchio by
 :class:`rtgait.robot.kinematics.PinocchioKinematics`; the estimator itself imports no robot-model library.
 """
 
@@ -41,13 +41,22 @@ class RobotKinematics(Protocol):
         base at rest."""
         ...
 
-    def leg_statics(self, gravity: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
-        """Each leg's statics at the configuration of the last :meth:`update`, gravity ``gravity`` (m/s^2, in the
-        base frame).
+    def leg_dynamics(
+        self, angular_velocity: tuple[float, float, float], acceleration: tuple[float, ...],
+        joint_accelerations: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        """Each leg's dynamics at the configuration and joint velocities of the last :meth:`update`.
+
+        Args:
+            angular_velocity: the base's angular velocity (rad/s, base frame).
+            acceleration: the base origin's specific force ``a - g`` (m/s^2: ``(0, 0, 9.81)`` upright at rest) then
+                the base's angular acceleration (rad/s^2), base frame.
+            joint_accelerations: the joints' accelerations (rad/s^2), shape ``(joint_count,)``.
 
         Returns:
             ``(jacobians, torques)``: the sole frames' Jacobians with respect to each leg's joints, shape
-            ``(2, 6, n_leg)``, rows ``(linear; angular)`` in the sole frame; and the torques (N m) that hold each
-            leg's joints against gravity with the sole free, shape ``(2, n_leg)``, in :attr:`leg_joints` order.
+            ``(2, 6, n_leg)``, rows ``(linear; angular)`` in the sole frame; and the torques (N m) each leg's joints
+            need for that motion with the sole free, gravity included, shape ``(2, n_leg)``, in :attr:`leg_joints`
+            order.
         """
         ...

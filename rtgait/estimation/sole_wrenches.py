@@ -14,20 +14,20 @@ A swinging foot's acceleration times its mass is left out: a few newtons, well b
 
 **From joint torques** (a leg without a force sensor, the G1's). The dynamics of a leg's joints,
 ``M_l q'' + h_l = tau_l + J^T F``, with ``J`` the sole frame's 6 x n Jacobian with respect to the leg's joints
-(rows linear then angular, sole frame) and ``F = (f, t)`` the ground's wrench on the sole in that frame, give at
-rest, where ``h_l`` is the leg's gravity torques ``g_l`` (the torques that hold the links below each joint),
+(rows linear then angular, sole frame) and ``F = (f, t)`` the ground's wrench on the sole in that frame, give with
+``tau_id = M_l q'' + h_l`` the torques the leg's motion needs with the sole free (its inverse dynamics)
 
-    J^T F = g_l - tau_l        =>        F = J^-T (g_l - tau_l)                              (N, N m)
+    J^T F = tau_id - tau_l        =>        F = J^-T (tau_id - tau_l)                          (N, N m)
 
-for a six-joint leg (least squares otherwise). It is quasi-static: the leg's inertial and velocity terms
-``M_l q'' + C_l q'`` are left out. They are small for a stance leg (its links hardly move) and of a few newton-metres
-for a swinging leg, which is why a robot estimated this way needs a landing threshold above the swing's error; the
-Jacobian is singular for a straight knee, where ``F`` is not observable along the leg's axis.
+for a six-joint leg (least squares otherwise); at rest ``tau_id`` is the leg's gravity torques. Where the motion
+comes from and what filters it: :mod:`rtgait.estimation.torque_wrenches`. The Jacobian is singular for a straight
+knee, where ``F`` is not observable along the leg's axis (then the least-squares wrench).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg.lapack import dgesv as _gesv
 
 from rtgait.interface.body_kinematics import ForceSensorMount
 from rtgait.interface.readings import Wrench
@@ -57,23 +57,28 @@ def sensor_wrench(reading: Wrench, mount: ForceSensorMount, gravity: tuple[float
     return (ax - wx, ay - wy, az - wz, bx - (cy * wz - cz * wy), by - (cz * wx - cx * wz), bz - (cx * wy - cy * wx))
 
 
-def torque_wrenches(jacobians: np.ndarray, gravity_torques: np.ndarray, torques: np.ndarray) -> list[SoleWrench]:
+def torque_wrenches(jacobians: np.ndarray, needed: np.ndarray, torques: np.ndarray) -> list[SoleWrench]:
     """The ground's wrench on each sole from its leg's joint torques (module docstring).
 
     Args:
         jacobians: the soles' Jacobians with respect to their legs' joints, shape ``(2, 6, n)``, rows linear then
             angular, sole frame.
-        gravity_torques: the torques holding each leg against gravity (N m), shape ``(2, n)``.
+        needed: the torques each leg's motion needs with the sole free, ``tau_id`` (N m), shape ``(2, n)``.
         torques: the legs' measured joint torques (N m), shape ``(2, n)``.
 
     Returns:
         The left and right soles' wrenches.
     """
-    rhs = gravity_torques - torques
-    jt = jacobians.transpose(0, 2, 1)
-    if jt.shape[1] == 6:
-        wrenches = np.linalg.solve(jt, rhs[..., None])[..., 0]
-    else:  # a leg of other than six joints: the least-squares (or least-norm) wrench
-        wrenches = np.stack([np.linalg.lstsq(jt[i], rhs[i], rcond=None)[0] for i in (0, 1)])
-    left, right = wrenches.tolist()
-    return [tuple(left), tuple(right)]  # type: ignore[list-item]
+    rhs = needed - torques
+    out = []
+    for i in (0, 1):
+        jt = jacobians[i].T
+        if jt.shape[0] == 6:
+            # LAPACK's solver called directly: numpy's solve costs four times as much on a 6 x 6.
+            _, _, wrench, info = _gesv(jt, rhs[i])
+            if info == 0:
+                out.append(tuple(wrench.tolist()))
+                continue
+        # A leg of other than six joints, or a singular Jacobian: the least-squares (or least-norm) wrench.
+        out.append(tuple(np.linalg.lstsq(jt, rhs[i], rcond=None)[0].tolist()))
+    return out  # type: ignore[return-value]

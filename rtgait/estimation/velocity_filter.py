@@ -1,10 +1,14 @@
 """A complementary filter on a point's velocity: the leg kinematics' velocity at low frequencies, the integrated
 accelerometer at high frequencies.
 
-With ``v_k`` the kinematic velocity (from the joints, the stance foot held still) and ``a`` the accelerometer's
+With ``v_k`` the kinematic velocity (from the joints, the stance foot held still) and ``a_k`` the accelerometer's
 acceleration in the world (gravity removed), each tick of ``dt`` makes
 
-    v^_k = alpha (v^_k-1 + dt (a_k-1 + a_k) / 2) + (1 - alpha) v_k,      alpha = exp(-dt / tau),  tau = 1 / (2 pi f_c)
+    v^_k = alpha (v^_k-1 + dt a_k) + (1 - alpha) v_k,      alpha = exp(-dt / tau),  tau = 1 / (2 pi f_c)
+
+``a_k`` is the mean acceleration over the period that ends at tick ``k``, what an IMU reports (its accelerometer
+sampled through an anti-aliasing filter, or integrated into a velocity increment over the sample period), so
+``dt a_k`` is the velocity's change over the period exactly.
 
 which is, in continuous time, ``V^(s) = 1 / (tau s + 1) V(s) + tau s / (tau s + 1) A(s) / s``: a first-order
 low-pass on the kinematics plus the complementary high-pass on the integrated acceleration. Where both sources
@@ -43,16 +47,16 @@ class ComplementaryVelocity:
     def reset(self) -> None:
         """Forget the state: the next update returns its kinematic velocity."""
         self._state: tuple[float, float, float] | None = None
-        self._acceleration = (0.0, 0.0, 0.0)
         self._dt = -1.0
         self._alpha = 0.0
 
     def update(
         self, dt: float, velocity: tuple[float, float, float], acceleration: tuple[float, float, float]
     ) -> tuple[float, float, float]:
-        """The filtered velocity (m/s) after ``dt`` (s) from the kinematic ``velocity`` (m/s) and the
-        ``acceleration`` (m/s^2, gravity removed) at this tick; ``dt <= 0`` (a repeated reading) keeps the state."""
-        state, (ax, ay, az) = self._state, acceleration
+        """The filtered velocity (m/s) after ``dt`` (s) from the kinematic ``velocity`` (m/s) and the mean
+        ``acceleration`` (m/s^2, gravity removed) over that period; ``dt <= 0`` (a repeated reading) keeps the
+        state."""
+        state = self._state
         if state is None:
             out = velocity
         elif dt <= 0.0:
@@ -60,14 +64,14 @@ class ComplementaryVelocity:
         else:
             if dt != self._dt:  # alpha for this period, recomputed only when the period changes
                 self._dt, self._alpha = dt, (math.exp(-dt / self.tau) if self.tau > 0.0 else 0.0)
-            a, h = self._alpha, 0.5 * dt
-            bx, by, bz = self._acceleration
+            a = self._alpha
             sx, sy, sz = state
             vx, vy, vz = velocity
+            ax, ay, az = acceleration
             out = (
-                a * (sx + h * (bx + ax)) + (1.0 - a) * vx,
-                a * (sy + h * (by + ay)) + (1.0 - a) * vy,
-                a * (sz + h * (bz + az)) + (1.0 - a) * vz,
+                a * (sx + dt * ax) + (1.0 - a) * vx,
+                a * (sy + dt * ay) + (1.0 - a) * vy,
+                a * (sz + dt * az) + (1.0 - a) * vz,
             )
-        self._state, self._acceleration = out, acceleration
+        self._state = out
         return out

@@ -42,7 +42,8 @@ class ImuReading(NamedTuple):
             ``(w, x, y, z)``.
         angular_velocity: ``(wx, wy, wz)`` in the IMU frame (rad/s).
         linear_acceleration: specific force ``(ax, ay, az)`` in the IMU frame (m/s^2): ``R^T (a - g)``, so about
-            ``(0, 0, 9.81)`` at rest with the IMU's z axis up.
+            ``(0, 0, 9.81)`` at rest with the IMU's z axis up; its mean over the sample period that ends at the
+            reading (an IMU's anti-aliasing filter or velocity increment), in the IMU frame at the reading.
     """
 
     orientation: tuple[float, float, float, float]

@@ -109,14 +109,19 @@ def replay_paths(result: SimResult) -> tuple[np.ndarray, np.ndarray]:
     """
     index = result.replay_index
     cog = result.cog[index]
-    zmp = result.zmp[index].copy()
-    last = result.zmp_planned[index[0]] if len(index) else np.zeros(2)
-    for row in zmp:  # a few hundred rows: a plain loop is clearer than a vectorised forward fill
+    first = result.zmp_planned[index[0]] if len(index) else np.zeros(2)
+    return cog, _held(result.zmp[index], first)
+
+
+def _held(values: np.ndarray, first: np.ndarray) -> np.ndarray:
+    """``values`` with each row that is not finite replaced by the last finite row before it (``first`` before any)."""
+    values, last = values.copy(), first
+    for row in values:  # a few hundred rows: a plain loop is clearer than a vectorised forward fill
         if np.isfinite(row).all():
             last = row.copy()
         else:
             row[:] = last
-    return cog, zmp
+    return values
 
 
 def write_sim_replay(
@@ -167,8 +172,9 @@ def write_sim_replay(
         sole=sole,
         cog=cog[keep],
         zmp=zmp[keep],
-        planned_cog=result.cog_planned[index],
-        planned_zmp=result.zmp_planned[index],
+        # Once the stack damps (its safety layer tripped) there is no plan: the planned paths stop where it began.
+        planned_cog=_held(result.cog_planned[index], result.cog_planned[index[0]]),
+        planned_zmp=_held(result.zmp_planned[index], result.zmp_planned[index[0]]),
         phases=[_PHASE_LABELS[int(code)] for code in result.support[index]],
         path_source="measured",
         title=title or f"rtgait: {result.robot} in MuJoCo",
@@ -287,6 +293,9 @@ def sim_report(summary: dict[str, Any], out: Path) -> str:
         outcome += f"; a loaded foot tipped over at {summary['tip_time']:.2f} s"
     if "guide" in summary:
         outcome += f"; led by the hand, the base ended {summary['guide']['base_error']:.3f} m from its goal"
+    first = (summary.get("safety") or {}).get("first_event")
+    if first is not None:
+        outcome += f"; DAMPING from {first['t']:.3f} s ({first['kind']}: {first['detail']})"
     control, physics = summary["control_dt"] * 1e3, summary["physics_dt"] * 1e3
     title = walk_title(summary["scenario"], summary["connection"], velocity_commands(summary))
     lines = [

@@ -1,11 +1,21 @@
 """The ``[actuation]`` table of a robot description: per-joint (or per group of joints) PD gains, armature and torque
-limits, and the control period and physics step; parsed by :func:`rtgait.robot.description.parse_robot`, resolved
-into each joint's servo by :mod:`rtgait.sim.actuation`."""
+limits, motor types, the control period, the physics step and the command's delay on the bus; parsed by
+:func:`rtgait.robot.description.parse_robot`, resolved into each joint's drive by :mod:`rtgait.sim.actuation` and
+:mod:`rtgait.sim.motors`.
+
+Two sets of gains: ``kp``/``kd`` (or, where not given, gains derived from the URDF) are the simulation's stiff
+servos; ``robot_kp``/``robot_kd`` are the gains the real robot's low-level controller runs (cited in each
+description). ``SimConfig.gains`` picks one.
+"""
 
 from __future__ import annotations
 
 import fnmatch
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+from rtgait.robot.motor_types import MotorType
 
 __all__ = [
     "DEFAULT_ARMATURE_PER_TORQUE",
@@ -16,6 +26,7 @@ __all__ = [
     "ActuationSpec",
     "ActuatorGroup",
     "JointActuationSpec",
+    "MotorType",
 ]
 
 DEFAULT_CONTROL_DT = 0.001
@@ -44,6 +55,9 @@ class ActuatorGroup:
         effort_limit: torque limit (N m), or ``None`` for the URDF's.
         natural_frequency: this group's target natural frequency (Hz) for derived gains, or ``None``.
         damping_ratio: this group's damping ratio for a derived kd, or ``None``.
+        robot_kp: the real robot's position gain (N m/rad), or ``None``.
+        robot_kd: the real robot's damping gain (N m s/rad), or ``None``.
+        motor: the name of the joints' motor type (``[actuation.motors.<name>]``), or ``None``.
     """
 
     match: tuple[str, ...]
@@ -53,6 +67,9 @@ class ActuatorGroup:
     effort_limit: float | None = None
     natural_frequency: float | None = None
     damping_ratio: float | None = None
+    robot_kp: float | None = None
+    robot_kd: float | None = None
+    motor: str | None = None
 
     def matches(self, joint: str) -> bool:
         """Whether ``joint`` matches one of the group's patterns (case-sensitive)."""
@@ -62,7 +79,8 @@ class ActuatorGroup:
 @dataclass(frozen=True)
 class JointActuationSpec:
     """What a description says about one joint's actuator (units as :class:`ActuatorGroup`'s); ``None``: derive
-    it from the URDF; ``armature_per_torque`` (s^2) gives the armature when none is given."""
+    it from the URDF (the robot's gains and the motor type: none given); ``armature_per_torque`` (s^2) gives the
+    armature when none is given."""
 
     kp: float | None
     kd: float | None
@@ -71,6 +89,9 @@ class JointActuationSpec:
     natural_frequency: float
     damping_ratio: float
     armature_per_torque: float
+    robot_kp: float | None = None
+    robot_kd: float | None = None
+    motor: MotorType | None = None
 
 
 @dataclass(frozen=True)
@@ -84,6 +105,9 @@ class ActuationSpec:
         natural_frequency: default target natural frequency of a loaded joint (Hz).
         damping_ratio: default damping ratio of the derived kd.
         armature_per_torque: default armature per N m of effort limit (s^2), :data:`DEFAULT_ARMATURE_PER_TORQUE`.
+        command_delay: control periods between a command's writing and the drives' applying it (a bus that delivers
+            it in the next cycle: 1).
+        motors: the ``[actuation.motors.<name>]`` tables, by name.
         groups: the ``[[actuation.joints]]`` entries, in file order (a later one wins).
     """
 
@@ -92,4 +116,6 @@ class ActuationSpec:
     natural_frequency: float = DEFAULT_NATURAL_FREQUENCY
     damping_ratio: float = DEFAULT_DAMPING_RATIO
     armature_per_torque: float = DEFAULT_ARMATURE_PER_TORQUE
+    command_delay: int = 0
+    motors: Mapping[str, MotorType] = field(default_factory=lambda: MappingProxyType({}))
     groups: tuple[ActuatorGroup, ...] = ()

@@ -14,9 +14,11 @@ loaded by path. Its tables, in SI units (m, rad, s, kg m^2, N m/rad):
   the posture), ``torso_frame`` (kept upright, heading along the mean yaw of the feet);
 * ``[posture]``: the half-sitting start posture, joint name -> angle (joints not listed are at 0);
 * optional, for the physics layer: ``[gains]`` (``kp``, ``kd``: a number or a table per joint) and ``[actuation]``
-  (periods, natural frequency, damping ratio, armature and ``[[actuation.joints]]`` groups matched by fnmatch
-  patterns, a later group winning); a joint's actuation is resolved key by key: the last matching group that sets
-  it, else ``[gains]``, else a default derived from the URDF by :mod:`rtgait.sim.actuation`;
+  (periods, the command's delay, natural frequency, damping ratio, motor types ``[actuation.motors.<name>]`` and
+  ``[[actuation.joints]]`` groups matched by fnmatch patterns giving gains, the real robot's gains, armature, torque
+  limits and the motor type, a later group winning: :mod:`rtgait.robot.actuation_table`); a joint's actuation is
+  resolved key by key: the last matching group that sets it, else ``[gains]``, else a default derived from the URDF
+  by :mod:`rtgait.sim.actuation`;
 * optional: ``[stepping]`` (step adjustment's limits, :class:`~rtgait.core.laws.stepping.SteppingLimits`) and
   ``[velocity]`` (bounds of walks by velocity command, :class:`~rtgait.core.planner.config.VelocityLimits`);
 * optional: ``[sensors]`` (the IMU, the feet's force/torque sensors, encoders, joint torques, their noise and
@@ -47,6 +49,7 @@ from rtgait.robot.actuation_table import (
     ActuationSpec,
     ActuatorGroup,
     JointActuationSpec,
+    MotorType,
 )
 from rtgait.robot.description_checks import (
     ERD_PREFIX,
@@ -74,6 +77,7 @@ __all__ = [
     "ActuationSpec",
     "ActuatorGroup",
     "JointActuationSpec",
+    "MotorType",
     "RobotDescription",
     "RobotError",
     "builtin_robots",
@@ -160,13 +164,16 @@ class RobotDescription:
         """What the description gives for ``joint``'s actuator, key by key (see the module docstring): the last
         matching ``[[actuation.joints]]`` group that sets a key wins, then ``[gains]`` for kp and kd."""
         spec, gains = self.actuation, self.gains(joint)
-        values: dict[str, float | None] = {"kp": None, "kd": None, "armature": None, "effort_limit": None}
+        values: dict[str, Any] = {"kp": None, "kd": None, "armature": None, "effort_limit": None, "robot_kp": None,
+                                  "robot_kd": None, "motor": None}  # fmt: skip
         if gains is not None:
             values["kp"], values["kd"] = gains
         values.update(natural_frequency=spec.natural_frequency, damping_ratio=spec.damping_ratio)
         for group in (g for g in spec.groups if g.matches(joint)):
             values.update({key: getattr(group, key) for key in values if getattr(group, key) is not None})
-        return JointActuationSpec(armature_per_torque=spec.armature_per_torque, **values)  # type: ignore[arg-type]
+        if values["motor"] is not None:
+            values["motor"] = spec.motors[values["motor"]]
+        return JointActuationSpec(armature_per_torque=spec.armature_per_torque, **values)
 
 
 def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None) -> RobotDescription:

@@ -27,6 +27,7 @@ from rtgait.core.laws.stepping import STEPPING_KEYS, SteppingLimits
 from rtgait.core.planner.config import VELOCITY_KEYS, VelocityLimits
 from rtgait.robot.actuation_table import ActuationSpec, ActuatorGroup
 from rtgait.robot.data import RobotDataError, robots_dir, share_dir
+from rtgait.robot.motor_types import MOTOR_KEYS, MotorType
 from rtgait.scenario.tomlfile import TomlFiles
 
 __all__ = [
@@ -169,11 +170,15 @@ def parse_gain(raw: Any, where: str, names: UrdfNames) -> float | Mapping[str, f
 
 
 _GROUP_KEYS = ("kp", "kd", "armature", "rotor_inertia", "gear_ratio", "effort_limit", "natural_frequency",
-               "damping_ratio")  # fmt: skip
+               "damping_ratio", "robot_kp", "robot_kd")  # fmt: skip
 _TABLE_KEYS = ("control_dt", "physics_dt", "natural_frequency", "damping_ratio", "armature_per_torque")
 _UNITS = {"kp": "N m/rad", "kd": "N m s/rad", "armature": "kg m^2", "rotor_inertia": "kg m^2", "effort_limit": "N m",
-          "natural_frequency": "Hz", "control_dt": "s", "physics_dt": "s", "armature_per_torque": "s^2"}  # fmt: skip
-_MAY_BE_ZERO = ("kd", "armature", "rotor_inertia", "armature_per_torque")
+          "natural_frequency": "Hz", "control_dt": "s", "physics_dt": "s", "armature_per_torque": "s^2",
+          "robot_kp": "N m/rad", "robot_kd": "N m s/rad", "peak_torque": "N m", "braking_torque": "N m",
+          "no_load_speed": "rad/s", "corner_speed": "rad/s", "coulomb_friction": "N m",
+          "viscous_friction": "N m s/rad"}  # fmt: skip
+_MAY_BE_ZERO = ("kd", "armature", "rotor_inertia", "armature_per_torque", "robot_kd", "corner_speed",
+                "coulomb_friction", "viscous_friction")  # fmt: skip
 
 
 def _numbers(table: dict[str, Any], where: str, keys: tuple[str, ...]) -> dict[str, float]:
@@ -186,9 +191,26 @@ def _numbers(table: dict[str, Any], where: str, keys: tuple[str, ...]) -> dict[s
     }
 
 
-def _actuator_group(raw: Any, where: str, names: UrdfNames) -> ActuatorGroup:
+def _motor_types(raw: Any) -> dict[str, MotorType]:
+    """The ``[actuation.motors.<name>]`` tables (:mod:`rtgait.robot.motor_types`)."""
+    motors = {}
+    for name, table in FILES.table(raw, "actuation.motors").items():
+        where = f"actuation.motors.{name}"
+        table = FILES.table(table, where)
+        FILES.check_keys(table, where, ("peak_torque", "no_load_speed"), MOTOR_KEYS[2:])
+        values = _numbers(table, where, MOTOR_KEYS)
+        if values.get("corner_speed", 0.0) >= values["no_load_speed"]:
+            raise RobotError(
+                f"{where}.corner_speed ({values['corner_speed']:g} rad/s) must be below {where}.no_load_speed "
+                f"({values['no_load_speed']:g} rad/s)"
+            )
+        motors[name] = MotorType(name=name, **values)
+    return motors
+
+
+def _actuator_group(raw: Any, where: str, names: UrdfNames, motors: Mapping[str, MotorType]) -> ActuatorGroup:
     table = FILES.table(raw, where)
-    FILES.check_keys(table, where, ("match",), _GROUP_KEYS)
+    FILES.check_keys(table, where, ("match",), (*_GROUP_KEYS, "motor"))
     patterns = [table["match"]] if isinstance(table["match"], str) else table["match"]
     if not (isinstance(patterns, list) and patterns and all(isinstance(p, str) and p for p in patterns)):
         raise RobotError(f"{where}.match must be a joint name pattern or a non-empty list of them, got {patterns!r}")
@@ -197,7 +219,13 @@ def _actuator_group(raw: Any, where: str, names: UrdfNames) -> ActuatorGroup:
         # A pattern that matches nothing is a typo: the group would silently not apply.
         if not any(fnmatch.fnmatchcase(joint, pattern) for joint in movable):
             raise RobotError(f"{where}.match: {pattern!r} matches no movable joint of the URDF")
-    values = _numbers(table, where, _GROUP_KEYS)
+    values: dict[str, Any] = _numbers(table, where, _GROUP_KEYS)
+    if "motor" in table:
+        motor = FILES.string(table, "motor", where, non_empty=True)
+        if motor not in motors:
+            known = ", ".join(motors) or "none"
+            raise RobotError(f"{where}.motor: no motor type {motor!r} in [actuation.motors] (described: {known})")
+        values["motor"] = motor
     rotor = "rotor_inertia" in values, "gear_ratio" in values
     if any(rotor) and not all(rotor):
         raise RobotError(f"{where}: rotor_inertia and gear_ratio go together (armature = rotor_inertia * gear_ratio^2)")
@@ -210,12 +238,21 @@ def _actuator_group(raw: Any, where: str, names: UrdfNames) -> ActuatorGroup:
 
 def parse_actuation(raw: Any, names: UrdfNames) -> ActuationSpec:
     table = FILES.table(raw, "actuation")
-    FILES.check_keys(table, "actuation", (), (*_TABLE_KEYS, "joints"))
+    FILES.check_keys(table, "actuation", (), (*_TABLE_KEYS, "command_delay", "motors", "joints"))
+    motors = _motor_types(table["motors"]) if "motors" in table else {}
     raw_groups = table.get("joints", [])
     if not isinstance(raw_groups, list):
         raise RobotError("actuation.joints must be an array of tables ([[actuation.joints]])")
-    groups = tuple(_actuator_group(g, f"actuation.joints[{i}]", names) for i, g in enumerate(raw_groups))
-    spec = ActuationSpec(groups=groups, **_numbers(table, "actuation", _TABLE_KEYS))
+    groups = tuple(_actuator_group(g, f"actuation.joints[{i}]", names, motors) for i, g in enumerate(raw_groups))
+    delay = table.get("command_delay", 0)
+    if not (isinstance(delay, int) and not isinstance(delay, bool) and delay >= 0):
+        raise RobotError(f"actuation.command_delay must be a whole number of control periods >= 0, got {delay!r}")
+    spec = ActuationSpec(
+        groups=groups,
+        command_delay=delay,
+        motors=MappingProxyType(motors),
+        **_numbers(table, "actuation", _TABLE_KEYS),
+    )
     ratio = spec.control_dt / spec.physics_dt
     if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-6 * ratio:
         raise RobotError(

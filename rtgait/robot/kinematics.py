@@ -1,12 +1,21 @@
 """A robot's kinematics for the state estimator, with Pinocchio: the frames of
 :class:`~rtgait.interface.body_kinematics.BodyKinematics` relative to the floating base, the feet's force sensor
-mounts and the legs' statics (the protocol :class:`rtgait.estimation.kinematics.RobotKinematics`).
+mounts and the legs' dynamics (the protocol :class:`rtgait.estimation.kinematics.RobotKinematics`).
 
 The reduced model's configuration is the base at the origin, unrotated, and the encoders' joints; its velocity the
 joints' alone. One ``centerOfMass(q, v)`` a tick runs the forward kinematics (positions and velocities) and the COM
 with its velocity; the sole frames and the IMU's are read off it (the IMU's only when a joint moves it relative to
-the base). The legs' statics (for a robot without foot force sensors) cost a generalized-gravity pass and the joint
-Jacobians, with the gravity turned into the base frame.
+the base). The legs' dynamics (for a robot without foot force sensors) cost one recursive Newton-Euler pass and the
+joint Jacobians from the placements the forward kinematics left.
+
+**Legs' dynamics.** The joint torques of the whole tree for the base's motion and the joints' (inverse dynamics,
+the soles free), of which the legs' rows depend only on the base's motion and the leg's own: the base frame turning
+at ``w`` with angular acceleration ``w'`` and its origin accelerating at ``a``. The gravity is the base origin's
+specific force ``f = a - g`` taken as the base's linear acceleration in a gravity-free model: a body at rest in
+gravity and one accelerated upward at ``g`` without it have the same joint torques. The base's linear velocity is
+taken as zero: a constant velocity added to every body changes no acceleration, hence no force, and with it zero
+the base's spatial acceleration is its origin's classical one. The drives' armatures (:mod:`rtgait.robot.drives`)
+add ``I_a q''`` to each joint, as the rotors a motor's torque also accelerates.
 
 A foot force sensor on frame ``s`` measures the wrench between the body it is on and that body's parent (as a
 simulator's force sensor at a site does, and an ankle sensor between shin and foot): the mass it carries besides
@@ -21,6 +30,7 @@ import pinocchio as pin
 from rtgait.interface.body_kinematics import BodyKinematics, ForceSensorMount, FrameMotion
 from rtgait.interface.sensor_spec import SensorFrame
 from rtgait.robot.description import RobotError
+from rtgait.robot.drives import joint_drives
 from rtgait.robot.model import RobotModel
 
 __all__ = ["PinocchioKinematics"]
@@ -51,7 +61,7 @@ class PinocchioKinematics:
         imu: SensorFrame | None = None,
         feet: tuple[SensorFrame, SensorFrame] | None = None,
     ) -> None:
-        model = pin.Model(robot.model)  # its own copy: leg_statics sets its gravity, the sensors add frames
+        model = pin.Model(robot.model)  # its own copy: without gravity, with the drives' armatures and sensor frames
         imu_frame = None if imu is None else _add_frame(model, "rtgait_imu", imu, "sensors.imu.frame")
         sensor_frames = None
         if feet is not None:
@@ -71,7 +81,11 @@ class PinocchioKinematics:
         self._leg_columns = tuple(_columns(leg, 6) for leg in self.leg_joints)
         self._jacobians = np.empty((2, 6, len(self.leg_joints[0])))
         self._holding = np.empty((2, len(self.leg_joints[0])))
-        self._gravity = model.gravity.linear  # a view of the model's gravity, set by leg_statics
+        # The legs' dynamics: the gravity comes in as the base's specific force (module docstring); the rotors.
+        model.gravity = pin.Motion.Zero()
+        model.armature[6:] = joint_drives(robot)[1]
+        self._v_dynamics = np.zeros(model.nv)
+        self._a_dynamics = np.zeros(model.nv)
         standing = model.createData()  # for the fixed placements, at half-sitting
         pin.centerOfMass(model, standing, robot.q_half_sitting)
         pin.framesForwardKinematics(model, standing, robot.q_half_sitting)
@@ -126,20 +140,34 @@ class PinocchioKinematics:
             (tuple(values[0:3]), tuple(values[3:6]), _frame_motion(values, 6), _frame_motion(values, 24), fixed),
         )
 
-    def leg_statics(self, gravity: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    def leg_dynamics(
+        self, angular_velocity: tuple[float, float, float], acceleration: tuple[float, ...],
+        joint_accelerations: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
         """The soles' Jacobians (sole frame, rows linear then angular) with respect to each leg's joints, shape
-        ``(2, 6, n_leg)``, and the torques holding each leg against ``gravity`` (m/s^2, base frame), shape
-        ``(2, n_leg)``, at the configuration of the last :meth:`update` (arrays the next call overwrites)."""
-        model, data, q = self.model, self.data, self._q
-        self._gravity[:] = gravity
-        holding = pin.computeGeneralizedGravity(model, data, q)
-        pin.computeJointJacobians(model, data, q)
+        ``(2, 6, n_leg)``, and the torques each leg's joints need for the motion with the soles free, shape
+        ``(2, n_leg)``, at the configuration and joint velocities of the last :meth:`update` (arrays the next call
+        overwrites; module docstring).
+
+        Args:
+            angular_velocity: the base's angular velocity (rad/s, base frame).
+            acceleration: the base origin's specific force ``a - g`` (m/s^2) then the base's angular acceleration
+                (rad/s^2), base frame.
+            joint_accelerations: the joints' accelerations (rad/s^2), shape ``(joint_count,)``.
+        """
+        model, data, q, v, a = self.model, self.data, self._q, self._v_dynamics, self._a_dynamics
+        v[3:6] = angular_velocity
+        v[6:] = self._v[6:]
+        a[0:6] = acceleration
+        a[6:] = joint_accelerations
+        torques = pin.rnea(model, data, q, v, a)
+        pin.computeJointJacobians(model, data)  # from the joint placements of q, which update() and rnea computed
         (left, right), jacobians, legs = self._soles, self._jacobians, self._holding
         columns_left, columns_right = self._leg_columns
         jacobians[0] = pin.getFrameJacobian(model, data, left, pin.LOCAL)[:, columns_left]
         jacobians[1] = pin.getFrameJacobian(model, data, right, pin.LOCAL)[:, columns_right]
-        legs[0] = holding[columns_left]
-        legs[1] = holding[columns_right]
+        legs[0] = torques[columns_left]
+        legs[1] = torques[columns_right]
         return jacobians, legs
 
     # ----- construction --------------------------------------------------------------------------------------------

@@ -1,21 +1,26 @@
-"""Joint actuation in physics: per-joint PD servos with torque limits and armature, from the robot description.
+"""Joint actuation in physics: each joint's drive gains, torque limit and armature, from the robot description.
 
-The model of one joint's drive, as position-controlled humanoids' joint loops run (and as mc_mujoco simulates them):
+The model of one joint's drive, as humanoids' joint loops run (Unitree's motors, a ros_control joint; and as
+mc_mujoco simulates them):
 
-* the controller sends a joint reference ``(q_ref, qd_ref)`` every **control period** (``control_dt``: 1 ms for
-  Talos, whose ros_control loop runs at 1 kHz; 2 ms for G1, whose low-level SDK loop runs at 500 Hz);
-* the drive applies ``tau = kp (q_ref - q) + kd (qd_ref - qd)`` (N m), clipped to the joint's torque limit, at every
-  **physics step** (``physics_dt``, which divides the control period);
-* between two references the drive sees them **interpolated linearly** over the physics substeps (substep ``i`` of
-  ``n`` gets ``previous + (i + 1) / n * (new - previous)``);
+* the controller sends a command ``(q_ref, qd_ref, tau_ff, kp, kd)`` every **control period** (``control_dt``: 1 ms
+  for Talos, whose ros_control loop runs at 1 kHz; 2 ms for G1, whose low-level SDK loop runs at 500 Hz); gains it
+  leaves out are the drive's own (this module's ``kp``, ``kd``);
+* the drive applies ``tau = tau_ff + kp (q_ref - q) + kd (qd_ref - qd)`` (N m), clipped to the joint's torque limit
+  (or the motor's envelope, :mod:`rtgait.sim.motors`), at every **physics step** (``physics_dt``, which divides the
+  control period): :mod:`rtgait.sim.drives`;
 * the motor's rotor, seen through the gear of ratio ``N``, adds ``J_rotor N^2`` to the joint's inertia (the
   **armature**).
 
-In MuJoCo: one *general* actuator per joint with ``gain = kp`` and bias ``-kp q - kd qd``, driven with
-``ctrl = q_ref + (kd / kp) qd_ref``, ``forcerange = +-effort limit``: the PD above, evaluated by MuJoCo at the state of
-each substep. Its ``-kd qd`` is integrated implicitly by the ``implicitfast`` integrator (and dropped, correctly,
-while the actuator saturates); a torque computed in Python would make the damping explicit, unstable once
-``kd / inertia`` exceeds ``2 / dt`` (a stance-sized servo on a light swing foot).
+In MuJoCo: one *general* actuator per joint with ``gain = kp`` and bias ``-kp q - kd qd`` (:func:`add_actuators`),
+``forcerange = +-effort limit``: MuJoCo evaluates the PD at the state of each substep, and the ``implicitfast``
+integrator integrates its ``-kd qd`` implicitly (dropping it, correctly, while the actuator saturates); a torque
+computed in Python would make the damping explicit, unstable once ``kd / inertia`` exceeds ``2 / dt`` (a
+stance-sized servo on a light swing foot).
+
+Two sets of the drive's own gains (``SimConfig.gains``): ``"stiff"``, the description's ``kp``/``kd`` else the
+defaults below, derived from the URDF; ``"robot"``, the gains the real robot's low-level controller runs
+(``robot_kp``/``robot_kd``, cited in each description).
 
 Defaults derived from the URDF when the description does not give a value (``[actuation]``,
 :mod:`rtgait.robot.description`):
@@ -41,11 +46,12 @@ from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
-import pinocchio as pin
 
+from rtgait.robot.drives import joint_drives
+from rtgait.robot.joint_inertia import carried_inertia
 from rtgait.robot.model import RobotModel
 
-__all__ = ["Actuation", "ReferenceInterpolator", "add_actuators", "carried_inertia", "resolve_actuation", "substeps"]
+__all__ = ["Actuation", "add_actuators", "carried_inertia", "own_gains", "resolve_actuation", "substeps"]
 
 _TIME_TOLERANCE = 1e-9  # relative: 0.002 / 0.0005 must count as exactly 4
 
@@ -75,35 +81,6 @@ def substeps(control_dt: float, physics_dt: float) -> int:
     return n
 
 
-def carried_inertia(robot: RobotModel) -> tuple[np.ndarray, np.ndarray]:
-    """The inertia each moving joint moves, about its own axis at half-sitting (kg m^2).
-
-    Returns:
-        ``(distal, carried)`` per joint of ``robot.joint_names``: ``distal`` is the inertia of everything beyond
-        the joint (its subtree, from the root link); ``carried`` is ``distal``, or for a joint whose subtree holds
-        a sole the larger of ``distal`` and the rest of the robot's inertia about the same axis (the foot on the
-        ground). Armature excluded.
-    """
-    model = robot.model
-    data = model.createData()
-    q = robot.q_half_sitting
-    pin.computeJointJacobians(model, data, q)
-    mass_matrix = pin.crba(model, data, q)
-    pin.ccrba(model, data, q, np.zeros(model.nv))
-    whole = data.oYcrb[1].matrix()  # the whole robot's spatial inertia (world frame, at the origin)
-    soles = {model.frames[robot.left_sole_id].parentJoint, model.frames[robot.right_sole_id].parentJoint}
-    distal, carried = [], []
-    for joint in range(2, model.njoints):
-        v = model.joints[joint].idx_v
-        axis = data.J[:, v]  # the joint's unit motion, world frame at the origin
-        own = float(mass_matrix[v, v])  # the subtree's composite inertia about the axis
-        rest = float(axis @ whole @ axis) - own
-        holds_sole = any(joint in model.supports[s] for s in soles)
-        distal.append(own)
-        carried.append(max(own, rest) if holds_sole else own)
-    return np.array(distal), np.array(carried)
-
-
 @dataclass(frozen=True, eq=False)
 class Actuation:
     """The resolved actuation of every moving joint, in ``joint_names`` order.
@@ -118,6 +95,7 @@ class Actuation:
             default gains are derived (:func:`carried_inertia`).
         control_dt: control period (s): a new joint reference every period.
         physics_dt: physics step (s), a divisor of ``control_dt``.
+        gains: which of the description's gain sets ``kp`` and ``kd`` are (``"stiff"`` or ``"robot"``).
     """
 
     joint_names: tuple[str, ...]
@@ -128,6 +106,7 @@ class Actuation:
     carried_inertia: np.ndarray
     control_dt: float
     physics_dt: float
+    gains: str = "stiff"
 
     def __post_init__(self) -> None:
         substeps(self.control_dt, self.physics_dt)
@@ -188,12 +167,9 @@ class Actuation:
         ]
 
 
-def _effort_limit(value: float) -> float:
-    """A URDF effort limit as a torque limit: missing (Pinocchio's huge default), 0 or not finite means none."""
-    return value if math.isfinite(value) and 0.0 < value < 1e30 else math.inf
-
-
-def resolve_actuation(robot: RobotModel, control_dt: float | None = None, physics_dt: float = 0.001) -> Actuation:
+def resolve_actuation(
+    robot: RobotModel, control_dt: float | None = None, physics_dt: float = 0.001, gains: str = "stiff"
+) -> Actuation:
     """Every moving joint's actuation: the description's values, else defaults derived from the URDF (see the
     module docstring).
 
@@ -201,43 +177,52 @@ def resolve_actuation(robot: RobotModel, control_dt: float | None = None, physic
         robot: the loaded robot.
         control_dt: control period (s); ``None``: the description's ``actuation.control_dt``.
         physics_dt: physics step (s); must divide the control period.
+        gains: ``"stiff"`` (the description's ``kp``/``kd``, else derived) or ``"robot"`` (its ``robot_kp``/
+            ``robot_kd``, which every moving joint must have).
 
     Raises:
-        ValueError: bad periods (:func:`substeps`), or a joint whose resolved kp is not > 0.
+        ValueError: bad periods (:func:`substeps`), an unknown gain set, a joint without the robot's gains, or a
+            joint whose resolved kp is not > 0.
     """
+    if gains not in ("stiff", "robot"):
+        raise ValueError(f"gains must be 'stiff' or 'robot', got {gains!r}")
     description = robot.description
     if control_dt is None:
         control_dt = description.actuation.control_dt
     substeps(control_dt, physics_dt)
     distal, carried = carried_inertia(robot)
-    model = robot.model
-    kp, kd, armature, limits = [], [], [], []
+    limits, armature = joint_drives(robot)
+    kp, kd = [], []
     for i, name in enumerate(robot.joint_names):
         spec = description.joint_actuation(name)
-        joint = model.joints[model.getJointId(name)]
-        limit = spec.effort_limit if spec.effort_limit is not None else _effort_limit(model.effortLimit[joint.idx_v])
-        rotor = spec.armature
-        if rotor is None:
-            rotor = spec.armature_per_torque * limit if math.isfinite(limit) else 0.0
-        omega = 2.0 * math.pi * spec.natural_frequency
-        joint_kp = spec.kp if spec.kp is not None else omega * omega * (rotor + float(carried[i]))
-        kp.append(joint_kp)
-        kd.append(
-            spec.kd
-            if spec.kd is not None
-            else 2.0 * spec.damping_ratio * math.sqrt(joint_kp * (rotor + float(distal[i])))
-        )
-        armature.append(rotor)
-        limits.append(limit)
+        rotor = float(armature[i])
+        if gains == "robot":
+            if spec.robot_kp is None or spec.robot_kd is None:
+                raise ValueError(
+                    f"gains 'robot': the description of {description.name} gives no robot_kp and robot_kd for joint "
+                    f"{name} ([[actuation.joints]])"
+                )
+            kp.append(spec.robot_kp)
+            kd.append(spec.robot_kd)
+        else:
+            omega = 2.0 * math.pi * spec.natural_frequency
+            joint_kp = spec.kp if spec.kp is not None else omega * omega * (rotor + float(carried[i]))
+            kp.append(joint_kp)
+            kd.append(
+                spec.kd
+                if spec.kd is not None
+                else 2.0 * spec.damping_ratio * math.sqrt(joint_kp * (rotor + float(distal[i])))
+            )
     return Actuation(
         joint_names=robot.joint_names,
         kp=np.array(kp),
         kd=np.array(kd),
-        armature=np.array(armature),
-        effort_limit=np.array(limits),
+        armature=armature,
+        effort_limit=limits,
         carried_inertia=carried,
         control_dt=float(control_dt),
         physics_dt=float(physics_dt),
+        gains=gains,
     )
 
 
@@ -262,56 +247,9 @@ def add_actuators(spec: mujoco.MjSpec, actuation: Actuation) -> None:
             actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_FALSE
 
 
-class ReferenceInterpolator:
-    """The joint references a drive sees at each physics substep: linear between two control ticks' references.
-
-    MuJoCo's actuator takes one control per joint, ``ctrl = q_ref + (kd / kp) qd_ref`` (see the module docstring),
-    which is linear in the reference, so interpolating the controls is interpolating ``(q_ref, qd_ref)``.
-
-    A drive servos its encoder's reading, not the joint: with encoder offsets ``o`` (reading - true angle, a model
-    error's joint zeros, :mod:`rtgait.sim.model_error`) the control is ``q_ref - o + (kd / kp) qd_ref``, so the joint
-    goes to ``q_ref - o`` and reads ``q_ref``. The references kept (:attr:`q`, :meth:`reference`) are the
-    controller's, in its model's convention.
-
-    Args:
-        actuation: the servos (their ``kd / kp`` turns a velocity reference into a position lead).
-        q: the joint positions the servos hold at the start (rad); the velocity reference starts at 0.
-        offsets: the encoders' offsets (rad), or ``None``: none.
-    """
-
-    def __init__(self, actuation: Actuation, q: np.ndarray, offsets: np.ndarray | None = None) -> None:
-        self.n = actuation.substeps
-        self.lead = actuation.kd / actuation.kp  # s
-        self.offsets = offsets
-        self.q = np.array(q, dtype=float)
-        self.qd = np.zeros_like(self.q)
-        self.q_previous, self.qd_previous = self.q, self.qd
-        self._ctrl = self.q.copy()  # the control of the period's last substep: the new reference's
-        if offsets is not None:
-            self._ctrl -= offsets
-        self._ctrl_previous = self._ctrl
-        self._ctrl_step = np.zeros_like(self.q)
-
-    def command(self, q_ref: np.ndarray, qd_ref: np.ndarray) -> None:
-        """A new reference from the controller (rad, rad/s): the substeps of this control period move to it.
-        The arrays are kept, not copied: pass new ones each period."""
-        self.q_previous, self.qd_previous = self.q, self.qd
-        self.q, self.qd = q_ref, qd_ref
-        self._ctrl_previous = self._ctrl
-        self._ctrl = q_ref + self.lead * qd_ref
-        if self.offsets is not None:
-            self._ctrl -= self.offsets
-        if self.n > 1:
-            self._ctrl_step = (self._ctrl - self._ctrl_previous) * (1.0 / self.n)
-
-    def reference(self, i: int) -> tuple[np.ndarray, np.ndarray]:
-        """The reference ``(q_ref, qd_ref)`` at substep ``i`` (0 to ``n - 1``) of the current control period."""
-        s = (i + 1) / self.n
-        return self.q_previous + s * (self.q - self.q_previous), self.qd_previous + s * (self.qd - self.qd_previous)
-
-    def apply(self, i: int, ctrl: np.ndarray) -> None:
-        """Write the actuators' controls for substep ``i`` (0 to ``n - 1``) into ``ctrl`` (e.g. ``data.ctrl``)."""
-        if i == self.n - 1:
-            ctrl[:] = self._ctrl  # the last substep reaches the new reference exactly
-        else:
-            np.add(self._ctrl_previous, (i + 1) * self._ctrl_step, out=ctrl)
+def own_gains(model: mujoco.MjModel, actuation: Actuation) -> None:
+    """Put the drives' own gains (:func:`add_actuators`'s) back into ``model``'s actuators, whatever a command with
+    other gains left there (:mod:`rtgait.sim.drives`)."""
+    model.actuator_gainprm[:, 0] = actuation.kp
+    model.actuator_biasprm[:, 1] = -actuation.kp
+    model.actuator_biasprm[:, 2] = -actuation.kd

@@ -1,4 +1,5 @@
-"""Physics parameters of a simulated robot and its floor: the physics step, the control period, contacts, solver."""
+"""Physics parameters of a simulated robot and its floor: the physics step, the control period, contacts, solver, and
+how the drives act (which gains, the motor model, the command's delay)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,12 @@ from rtgait.sim.actuation import substeps
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
 
-__all__ = ["SensorSettings", "SimConfig"]
+__all__ = ["GAIN_SETS", "SensorSettings", "SimConfig"]
+
+GAIN_SETS = ("stiff", "robot")
+"""The drives' own gains (``SimConfig.gains``): ``"stiff"``, the description's ``kp``/``kd`` or the stiff gains derived
+from the URDF (:mod:`rtgait.sim.actuation`); ``"robot"``, the gains the real robot's low-level controller runs
+(``robot_kp``/``robot_kd``)."""
 
 
 @dataclass(frozen=True)
@@ -77,6 +83,14 @@ class SimConfig:
             physics does not depend on them.
         model_error: seed of the differences between the simulated robot and the controller's model of it (masses,
             centres of mass, joint zeros: :mod:`rtgait.sim.model_error`); ``None``: none, the robot is the model.
+        gains: the drives' own gains, those a command without gains gets: one of :data:`GAIN_SETS`.
+        motor_model: whether the drives have their motor types' torque-speed envelopes and joint friction
+            (:mod:`rtgait.sim.motors`); ``False``: ideal drives, clipped at their torque limits only.
+        command_delay: control periods between writing a command and the drives' applying it (a bus that delivers
+            it in the next cycle: 1); ``None``: the description's ``actuation.command_delay``.
+
+    The drives of today's runs are ``gains="stiff"``, no motor model, no delay; the robot's own drives are
+    ``gains="robot", motor_model=True, command_delay=None``.
     """
 
     physics_dt: float | None = None
@@ -93,6 +107,9 @@ class SimConfig:
     meshes: bool = True
     sensors: SensorSettings = SensorSettings()
     model_error: int | None = None
+    gains: str = "stiff"
+    motor_model: bool = False
+    command_delay: int | None = 0
 
     def __post_init__(self) -> None:
         step = self.physics_dt
@@ -124,6 +141,15 @@ class SimConfig:
         seed = self.model_error
         if seed is not None and not (isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
             raise ValueError(f"SimConfig.model_error must be an integer seed >= 0 or None, got {seed!r}")
+        if self.gains not in GAIN_SETS:
+            raise ValueError(f"SimConfig.gains must be one of {', '.join(GAIN_SETS)}, got {self.gains!r}")
+        if not isinstance(self.motor_model, bool):
+            raise ValueError(f"SimConfig.motor_model must be true or false, got {self.motor_model!r}")
+        delay = self.command_delay
+        if delay is not None and not (isinstance(delay, int) and not isinstance(delay, bool) and delay >= 0):
+            raise ValueError(
+                f"SimConfig.command_delay must be a whole number of control periods >= 0 or None, got {delay!r}"
+            )
         low, high = self.contact_impedance
         if not 0.0 < low <= high < 1.0:
             raise ValueError(
@@ -131,7 +157,7 @@ class SimConfig:
             )
 
     def resolved(self, robot: RobotModel) -> SimConfig:
-        """These settings with the physics step and control period of ``robot``'s description where not given.
+        """These settings with the physics step and command delay of ``robot``'s description where not given.
 
         Raises:
             ValueError: the contact time constant is shorter than two of the resolved physics steps.
@@ -143,4 +169,5 @@ class SimConfig:
                 f"SimConfig.contact_timeconst must be >= 2 physics steps ({2.0 * step:g} s for {robot.name}), "
                 f"got {self.contact_timeconst}"
             )
-        return dataclasses.replace(self, physics_dt=step)
+        delay = actuation.command_delay if self.command_delay is None else self.command_delay
+        return dataclasses.replace(self, physics_dt=step, command_delay=delay)

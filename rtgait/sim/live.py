@@ -363,8 +363,11 @@ class LiveWalk:
             rate += ": cannot keep up, slower than real time"
         level = f"controller {self.loop.controller.level}"
         text = f"{command} | {phase}, walk time {values.t:.1f} s | {level} | {rate}"
+        safety = self.loop.stack.safety
         if self.loop.fell:
             text += f" | FELL ({self.loop.fall_cause})"
+        elif safety.damping:
+            text += f" | DAMPING ({safety.events[-1].kind})" if safety.events else " | DAMPING"
         elif self.loop.done:
             text += " | walk over"
         return text

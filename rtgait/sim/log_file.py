@@ -5,8 +5,8 @@ The columns are :func:`log_columns`: name, unit and meaning of each, also stored
 values): ``_x``/``_y``/``_z`` for world-frame components, ``left_``/``right_`` for the feet, ``<quantity>_<joint>`` for
 the joints. The file's metadata key ``rtgait`` holds one JSON object (:func:`log_metadata`): the robot, controller,
 periods, rtgait version, scenario, sole, the run's outcome, and ``events``, the table of what happened (landings,
-re-anchoring, step adjustments, replans, pushes, tip-over, fall), each with its time, tick, kind, side, detail and
-position; the per-tick ``events`` column names the events of each tick (empty on most).
+re-anchoring, step adjustments, replans, pushes, damping, tip-over, fall), each with its time, tick, kind, side,
+detail and position; the per-tick ``events`` column names the events of each tick (empty on most).
 
 Reading needs pyarrow only (:func:`read_sim_log`); writing is done from a :class:`~rtgait.sim.result.SimResult`
 (:func:`write_sim_log`), through :func:`rtgait.outputs.write_atomic` by :mod:`rtgait.io.sim_files`.
@@ -166,10 +166,11 @@ def _number(value: float | None) -> float | None:
 def sim_events(result: SimResult) -> list[dict[str, Any]]:
     """The events table of ``result``, in time order: the controller's events (``landing``, ``touchdown``,
     ``touchdown-refused``, ``step-adjustment``, ``replan``: :class:`~rtgait.control.settings.ControlEvent`),
-    ``push`` and ``push-end`` (``detail``: the force in N), ``tip-over`` and ``fall`` (``detail``: its cause). Each is
-    ``{"t", "tick", "kind", "side", "detail", "x", "y"}``: the time of the tick it happened at (s, walk clock), that
-    tick's index, and a position (m, world frame) or ``None``: where a foot landed or was re-anchored, the new landing
-    of a step adjustment."""
+    ``push`` and ``push-end`` (``detail``: the force in N), ``damping`` (the stack's safety layer tripped, ``detail``:
+    the fault's kind and what was wrong, :mod:`rtgait.stack.safety`), ``tip-over`` and ``fall`` (``detail``: its
+    cause). Each is ``{"t", "tick", "kind", "side", "detail", "x", "y"}``: the time of the tick it happened at (s,
+    walk clock), that tick's index, and a position (m, world frame) or ``None``: where a foot landed or was
+    re-anchored, the new landing of a step adjustment."""
     rows: list[tuple[float, str, str, str, float, float]] = [
         (e.t, e.kind, e.side, e.detail, e.x, e.y) for e in result.events
     ]
@@ -177,6 +178,8 @@ def sim_events(result: SimResult) -> list[dict[str, Any]]:
         force = ", ".join(f"{f:g}" for f in push.force)
         rows.append((push.start, "push", "", f"({force}) N", math.nan, math.nan))
         rows.append((push.start + push.duration, "push-end", "", f"({force}) N", math.nan, math.nan))
+    for fault in result.safety_events:
+        rows.append((fault.t, "damping", "", f"{fault.kind}: {fault.detail}", math.nan, math.nan))
     if result.tip_time is not None:
         rows.append((result.tip_time, "tip-over", "", "a loaded foot tilted beyond the tip angle", math.nan, math.nan))
     if result.fell and result.fall_time is not None:

@@ -98,6 +98,7 @@ __all__ = [
 ]
 
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
+_NO_COG, _NO_FOOT = (math.nan,) * 3, (math.nan,) * 4  # the IK's targets while the stack damps
 
 
 def open_loop_controller(sim: SimModel, planner: OnlinePlanner) -> WalkingController:
@@ -218,7 +219,7 @@ class ClosedLoop:
 
         # ----- loop state ----------------------------------------------------------------------------------------
         # The complete per-tick record (sim.parquet) of a whole run; a ring run (a live session) keeps none.
-        self.log = TickLog(sim, data, self.robot.servo, capacity, planner.w) if keep is None else None
+        self.log = TickLog(sim, data, self.robot.drives, capacity, planner.w) if keep is None else None
         # The hook, footstep changes, velocity commands and stop of the walk, at their times (loop_inputs.py).
         on_stop = self._follow_walk_end if self._can_grow else None  # steps held longer before the walk had an end
         self._inputs = WalkInputs(planner, options, stop_after, on_stop)
@@ -304,7 +305,7 @@ class ClosedLoop:
             code, phase = 0, -1
             dcm = dcm_planned = (math.nan, math.nan)
             out = measurement = truth = None  # no controller during the transition
-            made = hold(_new_tuple(IKTargets, (target_cog, left_foot, right_foot, None)))
+            made = hold(_new_tuple(IKTargets, (target_cog, left_foot, right_foot, None)), t)
         else:
             # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
             if estimator_reads_truth:
@@ -318,19 +319,26 @@ class ClosedLoop:
             if k == k0:
                 self.stack.start(0.0, measurement)
                 self._inputs.start()
-            self._walk_inputs(t, data)
+            if measurement is not None:  # None: the safety layer found a fault, the stack damps (stack.safety)
+                self._walk_inputs(t, data)
             made = control(t, measurement)
             out = made.targets
-            target_cog = out.com
-            left_foot, right_foot = out.left_foot, out.right_foot
-            planned_x, planned_y = out.zmp_planned
-            command_x, command_y = out.zmp_command
-            code, phase = SUPPORT_CODES[out.planned_support], out.phase
-            dcm, dcm_planned = measurement.dcm, out.dcm_planned
-            if out.events:
-                self._log(out.events)
-                if self._can_grow and any(e.kind == "step-adjustment" for e in out.events):
-                    self._follow_walk_end()
+            if out is None:  # the safety layer has tripped (stack.safety): the damping command, no targets, no plan
+                target_cog, left_foot, right_foot = _NO_COG, _NO_FOOT, _NO_FOOT
+                planned_x = planned_y = command_x = command_y = math.nan
+                code, phase = 0, -1
+                dcm = dcm_planned = (math.nan, math.nan)
+            else:
+                target_cog = out.com
+                left_foot, right_foot = out.left_foot, out.right_foot
+                planned_x, planned_y = out.zmp_planned
+                command_x, command_y = out.zmp_command
+                code, phase = SUPPORT_CODES[out.planned_support], out.phase
+                dcm, dcm_planned = measurement.dcm, out.dcm_planned  # type: ignore[union-attr]
+                if out.events:
+                    self._log(out.events)
+                    if self._can_grow and any(e.kind == "step-adjustment" for e in out.events):
+                        self._follow_walk_end()
 
         # The commanded configuration: the IK's base and the command's joints (the ankle tilts added).
         command = made.command

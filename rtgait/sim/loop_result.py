@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     from rtgait.sim.model import SimModel
     from rtgait.sim.robot import SimRobot
     from rtgait.sim.tick_log import TickLog
+    from rtgait.stack.walking_stack import WalkingStack
 
 __all__ = ["RunState", "loop_result"]
 
@@ -47,6 +48,7 @@ class RunState(Protocol):
     sim: SimModel
     planner: OnlinePlanner
     controller: WalkingController
+    stack: WalkingStack
     options: LoopOptions
     record: TickRecord
     contacts: ContactMonitor
@@ -121,6 +123,8 @@ def loop_result(loop: RunState, wall_time: float, n_steps: int, walk_end: float)
         gravity=loop.gravity,
         log=loop.log.finish(ticks) if loop.log is not None else None,
         model_error=sim.model_error,
+        safety_events=tuple(e for e in loop.stack.safety.events if e.t >= first),
+        safety=loop.stack.safety.summary(),
         state=options.state,
         sensors=dataclasses.replace(sim.config.sensors, latency=loop.robot.sensors.latency),
     )

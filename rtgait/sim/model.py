@@ -14,7 +14,9 @@ What the importer gets from the URDF and what is changed (:mod:`rtgait.sim.urdf_
   ``<mimic>`` couplings are dropped (every joint is locked or has its own servo).
 * Every joint outside ``walking.moving_joints`` is locked at its half-sitting angle, as the whole-body IK treats it:
   fewer degrees of freedom, cheaper physics steps.
-* Each moving joint gets a PD servo with its torque limit and armature (:mod:`rtgait.sim.actuation`).
+* Each moving joint gets a drive with its gains (``config.gains``), torque limit and armature
+  (:mod:`rtgait.sim.actuation`, :mod:`rtgait.sim.drives`); with ``config.motor_model``, its motor's torque-speed
+  envelope and the gears' friction, replacing the URDF's ``<dynamics>`` (:mod:`rtgait.sim.motors`).
 * The sensors of the description's ``[sensors]``: sites at their frames and MuJoCo's sensors on them
   (:mod:`rtgait.sim.sensor_sites`); massless, they change nothing in the physics.
 * With ``config.model_error``, the robot differs from the model the controller has of it: masses, centres of mass
@@ -36,10 +38,11 @@ import numpy as np
 
 from rtgait.robot.description import RobotError
 from rtgait.robot.model import RobotModel
-from rtgait.sim.actuation import Actuation, add_actuators, resolve_actuation
+from rtgait.sim.actuation import Actuation, add_actuators, own_gains, resolve_actuation
 from rtgait.sim.config import SimConfig
 from rtgait.sim.contact_model import add_floor, add_leg_shapes, add_sole, exclude_pairs, touching_pairs
 from rtgait.sim.model_error import ModelError, apply_model_error, draw
+from rtgait.sim.motors import MotorModel, add_friction, resolve_motors
 from rtgait.sim.sensor_sites import SensorLayout, add_sensors
 from rtgait.sim.urdf_import import MESH_FORMATS, MeshSkippedWarning, compile_spec, lock_joint, urdf_for_mujoco
 
@@ -73,6 +76,8 @@ class SimModel:
         sensors: where the robot's sensors are in ``data.sensordata`` (:mod:`rtgait.sim.sensor_sites`).
         model_error: how the simulated robot differs from ``robot`` (:mod:`rtgait.sim.model_error`; ``model`` has
             its masses and COMs, :attr:`encoder_offsets` its joint zeros), or ``None``: it does not.
+        motors: the drives' motors (:mod:`rtgait.sim.motors`), or ``None``: ideal drives (``config.motor_model``
+            false).
     """
 
     robot: RobotModel
@@ -93,6 +98,7 @@ class SimModel:
     excluded_leg_pairs: tuple[tuple[str, str], ...] = ()
     sensors: SensorLayout | None = None
     model_error: ModelError | None = None
+    motors: MotorModel | None = None
 
     @property
     def timestep(self) -> float:
@@ -108,6 +114,11 @@ class SimModel:
     def substeps(self) -> int:
         """Physics steps per control period."""
         return self.actuation.substeps
+
+    @property
+    def command_delay(self) -> int:
+        """Control periods between writing a joint command and the drives' applying it (``config.command_delay``)."""
+        return int(self.config.command_delay or 0)
 
     @property
     def kp(self) -> np.ndarray:
@@ -199,6 +210,10 @@ class SimModel:
         if not (math.isfinite(settle) and settle >= 0.0):
             raise ValueError(f"settle must be a duration >= 0 s, got {settle}")
         model = self.model
+        # The posture is held by the drives' own gains and at standstill, whatever a damping command left.
+        own_gains(model, self.actuation)
+        if self.motors is not None:
+            self.motors.standstill(model.actuator_forcerange)
         mujoco.mj_resetData(model, data)
         if q is None:
             data.qpos[:] = self.qpos_half_sitting
@@ -231,7 +246,8 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
     Raises:
         RobotError: the URDF cannot be read or MuJoCo cannot compile the edited model (message names the cause).
         ValueError: the control period (``config.control_dt`` or the description's) and the physics step do not
-            fit (:func:`rtgait.sim.actuation.substeps`), or a joint's resolved kp is not > 0.
+            fit (:func:`rtgait.sim.actuation.substeps`), a joint's resolved kp is not > 0, ``config.gains`` is
+            ``"robot"`` and a joint has no robot gains, or ``config.motor_model`` and a joint has no motor type.
     """
     if not isinstance(robot, RobotModel):
         robot = RobotModel.load(robot)
@@ -256,9 +272,12 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
         add_sole(spec, robot, side, root, config)
     add_floor(spec, config)
     shapes = add_leg_shapes(spec, robot) if config.leg_collisions else []
-    actuation = resolve_actuation(robot, config.control_dt, config.physics_dt)
+    actuation = resolve_actuation(robot, config.control_dt, config.physics_dt, config.gains)
     actuation = actuation.scaled(config.gain_scale, config.armature_scale)
     add_actuators(spec, actuation)
+    motors = resolve_motors(robot, actuation) if config.motor_model else None
+    if motors is not None:
+        add_friction(spec, motors)
     add_sensors(spec, robot, root)
 
     spec.option.timestep = config.physics_dt
@@ -306,6 +325,7 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
         excluded_leg_pairs=tuple(excluded),
         sensors=SensorLayout.of(model, robot),
         model_error=error,
+        motors=motors,
     )
     qpos = sim.qpos_from_pinocchio(robot.q_half_sitting)
     object.__setattr__(sim, "qpos_half_sitting", qpos)

@@ -11,7 +11,7 @@ real robot differs from its CAD model and its calibration (ranges in :data:`MODE
   sphere: ``|d|`` reaches ``sqrt(3) b``);
 * **joint zeros**: each moving joint's encoder reads ``q_read = q_true + o``, ``o`` in ``[-c, c]``. The controller
   commands ``q_ref`` in its model's convention; the drive servos its encoder reading to it, so the joint itself goes
-  to ``q_ref - o`` and its encoder then reads ``q_ref`` (:class:`~rtgait.sim.actuation.ReferenceInterpolator`,
+  to ``q_ref - o`` and its encoder then reads ``q_ref`` (:class:`~rtgait.sim.drives.Drives`,
   :class:`~rtgait.sim.sensors.SensorModel`).
 
 A *body* is a MuJoCo body with mass: the URDF's links on fixed and locked joints are fused into their moving parent

@@ -49,6 +49,7 @@ if TYPE_CHECKING:
     from rtgait.sim.estimation_errors import EstimationErrors
     from rtgait.sim.model_error import ModelError
     from rtgait.sim.tick_log import CompleteLog
+    from rtgait.stack.safety import SafetyEvent
 
 __all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SimResult", "Stance", "stances"]
 
@@ -202,6 +203,10 @@ class SimResult:
         log: the rest of the per-tick record (joint and base velocities, per-foot wrench, feet targets, ...:
             :class:`~rtgait.sim.tick_log.CompleteLog`), or ``None`` for a result made without it.
         model_error: how the simulated robot differed from its model (:mod:`rtgait.sim.model_error`), or ``None``.
+        safety_events: the faults that tripped the stack's safety layer into damping
+            (:class:`~rtgait.stack.safety.SafetyEvent`).
+        safety: the safety layer's record (:meth:`~rtgait.stack.safety.SafetyLayer.summary`: damping, events per
+            kind, the first event, clipped ticks per joint), or ``None`` for a result made without it.
         state: what the controller acted on: ``"estimated"``, the kinematic-inertial estimator on the simulated
             sensors; ``"truth"``, the simulator's truth (:attr:`rtgait.sim.loop_options.LoopOptions.state`).
         sensors: the simulated sensors' noise factor, latency (control periods, the description's when not set)
@@ -257,6 +262,8 @@ class SimResult:
     gravity: float = 9.81
     log: CompleteLog | None = field(default=None, repr=False)
     model_error: ModelError | None = field(default=None, repr=False)
+    safety_events: tuple[SafetyEvent, ...] = ()
+    safety: dict[str, Any] | None = None
     state: str = "estimated"
     sensors: SensorSettings | None = None
 
@@ -471,6 +478,7 @@ class SimResult:
             "legs_touched": self.legs_touched,
             "control_dt": self.control_dt,
             "physics_dt": self.physics_dt,
+            "safety": self.safety,
             "state": self.state,
             "sensors": None if self.sensors is None else dataclasses.asdict(self.sensors),
             "estimation": None if self.estimation_errors is None else self.estimation_errors.summary(),

@@ -1,12 +1,16 @@
 """The simulated robot behind :class:`~rtgait.interface.robot.RobotInterface`: MuJoCo's state read as the robot's
-encoders and drives report it, joint commands written to its position-controlled drives, and the simulator's truth
-on its own channel (:class:`~rtgait.interface.robot.GroundTruthSource`).
+encoders and drives report it, joint commands written to its drives, and the simulator's truth on its own channel
+(:class:`~rtgait.interface.robot.GroundTruthSource`).
 
-The drives are MuJoCo position actuators with the gains of the robot description's ``[actuation]``
-(:mod:`rtgait.sim.actuation`): a command's ``q_ref`` and ``dq_ref`` are interpolated linearly over the control
-period's physics substeps. What it does not simulate yet is refused, not ignored: gains other than the drives' own,
-feed-forward torques. The readings are those of the robot description's ``[sensors]`` (:mod:`rtgait.sim.sensors`):
-encoders, joint torques, the IMU and the feet's force sensors where the robot has them. With a model error
+The drives take the whole :class:`~rtgait.interface.command.JointCommand`, as G1's motors and a ros_control joint do:
+``tau = tau_ff + kp (q_ref - q) + kd (dq_ref - dq)`` at every physics step, within the torque limit or the motor's
+envelope, the gains left out of a command the description's (``SimConfig.gains``), a command applied
+``SimConfig.command_delay`` periods after it is written (:mod:`rtgait.sim.drives`). A **damping** command (``kp`` all
+0, ``kd`` given: Unitree's damping mode, the one the stack's safety layer sends, :mod:`rtgait.stack.safety`) is one
+of them: ``tau = kd (dq_ref - dq)``. MuJoCo has no per-data gains: the drives set them in the model's actuator
+parameters, so one :class:`SimRobot` drives a model at a time; a new one puts the model's own gains back. The
+readings are those of the robot description's ``[sensors]`` (:mod:`rtgait.sim.sensors`): encoders, joint torques (the
+drives'), the IMU and the feet's force sensors where the robot has them. With a model error
 (:mod:`rtgait.sim.model_error`) the encoders read the joints plus their zero offsets, and the drives servo those
 readings to the commanded references.
 """
@@ -21,8 +25,8 @@ import numpy as np
 from rtgait.interface.command import JointCommand
 from rtgait.interface.readings import SensorReadings
 from rtgait.interface.truth import GroundTruth
-from rtgait.sim.actuation import ReferenceInterpolator
 from rtgait.sim.contact_reading import ContactSums
+from rtgait.sim.drives import Drives
 from rtgait.sim.ground_truth import GroundTruthReader
 from rtgait.sim.sensors import SensorModel
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
@@ -43,6 +47,7 @@ class SimRobot:
 
     Attributes:
         joint_names: the moving joints, the order of every per-joint array read or written.
+        drives: the joints' drives (:class:`~rtgait.sim.drives.Drives`): the command they apply now, their gains.
         sensors: the sensors' noise, biases and latency behind :meth:`read` (:class:`~rtgait.sim.sensors.SensorModel`,
             with the settings of ``sim.config.sensors``).
     """
@@ -50,11 +55,12 @@ class SimRobot:
     def __init__(self, sim: SimModel, data: mujoco.MjData, joints: np.ndarray) -> None:
         self.sim, self.data = sim, data
         self.joint_names = sim.joint_names
-        self.servo = ReferenceInterpolator(sim.actuation, joints, sim.encoder_offsets)
+        self.drives = Drives(sim, data, joints)  # the model's own gains, whatever a robot before this one left
         self.reader = GroundTruthReader.for_sim(sim)
         self.sensors = SensorModel(sim)
         self.substeps = sim.substeps
         self._model, self._ctrl = sim.model, data.ctrl
+        self._apply = self.drives.apply
         # The first substep's contacts and sites, decoded once, when they are also the next tick's truth.
         self._last: tuple[StepSnapshot, ContactSums] | None = None
 
@@ -67,17 +73,18 @@ class SimRobot:
         return self.sensors.read(data.sensordata, float(data.time))
 
     def write(self, command: JointCommand) -> None:
-        """The drives' references for the coming control period (the arrays are kept: pass new ones each period).
+        """The drives' command for the coming control period (module docstring; without a command delay the arrays
+        are kept: pass new ones each period).
 
         Raises:
-            ValueError: a command with gains or feed-forward torques, which the simulated drives do not take.
+            ValueError: an array of the wrong shape or not finite, or gains that are not >= 0.
         """
-        if command.kp is not None or command.kd is not None or command.torques is not None:
-            raise ValueError(
-                "the simulated drives run the robot description's [actuation] gains and take no feed-forward "
-                "torque: leave JointCommand.kp, kd and torques None"
-            )
-        self.servo.command(command.positions, command.velocities)
+        self.drives.command(command)
+
+    @property
+    def damping(self) -> bool:
+        """Whether the drives hold no position (the command they apply has ``kp`` all 0: damping)."""
+        return self.drives.damping
 
     # ----- GroundTruthSource ---------------------------------------------------------------------------------------
     def ground_truth(self, t: float | None = None, velocities: bool = False) -> GroundTruth:
@@ -99,7 +106,7 @@ class SimRobot:
     def substep(self, i: int) -> None:
         """Physics substep ``i`` (0 to ``substeps - 1``) of the control period, the drives at their interpolated
         references."""
-        self.servo.apply(i, self._ctrl)
+        self._apply(i, self._ctrl)
         mujoco.mj_step(self._model, self.data)
         self._last = None
 
@@ -107,7 +114,7 @@ class SimRobot:
         """The control period's first physics substep, and the contacts and sites of the state it started from,
         read and decoded once (:mod:`rtgait.sim.step_snapshot`, :mod:`rtgait.sim.contact_reading`): the run's
         contact record reads them, and so does the next tick's truth when this is the period's only substep."""
-        self.servo.apply(0, self._ctrl)
+        self._apply(0, self._ctrl)
         mujoco.mj_step(self._model, self.data)
         snapshot = read_snapshot(self.data)
         last = (snapshot, self.reader.contacts.read(self.data, snapshot))

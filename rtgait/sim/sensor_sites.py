@@ -5,8 +5,10 @@ MuJoCo computes what each sensor measures (:mod:`rtgait.sim.sensors` adds the no
 * encoders, drives: ``jointpos``, ``jointvel`` and ``jointactuatorfrc`` of each moving joint, in the robot's joint
   order (the torque the joint's servo applies);
 * IMU (a site at the description's IMU frame): ``framequat`` (its orientation in the world, ``(w, x, y, z)``),
-  ``gyro`` (angular velocity in the site frame) and ``accelerometer`` (the specific force ``R^T (a - g)`` in the site
-  frame: MuJoCo's accelerations include the gravity field, so a body at rest reads ``+g`` upward);
+  ``gyro`` (angular velocity in the site frame), ``accelerometer`` (the specific force ``R^T (a - g)`` in the site
+  frame at this instant: MuJoCo's accelerations include the gravity field, so a body at rest reads ``+g`` upward)
+  and ``framelinvel`` (the site's velocity in the world frame, from which :mod:`rtgait.sim.sensors` makes the
+  accelerometer's reading, the mean specific force over the sample period);
 * feet (a site at each force sensor's frame): ``force`` and ``torque``, the interaction wrench between the site's
   body and its parent body, in the site frame, about the site. MuJoCo's sign is that of the force the parent exerts
   on the child body's subtree: on a foot standing on the floor it points down. :mod:`rtgait.sim.sensors` negates it
@@ -35,10 +37,12 @@ if TYPE_CHECKING:
     from rtgait.interface.sensor_spec import SensorFrame
     from rtgait.robot.model import RobotModel
 
-__all__ = ["IMU_SITE", "SensorLayout", "add_sensors"]
+__all__ = ["IMU_SITE", "IMU_SIZE", "SensorLayout", "add_sensors"]
 
 IMU_SITE = "imu"
 """Name of the IMU's site."""
+IMU_SIZE = 13
+"""Numbers of the IMU in the layout: quaternion (4), gyro (3), accelerometer (3), the site's world velocity (3)."""
 FOOT_SITES = {"left": "left_foot_sensor", "right": "right_foot_sensor"}
 """Names of the feet's force sensor sites."""
 _PREFIX = "rtgait_"  # of every sensor's name
@@ -76,7 +80,8 @@ def add_sensors(spec: mujoco.MjSpec, robot: RobotModel, root: mujoco.MjsBody) ->
     if sensors.imu is not None:
         _site_on_frame(spec, robot, root, IMU_SITE, sensors.imu.frame)
         for suffix, kind in (("quat", mujoco.mjtSensor.mjSENS_FRAMEQUAT), ("gyro", mujoco.mjtSensor.mjSENS_GYRO),
-                             ("accel", mujoco.mjtSensor.mjSENS_ACCELEROMETER)):  # fmt: skip
+                             ("accel", mujoco.mjtSensor.mjSENS_ACCELEROMETER),
+                             ("vel", mujoco.mjtSensor.mjSENS_FRAMELINVEL)):  # fmt: skip
             spec.add_sensor(name=f"{_PREFIX}imu_{suffix}", type=kind, objtype=site, objname=IMU_SITE)
     if sensors.feet is not None:
         for side, frame in (("left", sensors.feet.left), ("right", sensors.feet.right)):
@@ -88,8 +93,9 @@ def add_sensors(spec: mujoco.MjSpec, robot: RobotModel, root: mujoco.MjsBody) ->
 @dataclass(frozen=True)
 class SensorLayout:
     """Where the robot's sensors are in ``data.sensordata`` (module docstring): one slice ``[start, stop)``, in it
-    the joints' positions, velocities and torques (``n`` each), then the IMU's 10 numbers (quaternion, gyro,
-    accelerometer) if it has one, then each foot's 6 (force, torque) if it has force sensors."""
+    the joints' positions, velocities and torques (``n`` each), then the IMU's 13 numbers (quaternion, gyro,
+    accelerometer, the site's velocity in the world) if it has one, then each foot's 6 (force, torque) if it has
+    force sensors."""
 
     start: int
     joints: int
@@ -99,7 +105,7 @@ class SensorLayout:
     @property
     def size(self) -> int:
         """Numbers in the slice."""
-        return 3 * self.joints + (10 if self.imu else 0) + (12 if self.feet else 0)
+        return 3 * self.joints + (IMU_SIZE if self.imu else 0) + (12 if self.feet else 0)
 
     @property
     def stop(self) -> int:
@@ -114,7 +120,7 @@ class SensorLayout:
             raise RobotError(f"the MuJoCo model of {robot.name} has no joint sensors")
         layout = cls(int(model.sensor_adr[first]), len(robot.joint_names), sensors.imu is not None,
                      sensors.feet is not None)  # fmt: skip
-        last = first + 3 * layout.joints + (3 if layout.imu else 0) + (4 if layout.feet else 0) - 1
+        last = first + 3 * layout.joints + (4 if layout.imu else 0) + (4 if layout.feet else 0) - 1
         if last >= model.nsensor or model.sensor_adr[last] + model.sensor_dim[last] != layout.stop:  # pragma: no cover
             raise RobotError(f"the sensors of {robot.name}'s MuJoCo model are not laid out as added")
         return layout

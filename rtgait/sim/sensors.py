@@ -12,6 +12,14 @@ SensorSettings`), one reading per control tick of period ``dt``:
   an offset drawn once per run is added;
 * gyro ``w_m = w + b + n``, accelerometer ``f_m = R^T (a - g) + b + n``: white noise of standard deviation
   ``N / sqrt(dt)`` for a density ``N``, and a bias drawn once per run that walks by ``N_b sqrt(dt)`` a tick;
+* the accelerometer's ``a`` is the IMU's mean acceleration over the sample period, the change of the IMU site's
+  velocity since the last reading, ``a = (v_k - v_k-1) / (t_k - t_k-1)``, and ``R`` its orientation at the reading:
+  what a real IMU outputs, whose accelerometer is sampled through an anti-aliasing filter or integrated into a
+  velocity increment over the period (with the sculling correction that expresses it in the frame at the period's
+  end). MuJoCo's own accelerometer is the acceleration of one instant, one physics step of the period, computed
+  before the step integrates the servos' damping implicitly: it disagrees with the velocity the simulation goes on
+  to have by about 0.3 m/s^2 RMS on a walk (``docs/robots.md``, "Sensors"). The first reading, which has no period
+  before it, is MuJoCo's;
 * the IMU filter's orientation ``q_m = q_e q``, an error rotation in the world frame: white roll and pitch, and a yaw
   that drifts at a rate drawn once per run (``yaw = rate t``, ``t`` from the first reading).
 
@@ -35,6 +43,7 @@ import numpy as np
 
 from rtgait.interface.readings import ImuReading, SensorReadings, Wrench
 from rtgait.sim.config import SensorSettings
+from rtgait.sim.sensor_sites import IMU_SIZE
 
 if TYPE_CHECKING:
     from rtgait.interface.sensor_spec import SensorSpec
@@ -90,7 +99,7 @@ class SensorModel:
             white[k + 4 : k + 7], white[k + 7 : k + 10] = imu.gyro_noise_density * root, imu.accel_noise_density * root
             walk[0:3], walk[3:6] = imu.gyro_bias_walk * math.sqrt(dt), imu.accel_bias_walk * math.sqrt(dt)
             self._tilt_noise = s * imu.orientation_noise
-            k += 10
+            k += IMU_SIZE
         if feet is not None:
             self._feet_at = k
             for side in (k, k + 6):
@@ -116,6 +125,8 @@ class SensorModel:
         self._resolution = spec.encoder_resolution if s > 0.0 else 0.0
         # The draws of one tick: white noise for every reading, the bias walks, roll and pitch of the filter.
         self._draws = np.empty(size + (8 if imu is not None else 0))
+        self._gravity = tuple(sim.model.opt.gravity.tolist())
+        self._last_velocity: tuple[float, float, float, float] | None = None  # sampling time, the IMU's velocity
         self._ring = np.empty((self.latency + 1, size))
         self._stamps = [0.0] * (self.latency + 1)
         self.ticks = 0
@@ -127,7 +138,10 @@ class SensorModel:
         size, ring, k = layout.size, self._ring, self.ticks
         slot = k % len(ring)
         values = ring[slot]
-        np.add(sensordata[layout.start : layout.stop], self._offset, out=values)
+        values[:] = sensordata[layout.start : layout.stop]
+        if self._imu_at >= 0:
+            self._mean_specific_force(values, t)
+        values += self._offset
         if self.noise > 0.0:
             draws = self._draws
             self._rng.standard_normal(out=draws)
@@ -148,6 +162,26 @@ class SensorModel:
         self.ticks = k + 1
         delivered = (k + 1) % len(ring)  # the oldest slot: written `latency` ticks ago
         return self._readings(ring[delivered].copy(), self._stamps[delivered])
+
+    def _mean_specific_force(self, values: np.ndarray, t: float) -> None:
+        """The accelerometer's true reading in ``values``, sampled at ``t``: the IMU's mean specific force since the
+        last reading, ``R^T ((v - v_last) / (t - t_last) - g)``, ``R`` the IMU's orientation now (module docstring);
+        MuJoCo's instantaneous one where no earlier reading is."""
+        k = self._imu_at
+        vx, vy, vz = values[k + 10 : k + 13].tolist()
+        last, self._last_velocity = self._last_velocity, (t, vx, vy, vz)
+        if last is None or not t > last[0]:
+            return
+        rate = 1.0 / (t - last[0])
+        gx, gy, gz = self._gravity
+        ax, ay, az = (vx - last[1]) * rate - gx, (vy - last[2]) * rate - gy, (vz - last[3]) * rate - gz
+        w, x, y, z = values[k : k + 4].tolist()
+        # R^T a, with R the rotation of the unit quaternion (w, x, y, z): the columns of R dotted with a.
+        values[k + 7 : k + 10] = (
+            (1.0 - 2.0 * (y * y + z * z)) * ax + 2.0 * (x * y + w * z) * ay + 2.0 * (x * z - w * y) * az,
+            2.0 * (x * y - w * z) * ax + (1.0 - 2.0 * (x * x + z * z)) * ay + 2.0 * (y * z + w * x) * az,
+            2.0 * (x * z + w * y) * ax + 2.0 * (y * z - w * x) * ay + (1.0 - 2.0 * (x * x + y * y)) * az,
+        )
 
     def _walk_biases(self, draws: np.ndarray) -> None:
         """The gyro's and accelerometer's biases walk one tick (after this tick's reading used them)."""
@@ -181,7 +215,7 @@ class SensorModel:
         k = 0
         if layout.imu:
             imu = _new_tuple(ImuReading, (tuple(row[0:4]), tuple(row[4:7]), tuple(row[7:10])))
-            k = 10
+            k = IMU_SIZE  # the site's velocity, row[10:13], is not a reading
         if layout.feet:
             # MuJoCo's sign: the wrench on the foot from the leg; the reading's: on the leg from the foot.
             w = [-x for x in row[k : k + 12]]

@@ -25,7 +25,7 @@ state one physics step *before* ``t``: recording them costs nothing (measuring t
 cost as much as the controller's whole measurement, a tenth of a tick). They are NaN during the start transition,
 when the controller does not measure yet.
 
-Commanded at the tick: the joint velocity reference the servos were given (``ReferenceInterpolator.qd``), the IK's
+Commanded at the tick: the joint velocity reference the servos were given (``Drives.qd``), the IK's
 sole targets ``(x, y, z, yaw)`` (the planner's feet with the controller's landing and force-control heights), the
 support the controller acts on, its COM correction, the plan's COM velocity ``v = w (xi_plan - c_plan)`` (from the
 plan's DCM ``xi_plan`` and COM ``c_plan``, the IK's COM target minus the correction), and the controller level.
@@ -50,7 +50,7 @@ if TYPE_CHECKING:
     from rtgait.control.settings import ControlTargets
     from rtgait.estimation.state import Measurement
     from rtgait.interface.truth import GroundTruth
-    from rtgait.sim.actuation import ReferenceInterpolator
+    from rtgait.sim.drives import Drives
     from rtgait.sim.model import SimModel
 
 __all__ = ["LEVEL_CODES", "CompleteLog", "TickLog"]
@@ -164,14 +164,12 @@ class TickLog:
     Args:
         sim: the simulated robot.
         data: the MuJoCo state the run steps (its fixed-size arrays are read through views kept here).
-        servo: the joint servos' reference interpolator, read for the commanded joint velocities.
+        servo: the joints' drives, read for the velocity reference they apply.
         n_ticks: rows to allocate.
         omega: the planner's pendulum frequency (1/s).
     """
 
-    def __init__(
-        self, sim: SimModel, data: mujoco.MjData, servo: ReferenceInterpolator, n_ticks: int, omega: float
-    ) -> None:
+    def __init__(self, sim: SimModel, data: mujoco.MjData, servo: Drives, n_ticks: int, omega: float) -> None:
         model = sim.model
         nu = model.nu
         self._model, self._data, self._servo = model, data, servo

@@ -10,6 +10,7 @@ from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.stack.estimators import DEFAULT_STATE, StateSource, check_state, make_estimator
+from rtgait.stack.feedforward import FeedForward
 from rtgait.stack.walking_stack import WalkingStack
 
 if TYPE_CHECKING:
@@ -44,6 +45,7 @@ def walking_stack(
     options: ControllerOptions | None = None,
     estimator: Estimator | None = None,
     state: StateSource = DEFAULT_STATE,
+    feedforward: bool = False,
 ) -> WalkingStack:
     """The stack that walks ``walk`` on ``robot`` at control period ``dt`` (s).
 
@@ -58,6 +60,9 @@ def walking_stack(
         state: ``"estimated"`` (default: the kinematic-inertial estimator on the robot's sensors, its world frame
             the walk's standing feet) or ``"truth"`` (the ground-truth estimator, on a simulator's truth):
             :func:`rtgait.stack.estimators.make_estimator`.
+        feedforward: fill each command's ``torques`` with the feed-forward torques of whole-body inverse dynamics
+            (:class:`~rtgait.stack.feedforward.FeedForward`, the walk's sole, the floor's default friction); off by
+            default (no torques: the commands of a position-controlled robot).
 
     The stack's configuration :attr:`WalkingStack.q` is the walk's standing start: the COG between the first two
     footprints at the walking height, the soles level (the IK solved from half-sitting). Start the robot there.
@@ -73,4 +78,5 @@ def walking_stack(
         planner = controller.planner
         feet = (tuple(left), tuple(right))
         estimator = make_estimator(state, robot, planner.w, gravity=planner.config.gravity, start_feet=feet)
-    return WalkingStack(estimator, controller, ik, q)
+    feed = FeedForward(robot, walk.sole, dt) if feedforward else None
+    return WalkingStack(estimator, controller, ik, q, feedforward=feed)

@@ -4,16 +4,28 @@
     Measurement + planner                     --controller--> ControlTargets (COM, feet, lean, foot tilts)
     ControlTargets                            --IK-------->   q (free flyer + joints)
     q + the feet's tilts at the ankles        ------------->  JointCommand (q_ref, dq_ref)
+    q + the controller's ZMP split            --feed-forward-> JointCommand.torques (when asked for)
 
 The velocity reference is the joints' finite difference over the control period, ``dq_ref = (q_ref,k - q_ref,k-1)
 / dt``. The IK makes one Gauss-Newton iteration a tick from the last tick's solution (the targets move little in a
-period). Between the estimate and the control a loop may act on the planner (footstep changes, velocity commands
-due at this tick): :meth:`WalkingStack.estimate` and :meth:`WalkingStack.control` are the two halves of
-:meth:`WalkingStack.tick`.
+period). With a :class:`~rtgait.stack.feedforward.FeedForward`, the command also carries the feed-forward torques of the
+IK's motion with the wrenches the controller asks of the feet (whole-body inverse dynamics); without one (the
+default) it carries none.
+
+Between the estimate and the control a loop may act on the planner (footstep changes, velocity commands due at this
+tick): :meth:`WalkingStack.estimate` and :meth:`WalkingStack.control` are the two halves of :meth:`WalkingStack.tick`.
+
+The safety layer (:mod:`rtgait.stack.safety`) sits at both ends: it checks the readings and the estimate before the
+controller acts on them, catches the ``ValueError`` and ``ArithmeticError`` the estimator, the controller, its planner
+and the IK raise on bad input, clips every command to the joints' limits, and, once tripped, answers every tick with
+the damping command (``kp = 0``, ``kd > 0``): no exception leaves a tick on bad readings. A tripped tick's
+:class:`StackOutput` has no measurement and no targets; :meth:`WalkingStack.estimate` returns ``None`` once a fault is
+found (it is logged, with the tick's time, by the :meth:`WalkingStack.control` that follows).
 """
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -21,6 +33,9 @@ import numpy as np
 from rtgait.interface.command import JointCommand
 from rtgait.interface.task_targets import FootOffsets, IKTargets
 from rtgait.robot.ankles import AnkleJoints, add_ankle_offsets, find_ankle_joints
+from rtgait.robot.joint_inertia import damping_gains
+from rtgait.robot.joint_limits import joint_limits
+from rtgait.stack.safety import Fault, SafetyLayer
 
 if TYPE_CHECKING:
     from rtgait.control.controller import WalkingController
@@ -30,22 +45,25 @@ if TYPE_CHECKING:
     from rtgait.interface.readings import SensorReadings
     from rtgait.interface.truth import GroundTruth
     from rtgait.robot.ik import WholeBodyIK
+    from rtgait.stack.feedforward import FeedForward
 
 __all__ = ["StackOutput", "WalkingStack"]
 
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
+_BAD_INPUT = (ValueError, ArithmeticError)  # what bad numbers raise inside a tick (the documented ValueErrors)
 
 
 class StackOutput(NamedTuple):
     """What one tick of the stack made.
 
     Attributes:
-        measurement: the walking state the controller acted on; ``None`` for a tick that only held IK targets.
+        measurement: the walking state the controller acted on; ``None`` for a tick that only held IK targets or
+            that damps.
         targets: the controller's output (:class:`~rtgait.control.settings.ControlTargets`); ``None`` for a tick
-            that only held IK targets (:meth:`WalkingStack.hold`).
+            that only held IK targets (:meth:`WalkingStack.hold`) or that damps (the safety layer tripped).
         q: the IK's configuration of the reduced model, free flyer first (m, quaternion, rad), shape ``(nq,)``.
         command: the joints' command (:class:`~rtgait.interface.command.JointCommand`), the feet's tilts added at
-            the ankles.
+            the ankles, within the joints' limits; the damping command once the safety layer has tripped.
     """
 
     measurement: Measurement | None
@@ -64,6 +82,11 @@ class WalkingStack:
         ik: the whole-body IK of the robot.
         q: the configuration the robot starts from (the IK's first solution), shape ``(nq,)``.
         ankles: where the feet's tilts go; default found from the robot's sole frames.
+        safety: the safety layer; default one with the robot's joint limits and damping gains
+            (:func:`rtgait.robot.joint_limits.joint_limits`, :func:`rtgait.robot.joint_inertia.damping_gains`), the
+            planner's COM height and the default :class:`~rtgait.stack.safety.SafetySettings`.
+        feedforward: the feed-forward torques of each tick's command; ``None``: none (``JointCommand.torques`` is
+            ``None``).
 
     The controller acts on the measurement's DCM as the estimator made it, so an estimator that says its pendulum
     frequency (an ``omega`` attribute, 1/s) must make it with the planner's ``w``.
@@ -76,6 +99,8 @@ class WalkingStack:
         ik: WholeBodyIK,
         q: np.ndarray,
         ankles: AnkleJoints | None = None,
+        safety: SafetyLayer | None = None,
+        feedforward: FeedForward | None = None,
     ) -> None:
         q = np.array(q, dtype=float)
         if q.shape != (ik.robot.model.nq,):
@@ -88,48 +113,119 @@ class WalkingStack:
         self.dt = controller.dt
         self._q = q
         self._joints_previous = q[7:].copy()
+        if safety is None:
+            robot = ik.robot
+            safety = SafetyLayer(joint_limits(robot), damping_gains(robot), controller.planner.config.cog_height)
+        self.safety = safety
+        self.feedforward = feedforward
+        self._fault: Fault | None = None  # found by estimate(), logged by the control() of the same tick
 
     @property
     def q(self) -> np.ndarray:
         """The IK's last configuration (a new array each tick: keep it)."""
         return self._q
 
-    def estimate(self, readings: SensorReadings | None, truth: GroundTruth | None = None) -> Measurement:
-        """This tick's walking state (the first half of :meth:`tick`)."""
-        return self.estimator.update(readings, truth)
+    def estimate(self, readings: SensorReadings | None, truth: GroundTruth | None = None) -> Measurement | None:
+        """This tick's walking state (the first half of :meth:`tick`); ``None`` when the safety layer finds a fault
+        in the readings or the estimate, or has tripped before (module docstring)."""
+        safety = self.safety
+        if safety.damping:
+            safety.observe_joints(readings)
+            return None
+        fault = safety.check_readings(readings)
+        if fault is None:
+            try:
+                measurement = self.estimator.update(readings, truth)
+            except _BAD_INPUT as error:
+                fault = _error(error)
+            else:
+                fault = safety.check_measurement(measurement)
+                if fault is None:
+                    return measurement
+        self._fault = fault
+        return None
 
-    def start(self, t0: float, measurement: Measurement) -> None:
-        """Start the walk at ``t0`` (s) from the measured state (the controller's and the planner's start)."""
-        self.controller.start(t0, measurement)
+    def start(self, t0: float, measurement: Measurement | None) -> None:
+        """Start the walk at ``t0`` (s) from the measured state (the controller's and the planner's start); after a
+        fault at the first estimate the safety layer trips instead."""
+        if self._fault is not None or self.safety.damping:
+            self._damp(t0)
+            return
+        try:
+            self.controller.start(t0, measurement)
+        except _BAD_INPUT as error:
+            self._damp(t0, _error(error))
 
-    def control(self, t: float, measurement: Measurement) -> StackOutput:
+    def control(self, t: float, measurement: Measurement | None) -> StackOutput:
         """The controller's targets at ``t`` (s) for ``measurement``, through the IK to the joints (the second half
-        of :meth:`tick`)."""
-        out = self.controller.tick(t, measurement)
-        targets = _new_tuple(IKTargets, (out.com, out.left_foot, out.right_foot, out.lean))
-        return self._command(targets, measurement, out, out.offsets)
+        of :meth:`tick`); the damping command once the safety layer has tripped, or when the estimate found a fault
+        (``measurement`` ``None``)."""
+        if measurement is None or self.safety.damping:
+            return self._damp(t, None if measurement is not None else ("error", "no measurement at this tick"))
+        try:
+            out = self.controller.tick(t, measurement)
+            targets = _new_tuple(IKTargets, (out.com, out.left_foot, out.right_foot, out.lean))
+            return self._command(t, targets, measurement, out, out.offsets)
+        except _BAD_INPUT as error:
+            return self._damp(t, _error(error))
 
     def tick(self, t: float, readings: SensorReadings | None, truth: GroundTruth | None = None) -> StackOutput:
-        """One whole tick at ``t`` (s): estimate, control, IK, joint command."""
+        """One whole tick at ``t`` (s): estimate, control, IK, joint command (the damping command once tripped)."""
         return self.control(t, self.estimate(readings, truth))
 
-    def hold(self, targets: IKTargets) -> StackOutput:
-        """The joints for IK targets given directly, the controller left out (e.g. a start transition)."""
-        return self._command(targets, None, None, None)
+    def hold(self, targets: IKTargets, t: float = math.nan) -> StackOutput:
+        """The joints for IK targets given directly, the controller left out (e.g. a start transition; ``t`` (s)
+        stamps a fault); the damping command once the safety layer has tripped."""
+        if self.safety.damping:
+            return self._damp(t)
+        try:
+            return self._command(t, targets, None, None, None)
+        except _BAD_INPUT as error:
+            return self._damp(t, _error(error))
+
+    def _damp(self, t: float, fault: Fault | None = None) -> StackOutput:
+        """The damping output at ``t`` (s), the safety layer tripped first by the fault the estimate found, else
+        by ``fault`` (nothing is logged once it has tripped)."""
+        fault = self._fault or fault
+        if fault is not None:
+            self._fault = None
+            self.safety.trip(t, *fault)
+        command = self.safety.damping_command(self._joints_previous)
+        return _new_tuple(StackOutput, (None, None, self._q, command))
 
     def _command(
         self,
+        t: float,
         targets: IKTargets,
         measurement: Measurement | None,
         out: ControlTargets | None,
         offsets: FootOffsets | None,
     ) -> StackOutput:
         q, _ = self.ik.solve(targets, self._q, max_iterations=1, tolerance=0.0, errors=False)
-        self._q = q
         joints = q[7:]
         if offsets is not None and any(offsets):
             joints = joints.copy()
             add_ankle_offsets(joints, self.ankles, offsets)
-        velocities = (joints - self._joints_previous) / self.dt
+        previous, clip = self._joints_previous, self.safety.clip
+        velocities = (joints - previous) / self.dt
+        # The last joints are finite (checked here each tick): a NaN or infinite joint makes the difference one.
+        if not math.isfinite(float(velocities.sum())):
+            return self._damp(t, ("bad-command", "the joint command is NaN or infinite"))
+        clipped = clip.positions(joints)
+        if clipped is not joints:  # the velocity reference follows the clipped positions
+            joints, velocities = clipped, (clipped - previous) / self.dt
+        velocities = clip.velocities(velocities)
+        torques = None
+        if self.feedforward is not None:
+            torques = self.feedforward.torques(q, targets, out)
+            if not math.isfinite(float(torques.sum())):
+                return self._damp(t, ("bad-command", "the feed-forward torques are NaN or infinite"))
+            torques = clip.torques(torques)
+        self._q = q
         self._joints_previous = joints
-        return _new_tuple(StackOutput, (measurement, out, q, JointCommand(joints, velocities)))
+        return _new_tuple(StackOutput, (measurement, out, q, JointCommand(joints, velocities, torques)))
+
+
+def _error(error: Exception) -> Fault:
+    """An exception caught at the tick's boundary, as a fault."""
+    return "error", f"{type(error).__name__}: {error}"

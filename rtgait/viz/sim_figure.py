@@ -41,6 +41,7 @@ ZMP_SIM_FIGURE = "zmp_sim"
 _TRANSITION_COLOR = "#e8eef7"  # a pale blue: the start transition, unlike the grey double supports
 _COMMAND_COLOR = "tab:green"
 _SOLE_COLOR = "tab:olive"
+_DAMPING_COLOR = "tab:brown"
 _ERROR_MIN_SPAN = 0.02  # m: the error panel spans at least 20 mm, so a good walk's millimetres are not blown up
 
 
@@ -64,6 +65,7 @@ class ZmpSimRun:
         steps_completed, steps_planned: touch-downs completed and steps of the walk.
         rms: RMS distance of the measured ZMP from the plan in single support (m), NaN without one.
         robot, controller, title: the robot's name, the controller level, the title's first line (what was walked).
+        damping_time: when the stack's safety layer tripped and the joints began to damp (s), or ``None``.
     """
 
     times: np.ndarray
@@ -87,6 +89,7 @@ class ZmpSimRun:
     robot: str
     controller: str
     title: str = ""
+    damping_time: float | None = None
 
     @classmethod
     def from_result(cls, result: SimResult, title: str = "") -> ZmpSimRun:
@@ -113,6 +116,7 @@ class ZmpSimRun:
             robot=result.robot,
             controller=result.controller,
             title=title,
+            damping_time=result.safety_events[0].t if result.safety_events else None,
         )
 
 
@@ -184,6 +188,8 @@ def draw_zmp_sim(run: ZmpSimRun) -> Figure:
             ax.axvline(run.tip_time, color="tab:purple", lw=1.2, ls="--")
         if run.fall_time is not None:
             ax.axvline(run.fall_time, color="tab:red", lw=1.6)
+        if run.damping_time is not None:
+            ax.axvline(run.damping_time, color=_DAMPING_COLOR, lw=1.4, ls=":")
         ax.grid(True, lw=0.3)
         ax.set_xlim(float(t[0]), float(t[-1]))
         if index == 2:
@@ -227,6 +233,9 @@ def draw_zmp_sim(run: ZmpSimRun) -> Figure:
     if run.fall_time is not None:
         handles.append(Line2D([], [], color="tab:red", lw=1.6))
         labels.append(f"fell ({run.fall_time:.2f} s)")
+    if run.damping_time is not None:
+        handles.append(Line2D([], [], color=_DAMPING_COLOR, lw=1.4, ls=":"))
+        labels.append(f"damping: the safety layer tripped ({run.damping_time:.2f} s)")
     figure.legend(handles, labels, loc="outside lower center", fontsize=8, ncols=4, frameon=False)
 
     if run.fall_time is not None:
@@ -235,6 +244,8 @@ def draw_zmp_sim(run: ZmpSimRun) -> Figure:
         outcome = f"walked {run.steps_completed}/{run.steps_planned} steps"
     if run.tip_time is not None:
         outcome += f", a foot tipped over at {run.tip_time:.2f} s"
+    if run.damping_time is not None:
+        outcome += f", damping from {run.damping_time:.2f} s"
     if np.isfinite(run.rms):
         outcome += f"; ZMP {run.rms * 1e3:.0f} mm RMS from the plan in single support"
     robot = f"{run.robot} in MuJoCo, {run.controller}"
@@ -283,6 +294,10 @@ def _title(facts: dict[str, Any]) -> str:
 def _outcome(facts: dict[str, Any]) -> dict[str, Any]:
     """The outcome entries of a summary or a log's metadata, as :class:`ZmpSimRun` fields."""
     rms = facts.get("zmp_tracking_error_rms")
+    # summary.json's safety record, or the log's damping event
+    first_fault = (facts.get("safety") or {}).get("first_event") or next(
+        (e for e in facts.get("events", []) if e.get("kind") == "damping"), None
+    )
     return {
         "pushes": tuple(
             (float(p["start"]), float(p["duration"]), float(p["impulse_norm"])) for p in facts.get("pushes", [])
@@ -296,6 +311,7 @@ def _outcome(facts: dict[str, Any]) -> dict[str, Any]:
         "robot": str(facts["robot"]),
         "controller": str(facts["controller"]),
         "title": _title(facts),
+        "damping_time": None if first_fault is None else float(first_fault["t"]),
     }
 
 

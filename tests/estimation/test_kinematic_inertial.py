@@ -70,7 +70,7 @@ class RigidRobot:
         assert self.state is not None
         return self.state
 
-    def leg_statics(self, gravity):  # pragma: no cover - the sensors are read
+    def leg_dynamics(self, angular_velocity, acceleration, joint_accelerations):  # pragma: no cover - sensors are read
         raise AssertionError("a robot with foot force sensors")
 
     def readings(
@@ -138,7 +138,7 @@ def test_a_base_moving_over_still_feet_has_its_velocity_without_lag():
         m = e.update(robot.readings(t, p, r, v, a, w, loads))
         # The COM's velocity: the base's plus the turn of the COM about the base.
         expected = v + np.cross(w, r @ COM_IN_BASE)
-        np.testing.assert_allclose(m.com_vel, expected, atol=1e-5)  # the accelerometer integrated trapezoidally
+        np.testing.assert_allclose(m.com_vel, expected, atol=1e-9)  # a constant acceleration is its own mean
         np.testing.assert_allclose(m.com, p + r @ COM_IN_BASE, atol=1e-9)
 
 
@@ -242,12 +242,19 @@ def test_joint_torques_give_the_sole_wrench_through_the_legs_jacobian():
 
     rng = np.random.default_rng(3)
     jacobians = rng.normal(size=(2, 6, 6))
-    holding = rng.normal(size=(2, 6))
+    needed = rng.normal(size=(2, 6))
     wrenches = rng.normal(size=(2, 6)) * 100.0
-    # The leg's statics: tau = g - J^T F.
-    torques = holding - np.einsum("lij,li->lj", jacobians, wrenches)
-    out = torque_wrenches(jacobians, holding, torques)
+    # The leg's dynamics: tau = tau_id - J^T F.
+    torques = needed - np.einsum("lij,li->lj", jacobians, wrenches)
+    out = torque_wrenches(jacobians, needed, torques)
     np.testing.assert_allclose(out, wrenches, atol=1e-9)
+    # A straight knee: a Jacobian without rank along the leg, the least-squares wrench, the others recovered.
+    singular = jacobians.copy()
+    singular[0, :, 3] = singular[0, :, 2]
+    torques = needed - np.einsum("lij,li->lj", singular, wrenches)
+    left, right = torque_wrenches(singular, needed, torques)
+    np.testing.assert_allclose(singular[0].T @ left, needed[0] - torques[0], atol=1e-9)
+    np.testing.assert_allclose(right, wrenches[1], atol=1e-9)
 
 
 def test_bad_settings_and_readings_are_refused():

@@ -1,5 +1,5 @@
 """The estimator's Pinocchio kinematics against Pinocchio's own algorithms on the whole floating-base model: frames,
-COM, their velocities, the sensors' mounts, and the legs' statics against the recursive Newton-Euler algorithm with
+COM, their velocities, the sensors' mounts, and the legs' dynamics against the recursive Newton-Euler algorithm with
 an external wrench on the sole."""
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from rtgait.estimation.kinematics import RobotKinematics  # noqa: E402
 from rtgait.estimation.sole_wrenches import torque_wrenches  # noqa: E402
 from rtgait.interface.sensor_spec import SensorFrame  # noqa: E402
 from rtgait.robot.description import RobotError  # noqa: E402
+from rtgait.robot.drives import joint_drives  # noqa: E402
 from rtgait.robot.kinematics import PinocchioKinematics  # noqa: E402
 
 OFFSET = np.array([0.01, -0.02, 0.03])
@@ -78,16 +79,27 @@ def test_a_sensor_off_the_foot_is_refused(talos):
 
 
 @pytest.mark.parametrize("name", ["talos", "g1"])
-def test_the_legs_statics_turn_joint_torques_into_the_sole_wrench(request, name):
-    # The torques of a robot at rest under given sole wrenches, by the recursive Newton-Euler algorithm with external
-    # forces (a tilted base, gravity along the world's z): the legs' statics give the wrenches back.
+def test_the_legs_dynamics_turn_joint_torques_into_the_sole_wrench(request, name):
+    # The torques of a robot moving under given sole wrenches, by the recursive Newton-Euler algorithm with external
+    # forces on the whole floating-base model (a tilted base moving, turning and accelerating, every joint moving and
+    # accelerating, gravity along the world's z, the drives' rotors): the legs' dynamics give the wrenches back.
     robot = request.getfixturevalue(name)
     kinematics = PinocchioKinematics(robot)
-    joints = robot.q_half_sitting[7:]
-    kinematics.update(joints, np.zeros_like(joints))
-    model, data = robot.model, robot.model.createData()
+    rng = np.random.default_rng(4)
+    n = robot.model.nv - 6
+    joints = robot.q_half_sitting[7:] + rng.normal(0.0, 0.05, n)
+    velocities, accelerations = rng.normal(0.0, 1.0, n), rng.normal(0.0, 20.0, n)
+    kinematics.update(joints, velocities)
+    model = pin.Model(robot.model)
+    armature = joint_drives(robot)[1]
+    assert np.all(armature > 0.0)
+    model.armature[6:] = armature
+    data = model.createData()
     tilt = pin.rpy.rpyToMatrix(0.05, -0.1, 0.3)
-    q = np.concatenate([[0, 0, 0], pin.Quaternion(tilt).coeffs(), joints])
+    q = np.concatenate([[0.1, -0.2, 0.8], pin.Quaternion(tilt).coeffs(), joints])
+    # The base's velocity and spatial acceleration in its own frame (Pinocchio's free flyer): linear, angular.
+    base_velocity, base_acceleration = np.array([0.3, -0.1, 0.05, 0.2, -0.4, 0.6]), rng.normal(0.0, 2.0, 6)
+    v, a = np.concatenate([base_velocity, velocities]), np.concatenate([base_acceleration, accelerations])
     wrenches = np.array([[10.0, -5.0, 400.0, 3.0, -8.0, 0.5], [-4.0, 6.0, 250.0, -2.0, 5.0, -0.3]])
     forces = pin.StdVec_Force()
     for _ in range(model.njoints):
@@ -97,8 +109,17 @@ def test_the_legs_statics_turn_joint_torques_into_the_sole_wrench(request, name)
         frame = model.frames[sole]
         # The wrench in the sole frame, expressed in its joint's frame (Pinocchio's external forces are local).
         forces[frame.parentJoint] += frame.placement.act(pin.Force(wrench[:3], wrench[3:]))
-    torques = pin.rnea(model, data, q, np.zeros(model.nv), np.zeros(model.nv), forces)[6:]
-    gravity = tuple(tilt.T @ np.array([0.0, 0.0, -9.81]))
-    jacobians, holding = kinematics.leg_statics(gravity)
+    torques = pin.rnea(model, data, q, v, a, forces)[6:]
+    # What an IMU on the base would give: the angular velocity and acceleration, and the specific force of the base
+    # origin, its classical acceleration less the gravity, in the base frame.
+    angular, linear = base_velocity[3:], base_velocity[:3]
+    specific = base_acceleration[:3] + np.cross(angular, linear) - tilt.T @ np.array([0.0, 0.0, -9.81])
+    jacobians, needed = kinematics.leg_dynamics(tuple(angular), (*specific, *base_acceleration[3:]), accelerations)
     legs = np.array(kinematics.leg_joints)
-    np.testing.assert_allclose(torque_wrenches(jacobians, holding, torques[legs]), wrenches, atol=1e-6)
+    np.testing.assert_allclose(torque_wrenches(jacobians, needed, torques[legs]), wrenches, atol=1e-6)
+    # At rest the legs' dynamics are their statics: the torques that hold each leg against gravity.
+    kinematics.update(joints, np.zeros(n))
+    upright = (0.0, 0.0, 9.81, 0.0, 0.0, 0.0)  # standing still, the specific force is g upward
+    _, holding = kinematics.leg_dynamics((0.0, 0.0, 0.0), upright, np.zeros(n))
+    gravity = pin.computeGeneralizedGravity(model, data, np.concatenate([[0, 0, 0, 0, 0, 0, 1], joints]))[6:]
+    np.testing.assert_allclose(holding, gravity[legs], atol=1e-9)

@@ -126,20 +126,55 @@ def test_noise_free_imu_orientation_and_gyro_are_the_imu_frames(standing: dict[s
     np.testing.assert_allclose(gyro, np.array(standing["gyro"]), atol=1e-12)
 
 
-def test_accelerometer_reads_the_specific_force_in_its_frame(standing: dict[str, Any]) -> None:
-    """``R^T (a - g)``, ``a`` the change of the IMU site's velocity over the step from the state read (the step
-    integrates the servos' damping implicitly, MuJoCo's sensor reads the forward acceleration: they differ by
-    little where the acceleration changes little)."""
-    dt = standing["sim"].control_dt
-    accel = _imu(standing["readings"][:-1], "linear_acceleration")
-    linear, rotations = np.array(standing["linear"]), np.array(standing["rotation"][:-1])
-    a = (linear[1:] - linear[:-1]) / dt
-    expected = np.einsum("kji,kj->ki", rotations, a + np.array([0.0, 0.0, GRAVITY]))
-    np.testing.assert_allclose(accel, expected, atol=0.01)
+def _specific_forces(linear: np.ndarray, rotations: np.ndarray, dt: float) -> np.ndarray:
+    """``R_k^T ((v_k - v_k-1) / dt - g)``: the mean specific force over each period, in the IMU frame at its end."""
+    a = (linear[1:] - linear[:-1]) / dt + np.array([0.0, 0.0, GRAVITY])
+    return np.einsum("kji,kj->ki", rotations[1:], a)
+
+
+def test_accelerometer_reads_the_mean_specific_force_over_the_period(standing: dict[str, Any]) -> None:
+    """``R^T (a - g)``, ``a`` the change of the IMU site's velocity since the last reading over the period, ``R`` the
+    site's orientation at the reading; the first reading, without a period before it, is MuJoCo's accelerometer."""
+    sim = standing["sim"]
+    accel = _imu(standing["readings"], "linear_acceleration")
+    expected = _specific_forces(np.array(standing["linear"]), np.array(standing["rotation"]), sim.control_dt)
+    np.testing.assert_allclose(accel[1:], expected, atol=1e-9)
+    k = sim.sensors.start + 3 * sim.sensors.joints + 7
+    np.testing.assert_array_equal(accel[0], standing["raw"][0][k : k + 3])
     # Standing still, that is gravity alone, upward. Talos's IMU is mounted upside down (the URDF's imu_joint: roll
     # pi), so that is along its -z.
     np.testing.assert_allclose(np.linalg.norm(accel, axis=1), GRAVITY, rtol=0.002)
     assert accel[:, 2].mean() < -0.99 * GRAVITY
+
+
+def test_accelerometer_of_a_pushed_g1_is_its_velocity_change_over_the_period() -> None:
+    """G1's control period spans four physics steps: the reading is the mean over them, which is what integrates to
+    the IMU's velocity; MuJoCo's accelerometer, the acceleration of one instant before the step's implicit damping,
+    is not."""
+    from rtgait.sim.model import SimConfig, build_sim_model
+
+    sim = build_sim_model("g1", SimConfig(meshes=False, sensors=EXACT))
+    assert sim.substeps > 1
+    model, data = sim.model, sim.new_data()
+    robot = SimRobot(sim, data, data.ctrl.copy())
+    imu = _site(sim, "imu")
+    data.xfrc_applied[sim.base_body, :3] = (40.0, -60.0, 0.0)  # pushed: the pelvis sways
+    accel, instant, linear, rotations = [], [], [], []
+    k = sim.sensors.start + 3 * sim.sensors.joints + 7
+    for _ in range(100):
+        robot.first_substep()
+        for j in range(1, sim.substeps):
+            robot.substep(j)
+        accel.append(robot.read().imu.linear_acceleration)
+        instant.append(data.sensordata[k : k + 3].copy())
+        velocity = np.empty(6)
+        mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_SITE, imu, velocity, 0)  # world axes, at the site
+        linear.append(velocity[3:].copy())
+        rotations.append(data.site_xmat[imu].reshape(3, 3).copy())
+    expected = _specific_forces(np.array(linear), np.array(rotations), sim.control_dt)
+    np.testing.assert_allclose(np.array(accel)[1:], expected, atol=1e-9)
+    assert np.ptp(expected, axis=0).max() > 1.0  # it moves
+    assert np.sqrt(np.mean(np.square(np.array(instant)[1:] - expected))) > 0.01
 
 
 def test_ankle_sensors_carry_the_weight_above_them(standing: dict[str, Any]) -> None:

@@ -96,6 +96,16 @@ def test_actuation_from_the_description(tmp_path: Path) -> None:
          "give armature or rotor_inertia and gear_ratio, not both"),
         ('[[actuation.joints]]\nmatch = "leg_*"\neffort_limit = -5\n', "effort_limit must be a number > 0 N m"),
         ('[[actuation.joints]]\nkp = 1.0\n', "missing required key actuation.joints[0].match"),
+        ('[actuation]\ncommand_delay = 0.5\n', "actuation.command_delay must be a whole number of control periods"),
+        ('[actuation.motors.m]\npeak_torque = 10\n', "missing required key actuation.motors.m.no_load_speed"),
+        ('[actuation.motors.m]\npeak_torque = 10\nno_load_speed = 5\ncorner_speed = 6\n',
+         "actuation.motors.m.corner_speed (6 rad/s) must be below actuation.motors.m.no_load_speed (5 rad/s)"),
+        ('[actuation.motors.m]\npeak_torque = 10\nno_load_speed = 5\ncoulomb_friction = -1\n',
+         "actuation.motors.m.coulomb_friction must be a number >= 0 N m"),
+        ('[actuation.motors.m]\npeak_torque = 10\nno_load_speed = 5\nstall = 3\n',
+         "unknown key actuation.motors.m.stall"),
+        ('[[actuation.joints]]\nmatch = "leg_*"\nmotor = "m"\n', "no motor type 'm' in [actuation.motors]"),
+        ('[[actuation.joints]]\nmatch = "leg_*"\nrobot_kp = -1\n', "robot_kp must be a number > 0 N m/rad"),
     ],
 )  # fmt: skip
 def test_bad_actuation_tables(tmp_path: Path, table: str, words: str) -> None:

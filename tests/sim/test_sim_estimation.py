@@ -4,9 +4,10 @@ walking on the estimate.
 
 Bounds: issue 20's goals for an estimator (COM relative to the stance sole 5 mm RMS, COM velocity 0.02 m/s RMS,
 DCM 10 mm RMS, the feet's contact states right in 99 % of ticks, landings seen within 10 ms), with the feet's
-force sensors (Talos). A robot without them (G1) estimates its feet's wrenches from the joint torques, whose
-quasi-static error on a swinging leg needs a higher landing threshold (``docs/estimation.md``): a light first
-touch is seen when the load builds, up to some tens of milliseconds later.
+force sensors (Talos). A robot without them (G1) estimates its feet's wrenches from the joint torques and the legs'
+dynamics, low-passed against the torques' noise, with a landing threshold above the estimate's error on a swinging
+leg (``docs/estimation.md``): it meets the goals but for the contact states, which disagree for a few ticks at each
+landing where the foot touches, bounces and comes down again within tens of milliseconds.
 """
 
 from __future__ import annotations
@@ -80,9 +81,15 @@ def _rms(errors) -> float:
     return float(np.sqrt(np.mean(np.sum(np.square(errors), axis=1))))
 
 
+WITHIN = 0.010 + 1e-9  # s: landings seen within 10 ms (the tick times' round-off aside)
+RELANDING_AIR_TIME = 0.2  # s in the air below which a true landing is a re-landing after a bounce, not a step's
+
+
 def _errors(pairs):
     """RMS errors of the COM relative to the more loaded sole (m), COM velocity (m/s), DCM (m); the share of ticks
-    whose contact states agree; each true landing's delay until the estimate's of the same foot (s)."""
+    whose contact states agree; each true step landing's delay until the estimate's of the same foot (s), a foot in
+    the air for at least ``RELANDING_AIR_TIME`` before it (a re-landing after a bounce may be seen as part of the
+    step's landing)."""
     relative, velocity, dcm = [], [], []
     for m, g in pairs:
         i = 0 if g.left.normal_force >= g.right.normal_force else 1
@@ -92,10 +99,16 @@ def _errors(pairs):
         dcm.append(np.subtract(m.dcm, g.dcm))
     agree = np.mean([m.left.loaded == g.left.loaded and m.right.loaded == g.right.loaded for m, g in pairs])
     seen = [(landing.t, landing.side) for m, _ in pairs for landing in m.landings]
-    delays = []
-    for g_landing in (landing for _, g in pairs for landing in g.landings):
-        after = [t - g_landing.t for t, side in seen if side == g_landing.side and -0.05 < t - g_landing.t < 0.2]
-        delays.append(min(after, key=abs) if after else math.inf)
+    delays, last_loaded = [], {"left": -math.inf, "right": -math.inf}
+    for _, g in pairs:
+        for g_landing in g.landings:
+            if g_landing.t - last_loaded[g_landing.side] >= RELANDING_AIR_TIME:
+                after = [t - g_landing.t for t, side in seen if side == g_landing.side]
+                near = [d for d in after if -0.05 < d < 0.2]
+                delays.append(min(near, key=abs) if near else math.inf)
+        for side, foot in (("left", g.left), ("right", g.right)):
+            if foot.loaded and not any(landing.side == side for landing in g.landings):
+                last_loaded[side] = g.t
     return _rms(relative), _rms(velocity), _rms(dcm), float(agree), delays
 
 
@@ -110,25 +123,27 @@ def test_talos_estimate_from_its_sensors_meets_the_goals(talos_pairs):
     assert velocity < 0.02
     assert dcm < 0.010
     assert agree >= 0.99
-    assert len(delays) >= 4 and max(abs(d) for d in delays) <= 0.010
+    assert len(delays) >= 4 and max(abs(d) for d in delays) <= WITHIN
 
 
 def test_talos_estimate_with_the_sensors_noise(talos, scenario):
     relative, velocity, dcm, agree, delays = _errors(_shadow(talos, scenario, 1.0))
     assert relative < 0.005 and velocity < 0.02 and dcm < 0.010
+    assert len(delays) >= 4 and max(abs(d) for d in delays) <= WITHIN
     # The contact chatters tick by tick around the thresholds as a foot lifts off or lands, and an ankle sensor
     # reads the foot's own inertia as the stiff leg stops it: a few newtons of sensor noise and offset flip some of
     # those ticks (docs/estimation.md).
-    assert agree >= 0.98 and max(abs(d) for d in delays) <= 0.015
+    assert agree >= 0.98
 
 
-def test_g1_estimate_from_joint_torques(g1, scenario):
-    relative, velocity, dcm, agree, delays = _errors(_shadow(g1, scenario, 0.0))
-    assert relative < 0.005 and velocity < 0.03 and dcm < 0.010
-    # The torque-based contact states: right in most ticks; every landing seen, most within 10 ms, a light first
-    # touch when its load builds.
-    assert agree >= 0.9
-    assert len(delays) >= 4 and all(-0.010 <= d < 0.2 for d in delays) and np.median(delays) <= 0.010
+@pytest.mark.parametrize("noise", [0.0, 1.0])
+def test_g1_estimate_from_joint_torques(g1, scenario, noise):
+    relative, velocity, dcm, agree, delays = _errors(_shadow(g1, scenario, noise))
+    assert relative < 0.005 and velocity < 0.02 and dcm < 0.010
+    assert len(delays) >= 4 and all(abs(d) <= WITHIN for d in delays)
+    # The contact states disagree for a few ticks at each landing, where the foot touches, bounces and comes down
+    # again faster than the low-passed torque estimate follows (docs/estimation.md).
+    assert agree >= 0.95
 
 
 @pytest.mark.parametrize("name", ["talos", "g1"])

@@ -45,8 +45,8 @@ def test_the_simulated_robot_offers_the_robot_interface_and_its_truth(standing):
     readings = robot.read()
     assert readings.joint_positions.shape == readings.joint_velocities.shape == (len(robot.joint_names),)
     assert readings.imu is not None and readings.left_foot is not None and readings.right_foot is not None
-    with pytest.raises(ValueError, match="feed-forward"):
-        gains = np.ones(len(talos.joint_names))
+    with pytest.raises(ValueError, match="kp must be"):  # a gain per joint, refused before anything changes
+        gains = np.ones(len(talos.joint_names) + 1)
         robot.write(JointCommand(readings.joint_positions, readings.joint_velocities, kp=gains))
 
 
@@ -65,12 +65,14 @@ def test_one_tick_from_readings_to_the_joint_command(standing):
     data = talos.model.createData()
     com = pin.centerOfMass(talos.model, data, out.q)
     np.testing.assert_allclose(com, out.targets.com, atol=2e-3)
-    # Written to the drives, the period's last substep ends at the command's reference.
+    # Written to the drives, the period's last substep ends at the command's reference (a servo's control is
+    # q_ref + (kd / kp) dq_ref: rtgait.sim.drives).
     robot.write(out.command)
     robot.first_substep()
     for i in range(1, robot.substeps):
         robot.substep(i)
-    np.testing.assert_array_equal(robot.data.ctrl, robot.servo.lead * out.command.velocities + out.command.positions)
+    lead = robot.sim.kd / robot.sim.kp
+    np.testing.assert_array_equal(robot.data.ctrl, lead * out.command.velocities + out.command.positions)
 
 
 def test_an_estimator_whose_dcm_frequency_is_not_the_planner_s_is_refused(standing):

@@ -19,6 +19,7 @@ from typing import Literal
 
 import numpy as np
 
+from rtgait.core.input_bounds import InputOutOfBoundsError
 from rtgait.core.limits import MAX_PHASE_DURATION, MAX_PHASE_W_T, MAX_STRIDE, MIN_PHASE_DURATION, check_range
 
 Side = Literal["left", "right"]
@@ -36,7 +37,7 @@ def wrap_angle(angle: float) -> float:
 
 def _require_finite(name: str, value: float) -> None:
     if not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number, got {value}")
+        raise InputOutOfBoundsError(f"{name} must be a finite number, got {value}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -53,7 +54,7 @@ class Footstep:
             for name in ("x", "y", "yaw"):
                 _require_finite(f"footstep {name}", getattr(self, name))
         if self.side not in SIDES:
-            raise ValueError(f"footstep side must be 'left' or 'right', got {self.side!r}")
+            raise InputOutOfBoundsError(f"footstep side must be 'left' or 'right', got {self.side!r}")
 
     @property
     def position(self) -> np.ndarray:
@@ -78,13 +79,13 @@ class Stride:
         for name in ("length", "width", "turn"):
             _require_finite(f"stride {name}", getattr(self, name))
         if self.width <= 0.0:
-            raise ValueError(f"stride width must be > 0 m (feet apart), got {self.width}")
+            raise InputOutOfBoundsError(f"stride width must be > 0 m (feet apart), got {self.width}")
         if abs(self.length) > MAX_STRIDE or self.width > MAX_STRIDE:
-            raise ValueError(
+            raise InputOutOfBoundsError(
                 f"stride length and width must be at most {MAX_STRIDE:g} m, got {self.length}, {self.width}"
             )
         if abs(self.turn) >= math.pi / 2:
-            raise ValueError(f"stride turn must be within +-pi/2 rad, got {self.turn}")
+            raise InputOutOfBoundsError(f"stride turn must be within +-pi/2 rad, got {self.turn}")
 
 
 def place_step(stance: Footstep, stride: Stride) -> Footstep:
@@ -104,7 +105,7 @@ def place_step(stance: Footstep, stride: Stride) -> Footstep:
 def stride_between(stance: Footstep, landing: Footstep) -> Stride:
     """Inverse of :func:`place_step`: the stride that takes ``stance`` to ``landing``."""
     if landing.side == stance.side:
-        raise ValueError("consecutive footprints must alternate between left and right")
+        raise InputOutOfBoundsError("consecutive footprints must alternate between left and right")
     turn = wrap_angle(landing.yaw - stance.yaw)
     heading = stance.yaw + 0.5 * turn
     c, s = math.cos(heading), math.sin(heading)

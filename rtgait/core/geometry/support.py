@@ -2,12 +2,16 @@
 
 The margin is the signed distance (m) from the ZMP to the boundary of the support polygon: positive inside,
 negative outside. A plan whose margin goes negative anywhere asks for a ZMP the feet cannot produce.
+
+A support whose sole corners have no area in floating point (feet so far from the origin that a sole's size is
+below the coordinates' resolution) is a segment (two vertices, the extremes along the corners' spread) or a point
+(one vertex), never an error: its margin is minus the distance to it.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import ConvexHull
+from scipy.spatial import ConvexHull, QhullError
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
 
@@ -26,8 +30,20 @@ def support_polygon(feet: list[Footstep], sole: SoleRect) -> np.ndarray:
     corners = np.concatenate([sole.corners(foot) for foot in feet])
     if len(feet) == 1:
         return corners
-    hull = ConvexHull(corners)
+    try:
+        hull = ConvexHull(corners)
+    except QhullError:  # flat or a point: Qhull finds no 2-D simplex
+        return _degenerate_hull(corners)
     return corners[hull.vertices]  # scipy orders 2-D hull vertices counter-clockwise
+
+
+def _degenerate_hull(points: np.ndarray) -> np.ndarray:
+    """The hull of points with no area: the two extremes along their widest coordinate spread, or one point."""
+    spread = points.max(axis=0) - points.min(axis=0)
+    axis = int(np.argmax(spread))
+    if not spread[axis] > 0.0:
+        return points[:1].copy()
+    return points[[int(np.argmin(points[:, axis])), int(np.argmax(points[:, axis]))]]
 
 
 def signed_margin(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
@@ -37,6 +53,12 @@ def signed_margin(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     the Euclidean distance to the nearest edge segment, negated.
     """
     points = np.atleast_2d(np.asarray(points, dtype=float))
+    if len(polygon) <= 2:  # a point or segment support (no area): minus the distance to it, 0 on it
+        a, b = polygon[0], polygon[-1]
+        edge = b - a
+        length2 = float(edge @ edge)
+        along = np.clip((points - a) @ edge / length2, 0.0, 1.0) if length2 > 0.0 else np.zeros(len(points))
+        return -np.linalg.norm(points - (a + along[:, None] * edge), axis=1)
     start = polygon
     edge = np.roll(polygon, -1, axis=0) - polygon
     length = np.linalg.norm(edge, axis=1)

@@ -3,8 +3,8 @@
 :class:`~rtgait.core.planner.online.OnlinePlanner` takes these methods from :class:`MeasuredPlanning` (a mixin, so that
 the per-tick path stays one object with no indirection): ``observe`` (the measured COG state, and a replan by itself
 when the DCM error grows), ``touchdown`` (re-anchoring on a real foothold), ``replan_now`` (a plan whose free first
-segment is the remainder of the phase under way), the connection from the measured state, and step adjustment after a
-replan. The equations are in ``docs/closed_loop.md``.
+segment is the remainder of the phase under way) and the connection from the measured state; step adjustment after a
+replan is :mod:`rtgait.core.planner.adjusting`'s. The equations are in ``docs/closed_loop.md``.
 
 The mixin reads and writes the planner's state (the plan under way, the walk, the phase being sampled); it has no
 state of its own and is not meant to be used alone.
@@ -17,20 +17,10 @@ import time
 from collections.abc import Sequence
 from typing import Literal
 
-import numpy as np
-
-from rtgait.core.geometry.footsteps import Footstep, Side, Stride
-from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
-from rtgait.core.geometry.support import support_polygon
-from rtgait.core.laws.stepping import (
-    StepAdjustment,
-    StepDecision,
-    TimingOptions,
-    propose_landing,
-    remainder_options,
-    single_support_options,
-)
-from rtgait.core.lipm.pattern import MOVING_KINDS, PatternKey, PlanOperator
+from rtgait.core.geometry.footsteps import SIDES, Footstep, Side
+from rtgait.core.input_bounds import MAX_YAW, InputOutOfBoundsError, check_position
+from rtgait.core.laws.stepping import StepAdjustment
+from rtgait.core.lipm.pattern import PatternKey, PlanOperator
 from rtgait.core.planner.active_plan import PlanLayout
 from rtgait.core.planner.config import FEEDBACK_MODES, FeedbackMode
 from rtgait.core.planner.sample import PlanRecord
@@ -64,31 +54,50 @@ class MeasuredPlanning:
 
         With ``feedback="measured"`` each new plan connects from it, propagated to the connection instant by the
         pendulum (the planned ZMP drives both, so the deviation from the plan evolves as the free pendulum).
+
+        Bounds (:mod:`rtgait.core.input_bounds`): every value finite; ``cog`` within
+        ``COM_REACH_HEIGHTS * cog_height`` (plus half the feet's distance) of the midpoint of the feet on the
+        ground; ``|cog_vel|`` at most ``COM_SPEED_FROUDE * sqrt(gravity * cog_height)``; any ``t`` (an observation
+        more than :data:`OBSERVATION_MAX_AGE` from a connection is not used), but a replan it triggers (a DCM error,
+        only for ``t`` not before the latest sample) takes ``t`` as :meth:`replan_now` does.
         """
         t, cx, cy, vx, vy = values = (float(t), float(cog[0]), float(cog[1]), float(cog_vel[0]), float(cog_vel[1]))
-        # One finiteness test of the sum first (every tick): a NaN or an infinity makes it non-finite, and only
-        # then (or on an overflow of huge finite values) are the values tested one by one.
-        if not math.isfinite(t + cx + cy + vx + vy) and not all(
-            math.isfinite(v) for v in values
+        # The per-tick path: a few float comparisons. A NaN or an infinity makes the sum non-finite (and so may an
+        # overflow of huge finite values: the values are then tested one by one); the centre of reach is kept per
+        # phase sampled.
+        reach = self._reach
+        phase = self._phase
+        if phase is None or reach is None or reach[0] is not phase:
+            reach = self._reach_now()
+        dx, dy = cx - reach[1], cy - reach[2]
+        if (
+            not math.isfinite(t + cx + cy + vx + vy)
+            or dx * dx + dy * dy > reach[3]
+            or vx * vx + vy * vy > self._max_com_speed2
         ):
-            raise ValueError(f"observe needs a finite time, COG and COG velocity, got {values}")
-        self._observed = values
+            self._refuse_observation(values)
         threshold = self.config.replan_dcm_error
         plan = self._plan
         if threshold is None or plan is None or self.config.feedback != "measured" or t < self._latest:
+            self._observed = values
             return
         w = self.w
         planned = plan.cog_at(t, w)
-        self._observed_on_plan = (plan, t, planned)  # the connection from this observation needs it again
         px, py, pvx, pvy = planned
         ex = cx + vx / w - px - pvx / w
         ey = cy + vy / w - py - pvy / w
         if ex * ex + ey * ey > threshold * threshold and t - self._last_auto_replan >= AUTO_REPLAN_INTERVAL:
-            phase, rel = self._phase, t - self._t0
-            if phase is not None and phase.start <= rel < phase.end and phase.end - rel < AUTO_MIN_REMAINDER:
-                return  # a free segment this short would need wild ZMP swings: the next phase's first tick replans
-            self._last_auto_replan = t
-            self.replan_now(t, "dcm-error")
+            rel = t - self._t0
+            if not (phase is not None and phase.start <= rel < phase.end and phase.end - rel < AUTO_MIN_REMAINDER):
+                # Not within the last moments of a phase (a free segment that short would need wild ZMP swings:
+                # the next phase's first tick replans): replan now, all of it undone if the replan refuses t.
+                with self._atomic():
+                    self._observed, self._observed_on_plan = values, (plan, t, planned)
+                    self._last_auto_replan = t
+                    self.replan_now(t, "dcm-error")
+                return
+        self._observed = values
+        self._observed_on_plan = (plan, t, planned)  # the connection from this observation needs it again
 
     def touchdown(self, t: float, side: Side, x: float, y: float, yaw: float) -> int:
         """A foot is on the ground at ``(x, y)`` (m) with heading ``yaw`` (rad): where a swing foot really landed,
@@ -98,11 +107,31 @@ class MeasuredPlanning:
         The plan under way is remade at once from its own state at ``t`` (:meth:`replan_now`, reason
         ``"touchdown"``), so the ZMP rests on the new footprint from the end of the phase under way on (unless the
         phase ends within :data:`MIN_REMAINDER`: then the replan at the next double-support start does it).
+
+        Bounds (:mod:`rtgait.core.input_bounds`): ``t`` within ``MAX_TIME``, not before the latest sample and, like
+        a sample's, at most :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` double supports ahead; ``x``, ``y``
+        within ``MAX_POSITION``, ``yaw`` within ``MAX_YAW``; the footprint within the landing box
+        (:class:`~rtgait.core.input_bounds.LandingBounds`, :func:`~rtgait.core.planner.bounded.landing_bounds`) of
+        the foot it stepped from: turned less than a quarter turn, within the walk's and step adjustment's stride
+        limits (or the stride planned there, if longer) plus :data:`~rtgait.core.input_bounds.LANDING_TOLERANCE`.
         """
         if not self.started:
             raise RuntimeError("call start() before touchdown()")
-        footprint = Footstep(float(x), float(y), float(yaw), side)
-        if self._plan is not None and t >= self._latest:
+        t = float(t)
+        self._check_time("t", t)
+        self._check_not_before_latest("t", t)
+        if side not in SIDES:
+            raise InputOutOfBoundsError(f"side must be 'left' or 'right', got {side!r}")
+        x, y, yaw = float(x), float(y), float(yaw)
+        check_position("touchdown (x, y)", x, y)
+        if not abs(yaw) <= MAX_YAW:  # also refuses NaN
+            raise InputOutOfBoundsError(f"yaw must be finite and within +-{MAX_YAW:g} rad, got {yaw}")
+        with self._atomic():  # which footprint landed is known once t is sampled: a refused landing undoes that
+            return self._touchdown(t, Footstep(x, y, yaw, side))
+
+    def _touchdown(self, t: float, footprint: Footstep) -> int:
+        side = footprint.side
+        if self._plan is not None:
             self.sample_values(t)  # the landing may begin a double support: make its plan, then re-anchor it
         q = self._walk.latest_phase or 0
         kind = self.timeline.kind(q)
@@ -113,11 +142,12 @@ class MeasuredPlanning:
             n = self.n_steps
             i = q // 2 if n is None else min(q // 2, n)
             index = i if self._walk.footprint(i).side == side else i + 1
+        self._check_landing(index, footprint)
         if kind == "single" and index == (q + 1) // 2 + 1:
             self._freeze_swing(t)
         self._walk.retarget(index, footprint)
         self._phase = None
-        if self._plan is not None and t >= self._latest and self._next_replan_time > t:
+        if self._plan is not None and self._next_replan_time > t:
             self.replan_now(t, "touchdown")  # re-anchor now, unless the replan due at t will
         return index
 
@@ -194,24 +224,34 @@ class MeasuredPlanning:
 
         Returns the new plan's record, or ``None`` when the phase ends within :data:`MIN_REMAINDER` (the regular
         replan at the next double-support start is imminent) or the walk is settling.
+
+        Bounds: ``t`` finite, not before the latest sample and at most
+        :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` double supports ahead (as a sample's).
         """
         began = time.perf_counter()
-        if not math.isfinite(t):
-            raise ValueError(f"t must be finite, got {t}")
+        t = float(t)
+        self._check_time("t", t)
         if feedback is None:
             feedback = self.config.feedback
         elif feedback not in FEEDBACK_MODES:
-            raise ValueError(f"feedback must be one of {FEEDBACK_MODES} or None, got {feedback!r}")
+            raise InputOutOfBoundsError(f"feedback must be one of {FEEDBACK_MODES} or None, got {feedback!r}")
         if step_adjustment is None:
             adjust = self.config.step_adjustment
         elif step_adjustment is False or isinstance(step_adjustment, StepAdjustment):
             adjust = step_adjustment or None
         else:
-            raise ValueError(f"step_adjustment must be a StepAdjustment, False or None, got {step_adjustment!r}")
+            raise InputOutOfBoundsError(
+                f"step_adjustment must be a StepAdjustment, False or None, got {step_adjustment!r}"
+            )
         if self._plan is None:
             raise RuntimeError("replan_now needs a plan under way: call start() and sample() first")
-        if t < self._latest:
-            raise ValueError(f"replan_now at t={t} s is before the latest sample ({self._latest} s)")
+        self._check_not_before_latest("t", t)
+        with self._atomic():  # nothing is left to refuse: undone only if the replanning itself fails
+            return self._replan_now(t, reason, feedback, adjust, began)
+
+    def _replan_now(
+        self, t: float, reason: str, feedback: FeedbackMode, adjust: StepAdjustment | None, began: float
+    ) -> PlanRecord | None:
         self.sample_values(t)  # replans up to t if due, and fixes the phase
         phase = self._phase
         assert phase is not None
@@ -233,162 +273,3 @@ class MeasuredPlanning:
         if adjust is not None:
             self._adjust_step(t, planned, adjust)
         return record
-
-    # ----- step adjustment -------------------------------------------------------------------------------
-    def _free_segment_margin(self, halfplanes, samples: int) -> tuple[np.ndarray, np.ndarray, float]:
-        """The plan's free segment: its layout's ZMP rows ``M`` at ``samples`` times, its ZMP then and its margin."""
-        plan = self._plan
-        rows = plan.layout.zmp_rows(samples)
-        zmp = rows @ plan.y
-        return rows, zmp, float(halfplane_margin(zmp, *halfplanes).min())
-
-    def _adjust_step(self, t: float, planned: list[float] | None, adjust: StepAdjustment) -> StepDecision | None:
-        """After a replan: if its free segment asks for a ZMP outside the support polygon, move the landing of the
-        next step that can still change to the candidate that keeps it inside with the least departure
-        (:mod:`rtgait.core.laws.stepping`).
-
-        With none, ``StepAdjustment.on_failure`` decides: ``"continue"`` takes the landing with the largest margin
-        all the same (a capture step) and walks on, ``"stop"`` takes it and stops after that step, ``"keep"`` keeps
-        the walk as planned (footprints and timing). A plan made from the measured state is then replaced by the
-        one from the planned state ``planned``, with the new landing: a plan no foot can realise would ask the
-        feedback law to follow it, while from the planned state it asks only for what the ankle can do and the law,
-        saturated at the sole's edge, recovers the rest.
-        """
-        plan = self._plan
-        q = plan.phase0
-        walk = self._walk
-        if self.timeline.kind(q) in ("end", "settle"):
-            return None
-        halfplanes = polygon_halfplanes(support_polygon(walk.contact_feet(q), adjust.sole))
-        rows, zmp, before = self._free_segment_margin(halfplanes, adjust.samples)
-        if before >= adjust.required_margin:
-            return None
-        timings = None
-        if self._adapts_timing(adjust):
-            def timings(k: int, swinging: bool) -> TimingOptions | None:
-                return self._timing_options(k, swinging, adjust)
-        proposal = propose_landing(
-            adjust, walk, q, t, self.phase_start, rows, zmp, halfplanes, plan.layout.anchor_phases,
-            lambda: self._freeze_swing(t)[:2], timings,
-        )  # fmt: skip
-        if proposal is None:
-            if planned is not None:
-                self._connect(plan.t_start, q, plan.layout, planned, plan.elapsed)
-            return None
-        k, nominal, landing = proposal.step, proposal.nominal, proposal.landing
-        if not proposal.enough and adjust.on_failure == "keep":
-            return self._keep_walk(t, planned, proposal, before, halfplanes, adjust)
-        walk.move_landing(k, *landing)
-        moved = math.hypot(landing[0] - nominal.x, landing[1] - nominal.y)
-        reason = f"ZMP margin {before * 1e3:+.1f} mm: step {k} lands {moved:.3f} m away"
-        layout = None
-        if proposal.timing >= 0:
-            layout = self._timing_layouts(k, proposal.swinging, adjust)[proposal.timing]
-            walk.set_single_support(k, proposal.single_support)
-            if self._next_replan_phase is not None:  # the phases after step k's single support moved
-                self._next_replan_time = self.phase_start(self._next_replan_phase)
-            change = proposal.single_support - proposal.nominal_single_support
-            reason += (
-                f", {abs(change):.3f} s {'later' if change > 0 else 'sooner'} "
-                f"(single support {proposal.single_support:.3f} s)"
-            )
-        n = walk.n_steps
-        if not proposal.enough:
-            reason += f"; no landing keeps the ZMP inside (best {proposal.margin * 1e3:+.1f} mm)"
-            if adjust.on_failure == "stop" or planned is None:
-                if n is None or k < n:
-                    walk.set_strides([Stride(0.0, self.config.step_width, 0.0)], from_step=k + 1)
-                reason += ": emergency stop after it"
-            else:
-                reason += ": walking on from the planned state, the feedback law recovers"
-        self._phase = None
-        self._reconnect(planned if planned is not None and not proposal.enough else None, layout)
-        after = self._free_segment_margin(halfplanes, adjust.samples)[2]
-        decision = StepDecision(
-            t, k, (nominal.x, nominal.y), landing, before, after, proposal.candidates, not proposal.enough, reason,
-            proposal.single_support, proposal.nominal_single_support,
-        )  # fmt: skip
-        return self._log_decision(decision)
-
-    def _keep_walk(self, t: float, planned: list[float] | None, proposal, before: float, halfplanes, adjust):
-        """``on_failure="keep"`` and no candidate is enough: the footprints and timing stay as planned; a plan from
-        the measured state gives way to the one from the planned state (as when no step can move)."""
-        plan = self._plan
-        if planned is not None:
-            self._connect(plan.t_start, plan.phase0, plan.layout, planned, plan.elapsed)
-        nominal = proposal.nominal
-        after = self._free_segment_margin(halfplanes, adjust.samples)[2]
-        reason = (
-            f"ZMP margin {before * 1e3:+.1f} mm; no landing keeps the ZMP inside (best {proposal.margin * 1e3:+.1f} "
-            f"mm): step {proposal.step} kept as planned"
-        )
-        decision = StepDecision(
-            t, proposal.step, (nominal.x, nominal.y), (nominal.x, nominal.y), before, after, proposal.candidates, True,
-            reason, proposal.nominal_single_support, proposal.nominal_single_support, kept=True,
-        )  # fmt: skip
-        return self._log_decision(decision)
-
-    def _log_decision(self, decision: StepDecision) -> StepDecision:
-        """Log ``decision`` (once: a disturbance that persists re-decides the same capture step) and return it."""
-        k, landing = decision.step, decision.landing
-        last = self.step_adjustments[-1] if self.step_adjustments else None
-        repeated = last is not None and last.step == k and math.dist(last.landing, landing) < 1e-3 and last.emergency
-        if not repeated:  # a disturbance that persists re-decides the same capture step: log it once
-            self.step_adjustments.append(decision)
-            self.step_adjustment_count += 1
-        return decision
-
-    def _timing_durations(
-        self, k: int, swinging: bool, adjust: StepAdjustment
-    ) -> tuple[int, tuple[float, ...], np.ndarray] | None:
-        """The candidate timings of step ``k`` for the plan under way: the plan's segment whose duration changes,
-        its candidate durations (s) and the step's single support under each (s); ``None`` when the step's timing
-        cannot change. Swinging, the segment is the free one, the rest of the single support
-        (:func:`~rtgait.core.laws.stepping.remainder_options`); else the step's whole single support
-        (:func:`~rtgait.core.laws.stepping.single_support_options`)."""
-        plan = self._plan
-        if swinging:
-            durations = remainder_options(adjust, plan.elapsed, plan.durations[0])
-            return None if durations is None else (0, durations, plan.elapsed + np.array(durations))
-        segment = 2 * k - 1 - plan.phase0
-        if segment >= len(plan.durations) or plan.layout.kinds[segment] != "single":
-            return None
-        durations = single_support_options(adjust, plan.durations[segment])
-        return None if durations is None else (segment, durations, np.array(durations))
-
-    def _adapts_timing(self, adjust: StepAdjustment | None = None) -> bool:
-        """Step adjustment (``adjust``, default the config's) may change step timings (not with the auto
-        connection: it needs uniform timing)."""
-        adjust = adjust if adjust is not None else self.config.step_adjustment
-        return adjust is not None and adjust.adapt_timing and self.config.connection != "auto"
-
-    def _timing_layouts(self, k: int, swinging: bool, adjust: StepAdjustment) -> list[PlanLayout]:
-        """The plan under way's layout under each candidate timing of step ``k`` (:meth:`_timing_durations`)."""
-        segment, durations, _ = self._timing_durations(k, swinging, adjust)
-        return self._plan.layout.variants(segment, durations)
-
-    def _timing_options(self, k: int, swinging: bool, adjust: StepAdjustment) -> TimingOptions | None:
-        """What :func:`~rtgait.core.laws.stepping.propose_landing` weighs for a new timing of step ``k``: the plans
-        under the candidate timings, from the same inputs ``y`` (the state and the footprints do not change; the
-        operators do: built ahead for the plans of double-support starts, in one batch per plan shape)."""
-        found = self._timing_durations(k, swinging, adjust)
-        if found is None:
-            return None
-        segment, durations, singles = found
-        plan = self._plan
-        rows = plan.layout.variant_zmp_rows(segment, durations, adjust.samples)
-        return TimingOptions(singles, rows, rows @ plan.y)
-
-    def _reconnect(self, state: list[float] | None = None, layout: PlanLayout | None = None) -> None:
-        """Remake the plan under way at its own start, after its footprints (or the walk's length) changed at that
-        instant: from its own initial state, or from ``state`` (``[p0x, p0y, dp0x, dp0y, c0x, c0y, dc0x, dc0y]``);
-        with ``layout`` (after a new step timing), in that shape."""
-        plan = self._plan
-        q, elapsed = plan.phase0, plan.elapsed
-        if self._next_replan_phase is not None:
-            self._prepare_layouts(self._next_replan_phase)
-        if layout is None and elapsed == 0.0 and self.timeline.kind(q) in MOVING_KINDS:
-            layout = self._layout(q, self._plan_span(q))
-        elif layout is None:
-            layout = self._midphase_layout(q, plan.durations[0])
-        self._connect(plan.t_start, q, layout, plan.y[:4].ravel().tolist() if state is None else state, elapsed)

@@ -19,10 +19,11 @@ Connection modes (method.md section 5), for a change of step ``k``:
   decision, with the predictions and the reason, is in :attr:`OnlinePlanner.change_log`.
 
 The walk's footprints, strides, velocity command and deadlines live in :class:`~rtgait.core.walk.walk.Walk`. The
-planner's methods are in four modules: this one makes plans and samples them (the per-tick path,
+planner's methods are in six modules: this one makes plans and samples them (the per-tick path,
 :meth:`OnlinePlanner.sample_values`, and the replans it triggers); :mod:`rtgait.core.planner.planner_walk` tells of the
 walk and takes the changes; :mod:`rtgait.core.planner.measured` plans from the measured state;
-:mod:`rtgait.core.planner.layouts` builds the plan shapes ahead.
+:mod:`rtgait.core.planner.adjusting` adjusts steps after a replan; :mod:`rtgait.core.planner.layouts` builds the plan
+shapes ahead; :mod:`rtgait.core.planner.bounded` checks the closed-loop calls' arguments and undoes a refused call.
 """
 
 from __future__ import annotations
@@ -36,13 +37,16 @@ import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride, check_step_timings, midpoint
 from rtgait.core.geometry.support import signed_margin, support_polygon
+from rtgait.core.input_bounds import MAX_TIME, MAX_TURN, InputOutOfBoundsError, check_footstep
 from rtgait.core.laws.stepping import StepDecision
-from rtgait.core.limits import MAX_REPLANS_PER_SAMPLE, MAX_STEPS
+from rtgait.core.limits import MAX_STEPS
 from rtgait.core.lipm.closed_form import CogTrajectory, omega
 from rtgait.core.lipm.pattern import DEGREE, MOVING_KINDS, PatternKey
 from rtgait.core.lipm.spline import PiecewisePolynomial
 from rtgait.core.planner.active_plan import ActivePlan, PlanLayout
+from rtgait.core.planner.adjusting import StepAdjusting
 from rtgait.core.planner.auto import AutoConnection, ChangeRecord
+from rtgait.core.planner.bounded import BoundedCalls, measured_pair
 from rtgait.core.planner.config import (
     ALL_CONNECTION_MODES,
     CONNECTION_MODES,
@@ -63,7 +67,7 @@ from rtgait.core.walk.walk import Walk
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 
 
-class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
+class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, BoundedCalls):
     """Walking pattern generator that replans at every double-support start and can change steps on the fly.
 
     Args:
@@ -88,6 +92,13 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
     Samples may be asked for in any order within the plan being executed; what is committed (which steps may
     still change) is decided by the latest time sampled. One call replans at most
     :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` times: sample at least once per step.
+
+    Every argument of the closed-loop calls is checked against its bound (:mod:`rtgait.core.input_bounds`,
+    ``docs/closed_loop.md``) before anything changes: a refused call raises
+    :class:`~rtgait.core.input_bounds.InputOutOfBoundsError` (a ``ValueError``) naming the argument and the bound, or
+    :class:`StepChangeTooLateError` past a deadline, and leaves the planner exactly as it was. Calls out of order
+    (``sample`` or ``touchdown`` before :meth:`start`, ``replan_now`` before the first sample) raise
+    ``RuntimeError``: a programming error, not a measurement.
     """
 
     def __init__(self, config: PlannerConfig, strides: Sequence[Stride] | None = None) -> None:
@@ -95,6 +106,7 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
             raise ValueError(f"config must be a PlannerConfig, got {type(config).__name__}")
         self.config = config
         self.w = omega(config.cog_height, config.gravity)
+        self._init_bounds()
         check_step_timings(config.timing, self.w)
         self._walk = Walk(
             config.timing,
@@ -148,28 +160,40 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
         """Begin the walk at absolute time ``t0`` (s).
 
         Args:
-            feet: the measured standing feet, ``(left, right)`` as :class:`Footstep`s at any position and heading;
-                default: side by side at the origin heading +x. The walk heads where the feet point: strides and
-                velocity commands are relative to them.
-            cog: the measured horizontal COG position (m); default: between the feet.
-            cog_vel: the measured horizontal COG velocity (m/s); default: at rest.
+            feet: the measured standing feet, ``(left, right)`` as :class:`Footstep`s at any position and heading
+                (within :data:`~rtgait.core.input_bounds.MAX_POSITION` of the origin, headings within
+                :data:`~rtgait.core.input_bounds.MAX_YAW`, at most 2 m apart, turned less than a quarter turn from
+                each other); default: side by side at the origin heading +x. The walk heads where the feet point:
+                strides and velocity commands are relative to them.
+            cog: the measured horizontal COG position (m), within reach of the feet (``docs/closed_loop.md``);
+                default: between the feet.
+            cog_vel: the measured horizontal COG velocity (m/s), below the speed bound; default: at rest.
 
         The first plan starts with the ZMP under the COG (at rest, they coincide).
         """
-        if not math.isfinite(t0):
-            raise ValueError(f"t0 must be finite, got {t0}")
+        if not abs(t0) <= MAX_TIME:  # also refuses NaN
+            raise InputOutOfBoundsError(f"t0 must be finite and within +-{MAX_TIME:g} s, got {t0}")
         walk = self._walk
         if feet is not None:
             left, right = feet
             if not (isinstance(left, Footstep) and isinstance(right, Footstep)):
-                raise ValueError("feet must be two Footstep values (left, right)")
+                raise InputOutOfBoundsError("feet must be two Footstep values (left, right)")
             if left.side != "left" or right.side != "right":
-                raise ValueError(f"feet must be (left, right), got ({left.side}, {right.side})")
+                raise InputOutOfBoundsError(f"feet must be (left, right), got ({left.side}, {right.side})")
+            for foot in (left, right):
+                check_footstep(f"feet ({foot.side})", foot)
+            if not abs(math.remainder(left.yaw - right.yaw, math.tau)) < MAX_TURN:
+                raise InputOutOfBoundsError(
+                    f"feet must be turned less than {MAX_TURN:.4f} rad from each other, got yaws {left.yaw} and "
+                    f"{right.yaw}"
+                )
             ordered = (left, right) if self.config.first_side == "left" else (right, left)
         else:
             ordered = None
-        c = _pair("cog", cog, None)
-        v = _pair("cog_vel", cog_vel, (0.0, 0.0))
+        c = measured_pair("cog", cog, None)
+        v = measured_pair("cog_vel", cog_vel, (0.0, 0.0))
+        if c is not None or v != (0.0, 0.0):
+            self._check_com(c if c is not None else midpoint(*(ordered or walk.standing)), v, ordered or walk.standing)
         walk.restart(ordered)  # after every check: a refused start changes nothing
         if c is None:
             c = midpoint(*walk.standing)
@@ -180,6 +204,7 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
         self._plan = None
         self._observed = None
         self._observed_on_plan = None
+        self._reach = None
         self.plans.clear()
         self.replan_count = 0
         self._replaced()
@@ -259,22 +284,15 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
         self.plans.append(PlanRecord(t_start, q, end, len(layout.durations), elapsed, reason))
         self.replan_count += 1
 
-    def _advance(self, t: float) -> None:
-        """Replan at every double-support start up to ``t``, each from the state of the plan before it."""
-        q_next = self._next_replan_phase
-        if q_next is None:
-            return
-        timeline = self.timeline
-        # Usually one replan is due; count them (a phase lookup) only when t is past the one after it.
-        if t - self._t0 >= timeline.start_time(q_next + 2) and (timeline.last_phase or math.inf) > q_next:
-            due = (timeline.phase_at(t - self._t0) - q_next) // 2 + 1
-        else:
-            due = 1
-        if due > MAX_REPLANS_PER_SAMPLE:
-            raise ValueError(
-                f"t={t} s is {due} double supports ahead of the plan under way: sample the planner at least once "
-                f"per step (one call replans at most {MAX_REPLANS_PER_SAMPLE} times)"
-            )
+    def _catch_up(self, t: float) -> None:
+        """Before sampling ``t`` (s): commit the held changes whose step has lifted off and replan at every
+        double-support start up to ``t``, each from the state of the plan before it; ``t`` checked first
+        (:meth:`_check_time`: at most :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` replans)."""
+        self._check_time("t", t)
+        if t >= self._commit_time:
+            if self._auto.commit(t):
+                self._phase = None  # the swing target of the phase being sampled may have moved
+            self._commit_time = self._auto.next_commit
         while self._next_replan_time <= t:
             self._replan(t)
 
@@ -290,26 +308,26 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
 
     # ----- sampling -------------------------------------------------------------------------------------
     def sample(self, t: float) -> GaitSample:
-        """COG (pos, vel, acc), ZMP, reference ZMP, feet poses, DCM and support at absolute time ``t`` (s)."""
+        """COG (pos, vel, acc), ZMP, reference ZMP, feet poses, DCM and support at absolute time ``t`` (s).
+
+        ``t`` must be finite, within :data:`~rtgait.core.input_bounds.MAX_TIME`, not before the plan under way and
+        less than :data:`~rtgait.core.limits.MAX_REPLANS_PER_SAMPLE` double supports past the next replan
+        (:class:`~rtgait.core.input_bounds.InputOutOfBoundsError` otherwise, nothing changed)."""
         values, support, phase = self.sample_values(t)
         return GaitSample(t, np.fromiter(values, float, len(values)), support, phase)
 
     def sample_values(self, t: float) -> tuple[SampleValues, str, int]:
         """As :meth:`sample` but returns the values as a :class:`SampleValues` of plain floats, read by field (for
         tight loops), with the support and the phase."""
-        if t >= self._commit_time:
-            if self._auto.commit(t):
-                self._phase = None  # the swing target of the phase being sampled may have moved
-            self._commit_time = self._auto.next_commit
-        if t >= self._next_replan_time:
-            if t == math.inf:
-                raise ValueError("t must be finite, got inf")
-            self._advance(t)
+        if t >= self._commit_time or t >= self._next_replan_time or t > MAX_TIME:
+            self._catch_up(t)
         plan = self._plan
         if plan is None or not t >= plan.t_start:  # also rejects NaN
             if not self.started:
                 raise RuntimeError("call start() before sample()")
-            raise ValueError(f"t={t} s is before the plan being executed (starts at {self._earliest()} s)")
+            raise InputOutOfBoundsError(
+                f"t={t} s must not be before the plan being executed (starts at {self._earliest()} s)"
+            )
         rel = t - self._t0
         phase = self._phase
         if phase is None or not phase.start <= rel < phase.end:
@@ -370,15 +388,6 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, PlanShapes):
         return float(signed_margin(sample.zmp, polygon)[0])
 
 
-def _pair(name: str, value: Sequence[float] | None, default: tuple[float, float] | None) -> tuple[float, float] | None:
-    if value is None:
-        return default
-    pair = (float(value[0]), float(value[1]))
-    if not all(math.isfinite(v) for v in pair):
-        raise ValueError(f"{name} must be finite, got {pair}")
-    return pair
-
-
 def straight_walk(config: PlannerConfig, steps: int, step_length: float) -> list[Stride]:
     """Strides of a straight walk: ``steps`` steps of ``step_length`` (m), then one closing the feet."""
     if not isinstance(steps, int) or isinstance(steps, bool) or not 1 <= steps < MAX_STEPS:
@@ -395,6 +404,7 @@ __all__ = [
     "ConnectionMode",
     "FeedbackMode",
     "GaitSample",
+    "InputOutOfBoundsError",
     "OnlinePlanner",
     "PlanRecord",
     "PlannerConfig",

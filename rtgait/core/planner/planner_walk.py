@@ -93,7 +93,6 @@ class WalkQueries:
         return self._walk.contact_feet(q)
 
 
-
 class PlannerWalk(WalkQueries):
     """The walk methods of :class:`~rtgait.core.planner.online.OnlinePlanner` (see the module docstring): the queries of
     :class:`WalkQueries`, the latest time sampled and the changes."""
@@ -136,40 +135,46 @@ class PlannerWalk(WalkQueries):
         deadline; a refused change changes nothing. In auto mode the change is decided here
         (:mod:`rtgait.core.planner.auto`): applied now, deferred to a later step, or held until step ``step`` lifts off.
         """
-        if self.config.connection == "auto":
-            first, record = self._auto.change(step, {"length": length, "width": width, "turn": turn}, through)
-            self._commit_time = self._auto.next_commit
-            self._changed(first, record)
-            return
-        self._changed(self._walk.change_step(step, length=length, width=width, turn=turn, through=through))
+        with self._atomic():
+            if self.config.connection == "auto":
+                first, record = self._auto.change(step, {"length": length, "width": width, "turn": turn}, through)
+                self._commit_time = self._auto.next_commit
+                self._changed(first, record)
+                return
+            self._changed(self._walk.change_step(step, length=length, width=width, turn=turn, through=through))
 
     def set_strides(self, strides: Sequence[Stride], from_step: int | None = None) -> None:
         """Replace the walk from ``from_step`` (default: the first open step) on; the walk ends after them."""
-        self._replaced()
-        self._changed(self._walk.set_strides(strides, from_step))
+        with self._atomic():
+            self._replaced()
+            self._changed(self._walk.set_strides(strides, from_step))
 
     def set_footsteps(self, footsteps: Sequence[Footstep]) -> None:
         """Replace the walk by absolute landing footprints for steps 1..N (the first ones may already be walked:
         those must match what was walked, within 1 mm). Raises :class:`StepChangeTooLateError` when every one
         of them is committed."""
-        self._replaced()
-        self._changed(self._walk.set_footsteps(footsteps))
+        with self._atomic():
+            self._replaced()
+            self._changed(self._walk.set_footsteps(footsteps))
 
     def set_velocity(self, vx: float = 0.0, vy: float = 0.0, wz: float = 0.0) -> None:
         """Walk by command: forward and lateral speed (m/s), yaw rate (rad/s); open steps follow it.
 
         Commands beyond ``max_step_*`` per step are clamped with a :class:`CommandClampedWarning`; a command after
         :meth:`stop` cancels the stop with a :class:`StopCancelledWarning`."""
-        self._replaced()
-        self._changed(self._walk.set_velocity(VelocityCommand(vx, vy, wz)))
+        command = VelocityCommand(vx, vy, wz)
+        with self._atomic():
+            self._replaced()
+            self._changed(self._walk.set_velocity(command))
 
     def stop(self) -> None:
         """End the walk: the first open step brings the feet side by side, then the COG comes to rest.
 
         Calling it again once the closing step is committed changes nothing, so a control loop may keep
         sending "stop"."""
-        self._replaced()
-        self._changed(self._walk.stop())
+        with self._atomic():
+            self._replaced()
+            self._changed(self._walk.stop())
 
 
 __all__ = ["PlannerWalk"]

@@ -27,6 +27,7 @@ from collections.abc import Iterator, Sequence
 from typing import TypeVar
 
 from rtgait.core.geometry.footsteps import Footstep, Stride, Timeline, stride_between
+from rtgait.core.input_bounds import InputOutOfBoundsError, check_footstep
 from rtgait.core.limits import MAX_STEPS
 from rtgait.core.walk.velocity_command import VelocityCommand, warn_if_clamped
 
@@ -49,14 +50,24 @@ class WalkChanges:
     @contextlib.contextmanager
     def trial(self: _Changes) -> Iterator[_Changes]:
         """Changes made inside the block are undone when it ends: for predicting what a change would do."""
-        saved = (list(self._strides), list(self._prints), self.base, self.finite, self.command, self.stopping)
-        timeline, standing, step_timings = self._timeline, self.standing, self._step_timings
+        saved = self.snapshot()
         try:
             yield self
         finally:
-            strides, prints, self.base, self.finite, self.command, self.stopping = saved
-            self._strides[:], self._prints[:] = strides, prints
-            self._timeline, self.standing, self._step_timings = timeline, standing, step_timings
+            self.restore(saved)
+
+    def snapshot(self) -> tuple:
+        """Everything a change or :meth:`reach` may alter, for :meth:`restore` (lists copied, the rest immutable)."""
+        return (
+            list(self._strides), list(self._prints), self.base, self.finite, self.command, self.stopping,
+            self._timeline, self.standing, self._step_timings, self.latest_phase,
+        )  # fmt: skip
+
+    def restore(self, saved: tuple) -> None:
+        """Put the walk back as :meth:`snapshot` saw it."""
+        strides, prints, self.base, self.finite, self.command, self.stopping = saved[:6]
+        self._strides[:], self._prints[:] = strides, prints
+        self._timeline, self.standing, self._step_timings, self.latest_phase = saved[6:]
 
     def _is_ending(self) -> bool:
         n = self.n_steps
@@ -69,7 +80,7 @@ class WalkChanges:
 
     def _check_open(self, step: int, what: str = "step") -> None:
         if not isinstance(step, int) or isinstance(step, bool) or step < 1:
-            raise ValueError(f"{what} must be a 1-based step number, got {step!r}")
+            raise InputOutOfBoundsError(f"{what} must be a 1-based step number, got {step!r}")
         if step < self.first_open_step():
             raise StepChangeTooLateError(
                 f"step {step} can no longer change in {self.connection} mode (first open step: "
@@ -93,17 +104,17 @@ class WalkChanges:
         """
         last = step if through is None else through
         if not isinstance(last, int) or isinstance(last, bool):
-            raise ValueError(f"through must be a 1-based step number, got {through!r}")
+            raise InputOutOfBoundsError(f"through must be a 1-based step number, got {through!r}")
         if last < step:
-            raise ValueError(f"through ({through}) must be >= step ({step})")
+            raise InputOutOfBoundsError(f"through ({through}) must be >= step ({step})")
         self._check_open(step)
         # Check the values before anything is generated: a refused change must change nothing.
         Stride(0.0 if length is None else length, 0.2 if width is None else width, 0.0 if turn is None else turn)
         n = self.n_steps
         if n is not None and last > n:
-            raise ValueError(f"step {last} does not exist: the walk has {n} steps")
+            raise InputOutOfBoundsError(f"step {last} does not exist: the walk has {n} steps")
         if n is None and last - self.first_open_step() > MAX_STEPS:
-            raise ValueError(f"through must be within {MAX_STEPS} steps of the first open step, got {last}")
+            raise InputOutOfBoundsError(f"through must be within {MAX_STEPS} steps of the first open step, got {last}")
         self.ensure(last + 1)
         old = [self._strides[k - 1 - self.base] for k in range(step, last + 1)]
         new = [
@@ -125,13 +136,13 @@ class WalkChanges:
         self._check_open(start, "from_step")
         strides = list(strides)
         if not strides:
-            raise ValueError("set_strides needs at least one stride: the walk's last step is still to come")
+            raise InputOutOfBoundsError("set_strides needs at least one stride: the walk's last step is still to come")
         if not all(isinstance(s, Stride) for s in strides):
-            raise ValueError("set_strides needs Stride values")
+            raise InputOutOfBoundsError("set_strides needs Stride values")
         check_walk_length(start - 1 + len(strides))
         n = self.n_steps
         if n is not None and start > n + 1:
-            raise ValueError(f"from_step {start} leaves a gap after step {n}")
+            raise InputOutOfBoundsError(f"from_step {start} leaves a gap after step {n}")
         self.ensure(start)  # a walk by command: make its strides up to there
         self._strides[start - 1 - self.base :] = strides
         self.finite = True
@@ -149,9 +160,11 @@ class WalkChanges:
         """
         footsteps = list(footsteps)
         if not footsteps:
-            raise ValueError("set_footsteps needs at least one footstep")
+            raise InputOutOfBoundsError("set_footsteps needs at least one footstep")
         if not all(isinstance(f, Footstep) for f in footsteps):
-            raise ValueError("set_footsteps needs Footstep values")
+            raise InputOutOfBoundsError("set_footsteps needs Footstep values")
+        for k, footstep in enumerate(footsteps):
+            check_footstep(f"footsteps[{k}]", footstep)
         check_walk_length(len(footsteps))
         self._check_not_ending()
         first_open = self.first_open_step()
@@ -226,7 +239,7 @@ class WalkChanges:
         if self.latest_phase is not None and 2 * step <= self.latest_phase:
             raise StepChangeTooLateError(f"step {step} has already landed")
         if not (math.isfinite(duration) and duration > 0.0):
-            raise ValueError(f"single support must be a finite duration > 0 s, got {duration}")
+            raise InputOutOfBoundsError(f"single support must be a finite duration > 0 s, got {duration}")
         timeline = self._timeline
         timings = [timeline.step_timing(k) for k in range(1, max(step, len(self._step_timings)) + 1)]
         timings[step - 1] = (float(duration), timings[step - 1][1])
@@ -237,7 +250,9 @@ class WalkChanges:
         """Replace ``F[index]`` by ``footprint`` (where a foot really is); later footprints follow it, their
         strides unchanged."""
         if footprint.side != self.footprint(index).side:
-            raise ValueError(f"footprint {index} is a {self.footprint(index).side} foot, got a {footprint.side} one")
+            raise InputOutOfBoundsError(
+                f"footprint {index} is a {self.footprint(index).side} foot, got a {footprint.side} one"
+            )
         if index < 2:
             standing = list(self.standing)
             standing[index] = footprint
@@ -248,14 +263,18 @@ class WalkChanges:
             with contextlib.suppress(ValueError):
                 self._strides[index - 2 - self.base] = stride_between(self._prints[index - 1 - self.base], footprint)
         self._prints[index - self.base] = footprint
-        self._rebuild(index)
+        self._rebuild(max(index, 1))  # F[1] does not follow F[0]: both stand where they were measured
 
     def restart(self, feet: tuple[Footstep, Footstep] | None = None) -> None:
         """Forget what was reached (a new start); with ``feet``, the walk starts from them: ``(F[0], F[1])``, the
-        foot that swings first, then the other. Strides are kept, so the footprints follow the new feet."""
+        foot that swings first, then the other. Strides are kept, so the footprints follow the new feet. A walk whose
+        first footprints are no longer kept (:attr:`base` > 0) cannot start again: its first strides are gone."""
+        if self.base:
+            raise InputOutOfBoundsError(
+                f"a walk whose history was trimmed (history_steps = {self.history_steps}) cannot start again: "
+                f"make a new planner"
+            )
         if feet is not None:
-            if self.base:
-                raise ValueError("a walk whose history was trimmed cannot start again from new feet")
             self.standing = check_feet(feet)
             del self._prints[2:]
             self._prints[0:2] = self.standing
@@ -278,18 +297,18 @@ class WalkChanges:
 
 def check_walk_length(steps: int) -> None:
     if steps > MAX_STEPS:
-        raise ValueError(f"a walk may have at most {MAX_STEPS} steps, got {steps}")
+        raise InputOutOfBoundsError(f"a walk may have at most {MAX_STEPS} steps, got {steps}")
 
 
 def check_feet(feet: tuple[Footstep, Footstep]) -> tuple[Footstep, Footstep]:
     if len(feet) != 2 or not all(isinstance(f, Footstep) for f in feet):
-        raise ValueError("feet must be two Footstep values: (the foot that swings first, the other)")
+        raise InputOutOfBoundsError("feet must be two Footstep values: (the foot that swings first, the other)")
     first, second = feet
     if first.side == second.side:
-        raise ValueError("feet must be one left and one right foot")
+        raise InputOutOfBoundsError("feet must be one left and one right foot")
     distance = math.hypot(first.x - second.x, first.y - second.y)
     if distance > 2.0:
-        raise ValueError(f"the standing feet are {distance:.2f} m apart: at most 2 m")
+        raise InputOutOfBoundsError(f"the standing feet are {distance:.2f} m apart: at most 2 m")
     return first, second
 
 

@@ -15,6 +15,7 @@ import warnings
 from dataclasses import dataclass
 
 from rtgait.core.geometry.footsteps import Footstep, Side, Stride, other_side
+from rtgait.core.input_bounds import InputOutOfBoundsError
 
 
 class CommandClampedWarning(UserWarning):
@@ -32,7 +33,7 @@ class VelocityCommand:
     def __post_init__(self) -> None:
         for name in ("vx", "vy", "wz"):
             if not math.isfinite(getattr(self, name)):
-                raise ValueError(f"velocity command {name} must be finite, got {getattr(self, name)}")
+                raise InputOutOfBoundsError(f"velocity command {name} must be finite, got {getattr(self, name)}")
 
 
 @dataclass(frozen=True)

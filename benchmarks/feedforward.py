@@ -1,0 +1,114 @@
+"""Wall time of the stack's feed-forward torques per tick on a planned walk (run on demand, not in the test suite).
+
+The fig8 scenario is planned for the robot and sampled at the control period; each tick solves the whole-body IK
+once (warm-started, as the stack does) and then times :meth:`rtgait.stack.feedforward.FeedForward.torques` with the
+plan's support and ZMP standing in for the controller's output. Reported: median and p99 wall time per tick (us), the
+same for the IK, for the inverse dynamics' update alone and per distribution method (closed form, one foot, QP), and
+how many ticks each method served.
+
+Wall times on a shared virtual machine vary from run to run: run it a few times.
+
+Usage: ``python benchmarks/feedforward.py [--json] [--robot NAME] [--dt S]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import gc
+import json
+import time
+
+import numpy as np
+
+from rtgait.control.settings import ControlTargets
+from rtgait.core.analysis.rollout import rollout
+from rtgait.core.planner.online import OnlinePlanner
+from rtgait.core.planner.sample import SampleColumns
+from rtgait.interface.task_targets import FootOffsets, IKTargets
+from rtgait.robot.ik import WholeBodyIK
+from rtgait.robot.model import RobotModel
+from rtgait.scenario.loading import load_scenario
+from rtgait.stack.feedforward import FeedForward
+
+
+def _stats(micro: np.ndarray) -> dict[str, float]:
+    return {"median": float(np.median(micro)), "p99": float(np.percentile(micro, 99))} if len(micro) else {}
+
+
+def run(robot_name: str, dt: float) -> dict:
+    robot = RobotModel.load(robot_name)
+    scenario = dataclasses.replace(
+        load_scenario("fig8"),
+        dt=dt,
+        cog_height=robot.description.cog_height,
+        step_width=robot.step_width,
+        sole=robot.description.sole,
+    )
+    walk = rollout(OnlinePlanner(scenario.planner_config(), scenario.strides()), dt, scenario.sole, scenario.changes)
+    values = walk.values
+    ik = WholeBodyIK(robot, max_iterations=1, tolerance=0.0)
+    feedforward = FeedForward(robot, scenario.sole, dt)
+    first = IKTargets(
+        values[0, SampleColumns.cog], values[0, SampleColumns.left_foot], values[0, SampleColumns.right_foot]
+    )
+    q, _ = ik.solve(first, robot.q_half_sitting, 200, 1e-9)
+    n = len(values) - 1
+    ik_time, ff_time, update_time = np.empty(n), np.empty(n), np.empty(n)
+    methods: list[str] = []
+    clock = time.perf_counter
+    gc.collect()
+    for k in range(1, len(values)):
+        row = values[k]
+        cog, left, right = (
+            row[SampleColumns.cog].tolist(),
+            row[SampleColumns.left_foot].tolist(),
+            row[SampleColumns.right_foot].tolist(),
+        )
+        zmp = tuple(row[SampleColumns.zmp].tolist())
+        targets = IKTargets(cog, left, right)
+        start = clock()
+        q, _ = ik.solve(targets, q, errors=False)
+        ik_time[k - 1] = clock() - start
+        out = ControlTargets(k * dt, cog, left, right, FootOffsets(), zmp, zmp, (0.0, 0.0), str(walk.support[k]), 0, ())
+        start = clock()
+        feedforward.torques(q, targets, out)
+        ff_time[k - 1] = clock() - start
+        methods.append(feedforward.last.method)
+        v, a = feedforward.rates.velocity, feedforward.rates.acceleration
+        start = clock()
+        feedforward.dynamics.update(q, v, a)
+        update_time[k - 1] = clock() - start
+    names = np.array(methods)
+    return {
+        "robot": robot.name,
+        "dt": dt,
+        "ticks": n,
+        "ik_us": _stats(ik_time * 1e6),
+        "feedforward_us": _stats(ff_time * 1e6),
+        "inverse_dynamics_update_us": _stats(update_time * 1e6),
+        "feedforward_us_by_method": {m: _stats(ff_time[names == m] * 1e6) for m in sorted(set(methods))},
+        "ticks_by_method": {m: int((names == m).sum()) for m in sorted(set(methods))},
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--robot", default="talos", help="built-in robot name or description file (default talos)")
+    parser.add_argument("--dt", type=float, default=0.001, help="control period (s), default 0.001")
+    args = parser.parse_args()
+    result = run(args.robot, args.dt)
+    if args.json:
+        print(json.dumps(result))
+        return
+    print(f"{result['robot']}, dt {result['dt']} s, {result['ticks']} ticks")
+    for key in ("ik_us", "feedforward_us", "inverse_dynamics_update_us"):
+        print(f"  {key}: median {result[key]['median']:.1f}, p99 {result[key]['p99']:.1f}")
+    for method, stats in result["feedforward_us_by_method"].items():
+        count = result["ticks_by_method"][method]
+        print(f"  feed-forward, {method}: {count} ticks, median {stats['median']:.1f} us, p99 {stats['p99']:.1f} us")
+
+
+if __name__ == "__main__":
+    main()

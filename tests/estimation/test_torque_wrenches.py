@@ -1,0 +1,115 @@
+"""The soles' wrenches from the legs' joint torques (rtgait.estimation.torque_wrenches) against their definition: the
+motion handed to the legs' inverse dynamics (finite-differenced joint and base accelerations, the base origin's
+specific force from an IMU off the origin), the wrench through the Jacobian and its first-order low-pass."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rtgait.estimation.torque_wrenches import DEFAULT_WRENCH_CUTOFF, TorqueWrenches
+
+DT = 0.002
+G = 9.81
+
+
+class Legs:
+    """Two legs of six joints whose inverse dynamics are a fixed torque plus a linear term in the base's specific
+    force, recording the motion they are handed."""
+
+    joint_count = 14
+    leg_joints = (tuple(range(6)), tuple(range(7, 13)))  # a joint between the legs: index arrays, not a slice
+
+    def __init__(self) -> None:
+        rng = np.random.default_rng(2)
+        self.jacobians = rng.normal(size=(2, 6, 6)) + 3.0 * np.eye(6)
+        self.base = rng.normal(size=(2, 6))
+        self.gain = rng.normal(size=(2, 6, 3))
+        self.calls: list[tuple] = []
+
+    def leg_dynamics(self, angular_velocity, acceleration, joint_accelerations):
+        self.calls.append((angular_velocity, acceleration, joint_accelerations.copy()))
+        return self.jacobians, self.base + self.gain @ np.asarray(acceleration[:3])
+
+
+def _torques_for(legs: Legs, wrenches: np.ndarray, specific: np.ndarray) -> np.ndarray:
+    """The joint torques under the sole wrenches ``wrenches``: tau = tau_id - J^T F, in the robot's joint order."""
+    needed = legs.base + legs.gain @ specific
+    torques = np.zeros(legs.joint_count)
+    for i, joints in enumerate(legs.leg_joints):
+        torques[list(joints)] = needed[i] - legs.jacobians[i].T @ wrenches[i]
+    return torques
+
+
+def test_the_legs_are_handed_the_finite_differenced_motion():
+    legs = Legs()
+    estimate = TorqueWrenches(legs, cutoff=math.inf)
+    rng = np.random.default_rng(5)
+    velocities = [rng.normal(size=legs.joint_count) for _ in range(3)]
+    gyro = [tuple(rng.normal(size=3)) for _ in range(3)]
+    imu, imu_velocity, specific = (0.05, -0.02, 0.1), (0.01, 0.02, -0.03), (0.3, -0.2, 9.7)
+    for k in range(3):
+        estimate.update(DT, velocities[k], np.zeros(legs.joint_count), gyro[k], specific, imu, imu_velocity)
+    first, last = legs.calls[0], legs.calls[-1]
+    np.testing.assert_array_equal(first[2], 0.0)  # no earlier tick: no accelerations
+    np.testing.assert_allclose(last[2], (velocities[2] - velocities[1]) / DT, rtol=1e-12)
+    alpha = (np.array(gyro[2]) - np.array(gyro[1])) / DT
+    np.testing.assert_allclose(last[1][3:], alpha, rtol=1e-12)
+    # f_B = f_I - w' x p_I - w x (w x p_I) - 2 w x p_I'
+    w, p, u = np.array(gyro[2]), np.array(imu), np.array(imu_velocity)
+    expected = np.array(specific) - np.cross(alpha, p) - np.cross(w, np.cross(w, p)) - 2.0 * np.cross(w, u)
+    np.testing.assert_allclose(last[1][:3], expected, rtol=1e-12)
+    assert last[0] == gyro[2]
+
+
+def test_an_imu_off_a_spinning_base_gives_the_origins_specific_force():
+    # The base's origin stands still, upright, while the base spins up about a tilted axis: an IMU 0.1 m off the
+    # origin feels w' x p + w x (w x p) besides gravity; the legs are handed the origin's specific force, g upward.
+    legs = Legs()
+    estimate = TorqueWrenches(legs, cutoff=math.inf)
+    axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    alpha, p = 4.0 * axis, np.array([0.1, 0.05, -0.03])
+    for k in range(5):
+        w = alpha * k * DT  # the axis is fixed in the base, so the base-frame angular velocity grows along it
+        f = np.cross(alpha, p) + np.cross(w, np.cross(w, p)) + np.array([0.0, 0.0, G])
+        estimate.update(DT, np.zeros(legs.joint_count), np.zeros(legs.joint_count), tuple(w), tuple(f), tuple(p),
+                        (0.0, 0.0, 0.0))  # fmt: skip
+    np.testing.assert_allclose(legs.calls[-1][1], (0.0, 0.0, G, *alpha), atol=1e-9)
+
+
+def test_the_wrench_through_the_jacobian_low_passed():
+    legs = Legs()
+    cutoff = 30.0
+    estimate = TorqueWrenches(legs, cutoff=cutoff)
+    specific = np.array([0.0, 0.0, G])
+    before = np.array([[1.0, -2.0, 150.0, 0.5, -1.0, 0.1], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]])
+    after = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [-3.0, 4.0, 200.0, 1.0, 2.0, -0.2]])
+    zero = np.zeros(legs.joint_count)
+
+    def update(wrenches: np.ndarray, dt: float = DT):
+        return np.array(estimate.update(dt, zero, _torques_for(legs, wrenches, specific), (0.0, 0.0, 0.0),
+                                        tuple(specific), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))  # fmt: skip
+
+    np.testing.assert_allclose(update(before), before, atol=1e-9)  # the first tick: the wrench as it is
+    beta = math.exp(-2.0 * math.pi * cutoff * DT)
+    for k in range(1, 6):
+        out = update(after)
+        np.testing.assert_allclose(out, after + (before - after) * beta**k, atol=1e-9)
+    # A repeated reading keeps the last wrenches.
+    np.testing.assert_array_equal(update(before, 0.0), out)
+    # Without the filter: the wrench at once.
+    estimate = TorqueWrenches(legs, cutoff=math.inf)
+    update(before)
+    np.testing.assert_allclose(update(after), after, atol=1e-9)
+
+
+def test_bad_settings_are_refused():
+    legs = Legs()
+    assert DEFAULT_WRENCH_CUTOFF > 0.0
+    with pytest.raises(ValueError, match="cut-off"):
+        TorqueWrenches(legs, cutoff=0.0)
+    legs.leg_joints = (tuple(range(6)), tuple(range(7, 12)))
+    with pytest.raises(ValueError, match="leg_joints"):
+        TorqueWrenches(legs)
