@@ -4,8 +4,9 @@ degrade as the sensors get noisier and later (run on demand).
 Every walk here is the adaptive controller acting on the state the kinematic-inertial estimator makes from the
 simulated sensors (``state="estimated"``), each robot at its own physics step; the errors are ``summary.json``'s
 ``estimation`` (:mod:`rtgait.sim.estimation_errors`: RMS over the walk's ticks of the COM, the COM relative to the
-stance sole, the COM velocity, the DCM and the DCM relative to the stance sole; the largest DCM error; the share of
-ticks whose feet's load states are right; the landings missed and the worst detection delay).
+stance sole, the COM velocity, the DCM and the DCM relative to the stance sole, the ZMP; the largest DCM error; the
+share of ticks whose feet's load states are right; the step landings missed and the worst detection delay, apart from
+the re-landings of a foot that bounced).
 
 * **Walks**: fig8 and, with ``--velocity-walks``, the walks by velocity command of ``benchmarks/sim.py --walks
   --velocity-walks`` (0.3 m/s forward, 0.1 m/s backward, 0.1 m/s sideways, 0.3 rad/s turning, and one changing
@@ -109,15 +110,15 @@ def _errors(row: dict[str, Any]) -> str:
     return (
         f"{_mm(row.get('com_rms'), digits=2):>6} {_mm(row.get('com_relative_rms'), digits=2):>6} "
         f"{_mm(row.get('com_velocity_rms')):>7} {_mm(row.get('dcm_rms'), digits=2):>6} {_mm(row.get('dcm_max')):>6} "
-        f"{_mm(row.get('dcm_relative_rms'), digits=2):>6} "
+        f"{_mm(row.get('dcm_relative_rms'), digits=2):>6} {_mm(row.get('zmp_rms')):>6} "
         f"{_mm(row.get('contact_agreement'), 100.0, 2):>7} {row.get('landings_missed', '-')!s:>6} "
         f"{_mm(delay):>6}"
     )
 
 
-HEADER = (f"{'COM':>6} {'rel.':>6} {'vel.':>7} {'DCM':>6} {'max':>6} {'rel.':>6} {'contact':>7} {'missed':>6} "
-          f"{'delay':>6}")  # fmt: skip
-UNITS = f"{'mm':>6} {'mm':>6} {'mm/s':>7} {'mm':>6} {'mm':>6} {'mm':>6} {'%':>7} {'':>6} {'ms':>6}"
+HEADER = (f"{'COM':>6} {'rel.':>6} {'vel.':>7} {'DCM':>6} {'max':>6} {'rel.':>6} {'ZMP':>6} {'contact':>7} "
+          f"{'missed':>6} {'delay':>6}")  # fmt: skip
+UNITS = f"{'mm':>6} {'mm':>6} {'mm/s':>7} {'mm':>6} {'mm':>6} {'mm':>6} {'mm':>6} {'%':>7} {'steps':>6} {'ms':>6}"
 
 
 def print_tables(report: dict[str, Any]) -> None:
@@ -193,6 +194,7 @@ def shadow(robot_name: str, scenario_name: str, noise: float, seed: int, **setti
             soles=np.array([[m.left.pose[:3], m.right.pose[:3]] for m in states]),
             normal_force=np.array([[m.left.normal_force, m.right.normal_force] for m in states]),
             loaded=np.array([[m.left.loaded, m.right.loaded] for m in states]),
+            zmp=np.array([m.zmp for m in states]),
         )
 
     errors = estimation_errors(np.array(times), track(0), track(1), weight)

@@ -9,6 +9,7 @@ truth:
   the feet, so it carries their slips;
 * ``com_relative_rms``: the COM relative to the stance sole, ``(c_e - s_e) - (c_g - s_g)`` with ``s`` the sole frame's
   origin of the foot that carries more of the true load (m): what the balance controller feeds back;
+* ``zmp_rms``: the ZMP of both feet (m), over the ticks both have one (``None`` if a track has none);
 * ``com_velocity_rms`` (m/s), ``dcm_rms`` and ``dcm_max`` (m, the horizontal ``xi = c + c'/w``), and
   ``dcm_relative_rms``, the DCM relative to the stance sole likewise: on a long walk the absolute errors grow with the
   estimate's drift (its landings are placed by the legs' kinematics, step after step), which the controller, whose
@@ -17,10 +18,14 @@ truth:
   hysteresis) are the truth's. The truth's are the ground-truth estimator's: the true vertical forces through
   :class:`~rtgait.estimation.load.LoadHysteresis` with its default thresholds (:func:`loaded_states`);
 * landings: a foot's load state turning on after at least ``min_unloaded_time`` in the air (the rule of
-  :mod:`rtgait.estimation.load`), on each side. In time order, each true landing is matched with the estimate's
-  nearest landing of the same foot within :data:`LANDING_WINDOW` not matched yet; its delay is the estimate's time
-  minus the truth's (s, negative: seen early). ``landing_delay_worst`` is the delay of largest magnitude,
-  ``landings_missed`` the true landings without a match, ``landings_extra`` the estimate's without one.
+  :mod:`rtgait.estimation.load`), on each side. The truth's are *step landings* after at least
+  :data:`RELANDING_AIR_TIME` in the air, and *re-landings* after less: a foot that touched, bounced off for longer
+  than the load detection's least flight and came down again, which an estimate may see as part of the step's
+  landing. In time order, each true step landing is matched with the estimate's nearest landing of the same foot
+  within :data:`LANDING_WINDOW` not matched yet; its delay is the estimate's time minus the truth's (s, negative:
+  seen early). ``landing_delay_worst`` is the delay of largest magnitude, ``landings_missed`` the step landings
+  without a match; the re-landings are then matched likewise (``relandings_missed``), and ``landings_extra`` counts
+  the estimate's landings matched with none.
 """
 
 from __future__ import annotations
@@ -33,11 +38,17 @@ import numpy as np
 
 from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME
 
-__all__ = ["LANDING_WINDOW", "EstimationErrors", "StateTrack", "estimation_errors", "landing_times", "loaded_states"]
+__all__ = [
+    "LANDING_WINDOW", "RELANDING_AIR_TIME", "EstimationErrors", "StateTrack", "estimation_errors", "landing_times",
+    "loaded_states",
+]  # fmt: skip
 
 LANDING_WINDOW = (-0.05, 0.3)
 """How much earlier and later than a true landing (s) an estimated landing of the same foot may come to be its
 detection: a landing seen 0.3 s late is a missed one in all but name, and the next step's is further away."""
+RELANDING_AIR_TIME = 0.2
+"""A true landing after less time than this in the air (s) is a re-landing after a bounce, not a step's: the
+shortest swing of the built-in walks is 0.7 s."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,6 +63,7 @@ class StateTrack:
         normal_force: each foot's vertical contact force (N), shape ``(k, 2)``.
         loaded: each foot's load state after the landing hysteresis, shape ``(k, 2)``; ``None`` for the truth's
             from its forces (:func:`loaded_states`, from the first tick compared on).
+        zmp: the ZMP of both feet (m), shape ``(k, 2)``, NaN where there is none; ``None``: not known.
     """
 
     com: np.ndarray
@@ -60,6 +72,7 @@ class StateTrack:
     soles: np.ndarray
     normal_force: np.ndarray
     loaded: np.ndarray | None
+    zmp: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -68,11 +81,13 @@ class EstimationErrors:
 
     Attributes:
         ticks: ticks compared.
-        com_rms, com_relative_rms, com_velocity_rms, dcm_rms, dcm_relative_rms, dcm_max: the state's errors.
+        com_rms, com_relative_rms, com_velocity_rms, dcm_rms, dcm_relative_rms, dcm_max, zmp_rms: the state's
+            errors.
         contact_agreement: share of ticks with both feet's load states right.
-        landings: true landings.
-        landings_missed: true landings the estimate did not see within :data:`LANDING_WINDOW` (a foot that bounces,
-            landing twice, and is seen to land once counts one).
+        landings: true step landings.
+        landings_missed: true step landings the estimate did not see within :data:`LANDING_WINDOW`.
+        relandings: true re-landings after a bounce.
+        relandings_missed: those the estimate did not see apart from the step's landing.
         landings_extra: the estimate's landings matched with none of the truth's.
         landing_delay_worst: the detection delay of largest magnitude (s), ``None`` without a matched landing.
         landing_delay_median: the median detection delay (s), ``None`` likewise.
@@ -85,9 +100,12 @@ class EstimationErrors:
     dcm_rms: float
     dcm_relative_rms: float
     dcm_max: float
+    zmp_rms: float | None
     contact_agreement: float
     landings: int
     landings_missed: int
+    relandings: int
+    relandings_missed: int
     landings_extra: int
     landing_delay_worst: float | None
     landing_delay_median: float | None
@@ -116,10 +134,10 @@ def loaded_states(
 
 def landing_times(
     times: np.ndarray, loaded: np.ndarray, min_unloaded_time: float = DEFAULT_MIN_UNLOADED_TIME
-) -> list[tuple[float, int]]:
-    """The landings in a run of load states ``loaded`` (``(k, 2)`` at ``times``, s): ``(t, side)`` with side 0 left,
-    1 right, in time order. The first tick's states are taken as they are (no landing); a foot unloaded at the first
-    tick has been in the air since then."""
+) -> list[tuple[float, int, float]]:
+    """The landings in a run of load states ``loaded`` (``(k, 2)`` at ``times``, s): ``(t, side, air)`` with side 0
+    left, 1 right, and the time the foot was unloaded before it (s), in time order. The first tick's states are taken
+    as they are (no landing); a foot unloaded at the first tick has been in the air since then."""
     found = []
     for side in (0, 1):
         states = loaded[:, side].astype(np.int8)
@@ -130,7 +148,7 @@ def landing_times(
             before = falls[falls < rise]
             lifted = times[before[-1]] if len(before) else times[0]
             if times[rise] - lifted >= min_unloaded_time:
-                found.append((float(times[rise]), side))
+                found.append((float(times[rise]), side, float(times[rise] - lifted)))
     return sorted(found)
 
 
@@ -151,8 +169,9 @@ def estimation_errors(
     if estimate.loaded is None:
         raise ValueError("the estimate's track needs its load states")
     for name, track in (("estimate", estimate), ("truth", truth)):
-        columns = (track.com, track.com_velocity, track.dcm, track.soles, track.normal_force)
-        if any(len(a) != len(times) for a in (*columns, *([] if track.loaded is None else [track.loaded]))):
+        columns = [track.com, track.com_velocity, track.dcm, track.soles, track.normal_force]
+        columns += [a for a in (track.loaded, track.zmp) if a is not None]
+        if any(len(a) != len(times) for a in columns):
             raise ValueError(f"the {name}'s columns must have one row per tick ({len(times)})")
     if rows is not None:
         times, estimate, truth = times[rows], _take(estimate, rows), _take(truth, rows)
@@ -169,17 +188,17 @@ def estimation_errors(
     dcm_relative = dcm - (estimated_sole[:, 0:2] - true_sole[:, 0:2])
     agree = np.all(estimate.loaded == truth.loaded, axis=1)
     true_landings = landing_times(times, truth.loaded)
-    seen = landing_times(times, estimate.loaded)
-    delays, used = [], set()
-    low, high = LANDING_WINDOW
-    for t, side in true_landings:  # in time order, each estimated landing matched at most once
-        near = [(abs(s - t), i) for i, (s, other) in enumerate(seen) if other == side and low < s - t < high]
-        near = [pair for pair in near if pair[1] not in used]
-        if near:
-            i = min(near)[1]
-            used.add(i)
-            delays.append(seen[i][0] - t)
+    steps = [(t, side) for t, side, air in true_landings if air >= RELANDING_AIR_TIME]
+    relandings = [(t, side) for t, side, air in true_landings if air < RELANDING_AIR_TIME]
+    seen = [(t, side) for t, side, _ in landing_times(times, estimate.loaded)]
+    used: set[int] = set()
+    delays = _matched(steps, seen, used)
+    relandings_seen = _matched(relandings, seen, used)
     distance = np.hypot(dcm[:, 0], dcm[:, 1])
+    zmp_rms = None
+    if estimate.zmp is not None and truth.zmp is not None:
+        both = np.isfinite(estimate.zmp).all(axis=1) & np.isfinite(truth.zmp).all(axis=1)
+        zmp_rms = _rms(estimate.zmp[both] - truth.zmp[both])
     return EstimationErrors(
         ticks=n,
         com_rms=_rms(estimate.com - truth.com),
@@ -188,17 +207,36 @@ def estimation_errors(
         dcm_rms=_rms(dcm),
         dcm_relative_rms=_rms(dcm_relative),
         dcm_max=float(distance.max()) if n else math.nan,
+        zmp_rms=zmp_rms,
         contact_agreement=float(np.mean(agree)) if n else math.nan,
-        landings=len(true_landings),
-        landings_missed=len(true_landings) - len(delays),
+        landings=len(steps),
+        landings_missed=len(steps) - len(delays),
+        relandings=len(relandings),
+        relandings_missed=len(relandings) - len(relandings_seen),
         landings_extra=len(seen) - len(used),
         landing_delay_worst=float(max(delays, key=abs)) if delays else None,
         landing_delay_median=float(np.median(delays)) if delays else None,
     )
 
 
+def _matched(landings: list[tuple[float, int]], seen: list[tuple[float, int]], used: set[int]) -> list[float]:
+    """The delays (s) of the ``landings`` that ``seen`` has within :data:`LANDING_WINDOW`, in time order, each of
+    ``seen`` matched at most once (``used``: the indices matched so far, updated)."""
+    low, high = LANDING_WINDOW
+    delays = []
+    for t, side in landings:
+        near = [(abs(s - t), i) for i, (s, other) in enumerate(seen) if other == side and low < s - t < high]
+        near = [pair for pair in near if pair[1] not in used]
+        if near:
+            i = min(near)[1]
+            used.add(i)
+            delays.append(seen[i][0] - t)
+    return delays
+
+
 def _take(track: StateTrack, rows: np.ndarray) -> StateTrack:
     """The track at ``rows`` only."""
     loaded = None if track.loaded is None else track.loaded[rows]
+    zmp = None if track.zmp is None else track.zmp[rows]
     return StateTrack(track.com[rows], track.com_velocity[rows], track.dcm[rows], track.soles[rows],
-                      track.normal_force[rows], loaded)  # fmt: skip
+                      track.normal_force[rows], loaded, zmp)  # fmt: skip

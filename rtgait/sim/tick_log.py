@@ -62,9 +62,9 @@ LEVEL_CODES = {level: code for code, level in enumerate(CONTROLLER_LEVELS)}
 # The per-tick scalars, packed into one row of a float64 table with one ``struct`` call (a numpy assignment from a
 # tuple of Python floats costs several times more): COM velocity (3), base spatial velocity (6), IK sole targets
 # (2 x 4), per foot force (3), torque (3), CoP (2) and load (1), then COM correction (2), planned COM velocity (2),
-# the planner's phase, support code, level code; then the estimate's COM (3), COM velocity (3), DCM (2) and sole
-# positions (2 x 3), and the truth's COM, COM velocity and sole positions of the same instant with the feet's true
-# vertical forces (2).
+# the planner's phase, support code, level code; then the estimate's COM (3), COM velocity (3), DCM (2), sole
+# positions (2 x 3) and ZMP (2), and the truth's COM, COM velocity and sole positions of the same instant with the
+# feet's true vertical forces (2) and their moment about the world's origin, x and y (2).
 _COG_VELOCITY = 0
 _BASE_VELOCITY = 3
 _TARGETS = 9
@@ -72,12 +72,12 @@ _FEET = 17
 _FOOT = 9
 _PLAN = _FEET + 2 * _FOOT
 _ESTIMATE = _PLAN + 7
-_TRUTH = _ESTIMATE + 14
-_SCALARS = _TRUTH + 14
+_TRUTH = _ESTIMATE + 16
+_SCALARS = _TRUTH + 16
 _NAN_FEET = (math.nan,) * (2 * _FOOT)
 _NAN_PLAN = (math.nan,) * 4
-_NAN_ESTIMATE = (math.nan,) * 14
-_NAN_TRUTH = (math.nan,) * 14
+_NAN_ESTIMATE = (math.nan,) * 16
+_NAN_TRUTH = (math.nan,) * 16
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,6 +178,8 @@ class TickLog:
         self.omega = float(omega)
         self.sole = sim.robot.description.sole
         self.physics_dt = float(sim.timestep)
+        # The ground-truth estimator's least force for a ZMP: 0.1 % of the weight.
+        self._min_force = 1e-3 * float(sim.robot.mass * -model.opt.gravity[2])
         self._joints = np.full((n_ticks, 3, nu), math.nan)  # position, velocity, velocity reference
         # Every site (the model has the two sole sites only, so one assignment copies both).
         self._sites_position = np.full((n_ticks, model.nsite, 3), math.nan)
@@ -216,13 +218,14 @@ class TickLog:
             lf, rf = measurement.left, measurement.right
             feet = (*lf.force, *lf.torque, *lf.cop, lf.loaded, *rf.force, *rf.torque, *rf.cop, rf.loaded)
             (lx, ly, lz, _), (rx, ry, rz, _) = lf.pose, rf.pose
-            estimate = (*measurement.com, *measurement.com_vel, *measurement.dcm, lx, ly, lz, rx, ry, rz)
+            estimate = (*measurement.com, *measurement.com_vel, *measurement.dcm, lx, ly, lz, rx, ry, rz,
+                        *measurement.zmp)  # fmt: skip
         if truth is None:
             true: tuple[float, ...] = _NAN_TRUTH
         else:
             left, right = truth.left, truth.right
             true = (*truth.com, *truth.com_vel, *left.sole_position, *right.sole_position, left.force[2],
-                    right.force[2])  # fmt: skip
+                    right.force[2], left.moment[0] + right.moment[0], left.moment[1] + right.moment[1])  # fmt: skip
         if targets is None:
             plan: tuple[float, ...] = _NAN_PLAN
             phase, support = -1, 0
@@ -279,17 +282,26 @@ class TickLog:
             soles=columns[:, 8:14].reshape(-1, 2, 3).copy(),
             normal_force=feet[:, :, 2].copy(),
             loaded=feet[:, :, 8] == 1.0,
+            zmp=columns[:, 14:16].copy(),
         )
 
     def _truth(self, columns: np.ndarray) -> StateTrack:
         """The truth's track; its load states are left to the comparison, which starts the hysteresis where it
         starts comparing (:func:`~rtgait.sim.estimation_errors.estimation_errors`)."""
         com, velocity = columns[:, 0:3].copy(), columns[:, 3:6].copy()
+        force = columns[:, 12:14].copy()
+        total = force.sum(axis=1)
+        # The ZMP on the floor (z = 0) of the feet's wrenches, as the ground-truth estimator makes it
+        # (rtgait.estimation.feet): (-M_y, M_x) / F_z of their moment about the origin, NaN below its least force.
+        with np.errstate(invalid="ignore", divide="ignore"):
+            zmp = np.column_stack([-columns[:, 15], columns[:, 14]]) / total[:, None]
+        zmp[~(total > self._min_force)] = math.nan
         return StateTrack(
             com=com,
             com_velocity=velocity,
             dcm=com[:, 0:2] + velocity[:, 0:2] / self.omega,
             soles=columns[:, 6:12].reshape(-1, 2, 3).copy(),
-            normal_force=columns[:, 12:14].copy(),
+            normal_force=force,
             loaded=None,
+            zmp=zmp,
         )

@@ -152,7 +152,7 @@ class FailingEstimator:
         self.estimator.reset()
 
     def update(self, readings, truth):
-        if truth.t >= self.after:
+        if (truth if readings is None else readings).t >= self.after:  # on the estimate or the truth
             raise ValueError("the left foot's contact wrench is out of the estimator's bounds")
         return self.estimator.update(readings, truth)
 

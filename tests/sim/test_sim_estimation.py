@@ -182,7 +182,9 @@ def test_the_closed_loop_walks_on_the_estimate_and_reports_its_errors(request, m
     assert errors.com_velocity_rms == pytest.approx(velocity, rel=1e-9)
     assert errors.dcm_rms == pytest.approx(dcm, rel=1e-9)
     assert errors.contact_agreement == pytest.approx(agree, rel=1e-12)
-    assert errors.landings == len(delays) and errors.landings >= 4
+    assert errors.landings == len(delays) and errors.landings >= 4  # the step landings
+    zmp = [np.subtract(m.zmp, g.zmp) for m, g in pairs if np.isfinite(m.zmp).all() and np.isfinite(g.zmp).all()]
+    assert errors.zmp_rms == pytest.approx(_rms(zmp), rel=1e-6)
     summary = result.summary()
     assert summary["state"] == "estimated" and summary["sensors"] == {"noise": 1.0, "latency": 0, "seed": 0}
     assert summary["estimation"]["dcm_rms"] == errors.dcm_rms
