@@ -61,16 +61,17 @@ docs: $(STAMP)
 clean:
 	rm -rf $(VENV) out .pytest_cache .hypothesis
 
-# docs/images/ from the current code: the README's and docs' figures, remade in a scratch folder and copied.
+# docs/images/ from the current code: the README's and docs' figures, remade in a scratch folder and copied. The
+# physics ones on the simulator's truth, as results.md's tables beside them (the estimate's are in estimation.md).
 IMAGES := out/images
 images: $(STAMP)
 	$(BIN)/rtgait plan fig4 --out $(IMAGES)/fig4
 	$(BIN)/rtgait plan fig8 --out $(IMAGES)/fig8
 	$(BIN)/rtgait plan fig11 --robot talos --compensate-angular-momentum --out $(IMAGES)/fig11-talos
-	$(BIN)/rtgait simulate fig8 --robot talos --controller adaptive --out $(IMAGES)/fig8-sim
+	$(BIN)/rtgait simulate fig8 --robot talos --controller adaptive --state truth --out $(IMAGES)/fig8-sim
 	$(BIN)/rtgait sweep sweeps/map.toml --quiet --out $(IMAGES)/map
 	$(BIN)/python benchmarks/pushes.py --robot talos --controller open-loop --controller stabilized \
-		--controller adaptive --directions 8 --out $(IMAGES)/pushes
+		--controller adaptive --directions 8 --state truth --out $(IMAGES)/pushes
 	cp $(IMAGES)/fig4/zmp_cog.png docs/images/fig4_zmp_cog.png
 	cp $(IMAGES)/fig8/top_view.png docs/images/fig8_top_view.png
 	cp $(IMAGES)/fig11-talos/multibody_zmp.png docs/images/fig11_multibody_zmp.png
