@@ -27,9 +27,10 @@ demo: $(STAMP)
 		--tolerance 4 --out out/pushes
 	@echo "Figures, trajectory.csv and summary.json for each scenario are in out/<scenario>/;"
 	@echo "on Talos also joints.csv, multibody_zmp.png and replay.html (open it in a browser);"
-	@echo "the walks in MuJoCo physics (adaptive controller) are in out/fig8-sim/ and out/velocity-push-sim/"
-	@echo "(a velocity walk: 0.2 m/s forward, turning on the spot from 5 s, pushed 30 N s forward at 2.85 s);"
-	@echo "their ZMP errors are printed as median, 95th percentile and RMS over the single supports."
+	@echo "the walks in MuJoCo physics (adaptive controller, on the state estimated from the simulated sensors)"
+	@echo "are in out/fig8-sim/ and out/velocity-push-sim/ (a velocity walk: 0.2 m/s forward, turning on the spot"
+	@echo "from 5 s, pushed 30 N s forward at 2.85 s); their ZMP errors are printed as median, 95th percentile and"
+	@echo "RMS over the single supports, and the estimate's errors against the simulator's truth."
 	@echo "out/pushes/pushes.png is the largest push Talos survives in 4 directions at mid single support"
 	@echo "(a short run of benchmarks/pushes.py, bisected to 4 N s)."
 
