@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import itertools
 import math
 import sys
@@ -72,6 +73,20 @@ def add_parser(commands: Any) -> None:
         help="adaptive (default): + replanning from the measured state, re-anchoring on landings, step adjustment "
         "and landing detection; stabilized: the plan + DCM feedback on the measured COM state and foot force control "
         "from the measured wrench of each foot; open-loop: the plan alone (the paper's assumption)",
+    )
+    simulate.add_argument(
+        "--gains",
+        choices=("stiff", "robot"),
+        default="stiff",
+        help="the drives' own gains: stiff (default), derived from the URDF for an open-loop pattern; robot, the "
+        "gains the real robot's low-level controller runs, with feed-forward torques (docs/robots.md)",
+    )
+    simulate.add_argument(
+        "--drive",
+        choices=("position", "torque"),
+        default="position",
+        help="position (default): the drives' own gains around the IK's references; torque: the motion carried by "
+        "the feed-forward torques of inverse dynamics under a tenth of the robot's gains",
     )
     simulate.add_argument(
         "--control",
@@ -199,7 +214,8 @@ def run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     walk = robot_walk(scenario, robot)
     options, chosen = controller_settings(robot.description, scenario, args.control, control_pairs)
-    config = _physics_config(robot, args.control_dt, args.physics_dt)
+    config = dataclasses.replace(_physics_config(robot, args.control_dt, args.physics_dt), gains=args.gains)
+    _check_gains(robot, args.gains, args.drive)
     for push in pushes:
         try:
             push.check(robot.mass, walk.cog_height, walk.gravity)
@@ -218,7 +234,17 @@ def run(args: argparse.Namespace) -> int:
         extra["velocity"] = velocity_facts(commands)
     with mujoco_messages() as messages:  # else MuJoCo appends them to MUJOCO_LOG.TXT in the working folder
         result = _physics(
-            scenario, walk, robot, config, controller, options, schedule or velocity, pushes, progress, extra
+            scenario,
+            walk,
+            robot,
+            config,
+            controller,
+            options,
+            schedule or velocity,
+            pushes,
+            progress,
+            extra,
+            args.drive,
         )
     extra["mujoco_warnings"] = messages
     if show:
@@ -289,6 +315,23 @@ def _check_periods(control_dt: float | None, physics_dt: float | None) -> None:
             substeps(control_dt, physics_dt)
         except ValueError as error:
             raise ScenarioError(f"--physics-dt: {error}") from None
+
+
+def _check_gains(robot: RobotModel, gains: str, drive: str) -> None:
+    """The robot's own gains, which ``--gains robot`` and ``--drive torque`` need, are in its description."""
+    if gains != "robot" and drive != "torque":
+        return
+    missing = [
+        name for name in robot.joint_names
+        if robot.description.joint_actuation(name).robot_kp is None
+        or robot.description.joint_actuation(name).robot_kd is None
+    ]  # fmt: skip
+    if missing:
+        flag = "--gains robot" if gains == "robot" else "--drive torque"
+        raise ScenarioError(
+            f"{flag}: the description of {robot.name} gives no robot_kp and robot_kd for joint {missing[0]} "
+            "([[actuation.joints]])"
+        )
 
 
 def _physics_config(robot: RobotModel, control_dt: float | None, physics_dt: float | None) -> SimConfig:
@@ -419,19 +462,22 @@ def _physics(
     pushes: list[Push],
     progress: Callable[[float], None] | None,
     extra: dict[str, Any],
+    drive: str = "position",
 ) -> SimResult:
     """Walk ``scenario`` (as ``robot`` walks it: ``walk``) in MuJoCo; a guided walk's outcome goes into ``extra``."""
     from rtgait.io.sim_run import loop_options, simulate
+    from rtgait.sim.loop_options import LoopOptions
     from rtgait.sim.model import build_sim_model
 
     sim = build_sim_model(robot, config)
+    driven = LoopOptions(drive=drive)  # type: ignore[arg-type]
     if scenario.guide is None or velocity is not None:
         return simulate(scenario, robot, controller=controller, controller_options=options, velocity=velocity,
-                        push=pushes or None, sim=sim, progress=progress)  # type: ignore[arg-type]  # fmt: skip
+                        push=pushes or None, sim=sim, progress=progress, options=driven)  # type: ignore[arg-type]  # fmt: skip
     # Led by the hand: the outcome (where the person led the robot) goes into the summary too.
     from rtgait.sim.guided import simulate_guided
 
-    loop = loop_options(pushes or None)
+    loop = loop_options(pushes or None, driven)
     result, led = simulate_guided(
         sim, walk, loop, controller=controller, controller_options=options, progress=progress  # type: ignore[arg-type]
     )  # fmt: skip

@@ -82,9 +82,7 @@ def _foot_columns(side: str) -> list[LogColumn]:
         *_vector(f"{s}_target", "m", f"the IK's {s} sole target (planned foot with the controller's heights)"),
         LogColumn(f"{s}_target_yaw", "rad", f"the IK's {s} sole target heading"),
         *_vector(f"{s}_force", "N", f"contact force of the ground on the {s} foot, world frame ({_WRENCH_TIME})"),
-        *_vector(
-            f"{s}_torque", "N m", f"its moment about the {s} sole frame's origin, world frame ({_WRENCH_TIME})"
-        ),
+        *_vector(f"{s}_torque", "N m", f"its moment about the {s} sole frame's origin, world frame ({_WRENCH_TIME})"),
         *_vector(f"{s}_cop", "m", f"{s} centre of pressure on the ground; NaN unloaded ({_WRENCH_TIME})", "xy"),
         LogColumn(f"{s}_loaded", "", f"the {s} foot is loaded, after the landing hysteresis ({_WRENCH_TIME})"),
     ]
@@ -104,8 +102,11 @@ def log_columns(joint_names: Sequence[str]) -> list[LogColumn]:
         *_vector("zmp_planned", "m", "the planner's ZMP (in the transition: the COM target's projection)", "xy"),
         *_vector("zmp_command", "m", "ZMP asked of the feet (the DCM law's; the plan's in open-loop)", "xy"),
         *_vector(
-            "zmp_motion", "m", "multibody ZMP of the commanded motion (Pinocchio; not differentiated across a "
-            "retargeting); NaN off the ground and over re-anchored swings", "xy"
+            "zmp_motion",
+            "m",
+            "multibody ZMP of the commanded motion (Pinocchio; not differentiated across a "
+            "retargeting); NaN off the ground and over re-anchored swings",
+            "xy",
         ),
         *_vector("cog", "m", "measured COM, at t"),
         *_vector("cog_planned", "m", "the IK's COM target: the plan's COM plus the controller's correction"),
@@ -118,8 +119,11 @@ def log_columns(joint_names: Sequence[str]) -> list[LogColumn]:
         *_vector("base", "m", "floating-base position, at t"),
         *_vector("base_q", "", "floating-base orientation, unit quaternion", ("x", "y", "z", "w"), sep=""),
         *_vector(
-            "base_q_command", "", "the IK's floating-base orientation (leaned by the hip strategy), unit quaternion",
-            ("x", "y", "z", "w"), sep="",
+            "base_q_command",
+            "",
+            "the IK's floating-base orientation (leaned by the hip strategy), unit quaternion",
+            ("x", "y", "z", "w"),
+            sep="",
         ),
         *_vector("base_v", "m/s", "floating-base velocity at its origin, world frame, at t", sep=""),
         *_vector("base_w", "rad/s", "floating-base angular velocity, world frame, at t", sep=""),

@@ -67,6 +67,7 @@ from rtgait.robot.controller_info import robot_info
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Pushes
 from rtgait.sim.drive_mode import torque_gains, with_gains
+from rtgait.sim.drive_summary import ComTracking
 from rtgait.sim.loop_inputs import WalkInputs
 from rtgait.sim.loop_options import (
     LANDING_WINDOW,
@@ -83,7 +84,7 @@ from rtgait.sim.model import SimModel
 from rtgait.sim.result import SimResult
 from rtgait.sim.robot import SimRobot
 from rtgait.sim.row_packing import row_packer
-from rtgait.sim.start_balance import StartBalance, minimum_jerk_rates
+from rtgait.sim.start_balance import StartBalance, minimum_jerk_rates, needs_balance
 from rtgait.sim.tick_log import TickLog
 from rtgait.stack.estimators import make_estimator
 from rtgait.stack.feedforward import FeedForward
@@ -229,10 +230,20 @@ class ClosedLoop:
         self.stack = WalkingStack(estimator, controller, ik, q, feedforward=feed)
         self.drive_gains = torque_gains(sim) if options.drive == "torque" else None
         """The gains every command carries (torque drive), ``None``: the drives' own."""
+        self.com_tracking = ComTracking()
+        """The walk's COM tracking errors, planned vs estimated and vs true (:mod:`rtgait.sim.drive_summary`)."""
+        self.feedforward_clipped: int | None = None if feed is None else 0
+        """The walk's ticks at which the safety layer clipped a feed-forward torque; ``None``: no feed-forward."""
+        self._torque_clips = self.stack.safety.clip.counts.torque
+        self._clips_seen = 0
         self.start_balance = None
         """The start transition's DCM law (with feed-forward torques and a closed-loop level), ``None``: none."""
         if feed is not None and controller.feedback is not None:
-            self.start_balance = StartBalance(controller, self._left_start, self._right_start)
+            ankles = self.stack.ankles
+            kp = sim.actuation.kp if self.drive_gains is None else self.drive_gains[0]
+            stiffness = float(kp[ankles.left_pitch] + kp[ankles.right_pitch])
+            if needs_balance(stiffness, robot.mass, self.gravity, self._cog_start[2]):
+                self.start_balance = StartBalance(controller, self._left_start, self._right_start)
         self.landings = Landings(max(min(planner.config.timing.double_support, LANDING_WINDOW), dt), self.threshold)
 
         # ----- loop state ----------------------------------------------------------------------------------------
@@ -362,6 +373,12 @@ class ClosedLoop:
             else:
                 target_cog = out.com
                 left_foot, right_foot = out.left_foot, out.right_foot
+                offset = out.com_offset
+                self.com_tracking.add(
+                    (target_cog[0] - offset[0], target_cog[1] - offset[1]),
+                    measurement.com,
+                    base_com,  # type: ignore[union-attr]
+                )
                 planned_x, planned_y = out.zmp_planned
                 command_x, command_y = out.zmp_command
                 code, phase = SUPPORT_CODES[out.planned_support], out.phase
@@ -373,6 +390,11 @@ class ClosedLoop:
 
         # The commanded configuration: the IK's base and the command's joints (the ankle tilts added).
         command = made.command
+        if self.feedforward_clipped is not None and k >= k0:
+            clips = int(self._torque_clips.sum())
+            if clips != self._clips_seen:
+                self.feedforward_clipped += 1
+                self._clips_seen = clips
         row = commanded[i]
         row[:7] = made.q[:7]
         row[7:] = command.positions

@@ -257,6 +257,7 @@ class SimResult:
     model_error: ModelError | None = field(default=None, repr=False)
     safety_events: tuple[SafetyEvent, ...] = ()
     safety: dict[str, Any] | None = None
+    drive: dict[str, Any] | None = None
 
     # ----- time ------------------------------------------------------------------------------------------------------
     @property
@@ -454,6 +455,7 @@ class SimResult:
             "control_dt": self.control_dt,
             "physics_dt": self.physics_dt,
             "safety": self.safety,
+            "drive": self.drive,
         }
         if self.model_error is not None:
             summary["model_error"] = self.model_error.summary()

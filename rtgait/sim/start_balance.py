@@ -12,8 +12,11 @@ controller's gains) around the ramp:
     p_cmd  = p_ref + (1 + k_p / w) (xi - xi_ref) + (k_i / w) I        (inside the two feet's support polygon)
 
 (horizontal axes, m; ``w`` the planner's pendulum frequency, 1/s). The feed-forward moves the IK motion's wrench by
-``p_cmd - p_ref`` (:func:`~rtgait.stack.feedforward.commanded_wrench`). Only with feed-forward torques: the stiff
-position-only runs are unchanged.
+``p_cmd - p_ref`` (:func:`~rtgait.stack.feedforward.commanded_wrench`). Only with feed-forward torques (the stiff
+position-only runs are unchanged), and only where the servos cannot hold the robot (:func:`needs_balance`): the two
+ankles' pitch stiffness below gravity's toppling stiffness ``m g h`` (``h`` the COM's height at the walk's start).
+Where they can (TALOS's ankles at 10,000 N m/rad against some 850 N m/rad), the law is left out: on those undamped
+servos (no ``kd``) its ankle torques excite the feet's rocking instead.
 """
 
 from __future__ import annotations
@@ -30,7 +33,13 @@ if TYPE_CHECKING:
     from rtgait.control.controller import WalkingController
     from rtgait.core.laws.feedback import DcmFeedback
 
-__all__ = ["StartBalance", "minimum_jerk_rates"]
+__all__ = ["StartBalance", "minimum_jerk_rates", "needs_balance"]
+
+
+def needs_balance(ankle_stiffness: float, mass: float, gravity: float, height: float) -> bool:
+    """Whether ankles of summed pitch stiffness ``ankle_stiffness`` (N m/rad, both feet) are softer than gravity's
+    toppling stiffness ``m g h`` of a robot of ``mass`` (kg) with its COM ``height`` (m) above the soles."""
+    return ankle_stiffness < mass * gravity * height
 
 
 def minimum_jerk_rates(s: float, duration: float) -> tuple[float, float]:
