@@ -23,6 +23,8 @@ Every control tick (``sim.control_dt``: 1 ms for Talos, 2 ms for G1) of the walk
    Gauss-Newton iteration, so the solution varies smoothly and its finite difference is a clean joint velocity);
    the ankle tilts are added to the ankle joints (:func:`~rtgait.robot.ankles.add_ankle_offsets`);
 5. those angles and their velocity become the joint references of the PD servos (:mod:`rtgait.sim.actuation`),
+   with the feed-forward torques of inverse dynamics when :attr:`LoopOptions.feedforward` says so (by default with
+   the robot's gains or torque drive, whose low gains every command then carries: :mod:`rtgait.sim.drive_mode`),
    interpolated linearly over the physics substeps of the period, and ``mj_step`` advances the physics by
    ``sim.substeps`` steps, the servo torques recomputed at each.
 
