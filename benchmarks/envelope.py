@@ -184,8 +184,9 @@ def run(jobs: list[dict[str, Any]], workers: int, progress: bool = True) -> list
 
 
 def summary(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Per robot, timing and direction: the largest share walked with every smaller share walked too (0 when the
-    smallest failed), its stride and command, and the cases that did not walk."""
+    """Per robot, timing and direction: the direction's unit vector of shares and the limits it was swept to, the
+    largest share walked with every smaller share walked too (0 when the smallest failed), its stride and command,
+    and the cases that did not walk."""
     groups: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
     for row in rows:
         groups.setdefault((row["robot"], row["timing"], row["direction"]), []).append(row)
@@ -201,6 +202,8 @@ def summary(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
             "robot": robot,
             "timing": timing,
             "direction": direction,
+            "unit": list(DIRECTIONS[direction]),
+            "limits": cases[0]["limits"],
             "largest_walked_share": best["share"] if best else 0.0,
             "stride": best["stride"] if best else [0.0, 0.0, 0.0],
             "command": best["command"] if best else [0.0, 0.0, 0.0],

@@ -49,7 +49,9 @@ class PlannerConfig:
             toward the motion lands this much wider than the step after it, so ``|vy| <= max_step_lateral / 2T``
             over a step period ``T`` (:meth:`~rtgait.core.walk.walk.Walk.set_velocity`).
         max_step_turn: largest heading change a velocity command makes per pair of steps (rad), half of it per
-            step, so ``|wz| <= max_step_turn / 2T``. A command beyond any of the three is clamped, with a warning.
+            step, so ``|wz| <= max_step_turn / 2T``. The three bound one command together: the squares of its
+            shares of them add up to at most 1 (an ellipsoid, :mod:`rtgait.core.walk.velocity_command`); a command
+            beyond is scaled down onto it, with a warning.
         min_step_width: narrowest stance a sideways walk by command may close to (m), within (0, step_width];
             ``None`` (default): ``step_width``, i.e. the feet only ever open beyond the straight-walking stance.
         history_steps: footprints, strides, plan records and change records kept behind the current step, so an
