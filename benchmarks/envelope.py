@@ -21,6 +21,7 @@ pair of steps rad). ``benchmarks/sim.py --envelope`` runs it (its module docstri
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import sys
 import time
@@ -224,6 +225,13 @@ def print_summary(table: list[dict[str, Any]], state: str) -> None:
         failed = "; ".join(entry["failed"])
         print(f"{entry['robot']:<6} {entry['timing']:<6} {entry['direction']:<16} "
               f"{entry['largest_walked_share']:>5.2f} {command:<24} {stride:<28} {failed}")  # fmt: skip
+
+
+def record_text(report: dict[str, Any]) -> str:
+    """The record of a sweep (``--record``): its state, grid and summary, one summary entry a line."""
+    head = {key: report[key] for key in ("state", "quick", "steps")}
+    lines = [json.dumps(entry) for entry in report["summary"]]
+    return json.dumps(head)[:-1] + ', "summary": [\n' + ",\n".join(lines) + "\n]}\n"
 
 
 def envelope(args: Any) -> dict[str, Any]:

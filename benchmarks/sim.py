@@ -347,7 +347,7 @@ def print_walks(rows: list[dict[str, Any]]) -> None:
 
 def run_envelope(args: argparse.Namespace) -> None:
     """``--envelope``: the sweep of :mod:`envelope`, its summary printed (or everything as JSON) and recorded."""
-    from envelope import DIRECTIONS, envelope, print_summary
+    from envelope import DIRECTIONS, envelope, print_summary, record_text
 
     if args.steps < 2:
         raise SystemExit("--steps must be at least 2")
@@ -358,10 +358,8 @@ def run_envelope(args: argparse.Namespace) -> None:
         raise SystemExit(f"--shares must be within (0, 1], got {args.shares}")
     report = envelope(args)
     if args.record:
-        record = {key: report[key] for key in ("state", "quick", "steps", "summary")}
         with open(args.record, "w", encoding="utf-8") as file:
-            json.dump(record, file, indent=1)
-            file.write("\n")
+            file.write(record_text(report))
     if args.json:
         print(json.dumps(report))
         return
