@@ -6,10 +6,11 @@ period ``T`` of the timing, the command
 
     vx = s a L / T,    vy = s b Dmax / 2T,    wz = s c Tmax / 2T,
 
-with the robot's step limits ``L``, ``Dmax``, ``Tmax`` (its ``[velocity]`` table), so ``s = 1`` is on the clamp and
+with the robot's step limits ``L``, ``Dmax``, ``Tmax`` (its ``[velocity]`` table's, those of the timing's COG sway:
+:func:`rtgait.core.lipm.sway.cog_sway`), so ``s = 1`` is on the clamp and
 ``s < 1`` inside it: the sweep covers everything the planner accepts without clamping. Each case is planned and
 checked for reach by the whole-body IK first (as ``rtgait simulate`` does: a command out of reach is refused), then
-walked in MuJoCo for a few steps of that one command (the scenario's ``steps`` replaced) with the adaptive
+walked in MuJoCo for a few steps of that one command (``--steps``, then a closing step) with the adaptive
 controller, on ``state`` ``"truth"`` or ``"estimated"``. It walked when it was reachable and the robot did not fall,
 landed every step and ended at rest.
 
@@ -50,9 +51,6 @@ DIRECTIONS: dict[str, tuple[float, float, float]] = {
 QUICK_DIRECTIONS = ("forward", "backward", "left", "right", "turn left", "forward-left", "forward turning")
 SHARES = (0.25, 0.5, 0.75, 1.0)
 QUICK_SHARES = (0.5, 1.0)
-STEPS = 6
-"""Steps of one command per case (then a closing step)."""
-
 _MODELS: dict[str, Any] = {}
 
 

@@ -138,7 +138,8 @@ class RobotWalk(Scenario):
     velocity_limits: VelocityLimits | None = None
 
     def planner_config(self) -> PlannerConfig:
-        """The scenario's planner config with the robot's velocity-walk bounds."""
+        """The scenario's planner config with the robot's velocity-walk bounds, those of its timing's COG sway
+        (:meth:`~rtgait.core.planner.config.VelocityLimits.apply`)."""
         config = super().planner_config()
         return config if self.velocity_limits is None else self.velocity_limits.apply(config)
 
