@@ -16,6 +16,7 @@ import pytest
 from rtgait.core.geometry.footsteps import Timing, stride_between, wrap_angle
 from rtgait.core.planner.config import PlannerConfig, VelocityLimits
 from rtgait.core.planner.online import CommandClampedWarning, OnlinePlanner
+from rtgait.core.walk.velocity_command import StepLimits, VelocityCommand, clamp_command, command_reach
 
 TIMING = Timing(0.7, 0.1)  # T = 0.8 s, the paper's fig8
 PERIOD = 0.8
@@ -218,3 +219,12 @@ def test_a_bad_sway_table_names_the_key(change, message):
     table = {key: value for key, value in table.items() if value is not None}
     with pytest.raises(ValueError, match=message):
         VelocityLimits.from_table(table)
+
+
+def test_a_command_near_the_float_range_is_scaled_onto_the_ellipsoid_keeping_its_direction():
+    limits = StepLimits(0.3, 0.2, 0.6)
+    clamped = clamp_command(VelocityCommand(1e308, -1e308, 0.0), limits, 0.8)
+    assert command_reach(clamped, limits, 0.8) == pytest.approx(1.0)
+    assert clamped.vx > 0.0 > clamped.vy and clamped.wz == 0.0
+    # the direction kept: vx / vy is the command's -1
+    assert clamped.vx / clamped.vy == pytest.approx(-1.0)

@@ -62,10 +62,10 @@ REACH_TOLERANCE = 1e-12
 def command_reach(command: VelocityCommand, limits: StepLimits, period: float) -> float:
     """The command's share of the step limits over a step period ``period`` (s): ``r`` of the module docstring,
     0 standing still, 1 on the limits' ellipsoid."""
-    return math.sqrt(
-        (command.vx * period / limits.length) ** 2
-        + (2.0 * command.vy * period / limits.lateral) ** 2
-        + (2.0 * command.wz * period / limits.turn) ** 2
+    return math.hypot(  # hypot: no overflow on huge finite commands (their reach is then inf)
+        command.vx * period / limits.length,
+        2.0 * command.vy * period / limits.lateral,
+        2.0 * command.wz * period / limits.turn,
     )
 
 
@@ -76,6 +76,10 @@ def clamp_command(command: VelocityCommand, limits: StepLimits, period: float) -
     reach = command_reach(command, limits, period)
     if reach <= 1.0 + REACH_TOLERANCE:
         return command
+    if not math.isfinite(reach):  # components near the float range: take the direction first, then scale it
+        biggest = max(abs(command.vx), abs(command.vy), abs(command.wz))
+        command = VelocityCommand(command.vx / biggest, command.vy / biggest, command.wz / biggest)
+        reach = command_reach(command, limits, period)
     return VelocityCommand(command.vx / reach, command.vy / reach, command.wz / reach)
 
 
