@@ -29,10 +29,17 @@ Every run's controller acts on ``--state`` (``estimated``, the default: the stat
 sensors; ``truth``: the simulator's own); with ``--walks`` on the estimate, each walk's row has its estimation
 errors (``summary.json``'s ``estimation``).
 
+With ``--envelope`` it sweeps velocity commands x the timings of fig6, fig7 and fig8 per robot (default both) on
+``--state``, each a walk of ``--steps`` steps (default 6) of one command with the adaptive controller
+(:mod:`envelope`: the directions and shares of the step limits), and prints the largest command walked per
+direction; ``--quick`` takes a coarse grid, ``--record FILE`` writes the summary as JSON (docs/velocity_envelope.json
+is the one the robots' limits are checked against, walked on the truth).
+
 Usage: ``python benchmarks/sim.py [--json] [--robot NAME] [--scenario NAME] [--repeat N] [--control-dt S]
 [--physics-dt S] [--controller C] [--state S]`` or ``python benchmarks/sim.py --walks [--velocity-walks]
 [--robot NAME ...] [--velocity-only] [--controller C ...] [--state S] [--walk-time S] [--workers N] [--physics-dt S]
-[--option NAME=JSON ...] [--sim-option NAME=JSON ...] [--json]``
+[--option NAME=JSON ...] [--sim-option NAME=JSON ...] [--json]`` or ``python benchmarks/sim.py --envelope
+[--robot NAME ...] [--state S] [--quick] [--steps N] [--workers N] [--record FILE] [--json]``
 """
 
 from __future__ import annotations
@@ -357,6 +364,28 @@ def print_walks(rows: list[dict[str, Any]]) -> None:
               f"{dcm_error(r):>7} {r['real_time_factor']:>5.1f}")  # fmt: skip
 
 
+def run_envelope(args: argparse.Namespace) -> None:
+    """``--envelope``: the sweep of :mod:`envelope`, its summary printed (or everything as JSON) and recorded."""
+    from envelope import DIRECTIONS, envelope, print_summary, record_text
+
+    if args.steps < 2:
+        raise SystemExit("--steps must be at least 2")
+    unknown = sorted(set(args.directions or ()) - set(DIRECTIONS))
+    if unknown:
+        raise SystemExit(f"--direction {unknown[0]!r}: known are {', '.join(DIRECTIONS)}")
+    if args.shares is not None and not all(0.0 < share <= 1.0 for share in args.shares):
+        raise SystemExit(f"--shares must be within (0, 1], got {args.shares}")
+    report = envelope(args)
+    if args.record:
+        with open(args.record, "w", encoding="utf-8") as file:
+            file.write(record_text(report))
+    if args.json:
+        print(json.dumps(report))
+        return
+    print_summary(report["summary"], report["state"])
+    print(f"({report['seconds']:.0f} s on {args.workers} workers, {len(report['cases'])} cases)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true", help="print one JSON object")
@@ -374,6 +403,16 @@ def main() -> None:
     parser.add_argument("--velocity-only", action="store_true", help="with --walks: the walks by command alone")
     parser.add_argument("--walk-time", type=float, default=60.0, help="length of a walk by command (s)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes of --walks (default 2)")
+    parser.add_argument("--envelope", action="store_true", help="sweep velocity commands x fig6/7/8 timings")
+    parser.add_argument("--quick", action="store_true", help="with --envelope: a coarse grid")
+    parser.add_argument("--steps", type=int, default=6, help="with --envelope: steps per walk (default 6)")
+    parser.add_argument("--timing", action="append", dest="timings", choices=("fig6", "fig7", "fig8"),
+                        help="with --envelope: the timing(s) (default all three)")  # fmt: skip
+    parser.add_argument("--direction", action="append", dest="directions", metavar="NAME",
+                        help="with --envelope: the direction(s) (default all, or the quick ones)")  # fmt: skip
+    parser.add_argument("--shares", type=lambda text: tuple(float(v) for v in text.split(",")), default=None,
+                        metavar="S,S,...", help="with --envelope: shares of the limits")  # fmt: skip
+    parser.add_argument("--record", default=None, metavar="FILE", help="with --envelope: write the summary (JSON)")
     parser.add_argument(
         "--option", action="append", default=[], metavar="NAME=JSON",
         help="with --walks: a ControllerOptions field of the closed-loop levels, e.g. adapt_timing=true",
@@ -394,6 +433,9 @@ def main() -> None:
     unknown = sorted(set(args.sim_options) - known)
     if unknown:
         parser.error(f"--sim-option: SimConfig has no field {unknown[0]!r}")
+    if args.envelope:
+        run_envelope(args)
+        return
     if args.walks:
         began = time.perf_counter()
         rows = walks(args)

@@ -63,6 +63,14 @@ def add_parser(commands: Any) -> None:
         "adaptive; Insert switches it while walking)",
     )  # fmt: skip
     play.add_argument(
+        "--gains", choices=("stiff", "robot"), default="stiff", help="the drives' own gains: stiff (default) or "
+        "robot, the real robot's, with feed-forward torques (as rtgait simulate)",
+    )  # fmt: skip
+    play.add_argument(
+        "--drive", choices=("position", "torque"), default="position", help="position (default) or torque: the "
+        "motion carried by feed-forward torques under a tenth of the robot's gains (as rtgait simulate)",
+    )  # fmt: skip
+    play.add_argument(
         "--exit-after", metavar="SECONDS", type=float, help="end when the walk's clock reaches SECONDS (simulated "
         "time since the walk started, after the 1.5 s start transition), or earlier if a planned walk ends or the "
         "robot falls; without it, play runs until the window is closed",
@@ -124,9 +132,15 @@ def _scenario(name: str | None) -> tuple[Scenario, bool]:
 
 
 def _live_walk(
-    scenario: Scenario, by_command: bool, robot: RobotModel, level: str, push_force: float | None,
+    scenario: Scenario,
+    by_command: bool,
+    robot: RobotModel,
+    level: str,
+    push_force: float | None,
     args: argparse.Namespace,
-) -> tuple[LiveWalk, Scenario]:  # fmt: skip
+    gains: str = "stiff",
+    drive: str = "position",
+) -> tuple[LiveWalk, Scenario]:
     """The controller, the closed loop and the live walk of ``scenario`` on ``robot``, with the state, sensors and
     model error of ``args`` (:func:`~rtgait.cli.common.state_settings`)."""
     from rtgait.control.controller import make_controller
@@ -141,7 +155,7 @@ def _live_walk(
     settings, _ = controller_settings(robot.description, scenario, None, ())  # their [control] tables, as simulate
     if not by_command:  # as simulate does: a walk the robot cannot reach is refused before it starts
         whole_body_motion(robot, planned_walk(scenario, robot))
-    sim = build_sim_model(robot, SimConfig(sensors=sensors, model_error=model_error))
+    sim = build_sim_model(robot, SimConfig(gains=gains, sensors=sensors, model_error=model_error))
     strides = None if by_command else walk.strides()
     controller = make_controller(
         level,
@@ -152,7 +166,7 @@ def _live_walk(
         dt=sim.control_dt,
         options=settings,
     )
-    options = LoopOptions(changes=() if by_command else walk.changes, state=state)
+    options = LoopOptions(changes=() if by_command else walk.changes, drive=drive, state=state)  # type: ignore[arg-type]
     loop = ClosedLoop(sim, controller, options, keep=KEEP)
     force = push_force if push_force is not None else robot.mass * PUSH_SPEED / 0.1
     return LiveWalk(loop, by_command, force), walk
@@ -173,7 +187,9 @@ def run(args: argparse.Namespace) -> int:
         raise RunError(str(error)) from None
     from rtgait.io.sim_run import mujoco_messages
 
-    live, walk = _live_walk(scenario, by_command, robot, args.controller, args.push_force, args)
+    live, walk = _live_walk(
+        scenario, by_command, robot, args.controller, args.push_force, args, args.gains, args.drive
+    )  # fmt: skip
     if not args.quiet:
         what = "by velocity command" if by_command else f"{scenario.name} as planned"
         print(f"{PROG}: play: {robot.name}, {args.controller}, walking {what}; close the window to end", flush=True)

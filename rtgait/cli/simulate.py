@@ -80,6 +80,20 @@ def add_parser(commands: Any) -> None:
         "from the measured wrench of each foot; open-loop: the plan alone (the paper's assumption)",
     )
     simulate.add_argument(
+        "--gains",
+        choices=("stiff", "robot"),
+        default="stiff",
+        help="the drives' own gains: stiff (default), derived from the URDF for an open-loop pattern; robot, the "
+        "gains the real robot's low-level controller runs, with feed-forward torques (docs/robots.md)",
+    )
+    simulate.add_argument(
+        "--drive",
+        choices=("position", "torque"),
+        default="position",
+        help="position (default): the drives' own gains around the IK's references; torque: the motion carried by "
+        "the feed-forward torques of inverse dynamics under a tenth of the robot's gains",
+    )
+    simulate.add_argument(
         "--control",
         metavar="FILE",
         help="the controller's settings from the [control] table of a TOML file (gains, filters, landing handling: "
@@ -209,8 +223,10 @@ def run(args: argparse.Namespace) -> int:
     walk = robot_walk(scenario, robot)
     options, chosen = controller_settings(robot.description, scenario, args.control, control_pairs)
     config = dataclasses.replace(
-        _physics_config(robot, args.control_dt, args.physics_dt), sensors=sensors, model_error=model_error
-    )
+        _physics_config(robot, args.control_dt, args.physics_dt), gains=args.gains, sensors=sensors,
+        model_error=model_error,
+    )  # fmt: skip
+    _check_gains(robot, args.gains, args.drive)
     for push in pushes:
         try:
             push.check(robot.mass, walk.cog_height, walk.gravity)
@@ -229,7 +245,18 @@ def run(args: argparse.Namespace) -> int:
         extra["velocity"] = velocity_facts(commands)
     with mujoco_messages() as messages:  # else MuJoCo appends them to MUJOCO_LOG.TXT in the working folder
         result = _physics(
-            scenario, walk, robot, config, controller, options, schedule or velocity, pushes, progress, extra, state
+            scenario,
+            walk,
+            robot,
+            config,
+            controller,
+            options,
+            schedule or velocity,
+            pushes,
+            progress,
+            extra,
+            args.drive,
+            state,
         )
     extra["mujoco_warnings"] = messages
     if show:
@@ -300,6 +327,23 @@ def _check_periods(control_dt: float | None, physics_dt: float | None) -> None:
             substeps(control_dt, physics_dt)
         except ValueError as error:
             raise ScenarioError(f"--physics-dt: {error}") from None
+
+
+def _check_gains(robot: RobotModel, gains: str, drive: str) -> None:
+    """The robot's own gains, which ``--gains robot`` and ``--drive torque`` need, are in its description."""
+    if gains != "robot" and drive != "torque":
+        return
+    missing = [
+        name for name in robot.joint_names
+        if robot.description.joint_actuation(name).robot_kp is None
+        or robot.description.joint_actuation(name).robot_kd is None
+    ]  # fmt: skip
+    if missing:
+        flag = "--gains robot" if gains == "robot" else "--drive torque"
+        raise ScenarioError(
+            f"{flag}: the description of {robot.name} gives no robot_kp and robot_kd for joint {missing[0]} "
+            "([[actuation.joints]])"
+        )
 
 
 def _physics_config(robot: RobotModel, control_dt: float | None, physics_dt: float | None) -> SimConfig:
@@ -435,7 +479,8 @@ def _physics(
     pushes: list[Push],
     progress: Callable[[float], None] | None,
     extra: dict[str, Any],
-    state: StateSource,
+    drive: str = "position",
+    state: StateSource = DEFAULT_STATE,
 ) -> SimResult:
     """Walk ``scenario`` (as ``robot`` walks it: ``walk``) in MuJoCo, the controller on ``state``; a guided walk's
     outcome goes into ``extra``."""
@@ -444,14 +489,14 @@ def _physics(
     from rtgait.sim.model import build_sim_model
 
     sim = build_sim_model(robot, config)
+    driven = LoopOptions(drive=drive, state=state)  # type: ignore[arg-type]
     if scenario.guide is None or velocity is not None:
         return simulate(scenario, robot, controller=controller, controller_options=options, velocity=velocity,
-                        push=pushes or None, sim=sim, progress=progress,
-                        options=LoopOptions(state=state))  # type: ignore[arg-type]  # fmt: skip
+                        push=pushes or None, sim=sim, progress=progress, options=driven)  # type: ignore[arg-type]  # fmt: skip
     # Led by the hand: the outcome (where the person led the robot) goes into the summary too.
     from rtgait.sim.guided import simulate_guided
 
-    loop = loop_options(pushes or None, LoopOptions(state=state))
+    loop = loop_options(pushes or None, driven)
     result, led = simulate_guided(
         sim, walk, loop, controller=controller, controller_options=options, progress=progress  # type: ignore[arg-type]
     )  # fmt: skip

@@ -24,7 +24,7 @@ from typing import Any
 
 from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.core.laws.stepping import STEPPING_KEYS, SteppingLimits
-from rtgait.core.planner.config import VELOCITY_KEYS, VelocityLimits
+from rtgait.core.planner.config import MORE_SWAY_KEY, SWAY_KEY, VELOCITY_KEYS, VelocityLimits
 from rtgait.robot.actuation_table import ActuationSpec, ActuatorGroup
 from rtgait.robot.data import RobotDataError, robots_dir, share_dir
 from rtgait.robot.motor_types import MOTOR_KEYS, MotorType
@@ -272,8 +272,10 @@ def parse_velocity(raw: Any, sole: SoleRect) -> VelocityLimits:
     """The ``[velocity]`` table (:class:`~rtgait.core.planner.config.VelocityLimits` checks the values the way
     :class:`~rtgait.core.planner.config.PlannerConfig` does; ``min_step_width`` against the robot's stance is checked
     when it is applied, :func:`rtgait.robot.motion.robot_scenario`)."""
-    limits = _limits_table(raw, "velocity", VELOCITY_KEYS, VelocityLimits.from_table)
+    limits = _limits_table(raw, "velocity", (*VELOCITY_KEYS, SWAY_KEY, MORE_SWAY_KEY), VelocityLimits.from_table)
     _soles_apart("velocity.min_step_width", limits.min_step_width, sole)
+    for i, entry in enumerate(limits.more_sway):
+        _soles_apart(f"velocity.{MORE_SWAY_KEY}[{i}].min_step_width", entry.min_step_width, sole)
     return limits
 
 

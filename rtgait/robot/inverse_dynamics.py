@@ -115,6 +115,13 @@ class InverseDynamics:
         self._required = required = RequiredWrench(wrench[:3], wrench[3:])
         return required
 
+    def require(self, wrench: RequiredWrench) -> None:
+        """Make ``wrench`` (world axes, about the origin) the one :meth:`distribute` shares out instead of the last
+        :meth:`update`'s (e.g. the motion's moved to a commanded ZMP); the torques keep the update's RNEA."""
+        if self._required is None:
+            raise ValueError("update() must run before require()")
+        self._required = wrench
+
     @property
     def required(self) -> RequiredWrench | None:
         """The last :meth:`update`'s required wrench (``None`` before the first)."""

@@ -138,7 +138,8 @@ class RobotWalk(Scenario):
     velocity_limits: VelocityLimits | None = None
 
     def planner_config(self) -> PlannerConfig:
-        """The scenario's planner config with the robot's velocity-walk bounds."""
+        """The scenario's planner config with the robot's velocity-walk bounds, those of its timing's COG sway
+        (:meth:`~rtgait.core.planner.config.VelocityLimits.apply`)."""
         config = super().planner_config()
         return config if self.velocity_limits is None else self.velocity_limits.apply(config)
 
@@ -151,12 +152,14 @@ def robot_scenario(scenario: Scenario, robot: RobotModel) -> RobotWalk:
         RobotError: the description's ``velocity.min_step_width`` is wider than the robot's stance.
     """
     limits = robot.description.velocity
-    narrowest = None if limits is None else limits.min_step_width
-    if narrowest is not None and narrowest > robot.step_width:
-        raise RobotError(
-            f"velocity.min_step_width ({narrowest:g} m) must be at most the stance of {robot.name} at half-sitting "
-            f"({robot.step_width:.4f} m): it is the narrowest stance a sideways walk closes to"
-        )
+    for i, table in enumerate(() if limits is None else limits.every_table()):
+        narrowest = table.min_step_width
+        if narrowest is not None and narrowest > robot.step_width:
+            key = "velocity.min_step_width" if i == 0 else f"velocity.more_sway[{i - 1}].min_step_width"
+            raise RobotError(
+                f"{key} ({narrowest:g} m) must be at most the stance of {robot.name} at half-sitting "
+                f"({robot.step_width:.4f} m): it is the narrowest stance a sideways walk closes to"
+            )
     values = {f.name: getattr(scenario, f.name) for f in dataclasses.fields(Scenario)}
     values.update(cog_height=robot.description.cog_height, step_width=robot.step_width, sole=robot.description.sole)
     return RobotWalk(**values, velocity_limits=limits)

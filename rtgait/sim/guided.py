@@ -323,7 +323,12 @@ def simulate_guided(
     if path is None:
         raise ValueError(f"scenario {walk.name!r} has no [guide] path")
     level = make_controller(
-        controller, walk.planner_config(), None, walk.sole, robot_info(sim.robot), dt=sim.control_dt,
+        controller,
+        walk.planner_config(),
+        None,
+        walk.sole,
+        robot_info(sim.robot),
+        dt=sim.control_dt,
         options=controller_options,
     )
     pull = HandPull(sim, level.planner, path, leash, max_steps=walk.steps, controller=level)

@@ -94,8 +94,9 @@ def key_action(code: int) -> str | None:
 
 @dataclass(frozen=True)
 class CommandLimits:
-    """The largest velocity command the planner walks without clamping it: ``|vx| <= vx``, ``|vy| <= vy`` (m/s),
-    ``|wz| <= wz`` (rad/s)."""
+    """The largest velocity command the planner walks without clamping it along each axis alone: ``|vx| <= vx``,
+    ``|vy| <= vy`` (m/s), ``|wz| <= wz`` (rad/s); together, the squares of the three shares add up to at most 1
+    (:mod:`rtgait.core.walk.velocity_command`: the planner scales a command beyond onto that, with a warning)."""
 
     vx: float
     vy: float

@@ -23,6 +23,8 @@ Every control tick (``sim.control_dt``: 1 ms for Talos, 2 ms for G1) of the walk
    Gauss-Newton iteration, so the solution varies smoothly and its finite difference is a clean joint velocity);
    the ankle tilts are added to the ankle joints (:func:`~rtgait.robot.ankles.add_ankle_offsets`);
 5. those angles and their velocity become the joint references of the PD servos (:mod:`rtgait.sim.actuation`),
+   with the feed-forward torques of inverse dynamics when :attr:`LoopOptions.feedforward` says so (by default with
+   the robot's gains or torque drive, whose low gains every command then carries: :mod:`rtgait.sim.drive_mode`),
    interpolated linearly over the physics substeps of the period, and ``mj_step`` advances the physics by
    ``sim.substeps`` steps, the servo torques recomputed at each.
 
@@ -53,6 +55,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 import mujoco
 
@@ -65,6 +68,8 @@ from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Pushes
+from rtgait.sim.drive_mode import torque_gains, with_gains
+from rtgait.sim.drive_summary import ComTracking
 from rtgait.sim.loop_inputs import WalkInputs
 from rtgait.sim.loop_options import (
     LANDING_WINDOW,
@@ -81,10 +86,15 @@ from rtgait.sim.model import SimModel
 from rtgait.sim.result import SimResult
 from rtgait.sim.robot import SimRobot
 from rtgait.sim.row_packing import row_packer
+from rtgait.sim.start_balance import StartBalance, minimum_jerk_rates, needs_balance
 from rtgait.sim.tick_log import TickLog
 from rtgait.stack.estimators import make_estimator
+from rtgait.stack.feedforward import FeedForward
 from rtgait.stack.setup import start_pose
 from rtgait.stack.walking_stack import WalkingStack
+
+if TYPE_CHECKING:
+    from rtgait.estimation.state import Measurement
 
 __all__ = [
     "LANDING_WINDOW",
@@ -214,7 +224,28 @@ class ClosedLoop:
             options.state, robot, planner.w, gravity=self.gravity,
             start_feet=(tuple(self._left_start), tuple(self._right_start)),
         )  # fmt: skip
-        self.stack = WalkingStack(estimator, controller, ik, q)
+        # Feed-forward torques (the IK's motion through inverse dynamics, the DCM law's wrench at the feet) with the
+        # robot's gains or torque drive; torque drive adds its low gains to every command (drive_mode.py).
+        feed = None
+        if options.feeds_forward(sim.config.gains):
+            feed = FeedForward(robot, controller.sole, dt, friction=sim.config.friction)
+        self.stack = WalkingStack(estimator, controller, ik, q, feedforward=feed)
+        self.drive_gains = torque_gains(sim) if options.drive == "torque" else None
+        """The gains every command carries (torque drive), ``None``: the drives' own."""
+        self.com_tracking = ComTracking()
+        """The walk's COM tracking errors, planned vs estimated and vs true (:mod:`rtgait.sim.drive_summary`)."""
+        self.feedforward_clipped: int | None = None if feed is None else 0
+        """The walk's ticks at which the safety layer clipped a feed-forward torque; ``None``: no feed-forward."""
+        self._torque_clips = self.stack.safety.clip.counts.torque
+        self._clips_seen = 0
+        self.start_balance = None
+        """The start transition's DCM law (with feed-forward torques and a closed-loop level), ``None``: none."""
+        if feed is not None and controller.feedback is not None:
+            ankles = self.stack.ankles
+            kp = sim.actuation.kp if self.drive_gains is None else self.drive_gains[0]
+            stiffness = float(kp[ankles.left_pitch] + kp[ankles.right_pitch])
+            if needs_balance(stiffness, robot.mass, self.gravity, self._cog_start[2]):
+                self.start_balance = StartBalance(controller, self._left_start, self._right_start)
         self.landings = Landings(max(min(planner.config.timing.double_support, LANDING_WINDOW), dt), self.threshold)
 
         # ----- loop state ----------------------------------------------------------------------------------------
@@ -305,7 +336,23 @@ class ClosedLoop:
             code, phase = 0, -1
             dcm = dcm_planned = (math.nan, math.nan)
             out = measurement = truth = None  # no controller during the transition
-            made = hold(_new_tuple(IKTargets, (target_cog, left_foot, right_foot, None)), t)
+            targets = _new_tuple(IKTargets, (target_cog, left_foot, right_foot, None))
+            balance = self.start_balance
+            if balance is None:
+                made = hold(targets, t)
+            else:  # soft drives: the DCM law around the ramp, through the feed-forward torques (start_balance.py)
+                state = self._estimate(t)
+                if state is None:  # the safety layer found a fault: the stack damps
+                    made = control(t, None)
+                else:
+                    rate, acceleration = minimum_jerk_rates(k * dt / ramp, ramp) if k * dt < ramp else (0.0, 0.0)
+                    delta = [b - a for a, b in zip(self._cog_half_sitting[:2], self._cog_start[:2], strict=True)]
+                    (command_x, command_y), (planned_x, planned_y), dcm_planned = balance.update(
+                        state.dcm, target_cog, (rate * delta[0], rate * delta[1]),
+                        (acceleration * delta[0], acceleration * delta[1]),
+                    )  # fmt: skip
+                    dcm = state.dcm
+                    made = hold(targets, t, (command_x - planned_x, command_y - planned_y))
         else:
             # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
             if estimator_reads_truth:
@@ -331,6 +378,12 @@ class ClosedLoop:
             else:
                 target_cog = out.com
                 left_foot, right_foot = out.left_foot, out.right_foot
+                offset = out.com_offset
+                self.com_tracking.add(
+                    (target_cog[0] - offset[0], target_cog[1] - offset[1]),
+                    measurement.com,
+                    base_com,  # type: ignore[union-attr]
+                )
                 planned_x, planned_y = out.zmp_planned
                 command_x, command_y = out.zmp_command
                 code, phase = SUPPORT_CODES[out.planned_support], out.phase
@@ -342,10 +395,15 @@ class ClosedLoop:
 
         # The commanded configuration: the IK's base and the command's joints (the ankle tilts added).
         command = made.command
+        if self.feedforward_clipped is not None and k >= k0:
+            clips = int(self._torque_clips.sum())
+            if clips != self._clips_seen:
+                self.feedforward_clipped += 1
+                self._clips_seen = clips
         row = commanded[i]
         row[:7] = made.q[:7]
         row[7:] = command.positions
-        write(command)
+        write(with_gains(command, self.drive_gains))
 
         # ----- physics: the control period's substeps -----------------------------------------------------------
         base = bases[i]
@@ -385,6 +443,15 @@ class ClosedLoop:
         if k + 1 == n_ticks:
             self._finish()
         return True
+
+    def _estimate(self, t: float) -> Measurement | None:
+        """The stack's estimate at ``t`` (s, walk clock): of the truth, or of the sensors' readings stamped on the
+        walk's clock (their sampling time, latency kept); ``None`` when the safety layer finds a fault."""
+        estimate, ground_truth = self.stack.estimate, self.robot.ground_truth
+        if self._hot[19]:  # the estimator reads the truth (as step() does)
+            return estimate(None, ground_truth(t, self.log is not None))
+        readings = self.robot.read()
+        return estimate(readings._replace(t=readings.t - (self.data.time - t)), None)
 
     def _follow_walk_end(self) -> None:
         """A step's timing changed: the run lasts until the walk as it is now has come to rest (``after`` later), no

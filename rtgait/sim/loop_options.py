@@ -13,6 +13,7 @@ from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.push import Push
 from rtgait.sim.contact import FallLimits
+from rtgait.sim.drive_mode import DriveMode, check_drive
 from rtgait.stack.estimators import DEFAULT_STATE, StateSource, check_state
 
 __all__ = [
@@ -55,6 +56,13 @@ class LoopOptions:
             simulated robot's sensor readings (with their noise, bias and latency: ``SimConfig.sensors``), as on a
             robot; ``"truth"``, the simulator's ground truth, to tell the controller's doing from the estimator's
             (:func:`rtgait.stack.estimators.make_estimator`).
+        drive: how the joints are driven (:mod:`rtgait.sim.drive_mode`): ``"position"``, the drives' own gains
+            (``SimConfig.gains``); ``"torque"``, the motion carried by the feed-forward torques under a tenth of the
+            robot's gains.
+        feedforward: whether each command carries the feed-forward torques of whole-body inverse dynamics
+            (:mod:`rtgait.stack.feedforward`, the DCM law's commanded wrench); ``None``: on with the robot's gains
+            (``SimConfig.gains = "robot"``) or torque drive, off with the stiff gains in position drive. Torque
+            drive needs them.
     """
 
     start_ramp: float = 1.0
@@ -70,9 +78,16 @@ class LoopOptions:
     on_tick: Callable[[float, mujoco.MjData], None] | None = None
     duration: float | None = None
     state: StateSource = DEFAULT_STATE
+    drive: DriveMode = "position"
+    feedforward: bool | None = None
 
     def __post_init__(self) -> None:
         check_state(self.state, "LoopOptions.state")
+        check_drive(self.drive, "LoopOptions.drive")
+        if self.feedforward is not None and not isinstance(self.feedforward, bool):
+            raise ValueError(f"LoopOptions.feedforward must be true, false or None, got {self.feedforward!r}")
+        if self.drive == "torque" and self.feedforward is False:
+            raise ValueError("LoopOptions.drive 'torque' needs the feed-forward torques (feedforward None or True)")
         if self.duration is not None and not (math.isfinite(self.duration) and self.duration > 0.0):
             raise ValueError(f"duration must be > 0 s, got {self.duration}")
         if not (math.isfinite(self.replay_period) and self.replay_period > 0.0):
@@ -93,6 +108,13 @@ class LoopOptions:
         times = [change[0] for change in self.velocity_changes]
         if times != sorted(times):
             raise ValueError(f"velocity changes must be in time order, got times {times}")
+
+    def feeds_forward(self, gains: str) -> bool:
+        """Whether the loop's commands carry feed-forward torques with the drives' own gains ``gains``
+        (``SimConfig.gains``): :attr:`feedforward`, or by default with the robot's gains or torque drive."""
+        if self.feedforward is not None:
+            return self.feedforward
+        return gains == "robot" or self.drive == "torque"
 
     @property
     def lead(self) -> float:

@@ -25,6 +25,7 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Protocol
 
+from rtgait.sim.drive_summary import drive_summary
 from rtgait.sim.result import SimResult
 
 if TYPE_CHECKING:
@@ -32,6 +33,7 @@ if TYPE_CHECKING:
     from rtgait.core.planner.online import OnlinePlanner
     from rtgait.core.push import Push
     from rtgait.sim.contact import ContactMonitor, Landings
+    from rtgait.sim.drive_summary import ComTracking
     from rtgait.sim.loop_options import LoopOptions
     from rtgait.sim.loop_record import TickRecord
     from rtgait.sim.model import SimModel
@@ -66,6 +68,8 @@ class RunState(Protocol):
     fell: bool
     fall_time: float | None
     fall_cause: str | None
+    com_tracking: ComTracking
+    feedforward_clipped: int | None
 
 
 def loop_result(loop: RunState, wall_time: float, n_steps: int, walk_end: float) -> SimResult:
@@ -92,6 +96,16 @@ def loop_result(loop: RunState, wall_time: float, n_steps: int, walk_end: float)
     replay_index, replay_qpos, replay_soles = loop.record.replay(ticks)
     first = float(arrays["times"][0])
     events = [e for e in loop.events if e.t >= first]
+    log = loop.log.finish(ticks) if loop.log is not None else None
+    config = sim.config
+    settings = {
+        "gains": config.gains, "drive": options.drive, "feedforward": loop.stack.feedforward is not None,
+        "motor_model": config.motor_model, "command_delay": config.command_delay,
+    }  # fmt: skip
+    drive = drive_summary(
+        sim, settings, arrays["torque"], None if log is None else log.joint_velocity, loop.feedforward_clipped,
+        max(ticks - loop.k0, 0), loop.com_tracking,
+    )  # fmt: skip
     return SimResult(
         **arrays,
         joint_names=sim.joint_names,
@@ -121,10 +135,11 @@ def loop_result(loop: RunState, wall_time: float, n_steps: int, walk_end: float)
         replans=planner.replan_count if planner.started else 0,
         model=robot.model,
         gravity=loop.gravity,
-        log=loop.log.finish(ticks) if loop.log is not None else None,
+        log=log,
         model_error=sim.model_error,
         safety_events=tuple(e for e in loop.stack.safety.events if e.t >= first),
         safety=loop.stack.safety.summary(),
+        drive=drive,
         state=options.state,
         sensors=dataclasses.replace(sim.config.sensors, latency=loop.robot.sensors.latency),
     )

@@ -264,6 +264,7 @@ class SimResult:
     model_error: ModelError | None = field(default=None, repr=False)
     safety_events: tuple[SafetyEvent, ...] = ()
     safety: dict[str, Any] | None = None
+    drive: dict[str, Any] | None = None
     state: str = "estimated"
     sensors: SensorSettings | None = None
 
@@ -479,6 +480,7 @@ class SimResult:
             "control_dt": self.control_dt,
             "physics_dt": self.physics_dt,
             "safety": self.safety,
+            "drive": self.drive,
             "state": self.state,
             "sensors": None if self.sensors is None else dataclasses.asdict(self.sensors),
             "estimation": None if self.estimation_errors is None else self.estimation_errors.summary(),

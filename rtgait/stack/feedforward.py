@@ -5,7 +5,7 @@ Per tick, from the IK's configuration ``q``:
 
 1. its velocity and acceleration by low-passed backward differences (:class:`~rtgait.robot.motion_rates.MotionRates`);
 2. RNEA and the wrench ``W`` the feet must give the robot for that motion
-   (:class:`~rtgait.robot.inverse_dynamics.InverseDynamics`);
+   (:class:`~rtgait.robot.inverse_dynamics.InverseDynamics`), its ZMP moved by the DCM law's correction (below);
 3. the desired split: the controller's commanded ZMP shared between the feet in contact as the foot force control
    shares it (:func:`~rtgait.control.foot_control.split_zmp`: load ratio and a CoP per foot); without a controller
    (:meth:`~rtgait.stack.walking_stack.WalkingStack.hold`) the motion's own ZMP in double support;
@@ -13,6 +13,20 @@ Per tick, from the IK's configuration ``q``:
    (:mod:`rtgait.robot.contact_wrenches`: closed form, a QP when a cone binds);
 5. ``tau = RNEA_joints - sum J^T w`` (N m), which the stack's safety layer clips to the joints' torque limits and
    counts (:mod:`rtgait.stack.command_limits`).
+
+**The wrench the DCM law commands.** The IK's motion follows the plan's COM (with the COM correction), so the
+motion's wrench has the plan's ZMP ``p_ref``, not the commanded ``p_cmd = p_ref + (1 + k_p / w) e + ...``: feet that
+gave only the motion's wrench would carry none of the balance feedback, which on drives of low gains must come from
+the torques (the ankles' stiffness is below gravity's toppling stiffness ``m g h``). The required wrench ``(F, N)``
+(world axes, about the origin) is therefore moved to the ZMP ``p + dp``, ``dp = p_cmd - p_ref`` the law's correction,
+with its line of action still through the COM target ``c`` (the rate of angular momentum ``N - c x F`` kept):
+
+    dF_xy = -F_z dp / (c_z - h),        dN = c x dF                                              (N, N m)
+
+(``h`` the soles' mean height; the pendulum's ``c'' = w^2 (c - p)`` with ``w^2 = g / (c_z - h)``: the COM is asked the
+acceleration that the commanded ZMP gives it). With the joints' rows of ``tau = RNEA - sum J^T w`` the legs then push
+the floor with the commanded wrench, and the difference from the motion's accelerates the robot as the law asks.
+``open-loop`` (``p_cmd = p_ref``) and :meth:`~rtgait.stack.walking_stack.WalkingStack.hold` move nothing.
 """
 
 from __future__ import annotations
@@ -20,21 +34,21 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from rtgait.control.foot_control import split_zmp
 from rtgait.robot.contact_wrenches import DEFAULT_FRICTION
-from rtgait.robot.inverse_dynamics import InverseDynamics
+from rtgait.robot.inverse_dynamics import InverseDynamics, RequiredWrench
 from rtgait.robot.motion_rates import DEFAULT_RATE_FILTER, MotionRates
 
 if TYPE_CHECKING:
-    import numpy as np
-
     from rtgait.control.settings import ControlTargets
     from rtgait.core.geometry.footsteps import SoleRect
     from rtgait.interface.task_targets import IKTargets
     from rtgait.robot.contact_wrenches import WrenchDistribution
     from rtgait.robot.model import RobotModel
 
-__all__ = ["FeedForward"]
+__all__ = ["FeedForward", "commanded_wrench"]
 
 _CONTACT = {"double": (True, True), "left": (True, False), "right": (False, True)}  # the feet carrying load
 _INFEASIBLE = 1.0  # N: a residual beyond rounding and the QP's weighting (rtgait.robot.contact_wrenches.SUM_WEIGHT)
@@ -77,19 +91,35 @@ class FeedForward:
         """Forget the motion: the next configuration starts at rest."""
         self.rates.reset()
 
-    def torques(self, q: np.ndarray, targets: IKTargets, out: ControlTargets | None) -> np.ndarray:
+    def torques(
+        self,
+        q: np.ndarray,
+        targets: IKTargets,
+        out: ControlTargets | None,
+        shift: tuple[float, float] | None = None,
+    ) -> np.ndarray:
         """The joints' feed-forward torques (N m, in joint order) for the IK's configuration ``q``, the IK's
-        ``targets`` (their feet are the split's) and the controller's output (``None``: no controller)."""
+        ``targets`` (their feet are the split's) and the controller's output (``None``: no controller; then
+        ``shift`` (m), when given, moves the motion's ZMP as the controller's ``p_cmd - p_ref`` does, e.g. the start
+        transition's law, :mod:`rtgait.sim.start_balance`)."""
         v, a = self.rates.update(q)
         dynamics = self.dynamics
         required = dynamics.update(q, v, a)
         left, right = targets.left_foot, targets.right_foot
+        frames = dynamics.sole_frames
+        floor = 0.5 * float(frames[0][2, 3] + frames[1][2, 3])
         if out is None:
             support = "double"
-            frames = dynamics.sole_frames
-            zmp = required.zmp(0.5 * float(frames[0][2, 3] + frames[1][2, 3]))
+            if shift is not None and math.isfinite(shift[0] + shift[1]):
+                required = commanded_wrench(required, shift, targets.cog, floor)
+                dynamics.require(required)
+            zmp = required.zmp(floor)
         else:
             support, zmp = out.support, out.zmp_command
+            shift = (zmp[0] - out.zmp_planned[0], zmp[1] - out.zmp_planned[1])
+            if (shift[0] != 0.0 or shift[1] != 0.0) and math.isfinite(shift[0] + shift[1]):
+                required = commanded_wrench(required, shift, out.com, floor)
+                dynamics.require(required)
         if not (math.isfinite(zmp[0]) and math.isfinite(zmp[1])):  # no upward force (a fall): split in the middle
             zmp = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]))
         split = split_zmp(zmp, left, right, self.sole, support)
@@ -99,3 +129,20 @@ class FeedForward:
         if distribution.residual > _INFEASIBLE:
             self.infeasible += 1
         return dynamics.torques(distribution.wrenches)
+
+
+def commanded_wrench(
+    required: RequiredWrench, shift: tuple[float, float], com: tuple[float, float, float], floor: float
+) -> RequiredWrench:
+    """``required`` (world axes, about the origin; N, N m) with its ZMP moved by ``shift`` (m), its line of action
+    kept through ``com`` (m) over the floor at height ``floor`` (m): the module docstring's ``dF``, ``dN``; unchanged
+    without an upward force or with the COM not above the floor."""
+    fz = float(required.force[2])
+    height = com[2] - floor
+    if not (fz > 0.0 and height > 0.0):
+        return required
+    dfx, dfy = -fz * shift[0] / height, -fz * shift[1] / height
+    cx, cy, cz = com
+    force = required.force + np.array([dfx, dfy, 0.0])
+    moment = required.moment + np.array([-cz * dfy, cz * dfx, cx * dfy - cy * dfx])
+    return RequiredWrench(force, moment)

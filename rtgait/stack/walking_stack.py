@@ -173,13 +173,17 @@ class WalkingStack:
         """One whole tick at ``t`` (s): estimate, control, IK, joint command (the damping command once tripped)."""
         return self.control(t, self.estimate(readings, truth))
 
-    def hold(self, targets: IKTargets, t: float = math.nan) -> StackOutput:
+    def hold(
+        self, targets: IKTargets, t: float = math.nan, zmp_shift: tuple[float, float] | None = None
+    ) -> StackOutput:
         """The joints for IK targets given directly, the controller left out (e.g. a start transition; ``t`` (s)
-        stamps a fault); the damping command once the safety layer has tripped."""
+        stamps a fault); the damping command once the safety layer has tripped. ``zmp_shift`` (m): a balance law's
+        ``p_cmd - p_ref``, which the feed-forward torques carry (:meth:`FeedForward.torques
+        <rtgait.stack.feedforward.FeedForward.torques>`)."""
         if self.safety.damping:
             return self._damp(t)
         try:
-            return self._command(t, targets, None, None, None)
+            return self._command(t, targets, None, None, None, zmp_shift)
         except _BAD_INPUT as error:
             return self._damp(t, _error(error))
 
@@ -200,6 +204,7 @@ class WalkingStack:
         measurement: Measurement | None,
         out: ControlTargets | None,
         offsets: FootOffsets | None,
+        zmp_shift: tuple[float, float] | None = None,
     ) -> StackOutput:
         q, _ = self.ik.solve(targets, self._q, max_iterations=1, tolerance=0.0, errors=False)
         joints = q[7:]
@@ -217,7 +222,7 @@ class WalkingStack:
         velocities = clip.velocities(velocities)
         torques = None
         if self.feedforward is not None:
-            torques = self.feedforward.torques(q, targets, out)
+            torques = self.feedforward.torques(q, targets, out, zmp_shift)
             if not math.isfinite(float(torques.sum())):
                 return self._damp(t, ("bad-command", "the feed-forward torques are NaN or infinite"))
             torques = clip.torques(torques)

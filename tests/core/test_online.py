@@ -567,7 +567,7 @@ def test_forward_velocity_command():
 @pytest.mark.parametrize(
     ("command", "direction"),
     [((0.0, 0.05, 0.0), "left"), ((0.0, -0.05, 0.0), "right"), ((-0.1, 0.0, 0.0), "back"),
-     ((0.1, 0.0, 0.2), "turn left"), ((0.1, 0.0, -0.2), "turn right")],
+     ((0.1, 0.0, 0.15), "turn left"), ((0.1, 0.0, -0.15), "turn right")],
 )  # fmt: skip
 def test_velocity_commands_move_the_right_way(command, direction):
     cfg = PlannerConfig()

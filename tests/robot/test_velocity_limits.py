@@ -3,15 +3,20 @@
 The truth is the robot's own model: the whole-body IK (every joint within its URDF range; it raises
 :class:`~rtgait.robot.motion.UnreachableError` when it cannot follow the plan) and the distance between the left and
 right legs' collision meshes of the URDF (feet included), computed by Pinocchio's collision library along the
-planned walk. Then: the robot's walks carry the limits into the planner, and a bad ``[velocity]`` table is refused
-in one line naming the key.
+planned walk. Every command the planner accepts at the paper's three timings, once clamped, is within that reach;
+and the limits are within the envelope the robots walked in MuJoCo (``docs/velocity_envelope.json``, recorded by
+``benchmarks/sim.py --envelope``). Then: the robot's walks carry the limits into the planner, and a bad
+``[velocity]`` table is refused in one line naming the key.
 """
 
 from __future__ import annotations
 
 import itertools
+import json
+import math
 import warnings
 from importlib import resources
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -75,12 +80,13 @@ def leg_gap(robot: RobotModel, q: np.ndarray) -> float:
     return gap
 
 
-def walk_at(robot: RobotModel, vx: float, vy: float, wz: float):
-    """The fig8 walk of ``robot`` by this command (its step period and the robot's limits), no clamping allowed."""
-    walk = robot_scenario(load_scenario("fig8"), robot)
+def walk_at(robot: RobotModel, vx: float, vy: float, wz: float, timing: str = "fig8", clamp: bool = False):
+    """The walk of ``robot`` by this command at the timing of scenario ``timing`` (its step period and the robot's
+    limits there), no clamping allowed unless ``clamp``."""
+    walk = robot_scenario(load_scenario(timing), robot)
     planner = OnlinePlanner(walk.planner_config(), None)
     with warnings.catch_warnings():
-        warnings.simplefilter("error", CommandClampedWarning)
+        warnings.simplefilter("ignore" if clamp else "error", CommandClampedWarning)
         planner.set_velocity(vx, vy, wz)
     plan = rollout(planner, walk.dt, walk.sole, duration=walk.timing.start + STEPS * walk.timing.step_period)
     return planner, plan
@@ -109,6 +115,52 @@ def test_a_walk_at_the_limit_is_reachable_without_the_legs_meeting(name, motion,
         assert max(abs(s.turn) for s in strides) == pytest.approx(0.5 * limits.max_step_turn, abs=1e-9)
     motion_q = whole_body_motion(robot, plan).q  # raises UnreachableError if the IK cannot follow it
     assert leg_gap(robot, motion_q[::25]) >= LEG_CLEARANCE  # every 0.125 s
+
+
+COMMANDS = {
+    "forward": (1.0, 0.0, 0.0),
+    "backward": (-1.0, 0.0, 0.0),
+    "left": (0.0, 0.5, 0.0),
+    "right": (0.0, -0.5, 0.0),
+    "the issue's diagonal": (0.2, 0.08, 0.0),
+    "backward-right": (-0.5, -0.5, 0.0),
+    "left turning": (0.0, 0.3, 1.0),
+}
+"""Commands (m/s, m/s, rad/s) beyond or near the limits at every paper timing, one per direction of the sweep."""
+
+
+@pytest.mark.parametrize("name", ["talos", "g1"])
+@pytest.mark.parametrize("timing", ["fig6", "fig7", "fig8"])
+def test_every_command_the_planner_accepts_is_within_the_robot_s_reach(name, timing, request):
+    """Clamped onto the limits of the timing's sway, each command's walk is one the IK follows (at fig7's timing
+    G1 used to be refused 0.2 m/s forward and 0.08 m/s sideways as out of reach: cut per axis, it asked both limits
+    at once)."""
+    robot = request.getfixturevalue(name)
+    for command in COMMANDS.values():
+        _, plan = walk_at(robot, *command, timing=timing, clamp=True)
+        whole_body_motion(robot, plan)  # raises UnreachableError if the IK cannot follow it
+
+
+ENVELOPE = Path(__file__).resolve().parents[2] / "docs" / "velocity_envelope.json"
+
+
+@pytest.mark.parametrize("name", ["talos", "g1"])
+def test_the_limits_are_within_the_walked_envelope(name, request):
+    """Along every direction of the recorded sweep, at each paper timing, the command on the robot's clamp (the
+    limits of that timing's sway) asks no more than the largest one the robot walked in MuJoCo: raise a limit, or
+    let a case of the record fail, and this fails until the envelope is walked again."""
+    robot = request.getfixturevalue(name)
+    record = json.loads(ENVELOPE.read_text(encoding="utf-8"))
+    assert record["state"] == "truth" and not record["quick"]
+    entries = [entry for entry in record["summary"] if entry["robot"] == name]
+    assert {entry["timing"] for entry in entries} == {"fig6", "fig7", "fig8"}
+    assert len(entries) == 3 * 11  # every direction of the full grid
+    for entry in entries:
+        config = robot_scenario(load_scenario(entry["timing"]), robot).planner_config()
+        limits = (config.max_step_length, config.max_step_lateral, config.max_step_turn)
+        assert math.isclose(math.hypot(*entry["unit"]), 1.0), entry
+        for unit, limit, walked in zip(entry["unit"], limits, entry["stride"], strict=True):
+            assert abs(unit) * limit <= abs(walked) + 1e-9, (entry["timing"], entry["direction"], entry["failed"])
 
 
 def test_the_robot_s_walks_carry_its_limits(g1):

@@ -113,3 +113,22 @@ def test_the_torques_are_clipped_to_the_limits_and_counted(talos, walk):
     assert np.abs(torques).max() == 5.0
     knee = talos.joint_names.index("leg_left_4_joint")
     assert stack.safety.clip.counts.torque[knee] == 1
+
+
+def test_commanded_wrench_moves_the_zmp_and_keeps_the_moment_about_the_com():
+    # The DCM law's correction moves the wrench's ZMP by exactly the shift, with the line of action through the COM:
+    # the rate of angular momentum N - c x F is unchanged (independent of how the shift is computed).
+    from rtgait.robot.inverse_dynamics import RequiredWrench
+    from rtgait.stack.feedforward import commanded_wrench
+
+    weight = 35.0 * 9.81
+    com = (0.02, -0.01, 0.70)
+    required = RequiredWrench(np.array([3.0, -2.0, weight]), np.array([4.0, -6.0, 0.5]))
+    floor = 0.01
+    moved = commanded_wrench(required, (0.015, -0.02), com, floor)
+    before, after = required.zmp(floor), moved.zmp(floor)
+    assert after[0] - before[0] == pytest.approx(0.015, abs=1e-12)
+    assert after[1] - before[1] == pytest.approx(-0.02, abs=1e-12)
+    c = np.array(com)
+    np.testing.assert_allclose(moved.moment - np.cross(c, moved.force), required.moment - np.cross(c, required.force))
+    assert moved.force[2] == required.force[2]

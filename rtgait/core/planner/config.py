@@ -12,6 +12,7 @@ from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.limits import MAX_HORIZON_STEPS, MAX_PHASE_W_T, MAX_STRIDE, check_range
 from rtgait.core.lipm.closed_form import GRAVITY, omega
 from rtgait.core.lipm.connect import MIN_REST_W_T
+from rtgait.core.lipm.sway import cog_sway
 
 ConnectionMode = Literal["real-time", "quasi-real-time", "auto"]
 CONNECTION_MODES: tuple[ConnectionMode, ConnectionMode] = ("real-time", "quasi-real-time")
@@ -48,7 +49,9 @@ class PlannerConfig:
             toward the motion lands this much wider than the step after it, so ``|vy| <= max_step_lateral / 2T``
             over a step period ``T`` (:meth:`~rtgait.core.walk.walk.Walk.set_velocity`).
         max_step_turn: largest heading change a velocity command makes per pair of steps (rad), half of it per
-            step, so ``|wz| <= max_step_turn / 2T``. A command beyond any of the three is clamped, with a warning.
+            step, so ``|wz| <= max_step_turn / 2T``. The three bound one command together: the squares of its
+            shares of them add up to at most 1 (an ellipsoid, :mod:`rtgait.core.walk.velocity_command`); a command
+            beyond is scaled down onto it, with a warning.
         min_step_width: narrowest stance a sideways walk by command may close to (m), within (0, step_width];
             ``None`` (default): ``step_width``, i.e. the feet only ever open beyond the straight-walking stance.
         history_steps: footprints, strides, plan records and change records kept behind the current step, so an
@@ -157,6 +160,11 @@ class PlannerConfig:
 VELOCITY_KEYS = ("max_step_length", "max_step_lateral", "max_step_turn", "min_step_width")
 """The :class:`PlannerConfig` fields that bound the strides of a walk by velocity command, as a robot description's
 ``[velocity]`` table names them."""
+SWAY_KEY = "max_sway"
+"""The key of a ``[velocity]`` table (or of one of its ``more_sway`` tables) that says up to which COG sway its
+limits hold (:func:`~rtgait.core.lipm.sway.cog_sway`)."""
+MORE_SWAY_KEY = "more_sway"
+"""The key of the ``[velocity]`` table's list of limits for walks that sway more (``[[velocity.more_sway]]``)."""
 
 
 @dataclass(frozen=True)
@@ -165,39 +173,118 @@ class VelocityLimits:
     each field not ``None`` replaces the :class:`PlannerConfig` field of the same name (m, m, rad, m).
 
     They are the robot's own: how far its legs reach sideways and how far its feet may turn against each other
-    without the soles or legs meeting, so a command within them asks nothing the robot cannot step; the
-    planner's defaults (0.3 m, 0.1 m, 0.4 rad, no narrowing) suit no robot in particular.
+    without the soles or legs meeting, and what it walks in physics, so a command within them asks nothing the robot
+    cannot step; the planner's defaults (0.3 m, 0.1 m, 0.4 rad, no narrowing) suit no robot in particular.
+
+    What a robot walks depends on the walk's timing through how far its COG sways toward each foot
+    (:func:`~rtgait.core.lipm.sway.cog_sway`, a number of the timing and the pendulum alone, below 1): the more it
+    sways, the farther the COG is from the other foot while that foot still bears weight. So the limits may be given
+    per sway: these hold up to ``max_sway`` (``None``: for every sway), and ``more_sway`` lists the limits of walks
+    that sway more, in increasing ``max_sway``, each holding up to its own and the last one for every larger sway too.
+    A field a ``more_sway`` entry leaves ``None`` is the one before it (:meth:`from_table` fills them in).
     """
 
     max_step_length: float | None = None
     max_step_lateral: float | None = None
     max_step_turn: float | None = None
     min_step_width: float | None = None
+    max_sway: float | None = None
+    more_sway: tuple[VelocityLimits, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.max_sway is not None and not (math.isfinite(self.max_sway) and 0.0 < self.max_sway <= 1.0):
+            raise ValueError(f"max_sway must be None or within (0, 1], got {self.max_sway}")
+        if not self.more_sway:
+            return
+        if self.max_sway is None:
+            raise ValueError("max_sway is needed with more_sway: up to which sway these limits hold")
+        previous = self.max_sway
+        for i, entry in enumerate(self.more_sway):
+            if not isinstance(entry, VelocityLimits) or entry.more_sway:
+                raise ValueError(f"more_sway[{i}] must be a VelocityLimits without more_sway of its own")
+            if entry.max_sway is None or entry.max_sway <= previous:
+                raise ValueError(
+                    f"more_sway[{i}].max_sway must be more than the one before it ({previous:g}), got {entry.max_sway}"
+                )
+            previous = entry.max_sway
 
     @classmethod
     def from_table(cls, table: dict, where: str = "velocity") -> VelocityLimits:
-        """From a ``[velocity]`` table (keys :data:`VELOCITY_KEYS`, all optional), each value checked as
+        """From a ``[velocity]`` table (keys :data:`VELOCITY_KEYS` and ``max_sway``, all optional, and
+        ``more_sway``, a list of tables of the same keys each with its ``max_sway``), each value checked as
         :class:`PlannerConfig` checks it; an error names ``where.key``."""
-        for key, value in table.items():
-            if key not in VELOCITY_KEYS:
-                raise ValueError(f"{where}: unknown key {key!r} (known: {', '.join(VELOCITY_KEYS)})")
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ValueError(f"{where}.{key} must be a number, got {value!r}")
-            if key == "min_step_width":  # against the robot's own stance when applied (apply)
-                if not (math.isfinite(value) and 0.0 < value <= MAX_STRIDE):
-                    raise ValueError(f"{where}.min_step_width must be within (0, {MAX_STRIDE:g}] m, got {value!r}")
-                continue
-            try:
-                PlannerConfig(**{key: float(value)})
-            except ValueError as error:
-                raise ValueError(f"{where}.{error}") from None
-        return cls(**{key: float(value) for key, value in table.items()})
+        base = _limits_from_table(table, where, nested=True)
+        entries = table.get(MORE_SWAY_KEY, [])
+        if not isinstance(entries, list) or not all(isinstance(entry, dict) for entry in entries):
+            raise ValueError(f"{where}.{MORE_SWAY_KEY} must be a list of tables ([[{where}.{MORE_SWAY_KEY}]])")
+        more: list[VelocityLimits] = []
+        previous = base
+        for i, entry in enumerate(entries):
+            name = f"{where}.{MORE_SWAY_KEY}[{i}]"
+            if SWAY_KEY not in entry:
+                raise ValueError(f"{name}: missing key {SWAY_KEY!r} (up to which sway these limits hold)")
+            limits = _limits_from_table(entry, name, nested=False)
+            # What an entry does not say, it keeps from the one before it.
+            filled = {key: getattr(limits, key) if getattr(limits, key) is not None else getattr(previous, key)
+                      for key in VELOCITY_KEYS}  # fmt: skip
+            previous = cls(**filled, max_sway=limits.max_sway)
+            more.append(previous)
+        try:
+            return dataclasses.replace(base, more_sway=tuple(more))
+        except ValueError as error:
+            raise ValueError(f"{where}.{error}") from None
+
+    def for_sway(self, sway: float) -> VelocityLimits:
+        """The limits of a walk whose COG sways ``sway`` (:func:`~rtgait.core.lipm.sway.cog_sway`): these, or the
+        first ``more_sway`` entry that holds up to it, or the last one."""
+        if self.max_sway is None or sway <= self.max_sway or not self.more_sway:
+            return self
+        for entry in self.more_sway:
+            if entry.max_sway is not None and sway <= entry.max_sway:
+                return entry
+        return self.more_sway[-1]
 
     def apply(self, config: PlannerConfig, where: str = "velocity") -> PlannerConfig:
-        """``config`` with these limits; an error names ``where.key`` (e.g. ``min_step_width`` wider than the
-        config's ``step_width``)."""
-        changes = {key: getattr(self, key) for key in VELOCITY_KEYS if getattr(self, key) is not None}
+        """``config`` with these limits, those for its timing's COG sway (:meth:`for_sway`); an error names
+        ``where.key`` (e.g. ``min_step_width`` wider than the config's ``step_width``)."""
+        limits = self
+        if self.more_sway:
+            timing = config.timing
+            limits = self.for_sway(cog_sway(config.w, timing.single_support, timing.double_support))
+        changes = {key: getattr(limits, key) for key in VELOCITY_KEYS if getattr(limits, key) is not None}
         try:
             return dataclasses.replace(config, **changes)
         except ValueError as error:
             raise ValueError(f"{where}.{error}") from None
+
+    def every_table(self) -> tuple[VelocityLimits, ...]:
+        """These limits and each ``more_sway`` entry, in increasing sway."""
+        return (self, *self.more_sway)
+
+
+def _limits_from_table(table: dict, where: str, nested: bool) -> VelocityLimits:
+    """The four limits and ``max_sway`` of one table (``nested``: it may also hold ``more_sway``, read elsewhere)."""
+    known = (*VELOCITY_KEYS, SWAY_KEY, *((MORE_SWAY_KEY,) if nested else ()))
+    values: dict[str, float] = {}
+    for key, value in table.items():
+        if key not in known:
+            raise ValueError(f"{where}: unknown key {key!r} (known: {', '.join(known)})")
+        if key == MORE_SWAY_KEY:
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{where}.{key} must be a number, got {value!r}")
+        if key == SWAY_KEY:
+            if not (math.isfinite(value) and 0.0 < value <= 1.0):
+                raise ValueError(
+                    f"{where}.{SWAY_KEY} must be within (0, 1] (a share of half the stance), got {value!r}"
+                )
+        elif key == "min_step_width":  # against the robot's own stance when applied (apply)
+            if not (math.isfinite(value) and 0.0 < value <= MAX_STRIDE):
+                raise ValueError(f"{where}.min_step_width must be within (0, {MAX_STRIDE:g}] m, got {value!r}")
+        else:
+            try:
+                PlannerConfig(**{key: float(value)})
+            except ValueError as error:
+                raise ValueError(f"{where}.{error}") from None
+        values[key] = float(value)
+    return VelocityLimits(**values)

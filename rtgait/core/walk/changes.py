@@ -187,7 +187,8 @@ class WalkChanges:
 
         The strides are made as :func:`~rtgait.core.walk.velocity_command.stride_from_command` says:
         ``|vx| <= limits.length / T``, ``|vy| <= limits.lateral / 2T`` and ``|wz| <= limits.turn / 2T`` over the
-        step period ``T``. A command beyond them is clamped to them, with a
+        step period ``T``, the squares of the three shares adding up to at most 1. A command beyond is scaled down
+        onto that ellipsoid (:func:`~rtgait.core.walk.velocity_command.clamp_command`), with a
         :class:`~rtgait.core.walk.velocity_command.CommandClampedWarning`; a command after :meth:`stop` cancels the
         stop, with a :class:`StopCancelledWarning`.
         """
