@@ -199,7 +199,7 @@ def shadow(robot_name: str, scenario_name: str, noise: float, seed: int, **setti
 
     errors = estimation_errors(np.array(times), track(0), track(1), weight)
     return {"robot": robot_name, "scenario": scenario_name, "noise": noise, "seed": seed, **settings,
-            "fell": loop.fell, **errors.summary()}  # fmt: skip
+            "fell": loop.fell, **errors.summary(), "landing_delays": list(errors.landing_delays)}  # fmt: skip
 
 
 def main() -> None:

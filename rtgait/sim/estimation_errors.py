@@ -91,6 +91,7 @@ class EstimationErrors:
         landings_extra: the estimate's landings matched with none of the truth's.
         landing_delay_worst: the detection delay of largest magnitude (s), ``None`` without a matched landing.
         landing_delay_median: the median detection delay (s), ``None`` likewise.
+        landing_delays: every matched step landing's detection delay (s), in time order (not in :meth:`summary`).
     """
 
     ticks: int
@@ -109,10 +110,14 @@ class EstimationErrors:
     landings_extra: int
     landing_delay_worst: float | None
     landing_delay_median: float | None
+    landing_delays: tuple[float, ...] = ()
 
     def summary(self) -> dict[str, Any]:
-        """JSON-ready values (``summary.json``'s ``estimation``): NaN (no tick compared) as ``None``."""
-        return {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in asdict(self).items()}
+        """JSON-ready values (``summary.json``'s ``estimation``), the delays' list left out: NaN (no tick compared)
+        as ``None``."""
+        values = asdict(self)
+        del values["landing_delays"]
+        return {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in values.items()}
 
 
 def loaded_states(
@@ -216,6 +221,7 @@ def estimation_errors(
         landings_extra=len(seen) - len(used),
         landing_delay_worst=float(max(delays, key=abs)) if delays else None,
         landing_delay_median=float(np.median(delays)) if delays else None,
+        landing_delays=tuple(float(d) for d in delays),
     )
 
 

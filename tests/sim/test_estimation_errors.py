@@ -110,6 +110,7 @@ def test_landings_are_matched_once_and_their_delays_signed():
     assert errors.relandings == 1 and errors.relandings_missed == 1
     assert errors.landing_delay_worst == pytest.approx(0.007)
     assert errors.landing_delay_median == pytest.approx(0.5 * (0.007 - 0.004))
+    assert errors.landing_delays == pytest.approx((-0.004, 0.007)) and "landing_delays" not in errors.summary()
     assert errors.contact_agreement == pytest.approx(1.0 - (5 + 4 + 7 + 60) / n)
     # Seen apart, 3 ms late: matched, not an extra landing.
     seen[1510:1573, 1] = False
