@@ -592,7 +592,7 @@ def test_velocity_commands_move_the_right_way(command, direction):
 
 def test_changing_the_command_mid_walk_keeps_continuity_and_stops_at_rest():
     cfg = PlannerConfig(timing=Timing(0.7, 0.15), connection="quasi-real-time")
-    commands = [(1.3, (0.25, 0.0, 0.0)), (4.41, (0.1, 0.04, 0.15)), (6.77, (-0.05, -0.05, -0.2)), (9.02, (0.3, 0, 0))]
+    commands = [(1.3, (0.25, 0.0, 0.0)), (4.41, (0.1, 0.04, 0.15)), (6.77, (-0.04, -0.04, -0.16)), (9.02, (0.3, 0, 0))]
     planner, run = velocity_walk(cfg, commands, stop_at=11.5, dt=0.001)
     assert run.replans_checked == planner.n_steps
     check_walk(planner, run)
