@@ -28,6 +28,7 @@ from rtgait.core.planner.sample import SampleColumns
 from rtgait.interface.task_targets import FootOffsets, IKTargets
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
+from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.loading import load_scenario
 from rtgait.stack.feedforward import FeedForward
 
@@ -38,13 +39,7 @@ def _stats(micro: np.ndarray) -> dict[str, float]:
 
 def run(robot_name: str, dt: float) -> dict:
     robot = RobotModel.load(robot_name)
-    scenario = dataclasses.replace(
-        load_scenario("fig8"),
-        dt=dt,
-        cog_height=robot.description.cog_height,
-        step_width=robot.step_width,
-        sole=robot.description.sole,
-    )
+    scenario = dataclasses.replace(robot_scenario(load_scenario("fig8"), robot), dt=dt)
     walk = rollout(OnlinePlanner(scenario.planner_config(), scenario.strides()), dt, scenario.sole, scenario.changes)
     values = walk.values
     ik = WholeBodyIK(robot, max_iterations=1, tolerance=0.0)

@@ -27,18 +27,13 @@ from rtgait.core.planner.sample import SampleColumns
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
+from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.loading import load_scenario
 
 
 def run(robot_name: str, dt: float, iterations: int, tolerance: float) -> dict:
     robot = RobotModel.load(robot_name)
-    scenario = dataclasses.replace(
-        load_scenario("fig8"),
-        dt=dt,
-        cog_height=robot.description.cog_height,
-        step_width=robot.step_width,
-        sole=robot.description.sole,
-    )
+    scenario = dataclasses.replace(robot_scenario(load_scenario("fig8"), robot), dt=dt)
     walk = rollout(OnlinePlanner(scenario.planner_config(), scenario.strides()), dt, scenario.sole, scenario.changes)
     cogs = walk.values[:, SampleColumns.cog].tolist()
     lefts = walk.values[:, SampleColumns.left_foot].tolist()

@@ -13,6 +13,7 @@ import uuid
 from pathlib import Path
 
 import pytest
+from scenario_files import header_text
 
 from rtgait import outputs
 from rtgait.cli import plan as plan_command
@@ -297,21 +298,7 @@ def test_plot_of_a_truncated_csv_is_one_error_line(
 
 # ----- 5. footstep plans as sweep bases; 8. [walk] optional in footstep plans -----------------------------------
 
-PLAN = """name = "free-path"
-connection = "quasi-real-time"
-[robot]
-cog_height = 0.80
-[robot.sole]
-front = 0.13
-back = 0.10
-inner = 0.07
-outer = 0.07
-[timing]
-single_support = 0.8
-double_support = 0.2
-dt = 0.01
-horizon_steps = 3
-{walk}
+PLAN = header_text("free-path", "quasi-real-time") + """{walk}
 [[footstep]]
 side = "right"
 x = 0.10
