@@ -404,8 +404,8 @@ def plot(cases: list[dict[str, Any]], settings: dict[str, Any], path: Path) -> P
     handles, labels = figure.axes[0].get_legend_handles_labels()
     figure.legend(handles, labels, loc="outside lower center", ncol=len(labels), fontsize=8, frameon=False)
     state = settings.get("state")
-    on = f", the controller on the {state} state" if state else ""
-    figure.suptitle(f"{settings['robot']} in MuJoCo, {settings['scenario']}{on}: 0.1 s pushes on the base", fontsize=10)
+    on = f"\nthe controller on the {state} state" if state else ""  # a line of its own: the figure may be narrow
+    figure.suptitle(f"{settings['robot']} in MuJoCo, {settings['scenario']}: 0.1 s pushes on the base{on}", fontsize=10)
     return save(figure, path)
 
 
