@@ -15,13 +15,13 @@ from pathlib import Path
 import pytest
 from scenario_files import header_text
 
-from rtgait import outputs
 from rtgait.cli import plan as plan_command
 from rtgait.cli import simulate as simulate_command
 from rtgait.cli.main import main
 from rtgait.core.analysis.rollout import rollout
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.io.plan_files import summarize
+from rtgait.outputs import staging_folders
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import DEFAULT_STEP_HEIGHT, DEFAULT_STEP_WIDTH, ScenarioError
 from rtgait.sweep import store as sweep_store
@@ -59,7 +59,7 @@ def dead_pid(tmp_path: Path) -> int:
 
 def staging(folder: Path, pid: int, host: str | None = None, prefix: str = "") -> Path:
     """A staging folder as a run of process ``pid`` names it (rtgait.outputs), with a half-written file in it."""
-    name = f".{prefix}rtgait-staging.{host or outputs._host()}.{pid}.{uuid.uuid4().hex[:8]}.tmp"
+    name = f".{prefix}rtgait-staging.{host or staging_folders.host()}.{pid}.{uuid.uuid4().hex[:8]}.tmp"
     path = folder / name
     path.mkdir(parents=True)
     (path / "trajectory.csv").write_text("half", encoding="utf-8")
@@ -298,7 +298,9 @@ def test_plot_of_a_truncated_csv_is_one_error_line(
 
 # ----- 5. footstep plans as sweep bases; 8. [walk] optional in footstep plans -----------------------------------
 
-PLAN = header_text("free-path", "quasi-real-time") + """{walk}
+PLAN = (
+    header_text("free-path", "quasi-real-time")
+    + """{walk}
 [[footstep]]
 side = "right"
 x = 0.10
@@ -313,6 +315,7 @@ x = 0.30
 y = -0.06
 yaw = 0.15
 {timing}"""
+)
 
 
 def footstep_plan(tmp_path: Path, walk: str = "", timing: str = "") -> Path:
