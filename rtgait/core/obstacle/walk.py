@@ -8,6 +8,7 @@ rollout is exactly the plain one.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
 from rtgait.core.geometry.footsteps import SoleRect, Stride
@@ -15,6 +16,14 @@ from rtgait.core.obstacle.avoid import Avoidance, ObstacleReaction
 from rtgait.core.obstacle.box import Obstacle
 from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.online import OnlinePlanner
+
+
+class ObstacleRun(NamedTuple):
+    """One walk with obstacles under one connection mode: the rollout and what it did on seeing each obstacle."""
+
+    connection: str
+    rollout: Rollout
+    avoidances: tuple[Avoidance, ...]
 
 
 def avoiding_rollout(
@@ -36,4 +45,4 @@ def avoiding_rollout(
     return result, tuple(seen)
 
 
-__all__ = ["avoiding_rollout"]
+__all__ = ["ObstacleRun", "avoiding_rollout"]
