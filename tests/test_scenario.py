@@ -318,7 +318,7 @@ def test_bad_input_raises_one_line_naming_the_field(tmp_path: Path, case: str, e
 
 
 def test_unknown_scenario_lists_the_builtins() -> None:
-    with pytest.raises(ScenarioError, match="fig4, fig6, fig7, fig8, fig8-real-time, fig11, guided, obstacle, sidestep, turn"):
+    with pytest.raises(ScenarioError, match=", ".join(BUILTINS)):
         load_scenario("fig5")
 
 
