@@ -488,7 +488,7 @@ def _physics(
     from rtgait.sim.loop_options import LoopOptions
     from rtgait.sim.model import build_sim_model
 
-    sim = build_sim_model(robot, config)
+    sim = build_sim_model(robot, config, walk.obstacles)
     driven = LoopOptions(drive=drive, state=state)  # type: ignore[arg-type]
     if scenario.guide is None or velocity is not None:
         return simulate(scenario, robot, controller=controller, controller_options=options, velocity=velocity,
