@@ -192,3 +192,19 @@ def test_the_figure_draws_one_top_view_per_mode(tmp_path: Path) -> None:
     assert titles[1].startswith("quasi-real-time: steps left from step 4") and "ZMP inside" in titles[1]
     path = plot_obstacle_walks(runs, SCENARIO.sole, "obstacle", tmp_path / "obstacle.png")
     assert path.stat().st_size > 10_000
+
+
+def test_the_closest_sole_distance_of_a_run() -> None:
+    from rtgait.io.obstacle_outputs import closest_sole_distance
+
+    sole = SCENARIO.sole  # 0.23 x 0.14 m, the ankle 0.10 m from the heel
+    # Two ticks: the right sole's toe 0.05 m short of the box's near face, then the left sole 0.02 m beside its side.
+    near_face, side_face = BOX.x - BOX.length / 2, BOX.y + BOX.width / 2
+    poses = np.array([
+        [[0.0, 1.0, 0.0], [near_face - sole.front - 0.05, BOX.y, 0.0]],
+        [[BOX.x, side_face + sole.inner + 0.02, 0.0], [0.0, -1.0, 0.0]],
+    ])  # fmt: skip
+    assert closest_sole_distance(poses, sole, BOX) == pytest.approx(0.02)
+    assert closest_sole_distance(poses[:1], sole, BOX) == pytest.approx(0.05)
+    poses[0, 1, 0] += 0.10  # the toe now 0.05 m into the box
+    assert closest_sole_distance(poses, sole, BOX) == 0.0

@@ -6,12 +6,19 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from rtgait.core.obstacle.avoid import Avoidance
+import numpy as np
+
+from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.obstacle.avoid import Avoidance, ObstacleReaction
+from rtgait.core.obstacle.box import Obstacle
 from rtgait.core.obstacle.walk import ObstacleRun, avoiding_rollout
 from rtgait.core.planner.config import CONNECTION_MODES
 from rtgait.scenario.scenario import Scenario
 
-__all__ = ["obstacle_report_lines", "obstacle_runs", "obstacle_summary"]
+__all__ = [
+    "closest_sole_distance", "obstacle_report_lines", "obstacle_runs", "obstacle_summary", "sim_obstacle_facts",
+    "sim_obstacle_lines",
+]  # fmt: skip
 
 
 def obstacle_runs(scenario: Scenario, own: ObstacleRun | None = None) -> list[ObstacleRun]:
@@ -85,4 +92,53 @@ def obstacle_report_lines(summary: list[dict[str, Any]]) -> list[str]:
         where = "inside" if not walk["zmp_outside"] else "OUTSIDE the support polygon"
         lines.append(f"obstacle    {walk['connection']}: {'; '.join(parts)}; ZMP {where}, min margin "
                      f"{walk['zmp_margin_min'] * 1e3:+.1f} mm at {walk['zmp_margin_min_time']:.3f} s")  # fmt: skip
+    return lines
+
+
+# ----- in physics ------------------------------------------------------------------------------------------------
+_GRID = 9  # sample points along each side of a sole: the distance is that of its nearest sample (a few mm coarse)
+
+
+def closest_sole_distance(sole_pose: np.ndarray, sole: SoleRect, box: Obstacle) -> float:
+    """Smallest distance (m) between the box and either sole over a run, ``sole_pose`` the soles' ground poses
+    ``(k, 2, 3)`` (x, y, yaw; left then right), each sole sampled on a grid of its rectangle: 0 where one overlaps
+    the box's footprint (the soles' heights are not looked at: a swing passing over the box counts)."""
+    u = np.linspace(-sole.back, sole.front, _GRID)
+    best = np.inf
+    for side, (low, high) in enumerate(((-sole.inner, sole.outer), (-sole.outer, sole.inner))):
+        U, V = (a.ravel() for a in np.meshgrid(u, np.linspace(low, high, _GRID)))
+        x, y, yaw = (sole_pose[:, side, i, None] for i in range(3))
+        points = np.stack([x + np.cos(yaw) * U - np.sin(yaw) * V, y + np.sin(yaw) * U + np.cos(yaw) * V], axis=-1)
+        local = box.to_local(points)
+        outside = np.maximum(np.abs(local) - (0.5 * box.length, 0.5 * box.width), 0.0)
+        best = min(best, float(np.hypot(outside[..., 0], outside[..., 1]).min(initial=np.inf)))
+    return best
+
+
+def sim_obstacle_facts(
+    reactions: tuple[tuple[float, ObstacleReaction], ...], sole_pose: np.ndarray, sole: SoleRect
+) -> list[dict[str, Any]]:
+    """Per obstacle of a MuJoCo run, JSON-ready: what the walk did on seeing it (``None``: never seen) and the
+    closest the soles came to it (m, :func:`closest_sole_distance`)."""
+    out = []
+    for _, reaction in reactions:
+        facts = _avoidance(reaction.result) if reaction.result is not None else {"side": None, "seen_tick": None}
+        facts["closest_sole_distance"] = closest_sole_distance(sole_pose, sole, reaction.obstacle)
+        out.append(facts)
+    return out
+
+
+def sim_obstacle_lines(summary: dict[str, Any]) -> list[str]:
+    """The lines ``rtgait simulate`` prints for the obstacles of a run."""
+    lines = []
+    for facts in summary.get("obstacles", []):
+        if facts["seen_tick"] is None:
+            did = "never seen"
+        elif facts["side"] is None:
+            did = f"seen at {facts['seen_tick']:.3f} s, no detour within the step limits"
+        else:
+            did = f"seen at {facts['seen_tick']:.3f} s, steps {facts['side']} from step {facts['first_open_step']}"
+        closest = facts["closest_sole_distance"]
+        lines.append(f"obstacle    {did}; the soles came {closest * 1e3:.0f} mm from it at the closest"
+                     + (" (they touched it)" if closest <= 0.0 else ""))  # fmt: skip
     return lines

@@ -158,7 +158,9 @@ def simulate(
     level, changes, stop_after = _controller(walk, command, controller, sim, controller_options)
     walk_options = dataclasses.replace(
         base_options, changes=changes, stop_after_steps=stop_after, velocity_changes=schedule,
-        reactions=base_options.reactions + obstacle_reactions(walk),
+        # The scenario's obstacles react when seen (a walk of footsteps), unless the caller made their reactions (to
+        # read what they did).
+        reactions=base_options.reactions or (obstacle_reactions(walk) if velocity is None else ()),
     )  # fmt: skip
     return run_sim_loop(sim, level, walk_options, progress=progress)
 
