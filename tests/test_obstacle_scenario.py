@@ -208,3 +208,15 @@ def test_the_closest_sole_distance_of_a_run() -> None:
     assert closest_sole_distance(poses[:1], sole, BOX) == pytest.approx(0.05)
     poses[0, 1, 0] += 0.10  # the toe now 0.05 m into the box
     assert closest_sole_distance(poses, sole, BOX) == 0.0
+
+
+@pytest.mark.parametrize(("x", "seen_at"), [(3.95, 15.0), (3.95, 12.0), (0.5, 5.0)])
+def test_a_box_seen_too_late_or_already_passed_leaves_the_walk_as_it_is(x: float, seen_at: float) -> None:
+    """Under the last footsteps when the walk is ending, too close to step around, or behind the robot: the walk is
+    not changed (and says so), it does not fail."""
+    box = dataclasses.replace(BOX, x=x, seen_at=seen_at)
+    plain = rollout(OnlinePlanner(SCENARIO.planner_config(), SCENARIO.strides()), SCENARIO.dt, SCENARIO.sole)
+    result, (avoidance,) = avoiding_rollout(SCENARIO.planner_config(), SCENARIO.strides(), SCENARIO.dt,
+                                            SCENARIO.sole, (box,))  # fmt: skip
+    assert avoidance.chosen is None or avoidance.chosen.side == "none"
+    assert result.footprints == plain.footprints

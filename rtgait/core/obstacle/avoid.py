@@ -28,7 +28,7 @@ from rtgait.core.analysis.batch import walk_family
 from rtgait.core.analysis.walk_family import ChangeShape, family_key
 from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride, stride_between
 from rtgait.core.obstacle.box import Obstacle
-from rtgait.core.obstacle.detour import Detour, NoDetourError, StrideRules, blocked, no_detour, plan_detour
+from rtgait.core.obstacle.detour import Detour, StrideRules, blocked, no_detour, plan_detour
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.walk.velocity_command import StepLimits
 
@@ -113,9 +113,13 @@ class ObstacleReaction:
     def __call__(self, planner: OnlinePlanner, t: float) -> None:
         rules = stride_rules(planner, self.margin, self.clearance)
         base = planner.walk.base
-        before = planner.footprints()
         first_open = planner.first_open_step()
         k0 = first_open - base
+        mode = planner.config.connection
+        if planner.n_steps is None:  # a walk by velocity command has no remaining footsteps to change
+            self.result = Avoidance(self.obstacle, t, mode, first_open, (), (), None, "none")
+            return
+        before = planner.footprints()
         candidates: list[Candidate] = []
         if not blocked(before, max(k0 + 1, 2), self.obstacle, self.sole, rules):
             chosen = Candidate("none", no_detour(before, first_open), None, "the walk is already clear of it")
@@ -126,7 +130,7 @@ class ObstacleReaction:
         for side in ("left", "right"):
             try:
                 detours.append((side, plan_detour(before, first_open, self.obstacle, self.sole, rules, side, base), ""))
-            except NoDetourError as error:
+            except ValueError as error:  # NoDetourError, or a change no stride can describe (feet crossing)
                 detours.append((side, None, str(error)))
         margins = self._predict(planner, t, [d for _, d, _ in detours if d is not None])
         predicted_by = "batch" if margins is not None else "none"
@@ -138,9 +142,13 @@ class ObstacleReaction:
         if chosen is not None:
             # Strides are relative: the open steps' strides from the committed stance foot F[k0] on.
             prints = chosen.detour.footprints[k0:]
-            planner.set_strides([stride_between(a, b) for a, b in itertools.pairwise(prints)], from_step=first_open)
-        self.result = Avoidance(self.obstacle, t, planner.config.connection, first_open, tuple(before),
-                                tuple(candidates), chosen, predicted_by)  # fmt: skip
+            try:
+                planner.set_strides([stride_between(a, b) for a, b in itertools.pairwise(prints)], first_open)
+            except ValueError as error:  # the walk is ending (its final double support has begun): too late
+                candidates.append(Candidate(chosen.side, None, chosen.zmp_margin, f"refused by the planner: {error}"))
+                chosen = None
+        self.result = Avoidance(self.obstacle, t, mode, first_open, tuple(before), tuple(candidates), chosen,
+                                predicted_by)  # fmt: skip
 
     # ----- the batched prediction ----------------------------------------------------------------------
     def _predict(self, planner: OnlinePlanner, t: float, detours: list[Detour]) -> list[float] | None:
