@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import math
 from pathlib import Path
@@ -14,6 +15,7 @@ from scenario_files import scenario_text
 
 from rtgait.cli.main import main
 from rtgait.core.analysis.rollout import rollout
+from rtgait.core.geometry.footsteps import stride_between
 from rtgait.core.obstacle.avoid import ObstacleReaction
 from rtgait.core.obstacle.walk import avoiding_rollout
 from rtgait.core.planner.online import OnlinePlanner
@@ -220,3 +222,23 @@ def test_a_box_seen_too_late_or_already_passed_leaves_the_walk_as_it_is(x: float
                                             SCENARIO.sole, (box,))  # fmt: skip
     assert avoidance.chosen is None or avoidance.chosen.side == "none"
     assert result.footprints == plain.footprints
+
+
+def test_every_candidate_s_batched_prediction_is_its_rollout_s_margin() -> None:
+    """Each side weighed (round the box, or over a low one: lengths changed) is predicted by the batched operators as
+    a rollout that hands the same change to the planner at the same tick measures it."""
+    low = dataclasses.replace(BOX, y=-0.12, length=0.10, width=0.10, height=0.01)
+    config = dataclasses.replace(SCENARIO, connection="real-time").planner_config()
+    _, (avoidance,) = avoiding_rollout(config, SCENARIO.strides(), SCENARIO.dt, SCENARIO.sole, (low,))
+    assert [c.side for c in avoidance.candidates] == ["left", "right", "over"]
+    k0 = avoidance.first_open
+    for candidate in avoidance.candidates:
+        prints = candidate.detour.footprints[k0:]
+        strides = [stride_between(a, b) for a, b in itertools.pairwise(prints)]
+
+        def change(planner: OnlinePlanner, t: float, strides: list = strides) -> None:
+            planner.set_strides(strides, k0)
+
+        result = rollout(OnlinePlanner(config, SCENARIO.strides()), SCENARIO.dt, SCENARIO.sole,
+                         reactions=[(low.seen_at, change)])  # fmt: skip
+        assert candidate.zmp_margin == pytest.approx(result.zmp_margin_min, abs=1e-9), candidate.side

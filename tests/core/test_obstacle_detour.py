@@ -4,6 +4,7 @@ planned place."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -13,6 +14,7 @@ from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride, place_foo
 from rtgait.core.geometry.swing import blend
 from rtgait.core.obstacle.box import Obstacle
 from rtgait.core.obstacle.detour import Detour, NoDetourError, StrideRules, blocked, plan_detour
+from rtgait.core.obstacle.step_over import plan_step_over
 from rtgait.core.walk.velocity_command import StepLimits
 
 SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.07)
@@ -132,3 +134,29 @@ def test_bad_obstacles_are_refused_in_one_line(values: dict, message: str) -> No
     with pytest.raises(ValueError, match=message) as error:
         Obstacle(**fields)
     assert "\n" not in str(error.value)
+
+
+def test_a_low_box_is_stepped_over_by_the_least_change_of_step_lengths() -> None:
+    before = straight()
+    low = Obstacle(x=1.71, y=-0.12, length=0.10, width=0.10, height=0.01)  # under the right foot's line
+    assert blocked(before, 5, low, SOLE, RULES) == [8]
+    detour = plan_step_over(before, 4, low, SOLE, RULES)
+    prints = list(detour.footprints)
+    assert detour.side == "over" and detour.moved > 0
+    for j in range(5, len(prints)):
+        assert sole_gap(prints[j], low) >= RULES.margin - 1e-9
+        assert prints[j].y == before[j].y  # only the lengths change
+    for i in range(4, len(prints) - 1):
+        length = prints[i + 1].x - prints[i].x
+        assert 0.0 <= length <= LIMITS.length + 1e-9
+    assert prints[-1].x == pytest.approx(prints[-2].x)  # the closing step still brings the feet side by side
+    # The least change: no changed footprint could move 1 mm back toward where it was planned.
+    for j in (j for j in range(len(prints)) if abs(prints[j].x - before[j].x) > 1e-3):
+        back = list(prints)
+        back[j] = dataclasses.replace(prints[j], x=prints[j].x + math.copysign(1e-3, before[j].x - prints[j].x))
+        lengths_ok = all(-1e-12 <= back[i + 1].x - back[i].x <= LIMITS.length + 1e-9 for i in range(4, len(back) - 1))
+        closing_ok = abs(back[-1].x - back[-2].x) < 1e-9
+        assert not (lengths_ok and closing_ok and all(sole_gap(f, low) >= RULES.margin - 1e-9 for f in back[5:]))
+    high = dataclasses.replace(low, height=0.03)
+    with pytest.raises(NoDetourError, match="too high to step over"):
+        plan_step_over(before, 4, high, SOLE, RULES)

@@ -3,17 +3,20 @@
 When the obstacle is seen (a control tick at or after its ``seen_at``), :class:`ObstacleReaction` takes the walk as
 planned then and the first step its connection mode still lets change (:meth:`Walk.first_open_step
 <rtgait.core.walk.walk.Walk.first_open_step>`: in real-time mode the step about to lift off, in quasi-real-time mode
-one double support earlier), makes the least detour on each side of the box (:mod:`rtgait.core.obstacle.detour`),
-predicts each one's smallest ZMP margin over the whole walk, and hands the least change whose prediction keeps the
-ZMP inside the support polygon (margin >= 0) to the planner (:meth:`~rtgait.core.planner.online.OnlinePlanner
-.set_footsteps`, connected by the mode's rule). When no detour keeps it inside, the one with the best margin is taken
-(and the record says so): what the paper's real-time mode risks (``docs/design`` method, section 5).
+one double support earlier), makes the least detour on each side of the box (:mod:`rtgait.core.obstacle.detour`) and,
+when the box is low enough, the least change of step lengths that steps over it
+(:mod:`rtgait.core.obstacle.step_over`), predicts each one's smallest ZMP margin over the whole walk, and hands the
+least change whose prediction keeps the ZMP inside the support polygons (margin >= 0) to the planner (the open steps'
+strides, :meth:`~rtgait.core.planner.online.OnlinePlanner.set_strides`, connected by the mode's rule). When none
+keeps it inside, the one with the best margin is taken (and the record says so): what the paper's real-time mode
+risks (``docs/design`` method, section 5).
 
 The predictions go through the batched operators (:mod:`rtgait.core.analysis.walk_family`): a straight walk whose
-detour changes only stride widths is one member of the family "the same walk with the widths of steps ``k0..N``
-free, handed over at the phase the obstacle is seen", so every candidate of a mode is one row of one evaluation,
-exactly what a rollout of it would give (a test compares them). A walk outside that family (turns, footholds,
-per-step timing, an earlier change) gets no prediction: the least change is taken.
+change keeps it straight (stride lengths and widths only) is one member of the family "the same walk with the length
+and width of each step ``k0..N`` free, handed over at the phase the obstacle is seen", so every candidate of a mode is
+one row of one evaluation, exactly what a rollout of it would give (a test compares them). A walk outside that family
+(turns, footholds, per-step timing, an earlier change, footprints re-anchored to measured ones) gets no prediction:
+the least change is taken.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from rtgait.core.analysis.walk_family import ChangeShape, family_key
 from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride, stride_between
 from rtgait.core.obstacle.box import Obstacle
 from rtgait.core.obstacle.detour import Detour, StrideRules, blocked, no_detour, plan_detour
+from rtgait.core.obstacle.step_over import plan_step_over
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.walk.velocity_command import StepLimits
 
@@ -127,9 +131,15 @@ class ObstacleReaction:
                                     (chosen,), chosen, "none")  # fmt: skip
             return
         detours: list[tuple[str, Detour | None, str]] = []
-        for side in ("left", "right"):
+        sides = ("left", "right", "over") if self.obstacle.can_step_over(rules.step_height, rules.clearance) else (
+            "left", "right")  # fmt: skip
+        for side in sides:
             try:
-                detours.append((side, plan_detour(before, first_open, self.obstacle, self.sole, rules, side, base), ""))
+                if side == "over":
+                    detour = plan_step_over(before, first_open, self.obstacle, self.sole, rules, base)
+                else:
+                    detour = plan_detour(before, first_open, self.obstacle, self.sole, rules, side, base)
+                detours.append((side, detour, ""))
             except ValueError as error:  # NoDetourError, or a change no stride can describe (feet crossing)
                 detours.append((side, None, str(error)))
         margins = self._predict(planner, t, [d for _, d, _ in detours if d is not None])
@@ -171,7 +181,7 @@ class ObstacleReaction:
         decided = q if abs(timeline.start_time(q) - rel) < 1e-12 else q + 1
         if decided > 2 * (steps + 1):
             return None
-        changed = tuple(ChangeShape(i, i, False, True, decided) for i in range(first_open, steps + 1))
+        changed = tuple(ChangeShape(i, i, True, True, decided) for i in range(first_open, steps + 1))
         key = family_key(planner.config, self.sole, self.dt, steps, changed)
         rows = []
         for detour in detours:
@@ -180,9 +190,9 @@ class ObstacleReaction:
             closing = widths[-1]
             if abs(closing.width - width) > _SAME or abs(closing.length) > _SAME or abs(closing.turn) > _SAME:
                 return None  # the closing step moved: not a member of the family
-            if any(abs(s.length - length) > _SAME or abs(s.turn) > _SAME for s in widths[:-1]):
+            if any(abs(s.turn) > _SAME for s in widths[:-1]):
                 return None
-            rows.append([1.0, length, width, *(s.width for s in widths[:-1])])
+            rows.append([1.0, length, width, *(v for s in widths[:-1] for v in (s.length, s.width))])
         result = walk_family(key).evaluate(np.array(rows))
         return [float(m) for m in result.margin]
 

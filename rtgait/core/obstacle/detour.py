@@ -49,11 +49,12 @@ from rtgait.core.geometry.footsteps import Footstep, SoleRect, stride_between
 from rtgait.core.obstacle.box import Obstacle
 from rtgait.core.walk.velocity_command import StepLimits
 
-PassSide = Literal["left", "right", "none"]
+PassSide = Literal["left", "right", "over", "none"]
 
 MOVED = 1e-6
 """A footprint moved by more than this (m) counts as changed."""
-_TOLERANCE = 1e-6  # m: slack of the checks after the solve (which meets its constraints to round-off)
+TOLERANCE = 1e-6
+"""Slack (m) of the checks after a solve, which meets its constraints to round-off."""
 
 
 @dataclass(frozen=True)
@@ -91,7 +92,8 @@ class Detour:
     """One way round the obstacle.
 
     Attributes:
-        side: ``"left"`` or ``"right"`` of the box (``"none"``: the walk was already clear of it).
+        side: ``"left"`` or ``"right"`` of the box, ``"over"`` it (:mod:`rtgait.core.obstacle.step_over`), or
+            ``"none"``: the walk was already clear of it.
         footprints: ``F[base..N + 1]`` after the change (m, rad).
         first_open: the first step whose landing could move (1-based); ``F[first_open + 1]`` is its landing.
         cost: ``sum_j |F_j - F_j^0|^2`` over the footprints (m^2).
@@ -111,13 +113,15 @@ class NoDetourError(ValueError):
     """No detour on that side keeps the footsteps off the obstacle within the step limits (the message says why)."""
 
 
-def _frame(origin: Footstep) -> tuple[np.ndarray, np.ndarray]:
+def frame(origin: Footstep) -> tuple[np.ndarray, np.ndarray]:
+    """The origin (m) and rotation of the frame of ``origin`` (``s`` along its heading, ``l`` to its left)."""
     c, s = math.cos(origin.yaw), math.sin(origin.yaw)
     return np.array([origin.x, origin.y]), np.array([[c, -s], [s, c]])
 
 
-def _to_frame(points: np.ndarray, origin: Footstep) -> np.ndarray:
-    o, R = _frame(origin)
+def to_frame(points: np.ndarray, origin: Footstep) -> np.ndarray:
+    """World points ``(..., 2)`` (m) as ``(s, l)`` in the frame of ``origin``."""
+    o, R = frame(origin)
     return (np.asarray(points, dtype=float) - o) @ R
 
 
@@ -130,9 +134,9 @@ def blocked(
     hits = []
     for j in range(first, len(footprints)):
         foot = footprints[j]
-        touching = obstacle.clearance(foot, sole, rules.margin - _TOLERANCE) < 0.0
+        touching = obstacle.clearance(foot, sole, rules.margin - TOLERANCE) < 0.0
         if not touching and not over and j >= 2:
-            touching = obstacle.segment_hits(footprints[j - 2], foot, sole, rules.margin - _TOLERANCE)
+            touching = obstacle.segment_hits(footprints[j - 2], foot, sole, rules.margin - TOLERANCE)
         if touching:
             hits.append(j)
     return hits
@@ -154,7 +158,7 @@ def plan_detour(
     if not 1 <= k0 < len(prints) - 1:
         raise NoDetourError(f"no step is left to change (first open step {first_open}, {len(prints) - 2 + base} steps)")
     origin = prints[k0]
-    sl = _to_frame(np.array([[f.x, f.y] for f in prints]), origin)
+    sl = to_frame(np.array([[f.x, f.y] for f in prints]), origin)
     s, l0 = sl[:, 0], sl[:, 1]
     over = obstacle.can_step_over(rules.step_height, rules.clearance)
     free = list(range(k0 + 1, len(prints)))  # the unknowns l_j
@@ -171,7 +175,7 @@ def plan_detour(
             else:
                 low -= a * l0[j]
         if not row.any():
-            if low > _TOLERANCE:
+            if low > TOLERANCE:
                 raise NoDetourError(f"a committed footstep already breaks a bound by {low:.3g} m")
             return
         rows.append(row)
@@ -181,7 +185,7 @@ def plan_detour(
     # cannot be stepped over, every swing's straight path where it crosses that range (linear in its two ends).
     extents = []
     for j in range(len(prints)):
-        box = _to_frame(obstacle.keep_out_corners(prints[j], sole, rules.margin), origin)
+        box = to_frame(obstacle.keep_out_corners(prints[j], sole, rules.margin), origin)
         extents.append((box[:, 0].min(), box[:, 0].max(), box[:, 1].min(), box[:, 1].max()))
     sign = 1.0 if side == "left" else -1.0
 
@@ -224,23 +228,23 @@ def plan_detour(
         raise NoDetourError("no footstep comes near the obstacle")
     A, b = np.array(rows), np.array(bounds)
     start = l0[k0 + 1 :]
-    x = start + _least_distance(A, b - A @ start)
+    x = start + least_distance(A, b - A @ start)
     violation = float(np.max(b - A @ x, initial=0.0))
-    if violation > _TOLERANCE:
+    if violation > TOLERANCE:
         raise NoDetourError(
             f"passing {side} needs more sideways reach than the step limits allow (short by {violation:.3g} m)"
         )
-    o, R = _frame(origin)
+    o, R = frame(origin)
     moved_prints = list(prints)
     for j, lj in zip(free, x, strict=True):
         world = o + R @ np.array([s[j], lj])
         moved_prints[j] = Footstep(float(world[0]), float(world[1]), prints[j].yaw, prints[j].side)
-    detour = _detour(side, prints, moved_prints, first_open)
+    detour = make_detour(side, prints, moved_prints, first_open)
     check_detour(prints, detour, obstacle, sole, rules, base)
     return detour
 
 
-def _least_distance(G: np.ndarray, h: np.ndarray) -> np.ndarray:
+def least_distance(G: np.ndarray, h: np.ndarray) -> np.ndarray:
     """The shortest ``z`` with ``G z >= h`` (Lawson and Hanson's least-distance programme, solved exactly by one
     non-negative least squares: with ``u >= 0`` minimising ``|E u - f|``, ``E = [G^T; h^T]``, ``f = (0, .., 0, 1)``,
     the residual ``r = E u - f`` gives ``z = -r[:n] / r[n]``; a zero residual means no ``z`` exists). Returns the
@@ -258,7 +262,8 @@ def _least_distance(G: np.ndarray, h: np.ndarray) -> np.ndarray:
     return -r[:n] / r[-1]
 
 
-def _detour(side: PassSide, before: Sequence[Footstep], after: Sequence[Footstep], first_open: int) -> Detour:
+def make_detour(side: PassSide, before: Sequence[Footstep], after: Sequence[Footstep], first_open: int) -> Detour:
+    """The :class:`Detour` from ``before`` to ``after`` (its cost and moves)."""
     moves = np.array([math.hypot(a.x - b.x, a.y - b.y) for a, b in zip(before, after, strict=True)])
     return Detour(side, tuple(after), first_open, float(np.sum(moves**2)), int(np.count_nonzero(moves > MOVED)),
                   float(moves.max(initial=0.0)))  # fmt: skip
@@ -280,7 +285,7 @@ def check_detour(
         if all(prints[j] == before[j] for j in (i - 1, i, i + 1)):
             continue  # a step the walk already had
         stride = stride_between(prints[i], prints[i + 1])  # raises when the feet cross
-        if not rules.narrowest - _TOLERANCE <= stride.width <= rules.widest + _TOLERANCE:
+        if not rules.narrowest - TOLERANCE <= stride.width <= rules.widest + TOLERANCE:
             raise NoDetourError(f"step {i + base} would stand {stride.width:.3f} m wide, outside the step limits")
         c, s = math.cos(prints[i].yaw), math.sin(prints[i].yaw)
         dx, dy = prints[i + 1].x - prints[i - 1].x, prints[i + 1].y - prints[i - 1].y
@@ -290,23 +295,16 @@ def check_detour(
         odx, ody = before[i + 1].x - before[i - 1].x, before[i + 1].y - before[i - 1].y
         old_share = math.hypot(old.length / limits.length, (-s * odx + c * ody) / limits.lateral,
                                old.turn / (0.5 * limits.turn))  # fmt: skip
-        if share > max(1.0, old_share) + _TOLERANCE:
+        if share > max(1.0, old_share) + TOLERANCE:
             raise NoDetourError(f"step {i + base} would use {share:.3f} of the step limits' ellipsoid (at most 1)")
 
 
 def no_detour(footprints: Sequence[Footstep], first_open: int) -> Detour:
     """The walk unchanged: already clear of the obstacle."""
-    return _detour("none", footprints, footprints, first_open)
+    return make_detour("none", footprints, footprints, first_open)
 
 
 __all__ = [
-    "MOVED",
-    "Detour",
-    "NoDetourError",
-    "PassSide",
-    "StrideRules",
-    "blocked",
-    "check_detour",
-    "no_detour",
-    "plan_detour",
-]
+    "MOVED", "TOLERANCE", "Detour", "NoDetourError", "PassSide", "StrideRules", "blocked", "check_detour", "frame",
+    "least_distance", "make_detour", "no_detour", "plan_detour", "to_frame",
+]  # fmt: skip
