@@ -23,7 +23,7 @@ from rtgait.core.planner.online import OnlinePlanner
 from rtgait.scenario.loading import builtin_scenarios, load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
 
-BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "sidestep", "turn")
+BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "obstacle", "sidestep", "turn")
 
 VALID = """\
 name = "probe"
@@ -115,6 +115,10 @@ def test_builtin_loads_under_its_own_name_with_the_shared_robot(name: str) -> No
             0.005, 3, 40, "quasi-real-time",
         )  # fmt: skip
         assert scenario.changes == () and scenario.guide is not None
+        return
+    if name == "obstacle":  # the paper's Fig. 1: no scheduled change, a box seen while walking
+        assert (scenario.dt, scenario.horizon_steps, scenario.steps, len(scenario.obstacles)) == (0.005, 3, 16, 1)
+        assert scenario.changes == ()
         return
     assert (scenario.dt, scenario.horizon_steps, scenario.steps) == (0.005, 3, 10)
     assert len(scenario.changes) == 1 and scenario.changes[0].step == 5
@@ -314,7 +318,7 @@ def test_bad_input_raises_one_line_naming_the_field(tmp_path: Path, case: str, e
 
 
 def test_unknown_scenario_lists_the_builtins() -> None:
-    with pytest.raises(ScenarioError, match="fig4, fig6, fig7, fig8, fig8-real-time, fig11, guided, sidestep, turn"):
+    with pytest.raises(ScenarioError, match=", ".join(BUILTINS)):
         load_scenario("fig5")
 
 

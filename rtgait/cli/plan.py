@@ -22,7 +22,9 @@ from rtgait.cli.common import (
     robot_walk,
 )
 from rtgait.core.analysis.rollout import Rollout, rollout
+from rtgait.core.obstacle.walk import ObstacleRun, avoiding_rollout
 from rtgait.core.planner.online import OnlinePlanner
+from rtgait.io.obstacle_outputs import obstacle_runs
 from rtgait.io.plan_files import plan_files, plan_report, write_plan_outputs
 from rtgait.outputs import OutputError, check_destination, write_text_atomic
 from rtgait.scenario.footholds import footstep_plan_text
@@ -105,17 +107,22 @@ def _check_order(order: int | None, scenario: Scenario) -> None:
         )
 
 
-def _run(scenario: Scenario, quiet: bool) -> tuple[Rollout, float]:
-    """Roll the scenario out; returns the rollout and its wall time (s)."""
+def _run(scenario: Scenario, quiet: bool) -> tuple[Rollout, float, ObstacleRun | None]:
+    """Roll the scenario out, reacting to its obstacles if any; returns the rollout, its wall time (s) and, with
+    obstacles, the run of the scenario's own connection mode."""
     ticks = scenario.duration / scenario.dt
     show = not quiet and ticks >= PROGRESS_MIN_TICKS and sys.stderr.isatty()
     label = f"{PROG}: planning {scenario.name}"
     progress = progress_printer(sys.stderr, label, total=math.floor(ticks + 1e-9) + 1, unit="ticks") if show else None
-    planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
     began = time.perf_counter()
+    if scenario.obstacles:
+        result, seen = avoiding_rollout(scenario.planner_config(), scenario.strides(), scenario.dt, scenario.sole,
+                                        scenario.obstacles, scenario.changes, progress=progress)  # fmt: skip
+        return result, time.perf_counter() - began, ObstacleRun(scenario.connection, result, seen)
+    planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
     result = rollout(planner, scenario.dt, scenario.sole, scenario.changes, progress=progress)
     elapsed = time.perf_counter() - began
-    return result, elapsed
+    return result, elapsed, None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -126,13 +133,15 @@ def run(args: argparse.Namespace) -> int:
     robot_name = args.robot or ("talos" if args.html or args.compensate is not None else None)
     require_extras(figures, args.html)
     fmt = args.figure_format
-    check_destination(out, plan_files(figures, robot_name is not None, args.html, fmt))
+    check_destination(out, plan_files(figures, robot_name is not None, args.html, fmt, bool(scenario.obstacles)))
     _check_export(args.export_footsteps)
     robot = None
     if robot_name is not None:
         robot = load_robot(robot_name)
         scenario = robot_walk(scenario, robot)
-    result, wall_time = _run(scenario, args.quiet)
+    result, wall_time, own = _run(scenario, args.quiet)
+    # With obstacles, the walk under each of the paper's connection modes, for the figure like its Fig. 1.
+    walks = obstacle_runs(scenario, own) if scenario.obstacles else None
     robot_run = None
     if robot is not None:
         from rtgait.robot.pipeline import run_on_robot
@@ -141,7 +150,7 @@ def run(args: argparse.Namespace) -> int:
         robot_run = run_on_robot(robot, result, scenario.cog_height, scenario.gravity, args.compensate)
     summary = write_plan_outputs(
         result, scenario, out, figures=figures, robot_run=robot_run, html=args.html, fmt=fmt,
-        background=args.replay_background,
+        background=args.replay_background, obstacle_runs=walks,
     )  # fmt: skip
     if args.export_footsteps is not None:
         try:

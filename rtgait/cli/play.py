@@ -144,7 +144,7 @@ def _live_walk(
     """The controller, the closed loop and the live walk of ``scenario`` on ``robot``, with the state, sensors and
     model error of ``args`` (:func:`~rtgait.cli.common.state_settings`)."""
     from rtgait.control.controller import make_controller
-    from rtgait.io.sim_run import planned_walk
+    from rtgait.io.sim_run import obstacle_reactions, planned_walk
     from rtgait.robot.motion import whole_body_motion
     from rtgait.sim.live import LiveWalk
     from rtgait.sim.loop import ClosedLoop, LoopOptions
@@ -155,7 +155,8 @@ def _live_walk(
     settings, _ = controller_settings(robot.description, scenario, None, ())  # their [control] tables, as simulate
     if not by_command:  # as simulate does: a walk the robot cannot reach is refused before it starts
         whole_body_motion(robot, planned_walk(scenario, robot))
-    sim = build_sim_model(robot, SimConfig(gains=gains, sensors=sensors, model_error=model_error))
+    obstacles = () if by_command else walk.obstacles  # drawn, and stepped around when seen
+    sim = build_sim_model(robot, SimConfig(gains=gains, sensors=sensors, model_error=model_error), obstacles)
     strides = None if by_command else walk.strides()
     controller = make_controller(
         level,
@@ -166,7 +167,10 @@ def _live_walk(
         dt=sim.control_dt,
         options=settings,
     )
-    options = LoopOptions(changes=() if by_command else walk.changes, drive=drive, state=state)  # type: ignore[arg-type]
+    options = LoopOptions(
+        changes=() if by_command else walk.changes, reactions=obstacle_reactions(walk) if obstacles else (),
+        drive=drive, state=state,  # type: ignore[arg-type]
+    )  # fmt: skip
     loop = ClosedLoop(sim, controller, options, keep=KEEP)
     force = push_force if push_force is not None else robot.mass * PUSH_SPEED / 0.1
     return LiveWalk(loop, by_command, force), walk

@@ -484,15 +484,21 @@ def _physics(
 ) -> SimResult:
     """Walk ``scenario`` (as ``robot`` walks it: ``walk``) in MuJoCo, the controller on ``state``; a guided walk's
     outcome goes into ``extra``."""
-    from rtgait.io.sim_run import loop_options, simulate
+    from rtgait.io.obstacle_outputs import sim_obstacle_facts
+    from rtgait.io.sim_run import loop_options, obstacle_reactions, simulate
     from rtgait.sim.loop_options import LoopOptions
     from rtgait.sim.model import build_sim_model
 
-    sim = build_sim_model(robot, config)
+    sim = build_sim_model(robot, config, walk.obstacles)
     driven = LoopOptions(drive=drive, state=state)  # type: ignore[arg-type]
     if scenario.guide is None or velocity is not None:
-        return simulate(scenario, robot, controller=controller, controller_options=options, velocity=velocity,
-                        push=pushes or None, sim=sim, progress=progress, options=driven)  # type: ignore[arg-type]  # fmt: skip
+        reactions = obstacle_reactions(walk) if velocity is None else ()
+        result = simulate(scenario, robot, controller=controller, controller_options=options, velocity=velocity,
+                          push=pushes or None, sim=sim, progress=progress,
+                          options=dataclasses.replace(driven, reactions=reactions))  # type: ignore[arg-type]  # fmt: skip
+        if reactions:
+            extra["obstacles"] = sim_obstacle_facts(reactions, result.sole_pose, walk.sole)
+        return result
     # Led by the hand: the outcome (where the person led the robot) goes into the summary too.
     from rtgait.sim.guided import simulate_guided
 

@@ -17,12 +17,14 @@ import numpy as np
 from rtgait.core.analysis.rollout import Rollout
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.planner.online import SAMPLE_FIELDS
+from rtgait.io.obstacle_outputs import obstacle_report_lines, obstacle_summary
 from rtgait.io.summary_json import summary_text
 from rtgait.outputs import Staging, staged_outputs, write_atomic
 from rtgait.scenario.scenario import Scenario
-from rtgait.viz.run_data import figure_file, margin_marker, plan_figure_files, plan_free_segments
+from rtgait.viz.run_data import OBSTACLE_FIGURE, figure_file, margin_marker, plan_figure_files, plan_free_segments
 
 if TYPE_CHECKING:  # the robot layer is optional (the [robot] extra)
+    from rtgait.core.obstacle.walk import ObstacleRun
     from rtgait.robot.pipeline import RobotRun
 
 __all__ = [
@@ -217,12 +219,14 @@ def summarize(rollout: Rollout, scenario: Scenario) -> dict[str, Any]:
 # ----- the whole set of a plan's outputs ------------------------------------------------------------------------
 
 
-def plan_files(figures: bool, robot: bool, html: bool, fmt: str = "png") -> list[str]:
+def plan_files(figures: bool, robot: bool, html: bool, fmt: str = "png", obstacles: bool = False) -> list[str]:
     """The files :func:`write_plan_outputs` writes with these options (figures in the format ``fmt``: png, pdf or
-    svg), in the order the summary lists them."""
+    svg; ``obstacles``: the scenario has some, and its figure like the paper's Fig. 1 is added), in the order the
+    summary lists them."""
     names = ["trajectory.csv", "summary.json"] + (["joints.csv"] if robot else [])
     if figures:
         names += [*plan_figure_files(fmt), *([figure_file("multibody_zmp", fmt)] if robot else [])]
+        names += [figure_file(OBSTACLE_FIGURE, fmt)] if obstacles else []
     return names + (["replay.html"] if robot and html else [])
 
 
@@ -236,6 +240,7 @@ def write_plan_outputs(
     html: bool = False,
     fmt: str = "png",
     background: str = "sky",
+    obstacle_runs: list[ObstacleRun] | None = None,
 ) -> dict[str, Any]:
     """Write what ``rtgait plan`` writes into the folder ``out``, replacing the previous outputs of the same names
     together or not at all (:func:`rtgait.outputs.staged_outputs`); returns the summary.
@@ -249,6 +254,8 @@ def write_plan_outputs(
         html: with a robot, also the 3D replay ``replay.html`` (needs meshcat).
         fmt: the figures' file format, ``"png"``, ``"pdf"`` or ``"svg"``.
         background: the replay's background, ``"sky"`` or ``"white"``.
+        obstacle_runs: with obstacles, the walk under each connection mode (:func:`rtgait.io.obstacle_outputs
+            .obstacle_runs`): adds ``obstacle_walks`` to the summary and, with figures, the obstacle figure.
 
     Raises:
         rtgait.outputs.OutputError: the outputs could not be written; ``out`` is unchanged.
@@ -260,8 +267,15 @@ def write_plan_outputs(
         if robot_run is not None:
             write_joints_csv(*robot_run.motion.table(), staging.add("joints.csv"))
             summary.update(robot_run.summary())
+        if obstacle_runs:
+            summary["obstacle_walks"] = obstacle_summary(obstacle_runs)
         if figures:
             _write_figures(result, scenario, robot_run, staging, fmt)
+            if obstacle_runs:
+                from rtgait.viz.obstacle_figure import plot_obstacle_walks
+
+                path = staging.add(figure_file(OBSTACLE_FIGURE, fmt))
+                plot_obstacle_walks(obstacle_runs, scenario.sole, scenario.name, path)
         if html and robot_run is not None:
             _write_replay(result, scenario, robot_run, staging.add("replay.html"), background)
         summary["rows"] = rows
@@ -394,6 +408,7 @@ def plan_report(summary: dict[str, Any], out: Path, wall_time: float) -> str:
         )
     else:
         lines.append(f"replans     none (first plan {times['first_plan']:.0f} µs)")
+    lines += obstacle_report_lines(summary.get("obstacle_walks", []))
     if "robot" in summary:
         lines += _robot_lines(summary)
     lines.append(f"outputs     {out}{os.sep}: {', '.join(summary['files'])} ({summary['rows']} rows)")

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from rtgait.io.obstacle_outputs import sim_obstacle_lines
 from rtgait.io.summary_json import summary_text
 from rtgait.outputs import write_atomic, write_text_atomic
 from rtgait.robot.model import RobotModel
@@ -331,6 +332,7 @@ def sim_report(summary: dict[str, Any], out: Path) -> str:
             f"{100.0 * e['contact_agreement']:.1f} % of the ticks, {e['landings_missed']} of {e['landings']} landings "
             "missed"
         )
+    lines += sim_obstacle_lines(summary)
     if pushes:
         lines.append("pushes      " + ", ".join(f"{p['impulse_norm']:.1f} N s at {p['start']:.2f} s" for p in pushes))
     lines.append(

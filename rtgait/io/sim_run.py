@@ -23,6 +23,7 @@ import mujoco
 from rtgait.control.control_table import control_options
 from rtgait.control.controller import ControllerOptions, WalkingController, make_controller
 from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
+from rtgait.core.obstacle.avoid import ObstacleReaction
 from rtgait.core.planner.levels import ControllerLevel, check_level
 from rtgait.core.planner.online import OnlinePlanner, VelocityCommand
 from rtgait.core.push import Push
@@ -140,7 +141,7 @@ def simulate(
     if controller_options is None:
         controller_options = robot_and_scenario_options(robot, scenario)
     if sim is None:
-        sim = build_sim_model(robot, sim_config(config, control_dt, physics_dt))
+        sim = build_sim_model(robot, sim_config(config, control_dt, physics_dt), walk.obstacles)
     elif sim.robot is not robot:
         raise ValueError(f"the simulation model was built for another model of {sim.robot.name!r}")
     else:
@@ -156,9 +157,18 @@ def simulate(
     command, schedule = _velocity_schedule(velocity)
     level, changes, stop_after = _controller(walk, command, controller, sim, controller_options)
     walk_options = dataclasses.replace(
-        base_options, changes=changes, stop_after_steps=stop_after, velocity_changes=schedule
-    )
+        base_options, changes=changes, stop_after_steps=stop_after, velocity_changes=schedule,
+        # The scenario's obstacles react when seen (a walk of footsteps), unless the caller made their reactions (to
+        # read what they did).
+        reactions=base_options.reactions or (obstacle_reactions(walk) if velocity is None else ()),
+    )  # fmt: skip
     return run_sim_loop(sim, level, walk_options, progress=progress)
+
+
+def obstacle_reactions(walk: Scenario) -> tuple[tuple[float, ObstacleReaction], ...]:
+    """A reaction per obstacle of ``walk`` (as the robot walks it: its sole), each called when the obstacle is seen
+    (:class:`~rtgait.core.obstacle.avoid.ObstacleReaction`, kept in the returned pairs for what it did)."""
+    return tuple((box.seen_at, ObstacleReaction(box, walk.sole, walk.dt)) for box in walk.obstacles)
 
 
 def robot_and_scenario_options(

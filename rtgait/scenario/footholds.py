@@ -103,7 +103,7 @@ def parse_footstep_plan(data: dict[str, Any], source: str = "") -> Scenario:
         data,
         "",
         ("name", "connection", "robot", "timing", "footstep"),
-        ("description", "auto_margin", "control", "walk"),
+        ("description", "auto_margin", "control", "walk", "obstacle"),
     )
     common = parse_common(data)
     walk = _FILES.table(data.get("walk", {}), "walk")

@@ -8,7 +8,7 @@ and are loaded by name; any other file is loaded by path. Its parts, in SI units
   with an optional ``auto_margin``);
 * ``[robot]``: ``cog_height``, optional ``gravity`` and ``mass`` (the point mass pushes act on in ``rtgait simulate
   --model lipm``), and ``[robot.sole]``: the sole rectangle ``front``, ``back``, ``inner``, ``outer`` around the foot
-  frame;
+  frame; optional ``[robot.velocity]``: the robot's stride limits (a robot description's ``[velocity]`` keys);
 * ``[timing]``: ``single_support``, ``double_support``, ``dt`` (the rollout's control period), ``horizon_steps``
   (steps covered by each plan), optional ``start``, ``end`` and ``settle`` durations;
 * ``[walk]``: ``steps`` forward steps of ``step_length``, ``step_width`` apart, ``step_height`` high, optional
@@ -18,6 +18,7 @@ and are loaded by name; any other file is loaded by path. Its parts, in SI units
 * ``[guide]`` (optional): a path along which a person leads the robot by the hand in ``rtgait simulate``
   (:class:`~rtgait.scenario.guide_path.GuidePath`, :mod:`rtgait.sim.guided`); the walk's footsteps are then ignored
   and ``walk.steps`` is the most steps the robot may take;
+* ``[[obstacle]]`` (optional): boxes seen while walking, which the walk steps around (:mod:`rtgait.scenario.obstacles`);
 * ``[control]`` (optional): the controller's settings for this walk (``docs/cli_and_scenarios.md``, "Controller
   settings"), applied over the robot description's.
 
@@ -62,7 +63,8 @@ from rtgait.core.limits import (
     MIN_GRAVITY,
     MIN_PHASE_DURATION,
 )
-from rtgait.core.planner.config import ALL_CONNECTION_MODES, MAX_AUTO_MARGIN
+from rtgait.core.obstacle.box import Obstacle
+from rtgait.core.planner.config import ALL_CONNECTION_MODES, MAX_AUTO_MARGIN, VelocityLimits
 from rtgait.core.planner.online import ConnectionMode, PlannerConfig
 from rtgait.scenario.checks import (
     PHASES,
@@ -73,6 +75,7 @@ from rtgait.scenario.checks import (
     within,
 )
 from rtgait.scenario.guide_path import GuidePath
+from rtgait.scenario.obstacles import check_seen_within, parse_obstacles, parse_robot_velocity
 from rtgait.scenario.tomlfile import NumberRule, SettingsPairs, TomlFiles
 
 __all__ = [
@@ -145,6 +148,10 @@ class Scenario:
         control: the ``[control]`` table, the controller's settings for this walk, as read
             (:data:`~rtgait.scenario.tomlfile.SettingsPairs`): ``rtgait simulate`` applies them over the robot's
             (:mod:`rtgait.control.control_table`, which checks them).
+        obstacles: boxes the walk sees while walking and steps around (``[[obstacle]]``,
+            :mod:`rtgait.scenario.obstacles`).
+        velocity: the robot's stride limits (``[robot.velocity]``), applied over the planner's defaults; ``None``:
+            the defaults.
     """
 
     name: str
@@ -169,6 +176,8 @@ class Scenario:
     auto_margin: float = 0.01
     footholds: tuple[Footstep, ...] | None = None
     control: SettingsPairs = ()
+    obstacles: tuple[Obstacle, ...] = ()
+    velocity: VelocityLimits | None = None
 
     def __post_init__(self) -> None:
         # The TOML loader already checks every field with its file path; these checks cover scenarios built in
@@ -199,6 +208,7 @@ class Scenario:
         check_distinct_steps([change.step for change in self.changes], "walk.change")
         if not (isinstance(self.control, tuple) and all(isinstance(p, tuple) and len(p) == 2 for p in self.control)):
             raise ScenarioError(f"control must be a tuple of (key, value) pairs, got {self.control!r}")
+        check_seen_within(self.obstacles, self.duration)
         if self.footholds is not None:
             if len(self.footholds) != self.steps + 1:
                 raise ScenarioError(
@@ -221,8 +231,8 @@ class Scenario:
             raise ScenarioError(f"dt must not exceed the shortest phase ({shortest} s), got {self.dt}")
 
     def planner_config(self) -> PlannerConfig:
-        """The online planner's parameters for this scenario."""
-        return PlannerConfig(
+        """The online planner's parameters for this scenario (with its ``[robot.velocity]`` limits, if any)."""
+        config = PlannerConfig(
             cog_height=self.cog_height,
             timing=self.timing,
             step_width=self.step_width,
@@ -235,6 +245,12 @@ class Scenario:
             auto_margin=self.auto_margin,
             sole=self.sole if self.connection == "auto" else None,
         )
+        if self.velocity is None:
+            return config
+        try:
+            return self.velocity.apply(config, "robot.velocity")
+        except ValueError as error:
+            raise ScenarioError(str(error)) from None
 
     def strides(self) -> list[Stride]:
         """Strides of the walk as planned before any change: ``steps`` forward ones, then a closing one (of a
@@ -334,8 +350,8 @@ def _parse_guide(raw: Any) -> GuidePath:
 
 def parse_common(data: dict[str, Any]) -> dict[str, Any]:
     """The parts a scenario and a footstep plan (:mod:`rtgait.scenario.footholds`) share: ``name``, ``description``,
-    ``connection``, ``auto_margin``, ``[robot]``, ``[timing]`` and ``[control]``, checked (``[control]``'s keys by
-    :mod:`rtgait.control.control_table` when applied), as :class:`Scenario` keywords."""
+    ``connection``, ``auto_margin``, ``[robot]``, ``[timing]``, ``[control]`` and ``[[obstacle]]``, checked
+    (``[control]``'s keys by :mod:`rtgait.control.control_table` when applied), as :class:`Scenario` keywords."""
     name = _FILES.string(data, "name")
     if not _NAME_PATTERN.fullmatch(name):
         raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
@@ -350,7 +366,7 @@ def parse_common(data: dict[str, Any]) -> dict[str, Any]:
         auto_margin = _number(data, "auto_margin", "", unit="m", bounds=(-MAX_AUTO_MARGIN, MAX_AUTO_MARGIN))
 
     robot = _FILES.table(data["robot"], "robot")
-    _FILES.check_keys(robot, "robot", ("cog_height", "sole"), ("gravity", "mass"))
+    _FILES.check_keys(robot, "robot", ("cog_height", "sole"), ("gravity", "mass", "velocity"))
     cog_height = _number(robot, "cog_height", "robot", rule="> 0", unit="m", bounds=_COG_HEIGHT_BOUNDS)
     gravity = 9.81
     if "gravity" in robot:
@@ -379,10 +395,12 @@ def parse_common(data: dict[str, Any]) -> dict[str, Any]:
         timing_table["horizon_steps"], "timing.horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY
     )
     control = _FILES.settings(data["control"], "control") if "control" in data else ()
+    velocity = parse_robot_velocity(robot["velocity"]) if "velocity" in robot else None
+    obstacles = parse_obstacles(data["obstacle"]) if "obstacle" in data else ()
     return {
         "name": name, "description": description, "connection": connection, "auto_margin": auto_margin,
         "cog_height": cog_height, "gravity": gravity, "mass": mass, "sole": sole, "timing": timing, "dt": dt,
-        "horizon_steps": horizon_steps, "control": control,
+        "horizon_steps": horizon_steps, "control": control, "velocity": velocity, "obstacles": obstacles,
     }  # fmt: skip
 
 
@@ -417,7 +435,10 @@ def build_scenario(**fields: Any) -> Scenario:
 def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
     """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
     _FILES.check_keys(
-        data, "", ("name", "connection", "robot", "timing", "walk"), ("description", "guide", "auto_margin", "control")
+        data,
+        "",
+        ("name", "connection", "robot", "timing", "walk"),
+        ("description", "guide", "auto_margin", "control", "obstacle"),
     )
     common = parse_common(data)
     connection = common["connection"]

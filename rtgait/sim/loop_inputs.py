@@ -3,7 +3,8 @@
 
 In this order, at tick time ``t`` (s, walk clock):
 
-1. the ``LoopOptions.on_tick`` hook, with the MuJoCo state;
+1. the ``LoopOptions.on_tick`` hook, with the MuJoCo state, then the ``LoopOptions.reactions`` whose time has come
+   (each once, in time order);
 2. the footstep changes (``LoopOptions.changes``) whose connection-mode deadline
    (:meth:`~rtgait.core.planner.online.OnlinePlanner.change_deadline`) has come, ``t >= deadline``, in deadline order,
    as :func:`rtgait.core.analysis.rollout.rollout` gives them;
@@ -49,6 +50,7 @@ class WalkInputs:
     ) -> None:
         self.planner, self.options, self._on_stop = planner, options, on_stop
         self._pending: list[ScheduledChange] = []
+        self._reactions = sorted(options.reactions, key=lambda r: r[0])
         self._commands = list(options.velocity_changes)
         self._stop_after = stop_after
         self._stopped = stop_after is None
@@ -63,6 +65,9 @@ class WalkInputs:
         planner = self.planner
         if self.options.on_tick is not None:
             self.options.on_tick(t, data)
+        reactions = self._reactions
+        while reactions and t >= reactions[0][0]:
+            reactions.pop(0)[1](planner, t)
         pending = self._pending
         while pending and t >= planner.change_deadline(pending[0].step):
             change = pending.pop(0)

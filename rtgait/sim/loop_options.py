@@ -47,6 +47,9 @@ class LoopOptions:
             (s) and the MuJoCo state, before the footstep changes and the controller: a hook for simulated sensors
             and operators (e.g. a hand pull through ``data.xfrc_applied`` that sets the planner's velocity command,
             :mod:`rtgait.sim.guided`). It may call ``planner.stop()``.
+        reactions: ``(time, react)`` pairs: ``react(planner, t)`` is called once, at the first tick ``t`` (s, walk
+            clock) at or after ``time``, after ``on_tick`` and before the footstep changes (an obstacle seen then:
+            :class:`~rtgait.core.obstacle.avoid.ObstacleReaction`).
         duration: for a walk by command that ``on_tick`` ends: simulate this long after the walk's start (s)
             instead of a length known in advance; ``stop_after_steps`` is then not needed.
         replay_period: the robot's whole configuration is recorded every this many seconds (rounded to whole
@@ -76,6 +79,7 @@ class LoopOptions:
     velocity_changes: tuple[tuple[float, float, float, float], ...] = ()
     replay_period: float = 0.04
     on_tick: Callable[[float, mujoco.MjData], None] | None = None
+    reactions: tuple[tuple[float, Callable[[OnlinePlanner, float], object]], ...] = ()
     duration: float | None = None
     state: StateSource = DEFAULT_STATE
     drive: DriveMode = "position"

@@ -31,11 +31,13 @@ qy, qz)``; joints are matched by URDF name, never by order.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
+from rtgait.core.obstacle.box import Obstacle
 from rtgait.robot.description import RobotError
 from rtgait.robot.model import RobotModel
 from rtgait.sim.actuation import Actuation, add_actuators, own_gains, resolve_actuation
@@ -43,6 +45,7 @@ from rtgait.sim.config import SimConfig
 from rtgait.sim.contact_model import add_floor, add_leg_shapes, add_sole, exclude_pairs, touching_pairs
 from rtgait.sim.model_error import ModelError, apply_model_error, draw
 from rtgait.sim.motors import MotorModel, add_friction, resolve_motors
+from rtgait.sim.obstacles import add_obstacles
 from rtgait.sim.sensor_sites import SensorLayout, add_sensors
 from rtgait.sim.urdf_import import MESH_FORMATS, MeshSkippedWarning, compile_spec, lock_joint, urdf_for_mujoco
 
@@ -240,8 +243,11 @@ def _half_sitting_qpos(model: mujoco.MjModel, robot: RobotModel) -> np.ndarray:
     return qpos
 
 
-def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) -> SimModel:
-    """Build the MuJoCo model of ``robot`` (a loaded robot, or a built-in robot name / description file path).
+def build_sim_model(
+    robot: RobotModel | str, config: SimConfig | None = None, obstacles: Sequence[Obstacle] = ()
+) -> SimModel:
+    """Build the MuJoCo model of ``robot`` (a loaded robot, or a built-in robot name / description file path), with
+    a box geom for each of ``obstacles`` (:mod:`rtgait.sim.obstacles`).
 
     Raises:
         RobotError: the URDF cannot be read or MuJoCo cannot compile the edited model (message names the cause).
@@ -271,6 +277,7 @@ def build_sim_model(robot: RobotModel | str, config: SimConfig | None = None) ->
     for side in ("left", "right"):
         add_sole(spec, robot, side, root, config)
     add_floor(spec, config)
+    add_obstacles(spec, obstacles)
     shapes = add_leg_shapes(spec, robot) if config.leg_collisions else []
     actuation = resolve_actuation(robot, config.control_dt, config.physics_dt, config.gains)
     actuation = actuation.scaled(config.gain_scale, config.armature_scale)

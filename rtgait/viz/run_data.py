@@ -31,6 +31,7 @@ if TYPE_CHECKING:
 __all__ = [
     "FIGURE_FORMATS",
     "MARGIN_TIE_TOLERANCE",
+    "OBSTACLE_FIGURE",
     "PENDULUM_FIGURE",
     "PLAN_FIGURES",
     "FigureInfo",
@@ -53,6 +54,9 @@ FIGURE_FORMATS = ("png", "pdf", "svg")
 
 PLAN_FIGURES = ("zmp_cog", "zmp_deviation", "top_view", "zmp_margin")
 """The figures of ``rtgait plan``, by file stem, in the order they are written and listed."""
+
+OBSTACLE_FIGURE = "obstacle"
+"""The figure of a plan with obstacles (:mod:`rtgait.viz.obstacle_figure`), by file stem."""
 
 PENDULUM_FIGURE = "pendulum"
 """The figure of ``rtgait simulate --model lipm``, by file stem."""

@@ -110,6 +110,7 @@ def rollout(
     changes: Sequence[ScheduledChange] = (),
     duration: float | None = None,
     progress: Callable[[float], None] | None = None,
+    reactions: Sequence[tuple[float, Callable[[OnlinePlanner, float], object]]] = (),
 ) -> Rollout:
     """Start ``planner`` at t = 0 and sample it every ``dt`` (s) until the walk has come to rest.
 
@@ -120,6 +121,8 @@ def rollout(
         changes: footstep changes, each handed over at its connection-mode deadline.
         duration: how long to run (s); default: until the walk has settled.
         progress: called now and then with the fraction done, for long runs.
+        reactions: ``(time, react)`` pairs: ``react(planner, t)`` is called at the first tick ``t`` at or after
+            ``time`` (s), before that tick is sampled (an obstacle seen then: :mod:`rtgait.core.obstacle.avoid`).
     """
     if not (math.isfinite(dt) and dt >= MIN_DT):
         raise ValueError(f"dt must be a finite period >= {MIN_DT:g} s, got {dt}")
@@ -135,6 +138,7 @@ def rollout(
         )
     planner.start(0.0)
     pending = sorted(changes, key=lambda c: planner.change_deadline(c.step))
+    waiting = sorted(reactions, key=lambda r: r[0])
     values = np.empty((n_ticks, len(SAMPLE_FIELDS)))
     support = np.empty(n_ticks, dtype=object)
     phase = np.empty(n_ticks, dtype=int)
@@ -147,6 +151,8 @@ def rollout(
     last_phase = -1
     for k in range(n_ticks):
         t = float(times[k])
+        while waiting and t >= waiting[0][0]:
+            waiting.pop(0)[1](planner, t)
         while pending and t >= planner.change_deadline(pending[0].step):
             change = pending.pop(0)
             planner.change_step(
