@@ -1,5 +1,10 @@
 """Footsteps, strides, sole rectangles and the phase timeline of a walk.
 
+A footprint is a foothold in 3D: its foot frame position ``(x, y, z)`` (m), heading ``yaw`` and the support
+surface's ``pitch`` and ``roll`` (rad, rotations about the foot's lateral and forward axes; 0 on level ground). A
+stride carries the height change ``rise = z_landing - z_stance`` and the landing surface's pitch and roll, so that a
+change of a stride's length keeps the step's height.
+
 Footprints are numbered ``F[0], F[1], ...``: ``F[0]`` is the standing position of the foot that swings first,
 ``F[1]`` that of the other foot, and ``F[i + 1]`` is where step ``i`` (1-based) lands. Step ``i`` swings the
 foot from ``F[i - 1]`` to ``F[i + 1]`` while the robot stands on ``F[i]``.
@@ -20,7 +25,14 @@ from typing import Literal
 import numpy as np
 
 from rtgait.core.input_bounds import InputOutOfBoundsError
-from rtgait.core.limits import MAX_PHASE_DURATION, MAX_PHASE_W_T, MAX_STRIDE, MIN_PHASE_DURATION, check_range
+from rtgait.core.limits import (
+    MAX_PHASE_DURATION,
+    MAX_PHASE_W_T,
+    MAX_STRIDE,
+    MAX_SURFACE_TILT,
+    MIN_PHASE_DURATION,
+    check_range,
+)
 
 Side = Literal["left", "right"]
 SIDES: tuple[Side, Side] = ("left", "right")
@@ -40,14 +52,29 @@ def _require_finite(name: str, value: float) -> None:
         raise InputOutOfBoundsError(f"{name} must be a finite number, got {value}")
 
 
+def _check_height_and_tilt(what: str, z: float, pitch: float, roll: float) -> None:
+    """``z`` within +-:data:`MAX_STRIDE` m, ``pitch`` and ``roll`` within +-:data:`MAX_SURFACE_TILT` rad."""
+    if not abs(z) <= MAX_STRIDE:  # also refuses NaN
+        raise InputOutOfBoundsError(f"{what} z (height) must be finite and within +-{MAX_STRIDE:g} m, got {z}")
+    for name, value in (("pitch", pitch), ("roll", roll)):
+        if not abs(value) <= MAX_SURFACE_TILT:
+            raise InputOutOfBoundsError(
+                f"{what} {name} must be finite and within +-{MAX_SURFACE_TILT:g} rad, got {value}"
+            )
+
+
 @dataclass(frozen=True, slots=True)
 class Footstep:
-    """A footprint on the ground: foot frame position (m), yaw (rad) and which foot."""
+    """A footprint: foot frame position (m), yaw (rad), which foot, and its height ``z`` (m) and the support
+    surface's ``pitch`` and ``roll`` (rad, each within :data:`~rtgait.core.limits.MAX_SURFACE_TILT`)."""
 
     x: float
     y: float
     yaw: float
     side: Side
+    z: float = 0.0
+    pitch: float = 0.0
+    roll: float = 0.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.x) and math.isfinite(self.y) and math.isfinite(self.yaw)):
@@ -55,6 +82,13 @@ class Footstep:
                 _require_finite(f"footstep {name}", getattr(self, name))
         if self.side not in SIDES:
             raise InputOutOfBoundsError(f"footstep side must be 'left' or 'right', got {self.side!r}")
+        if self.z or self.pitch or self.roll:  # level footprints (the common case) skip the checks
+            _check_height_and_tilt("footstep", self.z, self.pitch, self.roll)
+
+    @property
+    def level(self) -> bool:
+        """True on level ground at height 0 (every footprint of a flat walk)."""
+        return not (self.z or self.pitch or self.roll)
 
     @property
     def position(self) -> np.ndarray:
@@ -69,13 +103,21 @@ class Stride:
         length: forward displacement along the mean heading of the two footprints (m).
         width: lateral distance between the two footprints, positive = feet apart (m).
         turn: yaw change from the stance foot to the landing foot (rad), positive = to the left.
+        rise: height of the landing above the stance foot (m), negative = down.
+        pitch: pitch of the landing's support surface (rad, absolute, not relative to the stance foot's).
+        roll: roll of the landing's support surface (rad, absolute).
     """
 
     length: float
     width: float
     turn: float = 0.0
+    rise: float = 0.0
+    pitch: float = 0.0
+    roll: float = 0.0
 
     def __post_init__(self) -> None:
+        if self.rise or self.pitch or self.roll:
+            _check_height_and_tilt("stride", self.rise, self.pitch, self.roll)
         for name in ("length", "width", "turn"):
             _require_finite(f"stride {name}", getattr(self, name))
         if self.width <= 0.0:
@@ -99,6 +141,9 @@ def place_step(stance: Footstep, stride: Stride) -> Footstep:
         y=stance.y + s * stride.length + c * lateral,
         yaw=wrap_angle(stance.yaw + stride.turn),
         side=side,
+        z=stance.z + stride.rise,
+        pitch=stride.pitch,
+        roll=stride.roll,
     )
 
 
@@ -111,7 +156,8 @@ def stride_between(stance: Footstep, landing: Footstep) -> Stride:
     c, s = math.cos(heading), math.sin(heading)
     dx, dy = landing.x - stance.x, landing.y - stance.y
     lateral = -s * dx + c * dy
-    return Stride(length=c * dx + s * dy, width=lateral if landing.side == "left" else -lateral, turn=turn)
+    width = lateral if landing.side == "left" else -lateral
+    return Stride(c * dx + s * dy, width, turn, landing.z - stance.z, landing.pitch, landing.roll)
 
 
 def standing_feet(step_width: float, first_side: Side = "right") -> tuple[Footstep, Footstep]:

@@ -3,6 +3,12 @@
 A replan is ``G @ y`` (:mod:`rtgait.core.lipm.pattern`): ``y`` holds the state the plan starts from and the anchors the
 reference ZMP rests on. :class:`ActivePlan` keeps the result as Python floats per segment, evaluated lazily: one
 sample is scalar arithmetic, cheaper than any numpy call.
+
+Over height changes a plan has a vertical column too (``z``, ``None`` on level ground): the same operator applied to
+the vertical state and the footholds' heights. It is the 3D-DCM/VRP form (Englsberger et al. 2015, ``docs/method.md``):
+the virtual repellent point's height is the support height ``h(t)`` (anchors: the footholds' ``z``, carried between
+them as the horizontal ZMP is) plus the constant ``zc = g / w^2``, so ``c_z - c_z'' / w^2 = h + zc`` is the
+horizontal equation again, with the same ``w``, and the COG height above ``zc`` is its closed form.
 """
 
 from __future__ import annotations
@@ -27,7 +33,7 @@ class ActivePlan:
 
     __slots__ = (
         "durations", "elapsed", "first_reference", "layout", "offsets", "phase0", "reference_offset", "segments",
-        "t_start", "y",
+        "t_start", "y", "z", "z_segments",
     )  # fmt: skip
 
     def __init__(
@@ -39,8 +45,11 @@ class ActivePlan:
         first_reference,
         reference_offset: float,
         elapsed: float = 0.0,
+        z: np.ndarray | None = None,
     ) -> None:
         self.t_start = t_start
+        self.z = z  # the vertical column (h0, dh0, cz0, dcz0, heights...), None on level ground
+        self.z_segments: list | None = None if z is None else [None] * len(layout.durations)
         self.phase0 = phase0
         self.elapsed = elapsed  # time into phase0 at which the plan starts (s): 0 unless made mid-phase
         self.layout = layout
@@ -60,6 +69,39 @@ class ActivePlan:
         if seg is None:
             seg = self.segments[j] = (self.layout.G[12 * j : 12 * j + 12] @ self.y).T.tolist()
         return seg
+
+    def z_segment(self, j: int) -> list[float]:
+        """The vertical column's ``[h0..h4, A0..A4, V, W]`` of segment ``j`` (``z`` must be set)."""
+        seg = self.z_segments[j]
+        if seg is None:
+            seg = self.z_segments[j] = (self.layout.G[12 * j : 12 * j + 12] @ self.z).tolist()
+        return seg
+
+    def height_at(self, j: int, tau: float, w: float) -> tuple[float, float, float, float, float]:
+        """``(h, dh, cz, dcz, ddcz)`` on segment ``j`` at local time ``tau``: the support height under the VRP and
+        the COG height above ``zc`` with its rates (m, m/s, m/s^2); zeros on level ground."""
+        if self.z is None:
+            return (0.0, 0.0, 0.0, 0.0, 0.0)
+        a0, a1, a2, a3, a4, A0, A1, A2, A3, A4, V, W = self.z_segment(j)
+        e = math.exp(w * tau)
+        ch, sh = 0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e)
+        hom = V * ch + W * sh
+        return (
+            a0 + tau * (a1 + tau * (a2 + tau * (a3 + tau * a4))),
+            a1 + tau * (2.0 * a2 + tau * (3.0 * a3 + tau * 4.0 * a4)),
+            hom + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4))),
+            w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4)),
+            w * w * hom + 2.0 * A2 + tau * (6.0 * A3 + tau * 12.0 * A4),
+        )
+
+    def height_state(self, t: float, w: float) -> list[float]:
+        """``[h, dh, cz, dcz]`` at absolute time ``t`` (s): where a new plan's vertical column starts from."""
+        if self.z is None:
+            return [0.0, 0.0, 0.0, 0.0]
+        if t == self.t_start:
+            return self.z[:4].tolist()
+        j, tau = self.locate(t)
+        return list(self.height_at(j, tau, w)[:4])
 
     def locate(self, t: float) -> tuple[int, float]:
         """Segment index and local time of absolute time ``t`` (s), clamped to the plan."""

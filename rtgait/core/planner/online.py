@@ -250,7 +250,27 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
             reference, offset = previous.first_reference, elapsed
         else:
             reference = ((ax, 0.0, 0.0, 0.0), (ay, 0.0, 0.0, 0.0))
-        self._plan = ActivePlan(t_start, q, layout, y, reference, offset, elapsed)
+        self._plan = ActivePlan(
+            t_start, q, layout, y, reference, offset, elapsed, self._height_column(t_start, q, sources)
+        )
+
+    def _height_column(self, t_start: float, q: int, sources) -> np.ndarray | None:
+        """The vertical column of a plan starting at ``t_start`` (:mod:`rtgait.core.planner.active_plan`): the
+        vertical state of the plan before at that time (continuous across replanning, as the horizontal one) and the
+        footholds' heights under the anchors; ``None`` while both are zero (level ground)."""
+        heights = self._walk.heights_from(q >> 1, sources)
+        previous = self._plan
+        if previous is not None:
+            state = previous.height_state(t_start, self.w)
+        else:
+            standing = self._walk.standing
+            h0 = 0.5 * (standing[0].z + standing[1].z)
+            state = [h0, 0.0, h0, 0.0]
+        if heights is None:
+            if not any(state):
+                return None
+            heights = [0.0] * len(sources)
+        return np.array([*state, *heights])
 
     def _replan(self, t: float) -> None:
         """Make and connect the plan of the double support that begins now (phase ``_next_replan_phase``), for
@@ -364,6 +384,10 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
                 zmp_ref = zmp
             axes.append((cog, vel, acc, zmp, zmp_ref, cog + vel / w))
         (cog_x, cog_vx, cog_ax, zmp_x, zmp_ref_x, dcm_x), (cog_y, cog_vy, cog_ay, zmp_y, zmp_ref_y, dcm_y) = axes
+        cog_z, cog_vz, cog_az = self.config.cog_height, 0.0, 0.0
+        if plan.z is not None:
+            _, _, dz, cog_vz, cog_az = plan.height_at(j, tau, w)
+            cog_z += dz
         if phase.swing_from is None:  # both feet on the ground, left then right
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw, rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = phase.feet
         else:
@@ -372,7 +396,7 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw = left
             rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = right
         values = _new_tuple(SampleValues, (  # in field order
-            cog_x, cog_y, self.config.cog_height, cog_vx, cog_vy, 0.0, cog_ax, cog_ay, 0.0,
+            cog_x, cog_y, cog_z, cog_vx, cog_vy, cog_vz, cog_ax, cog_ay, cog_az,
             zmp_x, zmp_y, zmp_ref_x, zmp_ref_y,
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw, rfoot_x, rfoot_y, rfoot_z, rfoot_yaw,
             dcm_x, dcm_y,
