@@ -132,3 +132,21 @@ def test_terrain_errors_are_one_line(terrain, steps, length, message):
     with pytest.raises(ScenarioError, match=message) as error:
         _load(_walk(terrain, steps=steps, step_length=length))
     assert "\n" not in str(error.value)
+
+
+def test_a_swing_too_low_for_the_stairs_is_refused_naming_the_step():
+    text = _walk(STAIRS).replace("step_height = 0.05", "step_height = 0.01")
+    with pytest.raises(ScenarioError, match=r"^terrain: step 1's swing passes 0\.0\d+ m over the terrain mid-swing"):
+        _load(text)
+
+
+def test_swing_over_the_nose_keeps_its_clearance():
+    from rtgait.core.geometry.swing_terrain import swing_gaps
+
+    scenario = _load(_walk(STAIRS))
+    prints, terrain = scenario.nominal_footprints(), scenario.terrain.terrain
+    for step in range(1, len(prints) - 1):
+        s, gap = swing_gaps(terrain, prints[step - 1], prints[step + 1], scenario.step_height, scenario.sole)
+        assert gap.min() > -1e-9  # never into a tread or a riser
+        if prints[step - 1].z != prints[step + 1].z:  # over a nose: the full step height above the upper tread
+            assert gap[(s >= 0.35) & (s <= 0.65)].min() == pytest.approx(scenario.step_height, abs=1e-9)

@@ -268,7 +268,7 @@ class Scenario:
         else:
             prints = place_footsteps(standing_feet(self.step_width, self.first_foot), self._plan_strides())
         if self.terrain is not None:
-            prints = self.terrain.place(prints, self.sole, PlannerConfig.max_step_length)
+            prints = self.terrain.place(prints, self.sole, PlannerConfig.max_step_length, self.step_height)
         return prints
 
     @property

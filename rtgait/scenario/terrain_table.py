@@ -14,7 +14,9 @@
 
 Every terrain runs along x from the standing feet at the origin (:mod:`rtgait.core.geometry.terrain`). Placing the
 walk checks each step (:mod:`rtgait.core.geometry.terrain_walk`): a sole across an edge, a foothold off the surface,
-a step longer or higher than the robot's reach are refused with one line naming the step.
+a step longer or higher than the robot's reach, and a swing that cuts into the terrain or passes closer than
+:data:`~rtgait.core.geometry.swing_terrain.MIN_SWING_CLEARANCE` mid-swing
+(:mod:`rtgait.core.geometry.swing_terrain`) are refused with one line naming the step.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
+from rtgait.core.geometry.swing_terrain import check_swing
 from rtgait.core.geometry.terrain import Flat, Slope, Stairs, Step, SteppingStones, TerrainKind
 from rtgait.core.geometry.terrain_walk import DEFAULT_MAX_RISE, place_walk
 from rtgait.scenario.checks import ScenarioError
@@ -59,14 +62,20 @@ class TerrainSpec:
     place_footsteps: bool = True
     max_step_rise: float = DEFAULT_MAX_RISE
 
-    def place(self, prints: Sequence[Footstep], sole: SoleRect, max_length: float) -> list[Footstep]:
-        """``prints`` on the terrain when :attr:`place_footsteps`, each step checked; else as they are."""
+    def place(
+        self, prints: Sequence[Footstep], sole: SoleRect, max_length: float, step_height: float
+    ) -> list[Footstep]:
+        """``prints`` on the terrain when :attr:`place_footsteps`, each step and its swing (``step_height`` m above
+        the higher foothold) checked; else as they are."""
         if not self.place_footsteps:
             return list(prints)
         try:
-            return place_walk(self.terrain, prints, sole, max_length, self.max_step_rise)
+            placed = place_walk(self.terrain, prints, sole, max_length, self.max_step_rise)
+            for step in range(1, len(placed) - 1):
+                check_swing(self.terrain, placed[step - 1], placed[step + 1], step_height, sole, step)
         except ValueError as error:
             raise ScenarioError(f"terrain: {error}") from None
+        return placed
 
 
 def _number(table: dict[str, Any], key: str, rule: str = "any", unit: str = "m") -> float:

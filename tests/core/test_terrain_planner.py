@@ -88,3 +88,17 @@ def test_stepping_stones_error_is_zero_on_level_stones():
     scenario, _, result = _walk("stepping-stones")
     assert np.max(zmp_error(result, scenario.terrain.terrain, scenario.gravity)) < 1e-9
     assert math.isclose(result.column("cog_z").max(), scenario.cog_height)
+
+
+def test_a_touchdown_keeps_the_planned_height_of_the_foothold():
+    scenario = load_scenario("stairs-up")
+    planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
+    planner.start(0.0)
+    timeline = planner.timeline
+    t = timeline.start_time(3) + 0.5  # step 2's single support: F[3] on the first tread is being swung to
+    planner.sample(t)
+    planned = planner.footprints()[3]
+    assert planned.z == pytest.approx(0.15)
+    planner.touchdown(t + 0.1, planned.side, planned.x + 0.01, planned.y, planned.yaw)
+    assert planner.footprints()[3].z == pytest.approx(0.15)
+    assert planner.footprints()[3].x == pytest.approx(planned.x + 0.01)
