@@ -101,6 +101,8 @@ class ActivePlan:
         if t == self.t_start:
             return self.z[:4].tolist()
         j, tau = self.locate(t)
+        if j > 0 and tau < 1e-12:  # a phase start (every regular replan): the precomputed end rows, as end_state
+            return (self.layout.end_state_rows(j - 1, w) @ self.z).tolist()
         return list(self.height_at(j, tau, w)[:4])
 
     def locate(self, t: float) -> tuple[int, float]:

@@ -385,9 +385,12 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
             axes.append((cog, vel, acc, zmp, zmp_ref, cog + vel / w))
         (cog_x, cog_vx, cog_ax, zmp_x, zmp_ref_x, dcm_x), (cog_y, cog_vy, cog_ay, zmp_y, zmp_ref_y, dcm_y) = axes
         cog_z, cog_vz, cog_az = self.config.cog_height, 0.0, 0.0
-        if plan.z is not None:
-            _, _, dz, cog_vz, cog_az = plan.height_at(j, tau, w)
-            cog_z += dz
+        if plan.z is not None:  # the vertical column, as the horizontal axes above
+            _, _, _, _, _, A0, A1, A2, A3, A4, V, W = plan.z_segment(j)
+            hom = V * ch + W * sh
+            cog_z += hom + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4)))
+            cog_vz = w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4))
+            cog_az = w * w * hom + 2.0 * A2 + tau * (6.0 * A3 + tau * 12.0 * A4)
         if phase.swing_from is None:  # both feet on the ground, left then right
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw, rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = phase.feet
         else:
