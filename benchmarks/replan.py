@@ -87,7 +87,7 @@ def run(
     result = {
         "replan_us": {"median": float(np.median(steady)), "p99": float(np.percentile(steady, 99))},
         "sample_us": {"median": float(np.median(samples)), "p99": float(np.percentile(samples, 99))},
-        "replan_back_to_back_us": back_to_back(config, steps),
+        "replan_back_to_back_us": back_to_back(config, steps, terrain),
         "operator_build_us": operator_build(config),
         "replans": len(steady),
         "samples": len(samples),
@@ -117,9 +117,9 @@ def walk_strides(config: PlannerConfig, steps: int, terrain: bool) -> list[Strid
     ] + strides[-1:]
 
 
-def back_to_back(config: PlannerConfig, steps: int) -> dict:
+def back_to_back(config: PlannerConfig, steps: int, terrain: bool = False) -> dict:
     """Replans with nothing in between (one sample per double support): the cost with warm caches."""
-    planner = OnlinePlanner(config, straight_walk(config, steps, 0.1))
+    planner = OnlinePlanner(config, walk_strides(config, steps, terrain))
     planner.start(0.0)
     for k in range(steps):
         planner.sample(planner.phase_start(2 * k))
