@@ -4,6 +4,7 @@ heights, and each walk's expected outcome holds against independent truths (the 
 from __future__ import annotations
 
 import csv
+import json
 import math
 
 import numpy as np
@@ -94,3 +95,19 @@ def _flat_run(tmp_path):
     out = tmp_path / "flat"
     assert main(["plan", "fig6", "--out", str(out), "--quiet", "--no-figures"]) == 0
     return out
+
+
+def test_summary_reports_the_terrain_and_exported_footholds_keep_their_heights(tmp_path):
+    out, plan = tmp_path / "slope", tmp_path / "slope-plan.toml"
+    argv = ["plan", "slope-up", "--out", str(out), "--no-figures", "--quiet", "--export-footsteps", str(plan)]
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    terrain = summary["terrain"]
+    assert terrain["type"] == "slope" and terrain["place_footsteps"] is True
+    assert terrain["cog_height_range"] == pytest.approx([0.84, 0.84 + 2.0 * math.tan(TEN_DEGREES)], abs=1e-6)
+    assert 0.0 < terrain["zmp_error_max"] < 0.001
+    on_ramp = summary["footprints"][5]
+    assert on_ramp["pitch"] == pytest.approx(-TEN_DEGREES) and on_ramp["z"] > 0.0
+    assert "z" not in summary["footprints"][0]  # level footprints are written as before
+    again = load_scenario(str(plan))
+    assert [f.z for f in again.nominal_footprints()] == pytest.approx([f.get("z", 0.0) for f in summary["footprints"]])

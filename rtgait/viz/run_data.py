@@ -246,7 +246,8 @@ def plan_free_segments(rollout: Rollout) -> list[tuple[float, float]]:
 
 def _footstep(entry: Any, where: str) -> Footstep:
     try:
-        return Footstep(float(entry["x"]), float(entry["y"]), float(entry["yaw"]), entry["side"])
+        tilt = {key: float(entry[key]) for key in ("z", "pitch", "roll") if key in entry}  # off level ground
+        return Footstep(float(entry["x"]), float(entry["y"]), float(entry["yaw"]), entry["side"], **tilt)
     except (KeyError, TypeError, ValueError) as error:
         raise RunFilesError(f"{where}: a footprint must have x, y, yaw and side ({error})") from None
 
