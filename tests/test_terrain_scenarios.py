@@ -111,3 +111,9 @@ def test_summary_reports_the_terrain_and_exported_footholds_keep_their_heights(t
     assert "z" not in summary["footprints"][0]  # level footprints are written as before
     again = load_scenario(str(plan))
     assert [f.z for f in again.nominal_footprints()] == pytest.approx([f.get("z", 0.0) for f in summary["footprints"]])
+
+
+def test_physics_refuses_a_terrain_it_does_not_build(tmp_path, capsys):
+    assert main(["simulate", "stairs-up", "--out", str(tmp_path / "sim")]) == 2
+    assert "does not build yet" in capsys.readouterr().err
+    assert not (tmp_path / "sim").exists()
