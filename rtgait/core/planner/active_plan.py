@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.lipm.pattern import DEGREE, MOVING_KINDS, PlanOperator, segment_zmp_rows
 
 EAGER_SEGMENTS = 1
@@ -148,6 +149,30 @@ class ActivePlan:
             state[4 + axis] = V * ch + W * sh + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4)))
             state[6 + axis] = w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4))
         return state
+
+
+def height_column(
+    previous: ActivePlan | None,
+    t_start: float,
+    w: float,
+    heights: list[float] | None,
+    n_anchors: int,
+    standing: tuple[Footstep, Footstep],
+) -> np.ndarray | None:
+    """The vertical column of a plan starting at ``t_start`` (s): the vertical state of the plan before at that time
+    (continuous across replanning, as the horizontal one; before the first plan, at rest over the standing feet) and
+    the footholds' ``heights`` (m) under its ``n_anchors`` anchors (``None``: all 0); ``None`` while both are zero
+    (level ground: the plan needs no vertical column)."""
+    if previous is not None:
+        state = previous.height_state(t_start, w)
+    else:
+        h0 = 0.5 * (standing[0].z + standing[1].z)
+        state = [h0, 0.0, h0, 0.0]
+    if heights is None:
+        if not any(state):
+            return None
+        heights = [0.0] * n_anchors
+    return np.array([*state, *heights])
 
 
 class PlanLayout:

@@ -43,7 +43,7 @@ from rtgait.core.limits import MAX_STEPS
 from rtgait.core.lipm.closed_form import CogTrajectory, omega
 from rtgait.core.lipm.pattern import DEGREE, MOVING_KINDS, PatternKey
 from rtgait.core.lipm.spline import PiecewisePolynomial
-from rtgait.core.planner.active_plan import ActivePlan, PlanLayout
+from rtgait.core.planner.active_plan import ActivePlan, PlanLayout, height_column
 from rtgait.core.planner.adjusting import StepAdjusting
 from rtgait.core.planner.auto import AutoConnection, ChangeRecord
 from rtgait.core.planner.bounded import BoundedCalls, measured_pair
@@ -255,22 +255,9 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
         )
 
     def _height_column(self, t_start: float, q: int, sources) -> np.ndarray | None:
-        """The vertical column of a plan starting at ``t_start`` (:mod:`rtgait.core.planner.active_plan`): the
-        vertical state of the plan before at that time (continuous across replanning, as the horizontal one) and the
-        footholds' heights under the anchors; ``None`` while both are zero (level ground)."""
+        """The vertical column of a plan starting at ``t_start`` in phase ``q`` (:func:`height_column`)."""
         heights = self._walk.heights_from(q >> 1, sources)
-        previous = self._plan
-        if previous is not None:
-            state = previous.height_state(t_start, self.w)
-        else:
-            standing = self._walk.standing
-            h0 = 0.5 * (standing[0].z + standing[1].z)
-            state = [h0, 0.0, h0, 0.0]
-        if heights is None:
-            if not any(state):
-                return None
-            heights = [0.0] * len(sources)
-        return np.array([*state, *heights])
+        return height_column(self._plan, t_start, self.w, heights, len(sources), self._walk.standing)
 
     def _replan(self, t: float) -> None:
         """Make and connect the plan of the double support that begins now (phase ``_next_replan_phase``), for
