@@ -4,14 +4,20 @@
 from __future__ import annotations
 
 import math
+import sys
 
 import pytest
-import tomllib
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised only on Python 3.10
+    import tomli as tomllib
+
+from scenario_files import header_text, scenario_text
 
 from rtgait.core.geometry.footsteps import Footstep, Stride, place_step, stride_between
 from rtgait.scenario.loading import parse_document
 from rtgait.scenario.scenario import ScenarioError
-from tests.scenario_files import header_text, scenario_text
 
 TALOS_SOLE = "[robot.sole]\nfront = 0.105\nback = 0.105\ninner = 0.065\nouter = 0.065\n"
 
