@@ -102,3 +102,21 @@ def test_a_touchdown_keeps_the_planned_height_of_the_foothold():
     planner.touchdown(t + 0.1, planned.side, planned.x + 0.01, planned.y, planned.yaw)
     assert planner.footprints()[3].z == pytest.approx(0.15)
     assert planner.footprints()[3].x == pytest.approx(planned.x + 0.01)
+
+
+@pytest.mark.parametrize("phase_share", [0.3, 0.7])
+def test_a_replan_mid_phase_continues_the_height(phase_share):
+    scenario = load_scenario("stairs-up")
+    planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
+    planner.start(0.0)
+    timeline = planner.timeline
+    for q in (3, 4, 5):  # a single support climbing, the double support between treads, the next single support
+        t = timeline.start_time(q) + phase_share * timeline.duration(q)
+        before = planner.sample(t).values
+        assert planner.replan_now(t) is not None
+        after = planner.sample(t).values
+        # From the plan itself: the new plan starts where the old one was, height and vertical velocity included.
+        assert after[2] == pytest.approx(before[2], abs=1e-9)
+        assert after[5] == pytest.approx(before[5], abs=1e-9)
+    end = planner.end_time
+    assert planner.sample(end).values[2] == pytest.approx(scenario.cog_height + 0.9, abs=1e-6)
