@@ -11,6 +11,10 @@ replan connects a genuinely new plan (3-step horizon, both axes). Reported:
 * ``replan_back_to_back_us``: replans of consecutive double supports with nothing in between (warm caches);
 * ``operator_build_us``: building one plan shape's operator, which ``start()`` does once per shape.
 
+With ``--terrain`` every step also climbs or descends (``TERRAIN_RISE`` up for five steps, then down for five, over
+and over, as on a staircase): each plan carries its vertical column (the footholds' heights, the 3D-DCM/VRP form of
+``docs/method.md``), and its in-loop replan time is the one to compare with the level walk's (issue 22: under 2x).
+
 With ``--feedback measured`` the planner is told the measured COG state before every sample (``observe``; here the
 plan's own state of the tick before, as a robot that follows it), so every replan connects from it; ``observe_us`` is
 the wall time of one such call (its bounds checks included: :mod:`rtgait.core.input_bounds`).
@@ -18,7 +22,7 @@ the wall time of one such call (its bounds checks included: :mod:`rtgait.core.in
 Wall times on a shared virtual machine vary from run to run by a factor of two or more: run it a few times.
 
 Usage: ``python benchmarks/replan.py [--json] [--steps N] [--dt S] [--mode real-time|quasi-real-time]
-[--feedback planned|measured] [--no-gc]``
+[--feedback planned|measured] [--no-gc] [--terrain]``
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ import time
 
 import numpy as np
 
-from rtgait.core.geometry.footsteps import Timing
+from rtgait.core.geometry.footsteps import Stride, Timing
 from rtgait.core.lipm.pattern import PatternKey, PlanOperator
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, StepChangeTooLateError, straight_walk
 
@@ -44,10 +48,11 @@ def run(
     seed: int,
     collect_garbage: bool = True,
     feedback: str = "planned",
+    terrain: bool = False,
 ) -> dict:
     config = PlannerConfig(timing=Timing(0.8, 0.2), connection=mode, horizon_steps=horizon, feedback=feedback)
     measured = feedback == "measured"
-    planner = OnlinePlanner(config, straight_walk(config, steps, 0.1))
+    planner = OnlinePlanner(config, walk_strides(config, steps, terrain))
     rng = np.random.default_rng(seed)
     planner.start(0.0)
     if not collect_garbage:
@@ -82,13 +87,13 @@ def run(
     result = {
         "replan_us": {"median": float(np.median(steady)), "p99": float(np.percentile(steady, 99))},
         "sample_us": {"median": float(np.median(samples)), "p99": float(np.percentile(samples, 99))},
-        "replan_back_to_back_us": back_to_back(config, steps),
+        "replan_back_to_back_us": back_to_back(config, steps, terrain),
         "operator_build_us": operator_build(config),
         "replans": len(steady),
         "samples": len(samples),
         "settings": {
             "steps": steps, "dt": dt, "connection": mode, "horizon_steps": horizon, "gc": collect_garbage,
-            "feedback": feedback,
+            "feedback": feedback, "terrain": terrain,
         },
     }
     if measured:
@@ -97,9 +102,24 @@ def run(
     return result
 
 
-def back_to_back(config: PlannerConfig, steps: int) -> dict:
+TERRAIN_RISE = 0.1
+"""Height change of each step of ``--terrain`` (m)."""
+
+
+def walk_strides(config: PlannerConfig, steps: int, terrain: bool) -> list[Stride]:
+    """A straight walk of 0.1 m steps; with ``terrain``, up ``TERRAIN_RISE`` for five steps, down for five, ..."""
+    strides = straight_walk(config, steps, 0.1)
+    if not terrain:
+        return strides
+    return [
+        Stride(s.length, s.width, s.turn, rise=TERRAIN_RISE if (k // 5) % 2 == 0 else -TERRAIN_RISE)
+        for k, s in enumerate(strides[:-1])
+    ] + strides[-1:]
+
+
+def back_to_back(config: PlannerConfig, steps: int, terrain: bool = False) -> dict:
     """Replans with nothing in between (one sample per double support): the cost with warm caches."""
-    planner = OnlinePlanner(config, straight_walk(config, steps, 0.1))
+    planner = OnlinePlanner(config, walk_strides(config, steps, terrain))
     planner.start(0.0)
     for k in range(steps):
         planner.sample(planner.phase_start(2 * k))
@@ -134,10 +154,11 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--no-gc", action="store_true", help="disable Python's cyclic garbage collector while timing")
     parser.add_argument("--feedback", default="planned", choices=("planned", "measured"))
+    parser.add_argument("--terrain", action="store_true", help="every step climbs or descends 0.1 m (module doc)")
     args = parser.parse_args()
     result = run(
         args.steps, args.dt, args.mode, args.horizon, args.seed, collect_garbage=not args.no_gc,
-        feedback=args.feedback,
+        feedback=args.feedback, terrain=args.terrain,
     )  # fmt: skip
     gc.enable()
     if args.json:
@@ -146,6 +167,7 @@ def main() -> None:
     print(
         f"walk: {args.steps} steps, dt {args.dt * 1e3:g} ms, {args.mode}, horizon {args.horizon} steps, "
         f"garbage collector {'off' if args.no_gc else 'on'}, feedback {args.feedback}"
+        + (f", terrain +-{TERRAIN_RISE:g} m per step" if args.terrain else "")
     )
     print(f"replan : median {result['replan_us']['median']:7.2f} us   p99 {result['replan_us']['p99']:7.2f} us"
           f"   ({result['replans']} replans)")

@@ -283,8 +283,10 @@ def test_scenarios_lists_every_builtin_with_its_description(capsys: pytest.Captu
     assert main(["scenarios"]) == 0
     lines = capsys.readouterr().out.splitlines()
     names = [line.split()[0] for line in lines]
-    builtins = ["fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "obstacle", "sidestep", "turn"]
-    assert names == builtins
+    assert names == [
+        "fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "obstacle", "sidestep", "slope-down",
+        "slope-up", "stairs-down", "stairs-up", "stepping-stones", "turn", "unseen-step",
+    ]  # fmt: skip
     assert all(len(line.split(maxsplit=1)) == 2 for line in lines)
 
 

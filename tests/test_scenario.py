@@ -24,6 +24,8 @@ from rtgait.scenario.loading import builtin_scenarios, load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
 
 BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "obstacle", "sidestep", "turn")
+TERRAIN_BUILTINS = ("slope-down", "slope-up", "stairs-down", "stairs-up", "stepping-stones", "unseen-step")
+"""Talos's walks off the flat floor, tested in tests/test_terrain_scenarios.py."""
 
 VALID = """\
 name = "probe"
@@ -91,7 +93,12 @@ def edited(old: str, new: str) -> str:
 
 def test_builtin_listing_names_every_file_with_a_one_line_description() -> None:
     listing = builtin_scenarios()
-    assert tuple(listing) == BUILTINS  # natural order: fig4 before fig11
+    # Natural order: fig4 before fig11.
+    assert tuple(listing) == (
+        "fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "obstacle", "sidestep", "slope-down",
+        "slope-up", "stairs-down", "stairs-up", "stepping-stones", "turn", "unseen-step",
+    )  # fmt: skip
+    assert set(listing) == {*BUILTINS, *TERRAIN_BUILTINS}
     for description in listing.values():
         assert description and "\n" not in description
 
@@ -318,7 +325,9 @@ def test_bad_input_raises_one_line_naming_the_field(tmp_path: Path, case: str, e
 
 
 def test_unknown_scenario_lists_the_builtins() -> None:
-    with pytest.raises(ScenarioError, match=", ".join(BUILTINS)):
+    with pytest.raises(
+        ScenarioError, match="fig4, fig6, fig7, fig8, fig8-real-time, fig11, guided, obstacle, sidestep, slope-down"
+    ):
         load_scenario("fig5")
 
 

@@ -48,6 +48,9 @@ MAX_REPLANS_PER_SAMPLE = 64
 """Most double-support starts one ``sample()`` call may pass (it replans at each)."""
 MAX_STRIDE = 2.0
 """Largest stride length or width accepted (m): no humanoid steps farther."""
+MAX_SURFACE_TILT = 0.5
+"""Largest pitch or roll of a foothold's support surface accepted (rad, about 29 degrees): steeper than any ramp a
+walking humanoid stands on with a flat sole."""
 
 
 def check_range(name: str, value: float, low: float, high: float, unit: str) -> float:

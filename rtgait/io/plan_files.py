@@ -19,6 +19,7 @@ from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.planner.online import SAMPLE_FIELDS
 from rtgait.io.obstacle_outputs import obstacle_report_lines, obstacle_summary
 from rtgait.io.summary_json import summary_text
+from rtgait.io.terrain_summary import footprint_entry, terrain_line, terrain_summary
 from rtgait.outputs import Staging, staged_outputs, write_atomic
 from rtgait.scenario.scenario import Scenario
 from rtgait.viz.run_data import OBSTACLE_FIGURE, figure_file, margin_marker, plan_figure_files, plan_free_segments
@@ -146,7 +147,7 @@ def auto_decisions(scenario: Scenario) -> list[dict[str, Any]]:
 
 
 def _footprints(footprints: list[Footstep]) -> list[dict[str, Any]]:
-    return [{"x": f.x, "y": f.y, "yaw": f.yaw, "side": f.side} for f in footprints]
+    return [footprint_entry(f) for f in footprints]
 
 
 def summarize(rollout: Rollout, scenario: Scenario) -> dict[str, Any]:
@@ -211,6 +212,7 @@ def summarize(rollout: Rollout, scenario: Scenario) -> dict[str, Any]:
         "footprints": _footprints(rollout.footprints),
         "nominal_footprints": _footprints(scenario.nominal_footprints()),
         "free_segments": [list(segment) for segment in plan_free_segments(rollout)],
+        **terrain_summary(rollout, scenario),
         **({"auto_margin": scenario.auto_margin, "auto_decisions": auto_decisions(scenario)}
            if scenario.connection == "auto" else {}),
     }  # fmt: skip
@@ -284,9 +286,7 @@ def write_plan_outputs(
     return summary
 
 
-def _write_figures(
-    result: Rollout, scenario: Scenario, robot_run: RobotRun | None, staging: Staging, fmt: str
-) -> None:
+def _write_figures(result: Rollout, scenario: Scenario, robot_run: RobotRun | None, staging: Staging, fmt: str) -> None:
     from rtgait.viz.figures import FigureInfo, plot_multibody_zmp, render_all
 
     info = FigureInfo(
@@ -367,9 +367,7 @@ def _robot_lines(summary: dict[str, Any]) -> list[str]:
     if compensation is not None:
         before, after = compensation["before"], compensation["after"]
         changes = [
-            ", ".join(
-                f"{axis} {before[key][axis] * 1e3:.1f} -> {after[key][axis] * 1e3:.1f} mm" for axis in "xy"
-            )
+            ", ".join(f"{axis} {before[key][axis] * 1e3:.1f} -> {after[key][axis] * 1e3:.1f} mm" for axis in "xy")
             for key in ("multibody_zmp_error_max", "multibody_zmp_error_rms")
         ]
         lines.append(
@@ -399,6 +397,7 @@ def plan_report(summary: dict[str, Any], out: Path, wall_time: float) -> str:
         f"ZMP at ({x:.3f}, {y:.3f}) m, {summary['zmp_margin_min_support']} support",
         f"verdict     {'OUTSIDE the support polygon' if outside else 'inside the support polygon'}"
         + (f" for {summary['zmp_outside_duration']:.3f} s" if outside else ""),
+        *terrain_line(summary),
     ]
     if times["replan_median"] is not None:
         lines.append(

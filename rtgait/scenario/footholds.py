@@ -12,6 +12,9 @@ A footstep plan is a TOML file like a scenario (``name``, ``connection``, ``[rob
     x = 0.10                            # m, world frame
     y = -0.095
     yaw = 0.0                           # rad, optional (default 0)
+    z = 0.0                             # m, optional (default 0): the foothold's height
+    pitch = 0.0                         # rad, optional (default 0): the support surface's pitch (+: toes down)
+    roll = 0.0                          # rad, optional (default 0): its roll (+: the foot's left edge up)
     single_support = 0.8                # s, optional: this step's single support (default [timing]'s)
     double_support = 0.2                # s, optional: the double support after it (not on the last step)
 
@@ -24,7 +27,10 @@ final one, ``timing.end``, so the last step may not give ``double_support``.
 Refused, with the step named in one line (:class:`~rtgait.scenario.scenario.ScenarioError`): two steps of the same
 side in a row, a landing out of reach of its stance foot (farther than :data:`~rtgait.core.limits.MAX_STRIDE`, or a
 turn of a quarter turn or more), feet crossing, NaN or infinite values, and a timing outside the phase limits.
-:func:`footstep_plan_text` writes a walk's footholds back in this format (``rtgait plan --export-footsteps``).
+:func:`footstep_plan_text` writes a walk's footholds back in this format (``rtgait plan --export-footsteps``),
+with ``z``, ``pitch`` and ``roll`` where they are not 0. A ``[terrain]`` table (:mod:`rtgait.scenario.terrain_table`)
+with ``place_footsteps = true`` (its default) replaces each foothold's ``z``, ``pitch`` and ``roll`` with the
+terrain's.
 """
 
 from __future__ import annotations
@@ -34,14 +40,15 @@ from collections.abc import Sequence
 from typing import Any
 
 from rtgait.core.geometry.footsteps import Footstep, Timing, standing_feet, stride_between
-from rtgait.core.limits import MAX_STEPS, MAX_STRIDE
+from rtgait.core.limits import MAX_STEPS, MAX_STRIDE, MAX_SURFACE_TILT
 from rtgait.scenario.scenario import Scenario, ScenarioError, build_scenario, number, parse_common, walk_stance
+from rtgait.scenario.terrain_table import parse_terrain
 from rtgait.scenario.tomlfile import TomlFiles
 
 __all__ = ["footstep_plan_text", "parse_footstep_plan"]
 
 _FILES = TomlFiles(kind="footstep plan", folder="scenarios", error=ScenarioError)
-_STEP_KEYS = ("yaw", "single_support", "double_support")
+_STEP_KEYS = ("yaw", "z", "pitch", "roll", "single_support", "double_support")
 _PHASE_BOUNDS = (1e-3, 60.0)
 
 
@@ -62,6 +69,12 @@ def _parse_step(entry: Any, index: int, last: bool) -> tuple[Footstep, float | N
     yaw = number(entry, "yaw", where, unit="rad") if "yaw" in entry else 0.0
     if not abs(yaw) <= math.pi:
         raise ScenarioError(f"{where}.yaw must be within [-pi, pi] rad, got {yaw}")
+    z = number(entry, "z", where, unit="m", bounds=(-MAX_STRIDE, MAX_STRIDE)) if "z" in entry else 0.0
+    tilt = {
+        key: number(entry, key, where, unit="rad", bounds=(-MAX_SURFACE_TILT, MAX_SURFACE_TILT))
+        for key in ("pitch", "roll")
+        if key in entry
+    }
     timing: list[float | None] = []
     for key in ("single_support", "double_support"):
         value = None
@@ -72,7 +85,7 @@ def _parse_step(entry: Any, index: int, last: bool) -> tuple[Footstep, float | N
                 )
             value = number(entry, key, where, rule="> 0", unit="s", bounds=_PHASE_BOUNDS)
         timing.append(value)
-    return Footstep(x, y, yaw, side), timing[0], timing[1]
+    return Footstep(x, y, yaw, side, z, **tilt), timing[0], timing[1]
 
 
 def check_reach(stance: Footstep, landing: Footstep, index: int) -> None:
@@ -103,7 +116,7 @@ def parse_footstep_plan(data: dict[str, Any], source: str = "") -> Scenario:
         data,
         "",
         ("name", "connection", "robot", "timing", "footstep"),
-        ("description", "auto_margin", "control", "walk", "obstacle"),
+        ("description", "auto_margin", "control", "walk", "obstacle", "terrain"),
     )
     common = parse_common(data)
     walk = _FILES.table(data.get("walk", {}), "walk")
@@ -138,6 +151,7 @@ def parse_footstep_plan(data: dict[str, Any], source: str = "") -> Scenario:
         first_foot=first_foot,
         source=source,
         footholds=tuple(landing for landing, _, _ in steps),
+        terrain=parse_terrain(data["terrain"], step_width) if "terrain" in data else None,
     )
 
 
@@ -170,6 +184,7 @@ def footstep_plan_text(scenario: Scenario, footprints: Sequence[Footstep], name:
     for k, foot in enumerate(landings, start=1):
         lines += ["", "[[footstep]]", f"side = {_toml_string(foot.side)}", f"x = {foot.x!r}", f"y = {foot.y!r}"]
         lines.append(f"yaw = {foot.yaw!r}")
+        lines += [f"{key} = {getattr(foot, key)!r}" for key in ("z", "pitch", "roll") if getattr(foot, key)]
         if t.per_step and k <= len(t.per_step):
             single, double = t.per_step[k - 1]
             lines.append(f"single_support = {single!r}")

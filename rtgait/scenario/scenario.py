@@ -19,6 +19,7 @@ and are loaded by name; any other file is loaded by path. Its parts, in SI units
   (:class:`~rtgait.scenario.guide_path.GuidePath`, :mod:`rtgait.sim.guided`); the walk's footsteps are then ignored
   and ``walk.steps`` is the most steps the robot may take;
 * ``[[obstacle]]`` (optional): boxes seen while walking, which the walk steps around (:mod:`rtgait.scenario.obstacles`);
+* ``[terrain]`` (optional): the ground the walk's footsteps are placed on (:mod:`rtgait.scenario.terrain_table`);
 * ``[control]`` (optional): the controller's settings for this walk (``docs/cli_and_scenarios.md``, "Controller
   settings"), applied over the robot description's.
 
@@ -57,7 +58,6 @@ from rtgait.core.limits import (
     MAX_HORIZON_STEPS,
     MAX_PHASE_DURATION,
     MAX_STEPS,
-    MAX_STRIDE,
     MIN_COG_HEIGHT,
     MIN_DT,
     MIN_GRAVITY,
@@ -74,9 +74,17 @@ from rtgait.scenario.checks import (
     check_ticks,
     within,
 )
+from rtgait.scenario.fields import LENGTH_BOUNDS as _LENGTH_BOUNDS
+from rtgait.scenario.fields import WIDTH_BOUNDS as _WIDTH_BOUNDS
+from rtgait.scenario.fields import YAW_RULE as _YAW_RULE
+from rtgait.scenario.fields import choice as _choice
+from rtgait.scenario.fields import number as _number
+from rtgait.scenario.fields import parse_changes as _parse_changes
+from rtgait.scenario.fields import parse_guide as _parse_guide
 from rtgait.scenario.guide_path import GuidePath
 from rtgait.scenario.obstacles import check_seen_within, parse_obstacles, parse_robot_velocity
-from rtgait.scenario.tomlfile import NumberRule, SettingsPairs, TomlFiles
+from rtgait.scenario.terrain_table import TerrainSpec, parse_terrain
+from rtgait.scenario.tomlfile import SettingsPairs, TomlFiles
 
 __all__ = [
     "DEFAULT_STEP_HEIGHT",
@@ -91,7 +99,6 @@ __all__ = [
 
 _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 # Stride.turn must stay strictly inside +-pi/2; checking yaws with this rule gives the error a TOML field name.
-_YAW_RULE: NumberRule = "|x| < pi/2"
 MAX_WALK_STEPS = MAX_STEPS - 1
 """Most forward steps of a scenario: the closing step makes :data:`~rtgait.core.limits.MAX_STEPS`."""
 _STEPS_WHY = f"one closing step is added and a walk has at most {MAX_STEPS} steps"
@@ -99,8 +106,6 @@ _HORIZON_WHY = "the size and cost of every plan grow with it"
 _COG_HEIGHT_BOUNDS = (MIN_COG_HEIGHT, MAX_COG_HEIGHT)
 _GRAVITY_BOUNDS = (MIN_GRAVITY, MAX_GRAVITY)
 _PHASE_BOUNDS = (MIN_PHASE_DURATION, MAX_PHASE_DURATION)
-_LENGTH_BOUNDS = (-MAX_STRIDE, MAX_STRIDE)
-_WIDTH_BOUNDS = (0.0, MAX_STRIDE)
 _MASS_BOUNDS = (1.0, 500.0)  # kg: from a toy biped to the heaviest humanoid built
 DEFAULT_STEP_WIDTH = 0.19
 """``walk.step_width`` of a footstep plan that does not give it (m): every built-in scenario's, an adult humanoid's
@@ -152,6 +157,7 @@ class Scenario:
             :mod:`rtgait.scenario.obstacles`).
         velocity: the robot's stride limits (``[robot.velocity]``), applied over the planner's defaults; ``None``:
             the defaults.
+        terrain: the ``[terrain]`` table (:class:`~rtgait.scenario.terrain_table.TerrainSpec`), or ``None``: flat.
     """
 
     name: str
@@ -178,6 +184,7 @@ class Scenario:
     control: SettingsPairs = ()
     obstacles: tuple[Obstacle, ...] = ()
     velocity: VelocityLimits | None = None
+    terrain: TerrainSpec | None = None
 
     def __post_init__(self) -> None:
         # The TOML loader already checks every field with its file path; these checks cover scenarios built in
@@ -218,6 +225,8 @@ class Scenario:
                 raise ScenarioError("a footstep plan has no walk.change entries: edit the footholds instead")
             if self.footholds[0].side != self.first_foot:
                 raise ScenarioError(f"the first footstep must be the first foot ({self.first_foot})")
+        if self.terrain is not None:
+            self.nominal_footprints()  # places the walk on the terrain: a step it cannot take is refused now
 
     def _check_period(self) -> None:
         """``dt`` is a number within [MIN_DT, the shortest phase]."""
@@ -254,7 +263,13 @@ class Scenario:
 
     def strides(self) -> list[Stride]:
         """Strides of the walk as planned before any change: ``steps`` forward ones, then a closing one (of a
-        footstep plan: from each foothold to the next, the standing feet first)."""
+        footstep plan: from each foothold to the next, the standing feet first); on a terrain, from each placed
+        foothold to the next (their height changes and surfaces included)."""
+        if self.terrain is not None and self.terrain.place_footsteps:
+            return [stride_between(a, b) for a, b in itertools.pairwise(self.nominal_footprints()[1:])]
+        return self._plan_strides()
+
+    def _plan_strides(self) -> list[Stride]:
         if self.footholds is not None:
             chain = [*standing_feet(self.step_width, self.first_foot), *self.footholds]
             return [stride_between(a, b) for a, b in itertools.pairwise(chain[1:])]
@@ -263,10 +278,14 @@ class Scenario:
         return [forward] * self.steps + [Stride(0.0, self.step_width, 0.0)]
 
     def nominal_footprints(self) -> list[Footstep]:
-        """Footprints ``F[0..steps+1]`` the walk would have without any change (m, rad)."""
+        """Footprints ``F[0..steps+1]`` the walk would have without any change (m, rad), on the terrain if any."""
         if self.footholds is not None:
-            return [*standing_feet(self.step_width, self.first_foot), *self.footholds]
-        return place_footsteps(standing_feet(self.step_width, self.first_foot), self.strides())
+            prints = [*standing_feet(self.step_width, self.first_foot), *self.footholds]
+        else:
+            prints = place_footsteps(standing_feet(self.step_width, self.first_foot), self._plan_strides())
+        if self.terrain is not None:
+            prints = self.terrain.place(prints, self.sole, PlannerConfig.max_step_length, self.step_height)
+        return prints
 
     @property
     def duration(self) -> float:
@@ -280,72 +299,6 @@ class Scenario:
 
 
 # ----- TOML parsing ---------------------------------------------------------------------------------------------
-
-
-def _number(
-    data: dict[str, Any],
-    key: str,
-    where: str,
-    *,
-    rule: NumberRule = "any",
-    unit: str = "",
-    bounds: tuple[float, float] | None = None,
-) -> float:
-    """A finite number from ``data[key]`` of the table ``where`` (empty: the document) satisfying ``rule`` and
-    lying within ``bounds`` (inclusive)."""
-    path = f"{where}.{key}" if where else key
-    # Scenario messages word the unit of an unconstrained number "(in m)"; tests and users rely on that wording.
-    shown_unit = f"(in {unit})" if rule == "any" and unit else unit
-    value = _FILES.number(data[key], path, rule=rule, unit=shown_unit)
-    if bounds is not None:
-        within(path, value, bounds, unit)
-    return value
-
-
-def _choice(data: dict[str, Any], key: str, where: str, choices: tuple[str, ...]) -> str:
-    value = data[key]
-    path = f"{where}.{key}" if where else key
-    if value not in choices:
-        raise ScenarioError(f"{path} must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
-    return value
-
-
-def _parse_changes(raw: Any, steps: int) -> tuple[ScheduledChange, ...]:
-    if not isinstance(raw, list):
-        raise ScenarioError("walk.change must be an array of tables, written [[walk.change]]")
-    changes = []
-    for index, entry in enumerate(raw):
-        where = f"walk.change[{index}]"
-        entry = _FILES.table(entry, where)
-        _FILES.check_keys(entry, where, ("step",), ("length", "width", "yaw", "only"))
-        step = _FILES.count(entry["step"], f"{where}.step")
-        if step > steps:
-            raise ScenarioError(f"{where}.step must be a step of the walk (1..{steps}), got {step}")
-        length = _number(entry, "length", where, unit="m", bounds=_LENGTH_BOUNDS) if "length" in entry else None
-        width = _number(entry, "width", where, rule="> 0", unit="m", bounds=_WIDTH_BOUNDS) if "width" in entry else None
-        yaw = _number(entry, "yaw", where, rule=_YAW_RULE, unit="rad") if "yaw" in entry else None
-        if length is None and width is None and yaw is None:
-            raise ScenarioError(f"{where} changes nothing: give at least one of length, width, yaw")
-        only = entry.get("only", False)
-        if not isinstance(only, bool):
-            raise ScenarioError(f"{where}.only must be true or false, got {only!r}")
-        # By default a change persists (the user now wants longer/wider/turning steps); the closing step
-        # steps + 1 is never touched so the walk still ends with the feet side by side.
-        through = None if only else steps
-        changes.append(ScheduledChange(step, length=length, width=width, turn=yaw, through=through))
-    return tuple(changes)  # Scenario refuses two changes of one step, naming both entries
-
-
-def _parse_guide(raw: Any) -> GuidePath:
-    table = _FILES.table(raw, "guide")
-    keys = ("forward", "turn", "radius", "after", "speed")
-    _FILES.check_keys(table, "guide", (), keys)
-    units = {"forward": "m", "turn": "rad", "radius": "m", "after": "m", "speed": "m/s"}
-    values = {key: _number(table, key, "guide", unit=units[key]) for key in keys if key in table}
-    try:
-        return GuidePath(**values)
-    except ValueError as error:
-        raise ScenarioError(str(error)) from None
 
 
 def parse_common(data: dict[str, Any]) -> dict[str, Any]:
@@ -438,7 +391,7 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
         data,
         "",
         ("name", "connection", "robot", "timing", "walk"),
-        ("description", "guide", "auto_margin", "control", "obstacle"),
+        ("description", "guide", "auto_margin", "control", "obstacle", "terrain"),
     )
     common = parse_common(data)
     connection = common["connection"]
@@ -467,6 +420,7 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
         first_foot=first_foot,
         source=source,
         guide=guide,
+        terrain=parse_terrain(data["terrain"], step_width) if "terrain" in data else None,
     )
 
 

@@ -158,16 +158,17 @@ def _margin_caption(run: PlanRun) -> str:
 
 
 def draw_zmp_cog(run: PlanRun, info: FigureInfo) -> Figure:
-    """ZMP (planned and reference) and COG along x and y against time, with the support polygon's extent.
+    """ZMP (planned and reference) and COG along x and y against time, with the support polygon's extent; off the
+    flat floor a third panel draws the COG height and the feet's heights.
 
     The band is the support polygon's extent along each axis (m): a ZMP outside the band is outside the
     polygon; red dots mark every tick where the ZMP is outside the polygon in the plane.
     """
     lower, upper = support_extents(run)
-    figure = new_figure(11, 7.5)
-    axes = figure.subplots(2, 1, sharex=True)
+    figure = new_figure(11, 7.5 if run.heights is None else 10.0)
+    axes = figure.subplots(2 if run.heights is None else 3, 1, sharex=True)
     t = run.times
-    for index, (ax, axis) in enumerate(zip(axes, "xy", strict=True)):
+    for index, (ax, axis) in enumerate(zip(axes[:2], "xy", strict=True)):
         first = index == 0
         _shade_double_support(ax, run, first)
         ax.fill_between(t, lower[:, index], upper[:, index], color=BAND_COLOR, alpha=0.18, lw=0, zorder=1,
@@ -181,8 +182,22 @@ def draw_zmp_cog(run: PlanRun, info: FigureInfo) -> Figure:
         _mark_changes(ax, run, first)
         ax.set_ylabel(f"{axis} [m]")
         clean_ticks(ax)
+    if run.heights is not None:
+        _heights_panel(axes[2], run)
     _finish_time_panels(figure, axes, t, f"{info.title}: ZMP and COG", legend_columns=3)
     return figure
+
+
+def _heights_panel(ax: Axes, run: PlanRun) -> None:
+    """The COG height and both feet's heights (m) against time."""
+    t, heights = run.times, run.heights
+    _shade_double_support(ax, run, False)
+    ax.plot(t, heights[:, 0], color=COG_COLOR, lw=1.6, zorder=3)
+    ax.plot(t, heights[:, 1], color=SIDE_COLORS["left"], lw=1.2, zorder=3, label="left foot height")
+    ax.plot(t, heights[:, 2], color=SIDE_COLORS["right"], lw=1.2, zorder=3, label="right foot height")
+    ax.set_ylabel("z [m]")
+    ax.set_title("vertical (z): COG and feet", fontsize=10, loc="left")
+    clean_ticks(ax)
 
 
 def _deviation_panel(ax: Axes, run: PlanRun, index: int, first: bool) -> None:
@@ -192,8 +207,15 @@ def _deviation_panel(ax: Axes, run: PlanRun, index: int, first: bool) -> None:
     connecting = run.free_mask(initial=False)
     initial = run.free_mask(initial=True) & ~connecting
     for k, (t0, t1) in enumerate(runs(initial | connecting, t)):
-        ax.axvspan(t0, t1, color=DOUBLE_COLOR, alpha=0.6, lw=0, zorder=0,
-                   label="free first segment of a plan (the ZMP may leave its reference)" if first and k == 0 else None)
+        ax.axvspan(
+            t0,
+            t1,
+            color=DOUBLE_COLOR,
+            alpha=0.6,
+            lw=0,
+            zorder=0,
+            label="free first segment of a plan (the ZMP may leave its reference)" if first and k == 0 else None,
+        )
     # NaN outside the windows breaks the line there instead of drawing zeros that were never free.
     ax.plot(t, np.where(connecting, deviation, np.nan), color=ZMP_COLOR, lw=1.6, zorder=3, gid="deviation-replans",
             label=f"ZMP {MINUS} ZMP reference, replans" if first else None)  # fmt: skip
@@ -273,9 +295,17 @@ def draw_top_view(run: PlanRun, info: FigureInfo) -> Figure:
     if info.nominal_footprints is not None:
         # Drawn after the soles so the outlines stay visible where the moved footprints overlap them.
         for index in (i for i, was_moved in enumerate(moved) if was_moved):
-            ax.add_patch(Polygon(info.sole.corners(info.nominal_footprints[index]), closed=True, fill=False, ls="--",
-                                 edgecolor="0.4", lw=0.9,
-                                 label=None if "planned" in seen else "where it was planned before the change"))
+            ax.add_patch(
+                Polygon(
+                    info.sole.corners(info.nominal_footprints[index]),
+                    closed=True,
+                    fill=False,
+                    ls="--",
+                    edgecolor="0.4",
+                    lw=0.9,
+                    label=None if "planned" in seen else "where it was planned before the change",
+                )
+            )
             seen.add("planned")
     ax.plot(run.cog[:, 0], run.cog[:, 1], color=COG_COLOR, lw=1.5, label="COG")
     ax.plot(run.zmp[:, 0], run.zmp[:, 1], color=ZMP_COLOR, lw=1.3, label="ZMP (planned)")

@@ -175,6 +175,8 @@ class PlanRun:
         footprints: the footprints ``F[0..]`` as walked.
         changes: ``(decision time (s), step)`` of every footstep change, in the order they were handed over.
         free_segments: ``(start, end)`` (s) of the free first segment of every plan, the initial plan's first.
+        heights: COG, left and right foot heights (m), ``(k, 3)``, of a walk whose COG height changes (off the flat
+            floor); ``None`` on level ground.
     """
 
     times: np.ndarray
@@ -188,6 +190,7 @@ class PlanRun:
     footprints: list[Footstep]
     changes: list[tuple[float, int]]
     free_segments: list[tuple[float, float]]
+    heights: np.ndarray | None = None
 
     @classmethod
     def from_rollout(cls, rollout: Rollout) -> PlanRun:
@@ -205,6 +208,7 @@ class PlanRun:
             footprints=list(rollout.footprints),
             changes=[(float(t), int(step)) for t, step in rollout.changes],
             free_segments=plan_free_segments(rollout),
+            heights=_heights(column("cog_z"), column("lfoot_z"), column("rfoot_z")),
         )
 
     def column(self, name: str) -> np.ndarray:
@@ -234,6 +238,11 @@ class PlanRun:
         return mask
 
 
+def _heights(cog_z: np.ndarray, left_z: np.ndarray, right_z: np.ndarray) -> np.ndarray | None:
+    """The heights of a walk whose COG height changes, ``None`` for one at a constant height."""
+    return np.column_stack([cog_z, left_z, right_z]) if np.ptp(cog_z) > 0.0 else None
+
+
 def plan_free_segments(rollout: Rollout) -> list[tuple[float, float]]:
     """``(start, end)`` (s) of the free first segment of each plan of ``rollout``, the initial plan's first."""
     return [(float(plan.t), float(plan.first_segment_end)) for plan in rollout.plans]
@@ -241,7 +250,8 @@ def plan_free_segments(rollout: Rollout) -> list[tuple[float, float]]:
 
 def _footstep(entry: Any, where: str) -> Footstep:
     try:
-        return Footstep(float(entry["x"]), float(entry["y"]), float(entry["yaw"]), entry["side"])
+        tilt = {key: float(entry[key]) for key in ("z", "pitch", "roll") if key in entry}  # off level ground
+        return Footstep(float(entry["x"]), float(entry["y"]), float(entry["yaw"]), entry["side"], **tilt)
     except (KeyError, TypeError, ValueError) as error:
         raise RunFilesError(f"{where}: a footprint must have x, y, yaw and side ({error})") from None
 
@@ -351,6 +361,11 @@ def read_plan_run(folder: Path) -> tuple[PlanRun, FigureInfo, dict[str, Any]]:
     feet = tuple(f"{foot}_{k}" for foot in ("lfoot", "rfoot") for k in ("x", "y", "yaw"))
     columns = read_table(path, (*numeric, *feet, "support"))
     values = read_floats(columns, (*numeric, *feet), path)
+    height_names = ("cog_z", "lfoot_z", "rfoot_z")
+    heights = None
+    if all(name in columns for name in height_names):  # written by every rtgait plan; older runs may lack them
+        z = read_floats(columns, height_names, path)
+        heights = _heights(z[:, 0], z[:, 1], z[:, 2])
     try:
         sole = SoleRect(**{key: float(summary["sole"][key]) for key in ("front", "back", "inner", "outer")})
         nominal = summary.get("nominal_footprints")
@@ -380,6 +395,7 @@ def read_plan_run(folder: Path) -> tuple[PlanRun, FigureInfo, dict[str, Any]]:
         footprints=footprints,
         changes=changes,
         free_segments=free,
+        heights=heights,
     )
     return run, info, summary
 

@@ -1,8 +1,16 @@
-"""Swing-foot trajectories: smooth lift-off and touch-down.
+"""Swing-foot trajectories: smooth lift-off and touch-down, and over a height change.
 
-Horizontal position and yaw follow a quintic blend (zero velocity and acceleration at both ends); the height
-follows ``h * 64 s^3 (1 - s)^3``, which peaks at ``h`` mid-swing and also starts and ends with zero velocity and
-acceleration, so the foot neither scuffs at lift-off nor strikes at touch-down.
+Horizontal position and yaw follow a quintic blend (zero velocity and acceleration at both ends); between footholds
+at one height ``z0`` the height follows ``z0 + h * 64 s^3 (1 - s)^3``, which peaks at ``h`` mid-swing and also starts
+and ends with zero velocity and acceleration, so the foot neither scuffs at lift-off nor strikes at touch-down.
+
+Between footholds at different heights ``z0 != z1`` (a stair, a step) the foot rises first and comes down last:
+with ``top = max(z0, z1) + h`` and ``sigma`` = :data:`RISE_SHARE`,
+``z(s) = z0 + (top - z0) b(s / sigma) - (top - z1) b((s - 1 + sigma) / sigma)`` (``b`` the quintic blend, clipped to
+[0, 1]), so the sole is ``h`` above the higher foothold over the middle ``1 - 2 sigma`` of the swing, and the
+horizontal blend starts :data:`HORIZONTAL_DELAY` later and ends as much earlier: the toe is above the upper tread
+before it passes the stair nose (going up), the heel leaves the nose before the foot comes down (going down).
+:mod:`rtgait.core.geometry.swing_terrain` checks the swept sole against the terrain.
 """
 
 from __future__ import annotations
@@ -22,32 +30,66 @@ def lift(s: float) -> tuple[float, float]:
     return 64.0 * s**3 * r**3, 192.0 * s * s * r * r * (r - s)
 
 
+RISE_SHARE = 0.35
+"""Share of a height-changing swing spent rising (and as much coming down) to ``max(z0, z1) + h``."""
+HORIZONTAL_DELAY = 0.1
+"""Share of a height-changing swing at each end during which the foot only moves vertically."""
+
+
+def _clip01(s: float) -> float:
+    return min(max(s, 0.0), 1.0)
+
+
+def swing_height(z0: float, z1: float, s: float, height: float) -> float:
+    """Swing foot height (m) at progress ``s`` in [0, 1] from a foothold at ``z0`` to one at ``z1`` (module
+    docstring), ``height`` the clearance above the higher one."""
+    return swing_vertical(z0, z1, s, height)[0]
+
+
+def swing_vertical(z0: float, z1: float, s: float, height: float) -> tuple[float, float]:
+    """Swing foot height (m) and its derivative d/ds at progress ``s`` (module docstring)."""
+    if z0 == z1:  # level: the lift profile (a flat walk's swings unchanged)
+        z, dz = lift(s)
+        return z0 + height * z, height * dz
+    top = max(z0, z1) + height
+    up, dup = blend(_clip01(s / RISE_SHARE))
+    down, ddown = blend(_clip01((s - 1.0 + RISE_SHARE) / RISE_SHARE))
+    return z0 + (top - z0) * up - (top - z1) * down, ((top - z0) * dup - (top - z1) * ddown) / RISE_SHARE
+
+
+def _horizontal(start: Footstep, end: Footstep, s: float) -> tuple[float, float]:
+    """Horizontal blend and its derivative d/ds: delayed at both ends over a height change."""
+    if start.z == end.z:
+        return blend(s)
+    span = 1.0 - 2.0 * HORIZONTAL_DELAY
+    k, dk = blend(_clip01((s - HORIZONTAL_DELAY) / span))
+    return k, dk / span
+
+
 def swing_pose(start: Footstep, end: Footstep, s: float, height: float) -> tuple[float, float, float, float]:
     """Foot pose ``(x, y, z, yaw)`` (m, rad) at swing progress ``s`` in [0, 1] from ``start`` to ``end``."""
-    s = min(max(s, 0.0), 1.0)
-    k, _ = blend(s)
-    z, _ = lift(s)
+    s = _clip01(s)
+    k, _ = _horizontal(start, end, s)
     return (
         start.x + k * (end.x - start.x),
         start.y + k * (end.y - start.y),
-        height * z,
+        swing_vertical(start.z, end.z, s, height)[0],
         wrap_angle(start.yaw + k * wrap_angle(end.yaw - start.yaw)),
     )
 
 
 def swing_velocity(start: Footstep, end: Footstep, s: float, height: float, duration: float) -> tuple[float, ...]:
     """Foot velocity ``(vx, vy, vz, yaw_rate)`` (m/s, rad/s) at swing progress ``s`` over ``duration`` (s)."""
-    s = min(max(s, 0.0), 1.0)
-    _, dk = blend(s)
-    _, dz = lift(s)
+    s = _clip01(s)
+    _, dk = _horizontal(start, end, s)
+    _, dz = swing_vertical(start.z, end.z, s, height)
     scale = 1.0 / duration
     return (
         dk * (end.x - start.x) * scale,
         dk * (end.y - start.y) * scale,
-        height * dz * scale,
+        dz * scale,
         dk * wrap_angle(end.yaw - start.yaw) * scale,
     )
-
 
 
 def retargeted_swing(

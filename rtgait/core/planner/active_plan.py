@@ -3,6 +3,12 @@
 A replan is ``G @ y`` (:mod:`rtgait.core.lipm.pattern`): ``y`` holds the state the plan starts from and the anchors the
 reference ZMP rests on. :class:`ActivePlan` keeps the result as Python floats per segment, evaluated lazily: one
 sample is scalar arithmetic, cheaper than any numpy call.
+
+Over height changes a plan has a vertical column too (``z``, ``None`` on level ground): the same operator applied to
+the vertical state and the footholds' heights. It is the 3D-DCM/VRP form (Englsberger et al. 2015, ``docs/method.md``):
+the virtual repellent point's height is the support height ``h(t)`` (anchors: the footholds' ``z``, carried between
+them as the horizontal ZMP is) plus the constant ``zc = g / w^2``, so ``c_z - c_z'' / w^2 = h + zc`` is the
+horizontal equation again, with the same ``w``, and the COG height above ``zc`` is its closed form.
 """
 
 from __future__ import annotations
@@ -11,6 +17,7 @@ import math
 
 import numpy as np
 
+from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.lipm.pattern import DEGREE, MOVING_KINDS, PlanOperator, segment_zmp_rows
 
 EAGER_SEGMENTS = 1
@@ -27,7 +34,7 @@ class ActivePlan:
 
     __slots__ = (
         "durations", "elapsed", "first_reference", "layout", "offsets", "phase0", "reference_offset", "segments",
-        "t_start", "y",
+        "t_start", "y", "z", "z_segments",
     )  # fmt: skip
 
     def __init__(
@@ -39,8 +46,11 @@ class ActivePlan:
         first_reference,
         reference_offset: float,
         elapsed: float = 0.0,
+        z: np.ndarray | None = None,
     ) -> None:
         self.t_start = t_start
+        self.z = z  # the vertical column (h0, dh0, cz0, dcz0, heights...), None on level ground
+        self.z_segments: list | None = None if z is None else [None] * len(layout.durations)
         self.phase0 = phase0
         self.elapsed = elapsed  # time into phase0 at which the plan starts (s): 0 unless made mid-phase
         self.layout = layout
@@ -60,6 +70,41 @@ class ActivePlan:
         if seg is None:
             seg = self.segments[j] = (self.layout.G[12 * j : 12 * j + 12] @ self.y).T.tolist()
         return seg
+
+    def z_segment(self, j: int) -> list[float]:
+        """The vertical column's ``[h0..h4, A0..A4, V, W]`` of segment ``j`` (``z`` must be set)."""
+        seg = self.z_segments[j]
+        if seg is None:
+            seg = self.z_segments[j] = (self.layout.G[12 * j : 12 * j + 12] @ self.z).tolist()
+        return seg
+
+    def height_at(self, j: int, tau: float, w: float) -> tuple[float, float, float, float, float]:
+        """``(h, dh, cz, dcz, ddcz)`` on segment ``j`` at local time ``tau``: the support height under the VRP and
+        the COG height above ``zc`` with its rates (m, m/s, m/s^2); zeros on level ground."""
+        if self.z is None:
+            return (0.0, 0.0, 0.0, 0.0, 0.0)
+        a0, a1, a2, a3, a4, A0, A1, A2, A3, A4, V, W = self.z_segment(j)
+        e = math.exp(w * tau)
+        ch, sh = 0.5 * (e + 1.0 / e), 0.5 * (e - 1.0 / e)
+        hom = V * ch + W * sh
+        return (
+            a0 + tau * (a1 + tau * (a2 + tau * (a3 + tau * a4))),
+            a1 + tau * (2.0 * a2 + tau * (3.0 * a3 + tau * 4.0 * a4)),
+            hom + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4))),
+            w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4)),
+            w * w * hom + 2.0 * A2 + tau * (6.0 * A3 + tau * 12.0 * A4),
+        )
+
+    def height_state(self, t: float, w: float) -> list[float]:
+        """``[h, dh, cz, dcz]`` at absolute time ``t`` (s): where a new plan's vertical column starts from."""
+        if self.z is None:
+            return [0.0, 0.0, 0.0, 0.0]
+        if t == self.t_start:
+            return self.z[:4].tolist()
+        j, tau = self.locate(t)
+        if j > 0 and tau < 1e-12:  # a phase start (every regular replan): the precomputed end rows, as end_state
+            return (self.layout.end_state_rows(j - 1, w) @ self.z).tolist()
+        return list(self.height_at(j, tau, w)[:4])
 
     def locate(self, t: float) -> tuple[int, float]:
         """Segment index and local time of absolute time ``t`` (s), clamped to the plan."""
@@ -104,6 +149,30 @@ class ActivePlan:
             state[4 + axis] = V * ch + W * sh + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4)))
             state[6 + axis] = w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4))
         return state
+
+
+def height_column(
+    previous: ActivePlan | None,
+    t_start: float,
+    w: float,
+    heights: list[float] | None,
+    n_anchors: int,
+    standing: tuple[Footstep, Footstep],
+) -> np.ndarray | None:
+    """The vertical column of a plan starting at ``t_start`` (s): the vertical state of the plan before at that time
+    (continuous across replanning, as the horizontal one; before the first plan, at rest over the standing feet) and
+    the footholds' ``heights`` (m) under its ``n_anchors`` anchors (``None``: all 0); ``None`` while both are zero
+    (level ground: the plan needs no vertical column)."""
+    if previous is not None:
+        state = previous.height_state(t_start, w)
+    else:
+        h0 = 0.5 * (standing[0].z + standing[1].z)
+        state = [h0, 0.0, h0, 0.0]
+    if heights is None:
+        if not any(state):
+            return None
+        heights = [0.0] * n_anchors
+    return np.array([*state, *heights])
 
 
 class PlanLayout:

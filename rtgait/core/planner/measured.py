@@ -143,6 +143,11 @@ class MeasuredPlanning:
             i = q // 2 if n is None else min(q // 2, n)
             index = i if self._walk.footprint(i).side == side else i + 1
         self._check_landing(index, footprint)
+        planned = self._walk.footprint(index)
+        if not planned.level:  # a touch-down measures x, y, yaw: the planned height and surface stay
+            footprint = Footstep(
+                footprint.x, footprint.y, footprint.yaw, footprint.side, planned.z, planned.pitch, planned.roll
+            )
         if kind == "single" and index == (q + 1) // 2 + 1:
             self._freeze_swing(t)
         self._walk.retarget(index, footprint)

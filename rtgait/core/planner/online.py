@@ -43,7 +43,7 @@ from rtgait.core.limits import MAX_STEPS
 from rtgait.core.lipm.closed_form import CogTrajectory, omega
 from rtgait.core.lipm.pattern import DEGREE, MOVING_KINDS, PatternKey
 from rtgait.core.lipm.spline import PiecewisePolynomial
-from rtgait.core.planner.active_plan import ActivePlan, PlanLayout
+from rtgait.core.planner.active_plan import ActivePlan, PlanLayout, height_column
 from rtgait.core.planner.adjusting import StepAdjusting
 from rtgait.core.planner.auto import AutoConnection, ChangeRecord
 from rtgait.core.planner.bounded import BoundedCalls, measured_pair
@@ -250,7 +250,14 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
             reference, offset = previous.first_reference, elapsed
         else:
             reference = ((ax, 0.0, 0.0, 0.0), (ay, 0.0, 0.0, 0.0))
-        self._plan = ActivePlan(t_start, q, layout, y, reference, offset, elapsed)
+        self._plan = ActivePlan(
+            t_start, q, layout, y, reference, offset, elapsed, self._height_column(t_start, q, sources)
+        )
+
+    def _height_column(self, t_start: float, q: int, sources) -> np.ndarray | None:
+        """The vertical column of a plan starting at ``t_start`` in phase ``q`` (:func:`height_column`)."""
+        heights = self._walk.heights_from(q >> 1, sources)
+        return height_column(self._plan, t_start, self.w, heights, len(sources), self._walk.standing)
 
     def _replan(self, t: float) -> None:
         """Make and connect the plan of the double support that begins now (phase ``_next_replan_phase``), for
@@ -364,6 +371,13 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
                 zmp_ref = zmp
             axes.append((cog, vel, acc, zmp, zmp_ref, cog + vel / w))
         (cog_x, cog_vx, cog_ax, zmp_x, zmp_ref_x, dcm_x), (cog_y, cog_vy, cog_ay, zmp_y, zmp_ref_y, dcm_y) = axes
+        cog_z, cog_vz, cog_az = self.config.cog_height, 0.0, 0.0
+        if plan.z is not None:  # the vertical column, as the horizontal axes above
+            _, _, _, _, _, A0, A1, A2, A3, A4, V, W = plan.z_segment(j)
+            hom = V * ch + W * sh
+            cog_z += hom + A0 + tau * (A1 + tau * (A2 + tau * (A3 + tau * A4)))
+            cog_vz = w * (V * sh + W * ch) + A1 + tau * (2.0 * A2 + tau * (3.0 * A3 + tau * 4.0 * A4))
+            cog_az = w * w * hom + 2.0 * A2 + tau * (6.0 * A3 + tau * 12.0 * A4)
         if phase.swing_from is None:  # both feet on the ground, left then right
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw, rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = phase.feet
         else:
@@ -372,7 +386,7 @@ class OnlinePlanner(PlannerWalk, MeasuredPlanning, StepAdjusting, PlanShapes, Bo
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw = left
             rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = right
         values = _new_tuple(SampleValues, (  # in field order
-            cog_x, cog_y, self.config.cog_height, cog_vx, cog_vy, 0.0, cog_ax, cog_ay, 0.0,
+            cog_x, cog_y, cog_z, cog_vx, cog_vy, cog_vz, cog_ax, cog_ay, cog_az,
             zmp_x, zmp_y, zmp_ref_x, zmp_ref_y,
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw, rfoot_x, rfoot_y, rfoot_z, rfoot_yaw,
             dcm_x, dcm_y,

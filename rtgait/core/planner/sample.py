@@ -23,7 +23,9 @@ import numpy as np
 class SampleValues(NamedTuple):
     """The planner's sample at one instant, as plain floats (SI units, yaw in rad).
 
-    The COG's vertical velocity and acceleration are zero (the plan keeps the COG at a constant height). The reference
+    The COG's height is ``zc`` on level ground (its vertical velocity and acceleration zero); off the flat floor it
+    follows the footholds' heights (the 3D-DCM/VRP form, ``docs/method.md``) and the feet's ``z`` are the footholds'
+    heights and the swing's. The reference
     ZMP is the one the footsteps alone ask for; it differs from the planned ZMP in a connecting segment. The DCM
     (capture point) is ``xi = c + c'/w``, horizontal.
     """

@@ -122,6 +122,9 @@ class WalkChanges:
                 length=s.length if length is None else length,
                 width=s.width if width is None else width,
                 turn=s.turn if turn is None else turn,
+                rise=s.rise,  # a changed length or heading keeps the step's height and surface
+                pitch=s.pitch,
+                roll=s.roll,
             )
             for s in old
         ]
@@ -230,7 +233,9 @@ class WalkChanges:
         if self.latest_phase is not None and 2 * step <= self.latest_phase:
             raise StepChangeTooLateError(f"step {step} has already landed")
         stance, old = self.footprint(step), self.footprint(step + 1)
-        self._strides[step - 1 - self.base] = stride_between(stance, Footstep(x, y, old.yaw, old.side))
+        self._strides[step - 1 - self.base] = stride_between(
+            stance, Footstep(x, y, old.yaw, old.side, old.z, old.pitch, old.roll)
+        )
         self._rebuild(step)
 
     def set_single_support(self, step: int, duration: float) -> None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from rtgait.core.geometry.footsteps import Footstep, Timeline
-from rtgait.core.geometry.swing import lift, retargeted_swing, swing_pose, swing_velocity
+from rtgait.core.geometry.swing import retargeted_swing, swing_height, swing_pose, swing_velocity
 from rtgait.core.walk.walk import Walk
 
 SwingRetarget = tuple[float, tuple[float, float, float], tuple[float, float, float], float]
@@ -50,7 +50,8 @@ class PhaseInfo:
         since, pose0, vel0, _ = self.retarget
         span = self.end - since
         x, y, yaw = retargeted_swing(pose0, vel0, self.swing_to, (rel - since) / span, span)
-        return (x, y, height * lift(min(max(self.lift_progress(rel), 0.0), 1.0))[0], yaw)
+        z = swing_height(self.swing_from.z, self.swing_to.z, min(max(self.lift_progress(rel), 0.0), 1.0), height)
+        return (x, y, z, yaw)
 
     def lift_progress(self, rel: float) -> float:
         """Progress along the height profile at ``rel`` (s from the walk's start): ``(rel - start) / duration``, or
@@ -83,10 +84,10 @@ def phase_info(walk: Walk, timeline: Timeline, rel: float, retarget: tuple[int, 
     if q & 1 and timeline.kind(q) == "single":
         i = (q + 1) >> 1
         stance = walk.footprint(i)
-        pose = (stance.x, stance.y, 0.0, stance.yaw)
+        pose = (stance.x, stance.y, stance.z, stance.yaw)
         moved = retarget[1] if retarget is not None and retarget[0] == q else None
         return PhaseInfo(q, start, end, stance.side, pose, walk.footprint(i - 1), walk.footprint(i + 1), moved)
     a, b = walk.contact_feet(q)
     if a.side != "left":
         a, b = b, a
-    return PhaseInfo(q, start, end, "double", (a.x, a.y, 0.0, a.yaw, b.x, b.y, 0.0, b.yaw))
+    return PhaseInfo(q, start, end, "double", (a.x, a.y, a.z, a.yaw, b.x, b.y, b.z, b.yaw))

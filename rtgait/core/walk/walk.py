@@ -196,6 +196,17 @@ class Walk(WalkChanges):
                 anchors += (0.5 * (fa.x + fb.x), 0.5 * (fa.y + fb.y))
         return anchors
 
+    def heights_from(self, i0: int, relative: Sequence[tuple[int, int]]) -> list[float] | None:
+        """The footholds' heights (m) under the anchors of :meth:`anchors_from`, ``None`` when all are 0 (level
+        ground: the plan needs no vertical column)."""
+        prints = self._prints
+        start = i0 - self.base
+        heights = []
+        for a, b in relative:
+            za = prints[start + a].z
+            heights.append(za if a == b else 0.5 * (za + prints[start + b].z))
+        return heights if any(heights) else None
+
     # ----- deadlines ---------------------------------------------------------------------------------------
     def first_open_step(self) -> int:
         """The first step that may still be changed, given the latest phase reached."""
