@@ -50,6 +50,7 @@ __all__ = [
     "add_leg_shapes",
     "add_sole",
     "exclude_pairs",
+    "floor_contact_parameters",
     "leg_links",
     "leg_shapes",
     "touching_pairs",
@@ -67,7 +68,8 @@ _CLEARANCE = 0.002  # m: shapes closer than this at half-sitting are taken as to
 # ----- soles and floor ---------------------------------------------------------------------------------------
 
 
-def _contact_parameters(config: SimConfig) -> dict[str, object]:
+def floor_contact_parameters(config: SimConfig) -> dict[str, object]:
+    """The floor's (and the soles') friction and soft-contact parameters, as ``add_geom`` keywords."""
     return {
         "friction": [config.friction, 0.005, 0.0001],
         "solref": [config.contact_timeconst, config.contact_dampratio],
@@ -84,7 +86,7 @@ def add_floor(spec: mujoco.MjSpec, config: SimConfig) -> str:
         contype=FLOOR_BITS[0],
         conaffinity=FLOOR_BITS[1],
         rgba=[0.8, 0.8, 0.8, 1.0],
-        **_contact_parameters(config),
+        **floor_contact_parameters(config),
     )
     return "floor"
 
@@ -132,7 +134,7 @@ def add_sole(
         mass=0.0,
         group=3,
         rgba=[0.9, 0.5, 0.1, 0.6],
-        **_contact_parameters(config),
+        **floor_contact_parameters(config),
     )
     body.add_site(name=site_name, pos=placement.translation, quat=wxyz, size=[0.01, 0.01, 0.01])
     return geom_name, site_name

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from rtgait.core.geometry.terrain import TerrainKind
 from rtgait.core.obstacle.box import Obstacle
 from rtgait.robot.description import RobotError
 from rtgait.robot.model import RobotModel
@@ -47,6 +48,7 @@ from rtgait.sim.model_error import ModelError, apply_model_error, draw
 from rtgait.sim.motors import MotorModel, add_friction, resolve_motors
 from rtgait.sim.obstacles import add_obstacles
 from rtgait.sim.sensor_sites import SensorLayout, add_sensors
+from rtgait.sim.terrain import add_terrain
 from rtgait.sim.urdf_import import MESH_FORMATS, MeshSkippedWarning, compile_spec, lock_joint, urdf_for_mujoco
 
 __all__ = ["MESH_FORMATS", "SETTLE_TIME", "MeshSkippedWarning", "SimConfig", "SimModel", "build_sim_model"]
@@ -244,10 +246,14 @@ def _half_sitting_qpos(model: mujoco.MjModel, robot: RobotModel) -> np.ndarray:
 
 
 def build_sim_model(
-    robot: RobotModel | str, config: SimConfig | None = None, obstacles: Sequence[Obstacle] = ()
+    robot: RobotModel | str,
+    config: SimConfig | None = None,
+    obstacles: Sequence[Obstacle] = (),
+    terrain: TerrainKind | None = None,
 ) -> SimModel:
     """Build the MuJoCo model of ``robot`` (a loaded robot, or a built-in robot name / description file path), with
-    a box geom for each of ``obstacles`` (:mod:`rtgait.sim.obstacles`).
+    a box geom for each of ``obstacles`` (:mod:`rtgait.sim.obstacles`) and the boxes of ``terrain`` on a floor
+    lowered to its lowest level (:mod:`rtgait.sim.terrain`; ``None``: the flat floor).
 
     Raises:
         RobotError: the URDF cannot be read or MuJoCo cannot compile the edited model (message names the cause).
@@ -277,6 +283,8 @@ def build_sim_model(
     for side in ("left", "right"):
         add_sole(spec, robot, side, root, config)
     add_floor(spec, config)
+    if terrain is not None:
+        add_terrain(spec, terrain, config)
     add_obstacles(spec, obstacles)
     shapes = add_leg_shapes(spec, robot) if config.leg_collisions else []
     actuation = resolve_actuation(robot, config.control_dt, config.physics_dt, config.gains)
