@@ -158,7 +158,9 @@ def _live_walk(
     if not by_command:  # as simulate does: a walk the robot cannot reach is refused before it starts
         whole_body_motion(robot, planned_walk(scenario, robot))
     obstacles = () if by_command else walk.obstacles  # drawn, and stepped around when seen
-    sim = build_sim_model(robot, SimConfig(gains=gains, sensors=sensors, model_error=model_error), obstacles)
+    terrain = None if by_command or walk.terrain is None else walk.terrain.terrain
+    config = SimConfig(gains=gains, sensors=sensors, model_error=model_error)
+    sim = build_sim_model(robot, config, obstacles, terrain)
     strides = None if by_command else walk.strides()
     controller = make_controller(
         level,

@@ -491,7 +491,8 @@ def _physics(
     from rtgait.sim.loop_options import LoopOptions
     from rtgait.sim.model import build_sim_model
 
-    sim = build_sim_model(robot, config, walk.obstacles)
+    terrain = None if walk.terrain is None else walk.terrain.terrain
+    sim = build_sim_model(robot, config, walk.obstacles, terrain)
     driven = LoopOptions(drive=drive, state=state)  # type: ignore[arg-type]
     if scenario.guide is None or velocity is not None:
         reactions = obstacle_reactions(walk) if velocity is None else ()
