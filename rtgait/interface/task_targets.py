@@ -19,8 +19,10 @@ class IKTargets(NamedTuple):
 
     Attributes:
         cog: COG position ``(x, y, z)`` (m).
-        left_foot: left sole point ``(x, y, z, yaw)`` (m, rad); the sole is level.
-        right_foot: right sole point ``(x, y, z, yaw)`` (m, rad).
+        left_foot: left sole point ``(x, y, z, yaw)`` (m, rad); the sole is level. ``(x, y, z, yaw, pitch, roll)``:
+            the sole tilted to a sloped foothold, ``Rz(yaw) Ry(pitch) Rx(roll)``
+            (:mod:`rtgait.core.geometry.foot_tilt`).
+        right_foot: right sole point, likewise.
         lean: the upper body's lean, a rotation vector (rad, world frame) applied to the upright torso and pelvis
             targets (the hip strategy, :mod:`rtgait.core.laws.hip_strategy`); ``None``: upright.
     """

@@ -5,7 +5,9 @@ both feet; the whole body (free-floating base, legs, torso) follows with every o
 half-sitting posture. Tasks, all in the world frame:
 
 * COG position (x, y, z), m;
-* each sole frame's position and orientation: the planned (x, y, z) and yaw, sole level (6 per foot);
+* each sole frame's position and orientation: the planned (x, y, z) and yaw, sole level, or tilted by the
+  target's pitch and roll when it has them (``(x, y, z, yaw, pitch, roll)``: the sole on a sloped foothold,
+  ``Rz(yaw) Ry(pitch) Rx(roll)``) (6 per foot);
 * torso orientation: upright, heading along the mean yaw of the feet (3);
 * pelvis (floating base) orientation: likewise, with a small weight (3).
 
@@ -239,9 +241,9 @@ class WholeBodyIK:
         e = [
             cog[0] - com[0], cog[1] - com[1], cog[2] - com[2],
             left[0] - hl[0][3], left[1] - hl[1][3], left[2] - hl[2][3],
-            *_yaw_error(hl, cos(left_yaw), sin(left_yaw)),
+            *_foot_error(hl, left, left_yaw),
             right[0] - hr[0][3], right[1] - hr[1][3], right[2] - hr[2][3],
-            *_yaw_error(hr, cos(right_yaw), sin(right_yaw)),
+            *_foot_error(hr, right, right_yaw),
             *_leaned_yaw_error(self._torso, c, s, lean),
             *_leaned_yaw_error(self._pelvis, c, s, lean),
         ]  # fmt: skip
@@ -398,6 +400,23 @@ def _leaned_yaw_error(
     ex, ey, ez = _yaw_error(tilted, c, s)
     return (L[0][0] * ex + L[0][1] * ey + L[0][2] * ez, L[1][0] * ex + L[1][1] * ey + L[1][2] * ez,
             L[2][0] * ex + L[2][1] * ey + L[2][2] * ez)  # fmt: skip
+
+
+def _foot_error(h: list[list[float]], foot: Sequence[float], yaw: float) -> tuple[float, float, float]:
+    """World-frame rotation vector from the sole rotation ``h`` to the target of ``foot``: ``Rz(yaw)`` (level), or
+    ``Rz(yaw) Ry(pitch) Rx(roll)`` when ``foot`` has a pitch and roll (its 5th and 6th values, rad). That target is
+    ``Exp(w) Rz(yaw)`` with ``w = Rz(yaw) log(Ry(pitch) Rx(roll))``, the lean form of :func:`_leaned_yaw_error`."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    if len(foot) < 6 or not (foot[4] or foot[5]):
+        return _yaw_error(h, c, s)
+    cp, sp, cr, sr = math.cos(foot[4]), math.sin(foot[4]), math.cos(foot[5]), math.sin(foot[5])
+    # Ry(p) Rx(r) = [[cp, sp sr, sp cr], [0, cr, -sr], [-sp, cp sr, cp cr]]; its log from the skew part and trace.
+    cos_angle = 0.5 * (cp + cr + cp * cr - 1.0)
+    ax, ay, az = 0.5 * (cp * sr + sr), 0.5 * (sp * cr + sp), 0.5 * (-sp * sr)
+    sin_angle = math.sqrt(ax * ax + ay * ay + az * az)
+    scale = math.atan2(sin_angle, cos_angle) / sin_angle
+    wx, wy, wz = scale * ax, scale * ay, scale * az
+    return _leaned_yaw_error(h, c, s, (c * wx - s * wy, s * wx + c * wy, wz))
 
 
 def _rotation(ux: float, uy: float, uz: float, angle: float) -> list[list[float]]:

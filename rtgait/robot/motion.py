@@ -1,7 +1,8 @@
 """Whole-body joint trajectories from a planned walk: the planner's COG and feet, tick by tick, through the IK.
 
-The planner holds the COG at its constant height and gives each foot as ``(x, y, z, yaw)`` of its sole point
-(the ankle's projection on the sole) with the sole level; those are exactly the IK's targets. A walk the robot
+The planner gives the COG and each foot as ``(x, y, z, yaw)`` of its sole point (the ankle's projection on the
+sole); those are exactly the IK's targets, the sole level or, on sloped footholds, tilted to their surface
+(:mod:`rtgait.core.geometry.foot_tilt`). A walk the robot
 cannot follow (a step longer than its legs, a COG higher than it can reach) is detected from the IK's errors and
 raised as :class:`UnreachableError`, never returned as a silently different motion.
 """
@@ -14,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rtgait.core.analysis.rollout import Rollout
+from rtgait.core.geometry.foot_tilt import is_tilted, tilted_feet
 from rtgait.core.planner.config import PlannerConfig, VelocityLimits
 from rtgait.core.planner.sample import SampleColumns
 from rtgait.interface.task_targets import IKTargets
@@ -214,6 +216,9 @@ def whole_body_motion(
         cog[:, :2] += offset
     left = rollout.values[:, SampleColumns.left_foot].tolist()
     right = rollout.values[:, SampleColumns.right_foot].tolist()
+    if is_tilted(rollout.footprints):  # soles turned to the footholds' surfaces (foot_tilt.py)
+        tilted = [tilted_feet(rollout.footprints, a, b) for a, b in zip(left, right, strict=True)]
+        left, right = [a for a, _ in tilted], [b for _, b in tilted]
     cog_rows = cog.tolist()
     limit = dict(ERROR_LIMITS)
     if limits:

@@ -32,7 +32,7 @@ from rtgait.core.geometry.terrain_walk import DEFAULT_MAX_RISE, place_walk
 from rtgait.scenario.checks import ScenarioError
 from rtgait.scenario.tomlfile import TomlFiles
 
-PHYSICS_TERRAIN = ("flat",)
+PHYSICS_TERRAIN = ("flat", "stairs", "slope", "stones", "step")
 """The terrain types the physics simulation builds and walks on."""
 
 __all__ = ["PHYSICS_TERRAIN", "TERRAIN_TYPES", "TerrainSpec", "check_physics_terrain", "parse_terrain"]

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
+from rtgait.core.geometry.foot_tilt import is_tilted, tilted_feet
 from rtgait.interface.command import JointCommand
 from rtgait.interface.task_targets import FootOffsets, IKTargets
 from rtgait.robot.ankles import AnkleJoints, add_ankle_offsets, find_ankle_joints
@@ -119,6 +120,7 @@ class WalkingStack:
         self.safety = safety
         self.feedforward = feedforward
         self._fault: Fault | None = None  # found by estimate(), logged by the control() of the same tick
+        self._tilted = False  # whether the walk has sloped footholds (set at the start)
 
     @property
     def q(self) -> np.ndarray:
@@ -155,6 +157,10 @@ class WalkingStack:
             self.controller.start(t0, measurement)
         except _BAD_INPUT as error:
             self._damp(t0, _error(error))
+            return
+        planner = self.controller.planner
+        # On sloped footholds the soles turn to their surfaces (foot_tilt.py); a walk by command has none.
+        self._tilted = planner.n_steps is not None and is_tilted(planner.footprints())
 
     def control(self, t: float, measurement: Measurement | None) -> StackOutput:
         """The controller's targets at ``t`` (s) for ``measurement``, through the IK to the joints (the second half
@@ -164,7 +170,10 @@ class WalkingStack:
             return self._damp(t, None if measurement is not None else ("error", "no measurement at this tick"))
         try:
             out = self.controller.tick(t, measurement)
-            targets = _new_tuple(IKTargets, (out.com, out.left_foot, out.right_foot, out.lean))
+            left, right = out.left_foot, out.right_foot
+            if self._tilted:
+                left, right = tilted_feet(self.controller.planner.footprints(), left, right)
+            targets = _new_tuple(IKTargets, (out.com, left, right, out.lean))
             return self._command(t, targets, measurement, out, out.offsets)
         except _BAD_INPUT as error:
             return self._damp(t, _error(error))

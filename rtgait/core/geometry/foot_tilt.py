@@ -1,0 +1,55 @@
+"""The sole's tilt (pitch, roll) a foot target takes from the footholds: the surface it stands on or swings toward.
+
+The planner's samples give each foot as ``(x, y, z, yaw)``; its footholds (:class:`~rtgait.core.geometry.footsteps.
+Footstep`) carry the pitch and roll of their surface. A foot target at ``p = (x, y)`` of side ``s`` takes the tilt
+of the segment between two consecutive footholds ``a, b`` of that side nearest to ``p``, by its progress along it:
+
+    u = clip((p - a) . (b - a) / |b - a|^2, 0, 1),      tilt = (1 - u) tilt_a + u tilt_b
+
+so a stance foot (``p = a``) has exactly its foothold's tilt, and a swing turns the sole from the lift-off's to the
+landing's surface as it moves, levelled to it at touch-down. On level footholds every tilt is 0 and nothing changes.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+
+from rtgait.core.geometry.footsteps import Footstep
+
+__all__ = ["foot_tilt", "is_tilted", "tilted_feet"]
+
+
+def is_tilted(prints: Sequence[Footstep]) -> bool:
+    """Whether any of ``prints`` stands on a tilted surface (pitch or roll not 0)."""
+    return any(foot.pitch or foot.roll for foot in prints)
+
+
+def foot_tilt(prints: Sequence[Footstep], side: str, x: float, y: float) -> tuple[float, float]:
+    """``(pitch, roll)`` (rad) of a ``side`` foot target at ``(x, y)`` (m) among the footholds ``prints`` (module
+    docstring); ``(0, 0)`` when ``prints`` has no foothold of that side."""
+    own = [foot for foot in prints if foot.side == side]
+    if not own:
+        return 0.0, 0.0
+    if len(own) == 1:
+        return own[0].pitch, own[0].roll
+    best = (float("inf"), 0.0, 0.0)
+    for a, b in itertools.pairwise(own):
+        dx, dy = b.x - a.x, b.y - a.y
+        length2 = dx * dx + dy * dy
+        u = 0.0 if length2 == 0.0 else min(1.0, max(0.0, ((x - a.x) * dx + (y - a.y) * dy) / length2))
+        ex, ey = a.x + u * dx - x, a.y + u * dy - y
+        distance2 = ex * ex + ey * ey
+        if distance2 < best[0]:
+            best = (distance2, a.pitch + u * (b.pitch - a.pitch), a.roll + u * (b.roll - a.roll))
+    return best[1], best[2]
+
+
+def tilted_feet(
+    prints: Sequence[Footstep], left: Sequence[float], right: Sequence[float]
+) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The feet targets ``(x, y, z, yaw)`` with the footholds' tilt appended: ``(x, y, z, yaw, pitch, roll)``."""
+    return (
+        (*left[:4], *foot_tilt(prints, "left", left[0], left[1])),
+        (*right[:4], *foot_tilt(prints, "right", right[0], right[1])),
+    )
