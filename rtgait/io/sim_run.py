@@ -141,7 +141,8 @@ def simulate(
     if controller_options is None:
         controller_options = robot_and_scenario_options(robot, scenario)
     if sim is None:
-        sim = build_sim_model(robot, sim_config(config, control_dt, physics_dt), walk.obstacles)
+        terrain = None if walk.terrain is None else walk.terrain.terrain
+        sim = build_sim_model(robot, sim_config(config, control_dt, physics_dt), walk.obstacles, terrain)
     elif sim.robot is not robot:
         raise ValueError(f"the simulation model was built for another model of {sim.robot.name!r}")
     else:

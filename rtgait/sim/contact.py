@@ -18,10 +18,12 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from rtgait.core.geometry.terrain import Terrain
 from rtgait.core.push import Push
 from rtgait.sim.contact_reading import ContactSums
 from rtgait.sim.row_packing import row_packer
 from rtgait.sim.step_snapshot import StepSnapshot
+from rtgait.sim.terrain import surface_normal
 
 if TYPE_CHECKING:
     from rtgait.sim.model import SimModel
@@ -80,8 +82,11 @@ class ContactMonitor:
         threshold: float,
         falls: FallLimits,
         dt: float,
+        terrain: Terrain | None = None,
     ) -> None:
         self._sites = (left_site, right_site)
+        # On a sloped terrain a sole lying flat on it is tilted from level: the tilt is measured from the surface.
+        self._terrain = terrain if terrain is not None and getattr(terrain, "kind", "flat") != "flat" else None
         self.threshold = threshold
         # One row per tick, written at once (one assignment costs less than one per quantity): ZMP x, y (NaN while
         # no foot touches), vertical force left, right, sole corners touching left, right, cosine of the sole tilt
@@ -130,7 +135,16 @@ class ContactMonitor:
         if self.tip_time is None and (
             (fl > 0.5 * total and cos_left < self._cos_tip) or (fr > 0.5 * total and cos_right < self._cos_tip)
         ):
-            self.tip_time = t
+            terrain = self._terrain
+            if terrain is None:
+                self.tip_time = t
+            else:  # the tilt from the surface under the loaded sole
+                site, m = (left, ml) if fl > 0.5 * total else (right, mr)
+                nx, ny, nz = surface_normal(
+                    terrain, float(positions_of_sites[site][0]), float(positions_of_sites[site][1])
+                )
+                if m[2] * nx + m[5] * ny + m[8] * nz < self._cos_tip:
+                    self.tip_time = t
         return x, y, fl, fr
 
     def fall(self, base: np.ndarray) -> str | None:

@@ -210,7 +210,7 @@ class ClosedLoop:
         self.gravity = float(-model.opt.gravity[2])
         self.threshold = options.contact_threshold * robot.mass * self.gravity
         self.contacts = ContactMonitor(
-            data, sim.left_sole_site, sim.right_sole_site, capacity, self.threshold, options.falls, dt
+            data, sim.left_sole_site, sim.right_sole_site, capacity, self.threshold, options.falls, dt, sim.terrain
         )
         self._pushes = Pushes(sim, data, options.pushes)
         self.pushes: list[Push] = list(options.pushes)

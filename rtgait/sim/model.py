@@ -83,6 +83,7 @@ class SimModel:
             its masses and COMs, :attr:`encoder_offsets` its joint zeros), or ``None``: it does not.
         motors: the drives' motors (:mod:`rtgait.sim.motors`), or ``None``: ideal drives (``config.motor_model``
             false).
+        terrain: the terrain built into the scene (:mod:`rtgait.sim.terrain`), or ``None``: the flat floor.
     """
 
     robot: RobotModel
@@ -104,6 +105,7 @@ class SimModel:
     sensors: SensorLayout | None = None
     model_error: ModelError | None = None
     motors: MotorModel | None = None
+    terrain: TerrainKind | None = None
 
     @property
     def timestep(self) -> float:
@@ -341,6 +343,7 @@ def build_sim_model(
         sensors=SensorLayout.of(model, robot),
         model_error=error,
         motors=motors,
+        terrain=terrain,
     )
     qpos = sim.qpos_from_pinocchio(robot.q_half_sitting)
     object.__setattr__(sim, "qpos_half_sitting", qpos)

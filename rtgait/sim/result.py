@@ -317,10 +317,13 @@ class SimResult:
     @property
     def ended_at_rest(self) -> bool:
         """Not fallen, the run went past the walk's planned end, and at its end the COM is still (below
-        :data:`REST_SPEED`) with both feet on the floor, flat (no foot tipped onto an edge)."""
+        :data:`REST_SPEED`) with both feet on the floor, flat on their footholds (no foot tipped onto an edge: each
+        sole's tilt within 0.02 rad of its last foothold's surface tilt, 0 on level ground)."""
         if self.fell or not len(self.times) or self.times[-1] < self.walk_end:
             return False
-        flat = bool((self.sole_tilt[-1] < 0.02).all())
+        surface = {foot.side: math.acos(math.cos(foot.pitch) * math.cos(foot.roll)) for foot in self.footprints}
+        expected = np.array([surface.get("left", 0.0), surface.get("right", 0.0)])
+        flat = bool((np.abs(self.sole_tilt[-1] - expected) < 0.02).all())
         return self.at_rest_speed < REST_SPEED and bool(self.contact[-1].all()) and flat
 
     @property

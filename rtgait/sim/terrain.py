@@ -21,7 +21,17 @@ from dataclasses import dataclass
 
 import mujoco
 
-from rtgait.core.geometry.terrain import PIT_DEPTH, Flat, Slope, Stairs, Step, SteppingStones, TerrainKind
+from rtgait.core.geometry.terrain import (
+    PIT_DEPTH,
+    Flat,
+    Slope,
+    Stairs,
+    Step,
+    SteppingStones,
+    Terrain,
+    TerrainKind,
+    surface,
+)
 from rtgait.sim.config import SimConfig
 from rtgait.sim.contact_model import FLOOR_BITS, floor_contact_parameters
 
@@ -153,3 +163,12 @@ def add_terrain(spec: mujoco.MjSpec, terrain: TerrainKind, config: SimConfig, fl
             **floor_contact_parameters(config),
         )
     return [geom.name for geom in geoms]
+
+
+def surface_normal(terrain: Terrain, x: float, y: float) -> tuple[float, float, float]:
+    """The unit normal of ``terrain``'s surface at ``(x, y)`` (m): ``(-h_x, -h_y, 1) / norm`` from the surface's
+    pitch and roll (:func:`~rtgait.core.geometry.terrain.surface`, level on an edge)."""
+    _, pitch, roll = surface(terrain, x, y, 0.0)
+    hx, hy = -math.tan(pitch), math.tan(roll)
+    norm = math.sqrt(hx * hx + hy * hy + 1.0)
+    return -hx / norm, -hy / norm, 1.0 / norm

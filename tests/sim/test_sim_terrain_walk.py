@@ -1,0 +1,32 @@
+"""A walk onto terrain in physics (CI-fast): Talos walks six steps up the 10 degree ramp of ``slope-up`` on the
+estimated state, its soles turned to the ramp, and ends at rest on it, its COG risen with the footholds."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco")
+pytest.importorskip("pinocchio")
+
+from rtgait.io.sim_run import simulate
+
+
+def test_talos_walks_up_the_ramp_and_stands_on_it(talos, shorten) -> None:
+    scenario = shorten("slope-up", 6)  # the ramp from x = 0.5 m: steps 3 to 6 land on it, the closing step too
+    result = simulate(scenario, talos)
+    assert result.state == "estimated"
+    assert not result.fell and result.steps_completed == 7
+    assert result.ended_at_rest, "at rest with both soles flat on the ramp"
+    assert result.tip_time is None, "no loaded sole turned off the surface under it"
+    last = result.footprints[-1]
+    assert last.z == pytest.approx(math.tan(math.radians(10.0)) * 0.7)  # x = 1.2 m, 0.7 m up the ramp
+    assert last.pitch == pytest.approx(-math.radians(10.0))
+    # The COG rose with the footholds: within 1 cm of their height gain (its height above them is the nominal one).
+    start = int(np.searchsorted(result.times, 0.0))  # the walk's start, after the transition from half-sitting
+    rise = result.cog[-1, 2] - result.cog[start, 2]
+    assert rise == pytest.approx(last.z, abs=0.01)
+    # The soles lie on the ramp: tilted by its 10 degrees (within the 0.02 rad of ended_at_rest).
+    np.testing.assert_allclose(result.sole_tilt[-1], math.radians(10.0), atol=0.02)
