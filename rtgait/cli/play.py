@@ -24,7 +24,6 @@ from rtgait.outputs import OutputError, check_destination
 from rtgait.robot.controller_info import robot_info
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
-from rtgait.scenario.terrain_table import check_physics_terrain
 
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
@@ -129,7 +128,6 @@ def _scenario(name: str | None) -> tuple[Scenario, bool]:
     scenario = load_scenario(name)
     if scenario.guide is not None:
         raise ScenarioError(f"{scenario.name} is led by the hand ([guide]): walk it with 'rtgait simulate'")
-    check_physics_terrain(scenario.name, scenario.terrain)
     return scenario, False
 
 

@@ -38,7 +38,6 @@ from rtgait.io.summary_json import summary_text
 from rtgait.outputs import check_destination, staged_outputs
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
-from rtgait.scenario.terrain_table import check_physics_terrain
 from rtgait.viz.walk_title import velocity_commands, velocity_facts, walk_title
 
 if TYPE_CHECKING:
@@ -207,7 +206,6 @@ def run(args: argparse.Namespace) -> int:
         return _simulate_pendulum(args, scenario, out, control_pairs)
     if args.mass is not None:
         raise ScenarioError("--mass is for --model lipm (the robot's mass is its model's)")
-    check_physics_terrain(scenario.name, scenario.terrain)
     _check_periods(args.control_dt, args.physics_dt)
     check_state_options(args)
     args.robot = args.robot or "talos"

@@ -32,10 +32,7 @@ from rtgait.core.geometry.terrain_walk import DEFAULT_MAX_RISE, place_walk
 from rtgait.scenario.checks import ScenarioError
 from rtgait.scenario.tomlfile import TomlFiles
 
-PHYSICS_TERRAIN = ("flat", "stairs", "slope", "stones", "step")
-"""The terrain types the physics simulation builds and walks on."""
-
-__all__ = ["PHYSICS_TERRAIN", "TERRAIN_TYPES", "TerrainSpec", "check_physics_terrain", "parse_terrain"]
+__all__ = ["TERRAIN_TYPES", "TerrainSpec", "parse_terrain"]
 
 _FILES = TomlFiles(kind="scenario", folder="scenarios", error=ScenarioError)
 # Per type: required keys, optional keys.
@@ -122,13 +119,3 @@ def parse_terrain(raw: Any, step_width: float) -> TerrainSpec:
     except ValueError as error:  # the core's range checks, worded "terrain <field> must be within ..."
         raise ScenarioError(str(error).replace("terrain ", "terrain.", 1)) from None
     return TerrainSpec(terrain, place)
-
-
-def check_physics_terrain(name: str, spec: TerrainSpec | None) -> None:
-    """Refuse a walk on terrain in the physics simulation, whose scene is a flat floor (a walk planned over stairs
-    would step onto air): :class:`ScenarioError` naming the scenario ``name`` and what to do instead."""
-    if spec is not None and spec.terrain.kind not in PHYSICS_TERRAIN:
-        raise ScenarioError(
-            f"{name} walks on {spec.terrain.kind} terrain, which the physics simulation does not build yet: plan it "
-            "(rtgait plan) or simulate it with --model lipm"
-        )
