@@ -25,6 +25,12 @@ slip, the share of ticks at which the legs' collision boxes touched and the real
 processes (``--workers``, default 2). ``--sim-option NAME=JSON`` sets a field of the MuJoCo model's
 :class:`~rtgait.sim.model.SimConfig` (e.g. ``leg_collisions=false``, to see what the legs' collision boxes cost).
 
+Every run drives the joints with ``--gains`` (``stiff``, the default: the derived stiff servos; ``robot``: the real
+robot's own gains, with feed-forward torques) and ``--drive`` (``position``, the default; ``torque``: the motion carried
+by the feed-forward torques under a tenth of the robot's gains), :mod:`rtgait.sim.drive_mode`; with ``--walks`` each
+walk's row has ``summary.json``'s ``drive`` entry (COM tracking RMS vs the plan, estimated and true, the shares of
+saturated ticks, the peak joint torque and speed against their bounds).
+
 Every run's controller acts on ``--state`` (``estimated``, the default: the state estimated from the simulated
 sensors; ``truth``: the simulator's own); with ``--walks`` on the estimate, each walk's row has its estimation
 errors (``summary.json``'s ``estimation``).
@@ -36,10 +42,11 @@ direction; ``--quick`` takes a coarse grid, ``--record FILE`` writes the summary
 is the one the robots' limits are checked against, walked on the truth).
 
 Usage: ``python benchmarks/sim.py [--json] [--robot NAME] [--scenario NAME] [--repeat N] [--control-dt S]
-[--physics-dt S] [--controller C] [--state S]`` or ``python benchmarks/sim.py --walks [--velocity-walks]
-[--robot NAME ...] [--velocity-only] [--controller C ...] [--state S] [--walk-time S] [--workers N] [--physics-dt S]
-[--option NAME=JSON ...] [--sim-option NAME=JSON ...] [--json]`` or ``python benchmarks/sim.py --envelope
-[--robot NAME ...] [--state S] [--quick] [--steps N] [--workers N] [--record FILE] [--json]``
+[--physics-dt S] [--controller C] [--state S] [--gains G] [--drive D]`` or ``python benchmarks/sim.py --walks
+[--velocity-walks] [--robot NAME ...] [--velocity-only] [--controller C ...] [--state S] [--walk-time S] [--workers N]
+[--physics-dt S] [--gains G] [--drive D] [--option NAME=JSON ...] [--sim-option NAME=JSON ...] [--json]`` or ``python
+benchmarks/sim.py --envelope [--robot NAME ...] [--state S] [--quick] [--steps N] [--workers N] [--record FILE]
+[--json]``
 """
 
 from __future__ import annotations
@@ -147,7 +154,9 @@ IN_LOOP_PARTS = (
 )  # fmt: skip
 
 
-def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: Any, state: str) -> dict[str, float]:
+def in_loop_parts(
+    robot: RobotModel, scenario_name: str, controller: str, sim: Any, state: str, drive: str = "position"
+) -> dict[str, float]:
     """Mean wall time per tick (us) of each part of :meth:`~rtgait.sim.loop.ClosedLoop.step` inside one real run:
     each callable the tick calls is wrapped in a timer (a tenth of a microsecond each, counted in ``rest``), so the
     parts add up to the tick and ``rest`` is the loop's own bookkeeping (the record, references, fall checks)."""
@@ -195,7 +204,8 @@ def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: A
     mujoco.mj_step = timed("mj_step", original_mj_step)
     try:
         gc.collect()
-        simulate(load_scenario(scenario_name), robot, sim=sim, controller=controller, options=LoopOptions(state=state))
+        options = LoopOptions(state=state, drive=drive)  # type: ignore[arg-type]
+        simulate(load_scenario(scenario_name), robot, sim=sim, controller=controller, options=options)
     finally:
         ClosedLoop.__init__, ClosedLoop.step = original_init, original_step  # type: ignore[method-assign]
         mujoco.mj_step = original_mj_step
@@ -260,7 +270,8 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
     sim_options = job.get("sim_options") or {}
     if "sensors" in sim_options and isinstance(sim_options["sensors"], dict):  # from JSON
         sim_options = {**sim_options, "sensors": SensorSettings(**sim_options["sensors"])}
-    sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=job["physics_dt"], **sim_options))
+    gains = job.get("gains", "stiff")
+    sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=job["physics_dt"], gains=gains, **sim_options))
     scenario = load_scenario(job["scenario"])
     velocity = None
     if job["velocity"] is not None:
@@ -273,8 +284,9 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
         options = ControllerOptions(**job["options"]) if job["options"] else None
         result = simulate(
             scenario, robot, sim=sim, controller=job["controller"], velocity=velocity, controller_options=options,
-            options=LoopOptions(state=job.get("state", DEFAULT_STATE)),
+            options=LoopOptions(state=job.get("state", DEFAULT_STATE), drive=job.get("drive", "position")),
         )  # fmt: skip
+    summary = result.summary()
     clamped = any(issubclass(w.category, CommandClampedWarning) for w in caught)
     asked = walked = None
     if velocity is not None and len(velocity) == 1:
@@ -303,8 +315,9 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
         "simulated_time": result.duration,
         "real_time_factor": result.real_time_factor,
         "state": result.state,
-        "sensors": result.summary()["sensors"],
-        "estimation": result.summary()["estimation"],
+        "sensors": summary["sensors"],
+        "estimation": summary["estimation"],
+        "drive": summary["drive"],
     }
 
 
@@ -312,7 +325,7 @@ def walks(args: argparse.Namespace) -> list[dict[str, Any]]:
     """The outcome table of ``--walks`` (module docstring)."""
     controllers = args.controller or ["open-loop", "stabilized", "adaptive"]
     common = {"physics_dt": args.physics_dt, "options": args.options, "sim_options": args.sim_options,
-              "state": args.state}  # fmt: skip
+              "state": args.state, "gains": args.gains, "drive": args.drive}  # fmt: skip
     jobs = [
         {"robot": robot, "scenario": case, "controller": c, "velocity": None, "seconds": 0.0, **common}
         for robot in args.robots or ["talos"]
@@ -398,6 +411,10 @@ def main() -> None:
                         help="controller level(s); the speed report takes the first (default adaptive)")  # fmt: skip
     parser.add_argument("--state", choices=STATE_SOURCES, default=DEFAULT_STATE,
                         help=f"what the controller acts on (default {DEFAULT_STATE})")  # fmt: skip
+    parser.add_argument("--gains", choices=("stiff", "robot"), default="stiff",
+                        help="the drives' own gains: stiff (default) or robot, with feed-forward torques")  # fmt: skip
+    parser.add_argument("--drive", choices=("position", "torque"), default="position",
+                        help="position (default) or torque: a tenth of the robot's gains, with FF torques")  # fmt: skip
     parser.add_argument("--walks", action="store_true", help="report the outcomes of fig6/7/8 instead of speed")
     parser.add_argument("--velocity-walks", action="store_true", help="with --walks: the walks by command too")
     parser.add_argument("--velocity-only", action="store_true", help="with --walks: the walks by command alone")
@@ -434,6 +451,8 @@ def main() -> None:
     if unknown:
         parser.error(f"--sim-option: SimConfig has no field {unknown[0]!r}")
     if args.envelope:
+        if args.gains != "stiff" or args.drive != "position":
+            parser.error("--envelope sweeps the stiff position drives only (no --gains robot, --drive torque)")
         run_envelope(args)
         return
     if args.walks:
@@ -447,27 +466,30 @@ def main() -> None:
         return
     robot = RobotModel.load((args.robots or ["talos"])[0])
     controller = (args.controller or ["adaptive"])[0]
-    config = SimConfig(control_dt=args.control_dt, physics_dt=args.physics_dt)
+    config = SimConfig(control_dt=args.control_dt, physics_dt=args.physics_dt, gains=args.gains)
     sim = build_sim_model(robot, config)
     scenario = load_scenario(args.scenario)
     factors, per_tick = [], []
     reference_before = machine_reference_us()
     for _ in range(args.repeat):
         gc.collect()
-        result = simulate(scenario, robot, sim=sim, controller=controller, options=LoopOptions(state=args.state))
+        options = LoopOptions(state=args.state, drive=args.drive)
+        result = simulate(scenario, robot, sim=sim, controller=controller, options=options)
         factors.append(result.real_time_factor)
         per_tick.append(result.wall_time / len(result.times) * 1e6)
     report = {
         "robot": robot.name,
         "controller": controller,
         "state": args.state,
+        "gains": args.gains,
+        "drive": args.drive,
         "scenario": args.scenario,
         "simulated_time_s": result.duration,
         "real_time_factor": factors,
         "tick_us_median_of_runs": statistics.median(per_tick),
         "fell": result.fell,
         **parts(robot, args.scenario, dataclasses.replace(config, meshes=False)),
-        **in_loop_parts(robot, args.scenario, controller, sim, args.state),
+        **in_loop_parts(robot, args.scenario, controller, sim, args.state, args.drive),
     }
     report["machine_reference_us"] = [reference_before, machine_reference_us()]
     if args.json:
