@@ -90,6 +90,7 @@ from rtgait.sim.start_balance import StartBalance, minimum_jerk_rates, needs_bal
 from rtgait.sim.tick_log import TickLog
 from rtgait.stack.estimators import make_estimator
 from rtgait.stack.feedforward import FeedForward
+from rtgait.stack.measured_motion import MeasuredMotion
 from rtgait.stack.setup import start_pose
 from rtgait.stack.walking_stack import WalkingStack
 
@@ -226,9 +227,11 @@ class ClosedLoop:
         )  # fmt: skip
         # Feed-forward torques (the IK's motion through inverse dynamics, the DCM law's wrench at the feet) with the
         # robot's gains or torque drive; torque drive adds its low gains to every command (drive_mode.py).
+        # Torque drive computes them at the sensed state, tracking the IK's motion (stack/measured_motion.py).
         feed = None
         if options.feeds_forward(sim.config.gains):
-            feed = FeedForward(robot, controller.sole, dt, friction=sim.config.friction)
+            tracking = MeasuredMotion(robot) if options.drive == "torque" else None
+            feed = FeedForward(robot, controller.sole, dt, friction=sim.config.friction, tracking=tracking)
         self.stack = WalkingStack(estimator, controller, ik, q, feedforward=feed)
         self.drive_gains = torque_gains(sim) if options.drive == "torque" else None
         """The gains every command carries (torque drive), ``None``: the drives' own."""
@@ -338,7 +341,9 @@ class ClosedLoop:
             out = measurement = truth = None  # no controller during the transition
             targets = _new_tuple(IKTargets, (target_cog, left_foot, right_foot, None))
             balance = self.start_balance
-            if balance is None:
+            if balance is None and self.stack.feedforward is not None and self.stack.feedforward.tracking is not None:
+                made = hold(targets, t, None, self._estimate(t))  # torque drive: the torques at the sensed state
+            elif balance is None:
                 made = hold(targets, t)
             else:  # soft drives: the DCM law around the ramp, through the feed-forward torques (start_balance.py)
                 state = self._estimate(t)

@@ -27,6 +27,13 @@ with its line of action still through the COM target ``c`` (the rate of angular 
 acceleration that the commanded ZMP gives it). With the joints' rows of ``tau = RNEA - sum J^T w`` the legs then push
 the floor with the commanded wrench, and the difference from the motion's accelerates the robot as the law asks.
 ``open-loop`` (``p_cmd = p_ref``) and :meth:`~rtgait.stack.walking_stack.WalkingStack.hold` move nothing.
+
+**At the sensed state** (torque drive; ``tracking`` given and the tick's sensed joints passed): step 2 runs at the
+robot's sensed configuration and velocity (:mod:`rtgait.stack.measured_motion`: the base placed on the stance sole as
+estimated, the joints at their encoders) with the IK's acceleration, instead of at the IK's own configuration, and
+the joints' tracking torques (a PD scaled by the inertia each joint carries) are added: the torques then carry the
+motion under low drive gains. Without sensed joints (the truth's estimator reads no encoders) the tick falls back to
+the IK's configuration.
 """
 
 from __future__ import annotations
@@ -44,9 +51,11 @@ from rtgait.robot.motion_rates import DEFAULT_RATE_FILTER, MotionRates
 if TYPE_CHECKING:
     from rtgait.control.settings import ControlTargets
     from rtgait.core.geometry.footsteps import SoleRect
+    from rtgait.estimation.state import Measurement
     from rtgait.interface.task_targets import IKTargets
     from rtgait.robot.contact_wrenches import WrenchDistribution
     from rtgait.robot.model import RobotModel
+    from rtgait.stack.measured_motion import MeasuredMotion
 
 __all__ = ["FeedForward", "commanded_wrench"]
 
@@ -63,6 +72,8 @@ class FeedForward:
         dt: the control period (s).
         friction: the floor's Coulomb friction coefficient.
         rate_filter: the time constant of the velocity's and acceleration's low-pass (s).
+        tracking: the sensed state and tracking acceleration to compute the torques at (module docstring); ``None``:
+            the IK's configuration and motion.
 
     Attributes:
         dynamics: the inverse dynamics (its distributor's ``qp_count`` counts the ticks the QP ran).
@@ -80,8 +91,10 @@ class FeedForward:
         dt: float,
         friction: float = DEFAULT_FRICTION,
         rate_filter: float = DEFAULT_RATE_FILTER,
+        tracking: MeasuredMotion | None = None,
     ) -> None:
         self.dynamics = InverseDynamics(robot, sole, friction)
+        self.tracking = tracking
         self.rates = MotionRates(robot.model, dt, rate_filter)
         self.sole = sole
         self.last: WrenchDistribution | None = None
@@ -97,13 +110,18 @@ class FeedForward:
         targets: IKTargets,
         out: ControlTargets | None,
         shift: tuple[float, float] | None = None,
+        sensed: tuple[np.ndarray, np.ndarray, np.ndarray, Measurement] | None = None,
     ) -> np.ndarray:
         """The joints' feed-forward torques (N m, in joint order) for the IK's configuration ``q``, the IK's
         ``targets`` (their feet are the split's) and the controller's output (``None``: no controller; then
         ``shift`` (m), when given, moves the motion's ZMP as the controller's ``p_cmd - p_ref`` does, e.g. the start
-        transition's law, :mod:`rtgait.sim.start_balance`)."""
+        transition's law, :mod:`rtgait.sim.start_balance`). ``sensed``: the commanded joints (rad), the encoders'
+        positions (rad) and velocities (rad/s) and the tick's estimate, with which a ``tracking`` feed-forward
+        computes the torques at the sensed state (module docstring)."""
         v, a = self.rates.update(q)
         dynamics = self.dynamics
+        if self.tracking is not None and sensed is not None:
+            q, v, a = self.tracking.update(q, v, a, *sensed)
         required = dynamics.update(q, v, a)
         left, right = targets.left_foot, targets.right_foot
         frames = dynamics.sole_frames
@@ -128,7 +146,10 @@ class FeedForward:
         self.ticks += 1
         if distribution.residual > _INFEASIBLE:
             self.infeasible += 1
-        return dynamics.torques(distribution.wrenches)
+        torques = dynamics.torques(distribution.wrenches)
+        if self.tracking is not None and sensed is not None:
+            torques += self.tracking.feedback
+        return torques
 
 
 def commanded_wrench(
