@@ -233,7 +233,9 @@ class ClosedLoop:
             tracking = MeasuredMotion(robot) if options.drive == "torque" else None
             feed = FeedForward(robot, controller.sole, dt, friction=sim.config.friction, tracking=tracking)
         self.stack = WalkingStack(estimator, controller, ik, q, feedforward=feed)
-        self.drive_gains = torque_gains(sim) if options.drive == "torque" else None
+        self.drive_gains = (
+            torque_gains(sim, feed.tracking if feed is not None else None) if options.drive == "torque" else None
+        )
         """The gains every command carries (torque drive), ``None``: the drives' own."""
         self.com_tracking = ComTracking()
         """The walk's COM tracking errors, planned vs estimated and vs true (:mod:`rtgait.sim.drive_summary`)."""
@@ -357,7 +359,7 @@ class ClosedLoop:
                         (acceleration * delta[0], acceleration * delta[1]),
                     )  # fmt: skip
                     dcm = state.dcm
-                    made = hold(targets, t, (command_x - planned_x, command_y - planned_y))
+                    made = hold(targets, t, (command_x - planned_x, command_y - planned_y), state)
         else:
             # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
             if estimator_reads_truth:

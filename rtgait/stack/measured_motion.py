@@ -16,16 +16,34 @@ adjoint seen from the base, always invertible).
 inverse dynamics at ``(q_s, v_s, a_ref)`` gives the torques of gravity and of the motion's inertia at the joints' real
 configuration, and the contact wrenches the motion needs.
 
-**Tracking**: the errors from the IK's joint references are corrected by a PD on each joint scaled by the inertia it
-carries (:func:`~rtgait.robot.joint_inertia.carried_inertia` plus its drive's armature, ``I_j``, kg m^2):
+**Base tracking**: the base's height over the stance sole and its orientation are pulled toward the IK's by a PD in
+the base's acceleration (``k_p``, ``k_d`` below; the height compared over the sole, so that the estimate's offsets in
+height do not enter):
 
-    tau_fb = I_j (w^2 (q_ref - q_s) + 2 w (dq_ref - dq))                                     (N m)
+    a_b,z += k_p (h_ref - h_s) + k_d (h_ref' - h_s'),        a_b,rot += k_p log(R_s^T R_ref) + k_d (w_ref - w_s)
 
-critically damped at ``w = 2 pi`` :data:`TRACKING_FREQUENCY`: every joint settles at the same rate whatever it
-carries, a computed-torque law with the mass matrix's diagonal. Gravity no longer takes stiffness away (it is
-compensated at the sensed configuration), so this rate needs to be well above the gait's (a step a second), not above
-gravity's toppling rate; it stays well below what the loop's delays allow (a command a period late and a sensor sample
-or two behind: ``w`` times the few milliseconds of delay is under a quarter radian). The joint-space PD is the
+Inverse dynamics turns it into the wrench the feet must add (the whole robot's mass and inertia times it) and the
+legs' torques that push it: the height and the trunk's tilt are held by the feet's wrenches, as a COM and a waist
+task do in TSID, not by the joints' stiffness. The horizontal position is the DCM law's (its commanded wrench).
+
+**Joint tracking**: the errors from the IK's joint references are corrected by a PD on each joint scaled by the
+inertia of what lies beyond it (``I_j``, kg m^2: the mass matrix's diagonal at half-sitting,
+:func:`~rtgait.robot.joint_inertia.carried_inertia`'s ``distal``, plus its drive's armature):
+
+    tau_fb = I_j w^2 (q_ref - q_s),        kd_drive = 2 I_j w                              (N m, N m s/rad)
+
+critically damped at ``w = 2 pi`` :data:`TRACKING_FREQUENCY`: a computed-torque law with the mass matrix's diagonal.
+The stiffness is the controller's, on the encoders; the damping is the drives' own velocity loop's (added to the
+command's ``kd``, :mod:`rtgait.sim.drive_mode`), on the joint's velocity at every physics step: computed by the
+controller from velocities a control period old and held over the period, the same damping makes G1's legs chatter
+at its 500 Hz (the hips at their torque limit within 0.1 s of the start).
+Not the inertia a stance joint carries (the whole robot pivoting about it, ten to a hundred times more): computed from
+sensed velocities a sample or two late, damping that large makes the light links chatter (TALOS's knees at their
+torque limit every other tick); what a stance leg carries is held by the base's task instead. Gravity no longer takes
+stiffness away (it is compensated at the sensed configuration), so this rate needs to be well above the gait's (a
+step a second), not above gravity's toppling rate; it stays well below what the loop's delays allow (a command a
+period late and a sensor sample or two behind: ``w`` times the few milliseconds of delay is under a quarter radian).
+The joint-space PD is the
 posture task of TSID or mc_rtc's torque mode; their COM and base tasks are here the IK's references and the DCM
 law's wrench (:mod:`rtgait.stack.feedforward`).
 """
@@ -72,8 +90,13 @@ class MeasuredMotion:
         nv = robot.model.nv
         distal, _ = carried_inertia(robot)
         self.inertia = distal + joint_drives(robot)[1]
+        self.stiffness = self.kp * self.inertia
+        """``I_j w^2`` per joint (N m/rad): the tracking's stiffness, applied by :attr:`feedback`."""
+        self.damping = self.kd * self.inertia
+        """``2 I_j w`` per joint (N m s/rad): the tracking's damping, for the drives to apply (module docstring)."""
         self.feedback = np.zeros(nv - 6)
-        """The last :meth:`update`'s tracking torques ``tau_fb`` (N m, joint order; rewritten by the next)."""
+        """The last :meth:`update`'s tracking torques ``I_j w^2 (q_ref - q_s)`` (N m, joint order; rewritten by the
+        next)."""
         self.q = np.zeros(robot.model.nq)
         self.v = np.zeros(nv)
         self.a = np.zeros(nv)
@@ -99,6 +122,10 @@ class MeasuredMotion:
         foot = left if side == 0 else right
         sole = self._soles[side]
         q, v, a = self.q, self.v, self.a
+        # The IK's base height over its stance sole (m), to compare with the sensed one's.
+        pin.forwardKinematics(model, data, q_ref)
+        base_ref = pin.XYZQUATToSE3(q_ref[:7])
+        height_ref = float(base_ref.translation[2] - pin.updateFramePlacement(model, data, sole).translation[2])
         q[:] = q_ref
         q[7:] = joints
         # The joints' kinematics with the IK's base: the sole's placement relative to the base, and its Jacobian in
@@ -108,15 +135,19 @@ class MeasuredMotion:
         jacobian = pin.getFrameJacobian(model, data, sole, _LOCAL)
         x, y, z, yaw = foot.pose
         measured = pin.SE3(pin.rpy.rpyToMatrix(foot.roll, foot.pitch, yaw), np.array([x, y, z]))
-        base = measured * data.oMf[sole].inverse() * pin.XYZQUATToSE3(q_ref[:7])
+        base = measured * data.oMf[sole].inverse() * base_ref
         q[:7] = pin.SE3ToXYZQUAT(base)
         base_part, joint_part = jacobian[:, :6], jacobian[:, 6:]
         v[6:] = joint_velocities
         v[:6] = np.linalg.solve(base_part, -(joint_part @ joint_velocities))
+        # The base's height over the stance sole and its orientation toward the IK's, in the base's acceleration.
         a[:] = a_ref
+        rotation, rotation_ref = base.rotation, base_ref.rotation
+        height_error = height_ref - float(base.translation[2] - z)
+        rate_error = float(rotation_ref[2] @ v_ref[:3] - rotation[2] @ v[:3])
+        a[:3] += rotation[2] * (self.kp * height_error + self.kd * rate_error)  # R^T (0, 0, a_z): the base's axes
+        a[3:6] += self.kp * pin.log3(rotation.T @ rotation_ref) + self.kd * (v_ref[3:6] - v[3:6])
         fb = self.feedback
         np.subtract(joints_ref, joints, out=fb)
-        fb *= self.kp
-        fb += self.kd * (v_ref[6:] - joint_velocities)
-        fb *= self.inertia
+        fb *= self.stiffness
         return q, v, a
