@@ -3,7 +3,8 @@ asks of the feet.
 
 Per tick, from the IK's configuration ``q``:
 
-1. its velocity and acceleration by low-passed backward differences (:class:`~rtgait.robot.motion_rates.MotionRates`);
+1. its velocity and acceleration by low-passed backward differences (:class:`~rtgait.robot.motion_rates.MotionRates`;
+   a tick on which a joint would move faster than its speed limit is a jump of the reference, not differenced);
 2. RNEA and the wrench ``W`` the feet must give the robot for that motion
    (:class:`~rtgait.robot.inverse_dynamics.InverseDynamics`), its ZMP moved by the DCM law's correction (below);
 3. the desired split: the controller's commanded ZMP shared between the feet in contact as the foot force control
@@ -46,6 +47,7 @@ import numpy as np
 from rtgait.control.foot_control import split_zmp
 from rtgait.robot.contact_wrenches import DEFAULT_FRICTION
 from rtgait.robot.inverse_dynamics import InverseDynamics, RequiredWrench
+from rtgait.robot.joint_limits import joint_limits
 from rtgait.robot.motion_rates import DEFAULT_RATE_FILTER, MotionRates
 
 if TYPE_CHECKING:
@@ -95,7 +97,7 @@ class FeedForward:
     ) -> None:
         self.dynamics = InverseDynamics(robot, sole, friction)
         self.tracking = tracking
-        self.rates = MotionRates(robot.model, dt, rate_filter)
+        self.rates = MotionRates(robot.model, dt, rate_filter, joint_limits(robot).velocity)
         self.sole = sole
         self.last: WrenchDistribution | None = None
         self.ticks = self.infeasible = 0
