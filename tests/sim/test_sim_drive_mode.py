@@ -129,3 +129,28 @@ def test_summary_peak_envelope_is_the_motor_bound_at_the_joint_speed(g1):
     assert drive["feedforward_clipped_share"] is None
     # Without the joints' speeds no envelope is known.
     assert drive_summary(sim, {}, torque, None, None, 3, ComTracking())["peak_envelope"] is None
+
+
+def test_the_settle_holds_the_posture_under_the_robot_s_gains(g1_robot_gains):
+    # Settled with the stiff gains, the knees are where half-sitting puts them (under G1's own 100 N m/rad, with no
+    # feed-forward, they sagged by a quarter radian); the drives' own gains are back for the run.
+    sim = g1_robot_gains
+    data = sim.new_data()
+    knee = sim.joint_names.index("left_knee_joint")
+    q_half = sim.robot.q_half_sitting[7:]
+    assert abs(data.qpos[sim.qpos_index][knee] - q_half[knee]) < 0.01
+    np.testing.assert_allclose(sim.model.actuator_gainprm[:, 0], sim.actuation.kp)
+    np.testing.assert_allclose(-sim.model.actuator_biasprm[:, 2], sim.actuation.kd)
+
+
+def test_torque_drive_adds_the_tracking_damping_to_the_drives(g1_robot_gains):
+    from rtgait.stack.measured_motion import MeasuredMotion
+
+    tracking = MeasuredMotion(g1_robot_gains.robot)
+    kp, kd = torque_gains(g1_robot_gains)
+    kp_t, kd_t = torque_gains(g1_robot_gains, tracking)
+    np.testing.assert_allclose(kp_t, kp)
+    np.testing.assert_allclose(kd_t, kd + tracking.damping)
+    loop = standing_loop(g1_robot_gains, drive="torque")
+    assert loop.stack.feedforward.tracking is not None
+    np.testing.assert_allclose(loop.drive_gains[1], kd_t)
