@@ -227,10 +227,10 @@ class ClosedLoop:
         )  # fmt: skip
         # Feed-forward torques (the IK's motion through inverse dynamics, the DCM law's wrench at the feet) with the
         # robot's gains or torque drive; torque drive adds its low gains to every command (drive_mode.py).
-        # Torque drive computes them at the sensed state, tracking the IK's motion (stack/measured_motion.py).
+        # They are computed at the sensed state; torque drive adds the tracking of the IK's motion (measured_motion.py).
         feed = None
         if options.feeds_forward(sim.config.gains):
-            tracking = MeasuredMotion(robot) if options.drive == "torque" else None
+            tracking = MeasuredMotion(robot, track=options.drive == "torque")
             feed = FeedForward(robot, controller.sole, dt, friction=sim.config.friction, tracking=tracking)
         self.stack = WalkingStack(estimator, controller, ik, q, feedforward=feed)
         self.drive_gains = (
@@ -344,7 +344,7 @@ class ClosedLoop:
             targets = _new_tuple(IKTargets, (target_cog, left_foot, right_foot, None))
             balance = self.start_balance
             if balance is None and self.stack.feedforward is not None and self.stack.feedforward.tracking is not None:
-                made = hold(targets, t, None, self._estimate(t))  # torque drive: the torques at the sensed state
+                made = hold(targets, t, None, self._estimate(t))  # the feed-forward torques at the sensed state
             elif balance is None:
                 made = hold(targets, t)
             else:  # soft drives: the DCM law around the ramp, through the feed-forward torques (start_balance.py)

@@ -29,12 +29,12 @@ acceleration that the commanded ZMP gives it). With the joints' rows of ``tau = 
 the floor with the commanded wrench, and the difference from the motion's accelerates the robot as the law asks.
 ``open-loop`` (``p_cmd = p_ref``) and :meth:`~rtgait.stack.walking_stack.WalkingStack.hold` move nothing.
 
-**At the sensed state** (torque drive; ``tracking`` given and the tick's sensed joints passed): step 2 runs at the
-robot's sensed configuration and velocity (:mod:`rtgait.stack.measured_motion`: the base placed on the stance sole as
-estimated, the joints at their encoders) with the IK's acceleration, instead of at the IK's own configuration, and
-the joints' tracking torques (a PD scaled by the inertia each joint carries) are added: the torques then carry the
-motion under low drive gains. Without sensed joints (the truth's estimator reads no encoders) the tick falls back to
-the IK's configuration.
+**At the sensed state** (``tracking`` given and the tick's sensed joints passed; the closed loop always does): step 2
+runs at the robot's sensed configuration and velocity (:mod:`rtgait.stack.measured_motion`: the base placed on the
+stance sole as estimated, the joints at their encoders) with the IK's acceleration, instead of at the IK's own
+configuration, so that gravity's torques are those of where the robot is. Torque drive's ``tracking`` adds the base's
+task and the joints' tracking torques: the torques then carry the motion under low drive gains. Without sensed joints
+(the truth's estimator reads no encoders) the tick falls back to the IK's configuration.
 """
 
 from __future__ import annotations

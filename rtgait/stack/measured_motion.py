@@ -46,6 +46,12 @@ period late and a sensor sample or two behind: ``w`` times the few milliseconds 
 The joint-space PD is the
 posture task of TSID or mc_rtc's torque mode; their COM and base tasks are here the IK's references and the DCM
 law's wrench (:mod:`rtgait.stack.feedforward`).
+
+**Position drive** (``track=False``): the sensed state and the IK's acceleration alone, the drives' own gains doing
+the tracking. It matters where a drive is about as soft as gravity's toppling: G1's waist at 40 N m/rad against the
+upper body's ``m g l`` of some 35 N m/rad. Torques of gravity at the reference, not at the sensed configuration,
+leave the trunk nearly no net stiffness: it sags by a tenth of a radian in each single support, and the robot fell
+after 8 of fig8's 11 steps; with them it walks them all.
 """
 
 from __future__ import annotations
@@ -77,9 +83,11 @@ class MeasuredMotion:
     Args:
         robot: the loaded robot (its Pinocchio model, sole frames).
         frequency: the tracking PD's natural frequency (Hz), ``> 0``.
+        track: whether to add the base's and the joints' tracking (torque drive); ``False``: the sensed state and the
+            IK's acceleration alone (position drive, whose drives' own gains track; module docstring).
     """
 
-    def __init__(self, robot: RobotModel, frequency: float = TRACKING_FREQUENCY) -> None:
+    def __init__(self, robot: RobotModel, frequency: float = TRACKING_FREQUENCY, track: bool = True) -> None:
         if not (math.isfinite(frequency) and frequency > 0.0):
             raise ValueError(f"the tracking frequency must be > 0 Hz, got {frequency}")
         w = 2.0 * math.pi * frequency
@@ -90,6 +98,9 @@ class MeasuredMotion:
         nv = robot.model.nv
         distal, _ = carried_inertia(robot)
         self.inertia = distal + joint_drives(robot)[1]
+        self.track = track
+        if not track:
+            self.kp = self.kd = 0.0
         self.stiffness = self.kp * self.inertia
         """``I_j w^2`` per joint (N m/rad): the tracking's stiffness, applied by :attr:`feedback`."""
         self.damping = self.kd * self.inertia
@@ -140,14 +151,16 @@ class MeasuredMotion:
         base_part, joint_part = jacobian[:, :6], jacobian[:, 6:]
         v[6:] = joint_velocities
         v[:6] = np.linalg.solve(base_part, -(joint_part @ joint_velocities))
-        # The base's height over the stance sole and its orientation toward the IK's, in the base's acceleration.
         a[:] = a_ref
+        fb = self.feedback
+        if not self.track:
+            return q, v, a
+        # The base's height over the stance sole and its orientation toward the IK's, in the base's acceleration.
         rotation, rotation_ref = base.rotation, base_ref.rotation
         height_error = height_ref - float(base.translation[2] - z)
         rate_error = float(rotation_ref[2] @ v_ref[:3] - rotation[2] @ v[:3])
         a[:3] += rotation[2] * (self.kp * height_error + self.kd * rate_error)  # R^T (0, 0, a_z): the base's axes
         a[3:6] += self.kp * pin.log3(rotation.T @ rotation_ref) + self.kd * (v_ref[3:6] - v[3:6])
-        fb = self.feedback
         np.subtract(joints_ref, joints, out=fb)
         fb *= self.stiffness
         return q, v, a

@@ -132,3 +132,21 @@ def test_a_jump_of_the_reference_is_not_differenced(talos):
     assert 0.001 / dt / dt > JUMP_ACCELERATION
     guarded.update(base)
     assert guarded.jumps == 2
+
+
+def test_without_tracking_only_the_state_is_sensed(talos):
+    # Position drive: the base still sits on the measured sole, but nothing is added to the IK's motion.
+    tracking = MeasuredMotion(talos, track=False)
+    q_ref = talos.q_half_sitting.copy()
+    nv = talos.model.nv
+    joints = q_ref[7:] + 0.02
+    left, right = _soles(talos, q_ref)
+    tilt = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.01, 0.0), np.zeros(3))
+    sensed = _measurement(_foot(tilt * left, 500.0), _foot(tilt * right, 400.0))
+    a_ref = np.linspace(-1.0, 1.0, nv)
+    q, _, a = tracking.update(q_ref, np.zeros(nv), a_ref, q_ref[7:], joints, np.zeros(nv - 6), sensed)
+    np.testing.assert_array_equal(a, a_ref)
+    np.testing.assert_array_equal(tracking.feedback, 0.0)
+    np.testing.assert_array_equal(tracking.damping, 0.0)
+    np.testing.assert_array_equal(q[7:], joints)
+    assert not np.allclose(q[3:7], q_ref[3:7]), "the base is the sensed one, tilted"
