@@ -16,15 +16,18 @@ adjoint seen from the base, always invertible).
 inverse dynamics at ``(q_s, v_s, a_ref)`` gives the torques of gravity and of the motion's inertia at the joints' real
 configuration, and the contact wrenches the motion needs.
 
-**Base tracking**: the base's height over the stance sole and its orientation are pulled toward the IK's by a PD in
-the base's acceleration (``k_p``, ``k_d`` below; the height compared over the sole, so that the estimate's offsets in
-height do not enter):
+**Base tracking**: the base's height over the stance sole is pulled toward the IK's by a PD in the base's vertical
+acceleration (``k_p``, ``k_d`` below; the height compared over the sole, so that the estimate's offsets in height do not
+enter):
 
-    a_b,z += k_p (h_ref - h_s) + k_d (h_ref' - h_s'),        a_b,rot += k_p log(R_s^T R_ref) + k_d (w_ref - w_s)
+    a_b,z += k_p (h_ref - h_s) + k_d (h_ref' - h_s')
 
-Inverse dynamics turns it into the wrench the feet must add (the whole robot's mass and inertia times it) and the
-legs' torques that push it: the height and the trunk's tilt are held by the feet's wrenches, as a COM and a waist
-task do in TSID, not by the joints' stiffness. The horizontal position is the DCM law's (its commanded wrench).
+Inverse dynamics turns it into the vertical force the feet must add (the whole robot's mass times it) and the legs'
+torques that push it: the height is held by the feet's wrenches, as a COM task's height does in TSID, not by the
+joints' stiffness. The horizontal position is the DCM law's (its commanded wrench). The base's orientation gets no
+such task: sensed through the estimator's attitude (G1's IMU: 8.7 mrad of noise) and multiplied by the whole body's
+inertia times ``k_p``, it made G1 fall after three steps of fig8, its hips at their torque limit (without it G1 walks
+all eleven, TALOS too); the trunk's orientation is the joints' tracking's, on the encoders.
 
 **Joint tracking**: the errors from the IK's joint references are corrected by a PD on each joint scaled by the
 inertia of what lies beyond it (``I_j``, kg m^2: the mass matrix's diagonal at half-sitting,
@@ -155,12 +158,11 @@ class MeasuredMotion:
         fb = self.feedback
         if not self.track:
             return q, v, a
-        # The base's height over the stance sole and its orientation toward the IK's, in the base's acceleration.
+        # The base's height over the stance sole toward the IK's, in the base's acceleration.
         rotation, rotation_ref = base.rotation, base_ref.rotation
         height_error = height_ref - float(base.translation[2] - z)
         rate_error = float(rotation_ref[2] @ v_ref[:3] - rotation[2] @ v[:3])
         a[:3] += rotation[2] * (self.kp * height_error + self.kd * rate_error)  # R^T (0, 0, a_z): the base's axes
-        a[3:6] += self.kp * pin.log3(rotation.T @ rotation_ref) + self.kd * (v_ref[3:6] - v[3:6])
         np.subtract(joints_ref, joints, out=fb)
         fb *= self.stiffness
         return q, v, a
