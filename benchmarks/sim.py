@@ -6,10 +6,10 @@ tick; then times the parts of one tick separately on the same walk: the planner'
 ``mj_step`` (with the IK's joint references replayed; a tick takes ``control_dt / physics_dt`` of them), the
 contact measurement, and ``mj_step`` again without the no-slip solver and without the leg collision boxes, to
 show what each costs; then, inside one more run of the walk, the mean time per tick of each part of the real
-loop (``in_loop_*_us``: IK, physics, controller, measurement, contact record, complete log, servos, walk inputs
-and the loop's own ``rest``), which is what the real-time factor pays: each part there runs with the caches the
-others leave, about twice as slow as alone. ``machine_reference_us`` is the best time of ``sum(range(1000))``
-before and after (about 9 us on the usual machine): quote it with any timing.
+loop (``in_loop_*_us``: IK, physics, controller, measurement, feed-forward torques, contact record, complete log,
+servos, walk inputs and the loop's own ``rest``), which is what the real-time factor pays: each part there runs with
+the caches the others leave, about twice as slow as alone. ``machine_reference_us`` is the best time of
+``sum(range(1000))`` before and after (about 9 us on the usual machine): quote it with any timing.
 
 Wall times on a shared virtual machine vary from run to run: run it a few times.
 
@@ -150,7 +150,8 @@ def parts(robot: RobotModel, scenario_name: str, config: SimConfig) -> dict[str,
 
 # The in-loop breakdown's parts: what each timed callable of ClosedLoop.step is (the rest is the loop's own code).
 IN_LOOP_PARTS = (
-    "ik", "mj_step", "controller", "estimation", "contact_reading", "contact_monitor", "tick_log", "servo", "inputs",
+    "ik", "mj_step", "controller", "estimation", "feedforward", "contact_reading", "contact_monitor", "tick_log",
+    "servo", "inputs",
 )  # fmt: skip
 
 
@@ -184,6 +185,8 @@ def in_loop_parts(
         stack.ik.solve = timed("ik", stack.ik.solve)  # type: ignore[method-assign]
         stack.controller.tick = timed("controller", stack.controller.tick)  # type: ignore[method-assign]
         stack.estimator.update = timed("estimation", stack.estimator.update)  # type: ignore[method-assign]
+        if stack.feedforward is not None:  # the feed-forward torques (robot gains, torque drive)
+            stack.feedforward.torques = timed("feedforward", stack.feedforward.torques)  # type: ignore[method-assign]
         robot.reader.contacts.read = timed("contact_reading", robot.reader.contacts.read)  # type: ignore[method-assign]
         loop.contacts.record = timed("contact_monitor", loop.contacts.record)  # type: ignore[method-assign]
         if loop.log is not None:
