@@ -43,11 +43,14 @@ in-place bound dashed) into ``--out`` (default ``out/pushes-<robot>``), and prin
 the JSON document).
 
 The controller acts on ``--state``: ``estimated`` (the default), the state estimated from the simulated sensors;
-``truth``, the simulator's own (the in-place bounds are those of a controller that knows the state).
+``truth``, the simulator's own (the in-place bounds are those of a controller that knows the state). The joints are
+driven with ``--gains`` (``stiff``, the default, or ``robot``: the real robot's own gains with feed-forward torques) and
+``--drive`` (``position``, the default, or ``torque``: a tenth of the robot's gains, the motion carried by the
+feed-forward torques), :mod:`rtgait.sim.drive_mode`.
 
 Usage: ``python benchmarks/pushes.py [--robot R] [--controller C ...] [--state S] [--json] [--scenario fig8]
 [--phase single|double ...] [--directions 8] [--tolerance 1.0] [--workers 2] [--out DIR] [--physics-dt S]
-[--option NAME=JSON ...] [--bounds-only]``
+[--gains stiff|robot] [--drive position|torque] [--option NAME=JSON ...] [--bounds-only]``
 """
 
 from __future__ import annotations
@@ -167,24 +170,29 @@ PHYSICS_DT: dict[str, float | None] = {"value": None}
 """The physics step of the runs (s; ``--physics-dt``), handed to every worker by :func:`_init_worker`."""
 STATE: dict[str, str | None] = {"value": None}
 """What the controller acts on (``--state``; ``None``: the loop's default), handed to every worker likewise."""
+DRIVE: dict[str, str] = {"gains": "stiff", "drive": "position"}
+"""The drives' own gains and the drive mode (``--gains``, ``--drive``), handed to every worker likewise."""
 
 
-def _init_worker(physics_dt: float | None, state: str | None = None) -> None:
+def _init_worker(
+    physics_dt: float | None, state: str | None = None, gains: str = "stiff", drive: str = "position"
+) -> None:
     PHYSICS_DT["value"] = physics_dt
     STATE["value"] = state
+    DRIVE["gains"], DRIVE["drive"] = gains, drive
 
 
 def _setup(robot_name: str, scenario_name: str) -> tuple[Any, Any, Any]:
     """The robot, its MuJoCo model (no meshes: the same physics; the ``--physics-dt`` step) and the scenario, built
     once per process."""
-    key = f"{robot_name}|{scenario_name}|{PHYSICS_DT['value']}"
+    key = f"{robot_name}|{scenario_name}|{PHYSICS_DT['value']}|{DRIVE['gains']}"
     if key not in _CACHE:
         from rtgait.robot.model import RobotModel
         from rtgait.scenario.loading import load_scenario
         from rtgait.sim.model import SimConfig, build_sim_model
 
         robot = RobotModel.load(robot_name)
-        sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=PHYSICS_DT["value"]))
+        sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=PHYSICS_DT["value"], gains=DRIVE["gains"]))
         _CACHE[key] = (robot, sim, load_scenario(scenario_name))
     return _CACHE[key]
 
@@ -206,7 +214,9 @@ def survives(
     robot, sim, scenario = _setup(robot_name, scenario_name)
     pushes = None if push is None else Push(push[0], PUSH_DURATION, (push[1], push[2], 0.0))
     level = ControllerOptions(**options) if options else None
-    loop = LoopOptions() if STATE["value"] is None else LoopOptions(state=STATE["value"])  # type: ignore[arg-type]
+    loop = LoopOptions(drive=DRIVE["drive"])  # type: ignore[arg-type]
+    if STATE["value"] is not None:
+        loop = dataclasses.replace(loop, state=STATE["value"])
     with mujoco_messages():
         result = simulate(scenario, robot, sim=sim, controller=controller, push=pushes, controller_options=level,  # type: ignore[arg-type]
                           options=loop)  # fmt: skip
@@ -271,15 +281,18 @@ def run(
     options: dict[str, Any] | None = None,
     physics_dt: float | None = None,
     state: str | None = None,
+    gains: str = "stiff",
+    drive: str = "position",
 ) -> tuple[list[dict[str, Any]], dict[str, Any]]:
     """Every bisection of the benchmark; returns the cases and the settings. ``options``: controller options
     (:class:`~rtgait.control.controller.ControllerOptions` fields) for the closed-loop levels; ``physics_dt``: the
-    physics step (s); ``state``: what the controller acts on (default the loop's)."""
+    physics step (s); ``state``: what the controller acts on (default the loop's); ``gains``, ``drive``: the drives'
+    own gains and the drive mode (:mod:`rtgait.sim.drive_mode`)."""
     from tqdm import tqdm
 
     from rtgait.estimation.estimator import DEFAULT_STATE
 
-    _init_worker(physics_dt, state)
+    _init_worker(physics_dt, state, gains, drive)
     robot, _, scenario = _setup(robot_name, scenario_name)
     w = math.sqrt(scenario.gravity / robot.description.cog_height)
     first = START_DCM_SHIFT * robot.mass * w
@@ -287,7 +300,7 @@ def run(
     angles = [360.0 * i / directions for i in range(directions)]
     max_lean = (options or {}).get("max_lean")
     bounds = {phase: in_place_bounds(scenario, robot, site, angles, max_lean) for phase, site in sites.items()}
-    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(physics_dt, state)) as pool:
+    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(physics_dt, state, gains, drive)) as pool:
         options = options or {}
         levels = {c: (options if c != "open-loop" else {}) for c in controllers}
         unpushed = dict(pool.map(_unpushed, [(robot_name, scenario_name, c, levels[c]) for c in controllers]))
@@ -316,7 +329,7 @@ def run(
         "push_body": "floating base", "tolerance_Ns": tolerance, "first_impulse_Ns": first, "workers": workers,
         "sites": {phase: dataclasses.asdict(site) for phase, site in sites.items()}, "controller_options": options,
         "physics_dt": physics_dt if physics_dt is not None else robot.description.actuation.physics_dt,
-        "state": state or DEFAULT_STATE,
+        "state": state or DEFAULT_STATE, "gains": gains, "drive": drive,
     }  # fmt: skip
     return cases, settings
 
@@ -451,6 +464,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--out", type=Path, help="output folder (default out/pushes-<robot>)")
     parser.add_argument("--physics-dt", type=float, default=None, help="physics step, s (default: the robot's)")
+    parser.add_argument("--gains", choices=("stiff", "robot"), default="stiff",
+                        help="the drives' own gains: stiff (default) or robot, with feed-forward torques")  # fmt: skip
+    parser.add_argument("--drive", choices=("position", "torque"), default="position",
+                        help="position (default) or torque: a tenth of the robot's gains, with FF torques")  # fmt: skip
     parser.add_argument(
         "--option", action="append", default=[], metavar="NAME=JSON",
         help="a ControllerOptions field of the closed-loop levels, e.g. com_reference='\"planned\"' (for experiments)",
@@ -466,7 +483,8 @@ def main(argv: Sequence[str] | None = None) -> None:
         options = {name: json.loads(value) for name, value in (text.split("=", 1) for text in args.option)}
     except ValueError:
         parser.error("--option needs NAME=JSON, e.g. replan_dcm_error=0.04")
-    try:  # an unknown robot or scenario: one line, before any run
+    try:  # an unknown robot or scenario, or a robot without its own gains: one line, before any run
+        _init_worker(args.physics_dt, args.state, args.gains, args.drive)
         _setup(args.robot, args.scenario)
     except (ValueError, LookupError) as error:  # RobotError, RobotDataError, ScenarioError
         parser.error(str(error))
@@ -475,7 +493,8 @@ def main(argv: Sequence[str] | None = None) -> None:
         return
     cases, settings = run(args.robot, args.scenario, controllers, phases, args.directions, args.tolerance,
                           args.workers, progress=sys.stderr.isatty(), options=options,
-                          physics_dt=args.physics_dt, state=args.state)  # fmt: skip
+                          physics_dt=args.physics_dt, state=args.state, gains=args.gains,
+                          drive=args.drive)  # fmt: skip
     settings["seconds"] = time.perf_counter() - began
     out = args.out or Path("out") / f"pushes-{settings['robot']}"
     write_outputs(cases, settings, out)
@@ -484,7 +503,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         print()
         return
     print(f"{settings['robot']} ({settings['mass']:.1f} kg) in MuJoCo, {settings['scenario']}, on the "
-          f"{settings['state']} state: 0.1 s pushes on the "
+          f"{settings['state']} state, {settings['gains']} gains, {settings['drive']} drive: 0.1 s pushes on the "
           f"base, step {cases[0]['step'] if cases else '-'}, bisection to {args.tolerance:g} N s, "
           f"{settings['seconds']:.0f} s on {args.workers} workers; written to {out}{os.sep}")  # fmt: skip
     print(table(cases))

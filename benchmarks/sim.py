@@ -6,10 +6,10 @@ tick; then times the parts of one tick separately on the same walk: the planner'
 ``mj_step`` (with the IK's joint references replayed; a tick takes ``control_dt / physics_dt`` of them), the
 contact measurement, and ``mj_step`` again without the no-slip solver and without the leg collision boxes, to
 show what each costs; then, inside one more run of the walk, the mean time per tick of each part of the real
-loop (``in_loop_*_us``: IK, physics, controller, measurement, contact record, complete log, servos, walk inputs
-and the loop's own ``rest``), which is what the real-time factor pays: each part there runs with the caches the
-others leave, about twice as slow as alone. ``machine_reference_us`` is the best time of ``sum(range(1000))``
-before and after (about 9 us on the usual machine): quote it with any timing.
+loop (``in_loop_*_us``: IK, physics, controller, measurement, feed-forward torques, contact record, complete log,
+servos, walk inputs and the loop's own ``rest``), which is what the real-time factor pays: each part there runs with
+the caches the others leave, about twice as slow as alone. ``machine_reference_us`` is the best time of
+``sum(range(1000))`` before and after (about 9 us on the usual machine): quote it with any timing.
 
 Wall times on a shared virtual machine vary from run to run: run it a few times.
 
@@ -25,6 +25,12 @@ slip, the share of ticks at which the legs' collision boxes touched and the real
 processes (``--workers``, default 2). ``--sim-option NAME=JSON`` sets a field of the MuJoCo model's
 :class:`~rtgait.sim.model.SimConfig` (e.g. ``leg_collisions=false``, to see what the legs' collision boxes cost).
 
+Every run drives the joints with ``--gains`` (``stiff``, the default: the derived stiff servos; ``robot``: the real
+robot's own gains, with feed-forward torques) and ``--drive`` (``position``, the default; ``torque``: the motion carried
+by the feed-forward torques under a tenth of the robot's gains), :mod:`rtgait.sim.drive_mode`; with ``--walks`` each
+walk's row has ``summary.json``'s ``drive`` entry (COM tracking RMS vs the plan, estimated and true, the shares of
+saturated ticks, the peak joint torque and speed against their bounds).
+
 Every run's controller acts on ``--state`` (``estimated``, the default: the state estimated from the simulated
 sensors; ``truth``: the simulator's own); with ``--walks`` on the estimate, each walk's row has its estimation
 errors (``summary.json``'s ``estimation``).
@@ -36,10 +42,11 @@ direction; ``--quick`` takes a coarse grid, ``--record FILE`` writes the summary
 is the one the robots' limits are checked against, walked on the truth).
 
 Usage: ``python benchmarks/sim.py [--json] [--robot NAME] [--scenario NAME] [--repeat N] [--control-dt S]
-[--physics-dt S] [--controller C] [--state S]`` or ``python benchmarks/sim.py --walks [--velocity-walks]
-[--robot NAME ...] [--velocity-only] [--controller C ...] [--state S] [--walk-time S] [--workers N] [--physics-dt S]
-[--option NAME=JSON ...] [--sim-option NAME=JSON ...] [--json]`` or ``python benchmarks/sim.py --envelope
-[--robot NAME ...] [--state S] [--quick] [--steps N] [--workers N] [--record FILE] [--json]``
+[--physics-dt S] [--controller C] [--state S] [--gains G] [--drive D]`` or ``python benchmarks/sim.py --walks
+[--velocity-walks] [--robot NAME ...] [--velocity-only] [--controller C ...] [--state S] [--walk-time S] [--workers N]
+[--physics-dt S] [--gains G] [--drive D] [--option NAME=JSON ...] [--sim-option NAME=JSON ...] [--json]`` or ``python
+benchmarks/sim.py --envelope [--robot NAME ...] [--state S] [--quick] [--steps N] [--workers N] [--record FILE]
+[--json]``
 """
 
 from __future__ import annotations
@@ -143,11 +150,14 @@ def parts(robot: RobotModel, scenario_name: str, config: SimConfig) -> dict[str,
 
 # The in-loop breakdown's parts: what each timed callable of ClosedLoop.step is (the rest is the loop's own code).
 IN_LOOP_PARTS = (
-    "ik", "mj_step", "controller", "estimation", "contact_reading", "contact_monitor", "tick_log", "servo", "inputs",
+    "ik", "mj_step", "controller", "estimation", "feedforward", "contact_reading", "contact_monitor", "tick_log",
+    "servo", "inputs",
 )  # fmt: skip
 
 
-def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: Any, state: str) -> dict[str, float]:
+def in_loop_parts(
+    robot: RobotModel, scenario_name: str, controller: str, sim: Any, state: str, drive: str = "position"
+) -> dict[str, float]:
     """Mean wall time per tick (us) of each part of :meth:`~rtgait.sim.loop.ClosedLoop.step` inside one real run:
     each callable the tick calls is wrapped in a timer (a tenth of a microsecond each, counted in ``rest``), so the
     parts add up to the tick and ``rest`` is the loop's own bookkeeping (the record, references, fall checks)."""
@@ -175,6 +185,8 @@ def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: A
         stack.ik.solve = timed("ik", stack.ik.solve)  # type: ignore[method-assign]
         stack.controller.tick = timed("controller", stack.controller.tick)  # type: ignore[method-assign]
         stack.estimator.update = timed("estimation", stack.estimator.update)  # type: ignore[method-assign]
+        if stack.feedforward is not None:  # the feed-forward torques (robot gains, torque drive)
+            stack.feedforward.torques = timed("feedforward", stack.feedforward.torques)  # type: ignore[method-assign]
         robot.reader.contacts.read = timed("contact_reading", robot.reader.contacts.read)  # type: ignore[method-assign]
         loop.contacts.record = timed("contact_monitor", loop.contacts.record)  # type: ignore[method-assign]
         if loop.log is not None:
@@ -195,7 +207,8 @@ def in_loop_parts(robot: RobotModel, scenario_name: str, controller: str, sim: A
     mujoco.mj_step = timed("mj_step", original_mj_step)
     try:
         gc.collect()
-        simulate(load_scenario(scenario_name), robot, sim=sim, controller=controller, options=LoopOptions(state=state))
+        options = LoopOptions(state=state, drive=drive)  # type: ignore[arg-type]
+        simulate(load_scenario(scenario_name), robot, sim=sim, controller=controller, options=options)
     finally:
         ClosedLoop.__init__, ClosedLoop.step = original_init, original_step  # type: ignore[method-assign]
         mujoco.mj_step = original_mj_step
@@ -260,7 +273,8 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
     sim_options = job.get("sim_options") or {}
     if "sensors" in sim_options and isinstance(sim_options["sensors"], dict):  # from JSON
         sim_options = {**sim_options, "sensors": SensorSettings(**sim_options["sensors"])}
-    sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=job["physics_dt"], **sim_options))
+    gains = job.get("gains", "stiff")
+    sim = build_sim_model(robot, SimConfig(meshes=False, physics_dt=job["physics_dt"], gains=gains, **sim_options))
     scenario = load_scenario(job["scenario"])
     velocity = None
     if job["velocity"] is not None:
@@ -273,8 +287,9 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
         options = ControllerOptions(**job["options"]) if job["options"] else None
         result = simulate(
             scenario, robot, sim=sim, controller=job["controller"], velocity=velocity, controller_options=options,
-            options=LoopOptions(state=job.get("state", DEFAULT_STATE)),
+            options=LoopOptions(state=job.get("state", DEFAULT_STATE), drive=job.get("drive", "position")),
         )  # fmt: skip
+    summary = result.summary()
     clamped = any(issubclass(w.category, CommandClampedWarning) for w in caught)
     asked = walked = None
     if velocity is not None and len(velocity) == 1:
@@ -303,8 +318,9 @@ def walk_case(job: dict[str, Any]) -> dict[str, Any]:
         "simulated_time": result.duration,
         "real_time_factor": result.real_time_factor,
         "state": result.state,
-        "sensors": result.summary()["sensors"],
-        "estimation": result.summary()["estimation"],
+        "sensors": summary["sensors"],
+        "estimation": summary["estimation"],
+        "drive": summary["drive"],
     }
 
 
@@ -312,7 +328,7 @@ def walks(args: argparse.Namespace) -> list[dict[str, Any]]:
     """The outcome table of ``--walks`` (module docstring)."""
     controllers = args.controller or ["open-loop", "stabilized", "adaptive"]
     common = {"physics_dt": args.physics_dt, "options": args.options, "sim_options": args.sim_options,
-              "state": args.state}  # fmt: skip
+              "state": args.state, "gains": args.gains, "drive": args.drive}  # fmt: skip
     jobs = [
         {"robot": robot, "scenario": case, "controller": c, "velocity": None, "seconds": 0.0, **common}
         for robot in args.robots or ["talos"]
@@ -398,6 +414,10 @@ def main() -> None:
                         help="controller level(s); the speed report takes the first (default adaptive)")  # fmt: skip
     parser.add_argument("--state", choices=STATE_SOURCES, default=DEFAULT_STATE,
                         help=f"what the controller acts on (default {DEFAULT_STATE})")  # fmt: skip
+    parser.add_argument("--gains", choices=("stiff", "robot"), default="stiff",
+                        help="the drives' own gains: stiff (default) or robot, with feed-forward torques")  # fmt: skip
+    parser.add_argument("--drive", choices=("position", "torque"), default="position",
+                        help="position (default) or torque: a tenth of the robot's gains, with FF torques")  # fmt: skip
     parser.add_argument("--walks", action="store_true", help="report the outcomes of fig6/7/8 instead of speed")
     parser.add_argument("--velocity-walks", action="store_true", help="with --walks: the walks by command too")
     parser.add_argument("--velocity-only", action="store_true", help="with --walks: the walks by command alone")
@@ -434,6 +454,8 @@ def main() -> None:
     if unknown:
         parser.error(f"--sim-option: SimConfig has no field {unknown[0]!r}")
     if args.envelope:
+        if args.gains != "stiff" or args.drive != "position":
+            parser.error("--envelope sweeps the stiff position drives only (no --gains robot, --drive torque)")
         run_envelope(args)
         return
     if args.walks:
@@ -447,27 +469,30 @@ def main() -> None:
         return
     robot = RobotModel.load((args.robots or ["talos"])[0])
     controller = (args.controller or ["adaptive"])[0]
-    config = SimConfig(control_dt=args.control_dt, physics_dt=args.physics_dt)
+    config = SimConfig(control_dt=args.control_dt, physics_dt=args.physics_dt, gains=args.gains)
     sim = build_sim_model(robot, config)
     scenario = load_scenario(args.scenario)
     factors, per_tick = [], []
     reference_before = machine_reference_us()
     for _ in range(args.repeat):
         gc.collect()
-        result = simulate(scenario, robot, sim=sim, controller=controller, options=LoopOptions(state=args.state))
+        options = LoopOptions(state=args.state, drive=args.drive)
+        result = simulate(scenario, robot, sim=sim, controller=controller, options=options)
         factors.append(result.real_time_factor)
         per_tick.append(result.wall_time / len(result.times) * 1e6)
     report = {
         "robot": robot.name,
         "controller": controller,
         "state": args.state,
+        "gains": args.gains,
+        "drive": args.drive,
         "scenario": args.scenario,
         "simulated_time_s": result.duration,
         "real_time_factor": factors,
         "tick_us_median_of_runs": statistics.median(per_tick),
         "fell": result.fell,
         **parts(robot, args.scenario, dataclasses.replace(config, meshes=False)),
-        **in_loop_parts(robot, args.scenario, controller, sim, args.state),
+        **in_loop_parts(robot, args.scenario, controller, sim, args.state, args.drive),
     }
     report["machine_reference_us"] = [reference_before, machine_reference_us()]
     if args.json:

@@ -9,8 +9,13 @@ Pinocchio's algorithms take it), each smoothed by a first-order low-pass of time
 ``b = 1 - exp(-dt / T)`` (``T = 0``: the raw differences). A second difference multiplies whatever is not smooth in the
 IK's solutions (one Gauss-Newton step a tick, targets fed back from measurements) by ``1 / dt^2``, a million at 1 kHz:
 the low-pass keeps that out of the torques, at the price of a lag of about ``T`` on each (``T`` a few milliseconds
-against steps of tenths of a second). A reference that jumps (a target moved at once) still gives a burst of
-acceleration over a few ``T``: the torques it gives are clipped to the joints' limits by the stack.
+against steps of tenths of a second). A reference that jumps (a target moved at once) would still give a burst of
+acceleration over a few ``T``. With the joints' speed limits given, a tick on which some joint's difference is faster
+than its limit, or on which the free flyer's velocity changes by more than :data:`JUMP_ACCELERATION` allows (a moved
+COM target moves the IK's base at once), is taken as such a jump, not a motion: the configuration becomes the new one
+to difference from and the rates are kept (no joint can move that fast, and the burst, tens of times the motion's
+acceleration, saturates the feed-forward torques: G1's at each landing, where the controller moves the landed foot's
+target to where it touched down and replans the COM).
 """
 
 from __future__ import annotations
@@ -20,7 +25,12 @@ import math
 import numpy as np
 import pinocchio as pin
 
-__all__ = ["DEFAULT_RATE_FILTER", "MotionRates"]
+__all__ = ["DEFAULT_RATE_FILTER", "JUMP_ACCELERATION", "MotionRates"]
+
+JUMP_ACCELERATION = 50.0
+"""The free flyer's linear acceleration beyond which a tick is a jump of the reference (m/s^2; with joint speed
+limits only): five times gravity, where a walking robot's base accelerates by a few m/s^2 and a target moved by a
+millimetre in a 2 ms tick gives 250 m/s^2."""
 
 DEFAULT_RATE_FILTER = 0.005
 """The low-pass's time constant ``T`` (s): module docstring."""
@@ -33,11 +43,19 @@ class MotionRates:
         model: the Pinocchio model of the configurations.
         dt: the period between two configurations (s), ``> 0``.
         time_constant: the low-pass's ``T`` (s), ``>= 0``.
+        speed_limit: the joints' speed limits (rad/s, joint order; ``inf``: none); ``None``: no jump detection
+            (module docstring).
 
     The first configuration after :meth:`reset` (or after making) starts at rest: zero velocity and acceleration.
     """
 
-    def __init__(self, model: pin.Model, dt: float, time_constant: float = DEFAULT_RATE_FILTER) -> None:
+    def __init__(
+        self,
+        model: pin.Model,
+        dt: float,
+        time_constant: float = DEFAULT_RATE_FILTER,
+        speed_limit: np.ndarray | None = None,
+    ) -> None:
         if not (math.isfinite(dt) and dt > 0.0):
             raise ValueError(f"dt must be a period > 0 s, got {dt}")
         if not (math.isfinite(time_constant) and time_constant >= 0.0):
@@ -47,6 +65,9 @@ class MotionRates:
         self._v = np.zeros(model.nv)
         self._a = np.zeros(model.nv)
         self._q: np.ndarray | None = None
+        self.speed_limit = None if speed_limit is None else np.asarray(speed_limit, dtype=float)
+        self.jumps = 0
+        """Ticks taken as jumps of the reference (module docstring)."""
 
     @property
     def velocity(self) -> np.ndarray:
@@ -74,6 +95,12 @@ class MotionRates:
         v, a, b, rate = self._v, self._a, self._blend, 1.0 / self.dt
         step = pin.difference(self.model, previous, self._q)
         step *= rate
+        limit = self.speed_limit
+        if limit is not None and (
+            bool((np.abs(step[6:]) > limit).any()) or float(np.linalg.norm(step[:3] - v[:3])) * rate > JUMP_ACCELERATION
+        ):
+            self.jumps += 1  # a jump of the reference, not a motion: the rates go on from the new configuration
+            return v, a
         step -= v
         step *= b  # the filtered velocity's change over the tick
         # a + b (step / dt - a), in place: the acceleration's input is that change over the tick.

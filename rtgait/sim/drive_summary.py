@@ -9,6 +9,9 @@ peak joint torque and speed against their envelopes, and how well the COM tracke
   saturated on some physics steps of a tick only is not counted.
 * ``peak_torque`` and ``peak_speed``: the joint closest to its envelope, ``|tau| / bound`` (the torque limit, N m) and
   ``|dq| / bound`` (the motor's no-load speed with the motor model, else the URDF's speed limit, rad/s).
+* ``peak_envelope``: with the motor model, the tick and joint whose torque came closest to its motor's torque-speed
+  envelope at that tick's speed, ``|tau| / bound(dq)`` (the bound of ``drive_saturated_share``; a ratio of 1 is a
+  saturated drive); ``None`` without the motor model or the joints' speeds.
 * ``com_tracking_rms``: the RMS horizontal distance (m) over the walk's ticks from the planner's COM to the
   estimator's COM (``vs_estimated``) and to the simulator's true COM (``vs_true``).
 """
@@ -77,11 +80,14 @@ def drive_summary(
     limit = sim.actuation.effort_limit
     motors = sim.motors
     ticks = len(torque)
+    envelope = None
     if motors is not None and joint_velocity is not None and len(joint_velocity) == ticks:
         lower, upper = np.empty_like(torque), np.empty_like(torque)
         for k in range(ticks):
             motors.bounds(joint_velocity[k], lower[k], upper[k])
         bound = np.where(torque >= 0.0, upper, -lower)
+        if ticks:
+            envelope = _envelope_peak(names, torque, joint_velocity, bound)
     else:
         bound = np.broadcast_to(limit, torque.shape)
     saturated = (np.abs(torque) >= SATURATION_FRACTION * bound).any(axis=1) if ticks else np.zeros(0, bool)
@@ -92,6 +98,7 @@ def drive_summary(
         "drive_saturated_share": float(saturated.mean()) if ticks else None,
         "peak_torque": _peak(names, np.abs(torque), limit, "N m"),
         "peak_speed": None if joint_velocity is None else _peak(names, np.abs(joint_velocity), speed_bound, "rad/s"),
+        "peak_envelope": envelope,
         "com_tracking_rms": tracking.rms(),
     }
 
@@ -105,3 +112,14 @@ def _peak(names: tuple[str, ...], values: np.ndarray, bound: np.ndarray, unit: s
     i = int(np.argmax(ratios))
     return {"joint": names[i], "value": float(peaks[i]), "bound": float(bound[i]), "ratio": float(ratios[i]),
             "unit": unit}  # fmt: skip
+
+
+def _envelope_peak(names: tuple[str, ...], torque: np.ndarray, speed: np.ndarray, bound: np.ndarray) -> dict[str, Any]:
+    """The tick and joint whose torque is the largest share of its motor's bound at its speed (``bound`` > 0 where
+    a motor can push; 0 beyond the no-load speed, where any torque along the motion is beyond it)."""
+    magnitude = np.abs(torque)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratios = np.where(bound > 0.0, magnitude / bound, np.where(magnitude > 0.0, np.inf, 0.0))
+    k, i = np.unravel_index(int(np.argmax(ratios)), ratios.shape)
+    return {"joint": names[i], "tick": int(k), "torque": float(torque[k, i]), "speed": float(speed[k, i]),
+            "bound": float(bound[k, i]), "ratio": float(ratios[k, i]), "unit": "N m"}  # fmt: skip

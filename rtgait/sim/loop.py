@@ -90,6 +90,7 @@ from rtgait.sim.start_balance import StartBalance, minimum_jerk_rates, needs_bal
 from rtgait.sim.tick_log import TickLog
 from rtgait.stack.estimators import make_estimator
 from rtgait.stack.feedforward import FeedForward
+from rtgait.stack.measured_motion import MeasuredMotion
 from rtgait.stack.setup import start_pose
 from rtgait.stack.walking_stack import WalkingStack
 
@@ -226,11 +227,15 @@ class ClosedLoop:
         )  # fmt: skip
         # Feed-forward torques (the IK's motion through inverse dynamics, the DCM law's wrench at the feet) with the
         # robot's gains or torque drive; torque drive adds its low gains to every command (drive_mode.py).
+        # They are computed at the sensed state; torque drive adds the tracking of the IK's motion (measured_motion.py).
         feed = None
         if options.feeds_forward(sim.config.gains):
-            feed = FeedForward(robot, controller.sole, dt, friction=sim.config.friction)
+            tracking = MeasuredMotion(robot, track=options.drive == "torque")
+            feed = FeedForward(robot, controller.sole, dt, friction=sim.config.friction, tracking=tracking)
         self.stack = WalkingStack(estimator, controller, ik, q, feedforward=feed)
-        self.drive_gains = torque_gains(sim) if options.drive == "torque" else None
+        self.drive_gains = (
+            torque_gains(sim, feed.tracking if feed is not None else None) if options.drive == "torque" else None
+        )
         """The gains every command carries (torque drive), ``None``: the drives' own."""
         self.com_tracking = ComTracking()
         """The walk's COM tracking errors, planned vs estimated and vs true (:mod:`rtgait.sim.drive_summary`)."""
@@ -338,7 +343,9 @@ class ClosedLoop:
             out = measurement = truth = None  # no controller during the transition
             targets = _new_tuple(IKTargets, (target_cog, left_foot, right_foot, None))
             balance = self.start_balance
-            if balance is None:
+            if balance is None and self.stack.feedforward is not None and self.stack.feedforward.tracking is not None:
+                made = hold(targets, t, None, self._estimate(t))  # the feed-forward torques at the sensed state
+            elif balance is None:
                 made = hold(targets, t)
             else:  # soft drives: the DCM law around the ramp, through the feed-forward torques (start_balance.py)
                 state = self._estimate(t)
@@ -352,7 +359,7 @@ class ClosedLoop:
                         (acceleration * delta[0], acceleration * delta[1]),
                     )  # fmt: skip
                     dcm = state.dcm
-                    made = hold(targets, t, (command_x - planned_x, command_y - planned_y))
+                    made = hold(targets, t, (command_x - planned_x, command_y - planned_y), state)
         else:
             # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
             if estimator_reads_truth:

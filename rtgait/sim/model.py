@@ -213,6 +213,11 @@ class SimModel:
                 half-sitting. With a model error the drives hold its joint angles in the model's convention, so the
                 joints move by the encoder offsets while the robot settles on its soles, as a miscalibrated robot
                 set down on the floor would.
+
+        The settle holds the posture with the stiff gains (``SimConfig.gains = "stiff"``'s) whatever the drives' own:
+        under the robot's gains, with no feed-forward torque yet, the legs would sag under the weight (G1's knees by
+        a quarter radian, Talos's by 50 mrad) before the controller's first command, a start no robot lowered onto
+        the floor has. The drives' own gains are put back before time 0.
         """
         if not (math.isfinite(settle) and settle >= 0.0):
             raise ValueError(f"settle must be a duration >= 0 s, got {settle}")
@@ -229,8 +234,13 @@ class SimModel:
         data.ctrl[:] = data.qpos[self.qpos_index]
         if self.model_error is not None:  # the drives servo their encoders, which read the joints + the offsets
             data.ctrl -= self.model_error.joint_offsets
-        for _ in range(round(settle / model.opt.timestep)):
+        settling = round(settle / model.opt.timestep)
+        if settling and self.config.gains != "stiff":
+            stiff = resolve_actuation(self.robot, self.actuation.control_dt, self.actuation.physics_dt, "stiff")
+            own_gains(model, stiff)
+        for _ in range(settling):
             mujoco.mj_step(model, data)
+        own_gains(model, self.actuation)
         data.qvel[:] = 0.0
         data.qacc_warmstart[:] = 0.0
         data.time = 0.0

@@ -3,7 +3,8 @@ asks of the feet.
 
 Per tick, from the IK's configuration ``q``:
 
-1. its velocity and acceleration by low-passed backward differences (:class:`~rtgait.robot.motion_rates.MotionRates`);
+1. its velocity and acceleration by low-passed backward differences (:class:`~rtgait.robot.motion_rates.MotionRates`;
+   a tick on which a joint would move faster than its speed limit is a jump of the reference, not differenced);
 2. RNEA and the wrench ``W`` the feet must give the robot for that motion
    (:class:`~rtgait.robot.inverse_dynamics.InverseDynamics`), its ZMP moved by the DCM law's correction (below);
 3. the desired split: the controller's commanded ZMP shared between the feet in contact as the foot force control
@@ -27,6 +28,13 @@ with its line of action still through the COM target ``c`` (the rate of angular 
 acceleration that the commanded ZMP gives it). With the joints' rows of ``tau = RNEA - sum J^T w`` the legs then push
 the floor with the commanded wrench, and the difference from the motion's accelerates the robot as the law asks.
 ``open-loop`` (``p_cmd = p_ref``) and :meth:`~rtgait.stack.walking_stack.WalkingStack.hold` move nothing.
+
+**At the sensed state** (``tracking`` given and the tick's sensed joints passed; the closed loop always does): step 2
+runs at the robot's sensed configuration and velocity (:mod:`rtgait.stack.measured_motion`: the base placed on the
+stance sole as estimated, the joints at their encoders) with the IK's acceleration, instead of at the IK's own
+configuration, so that gravity's torques are those of where the robot is. Torque drive's ``tracking`` adds the base's
+task and the joints' tracking torques: the torques then carry the motion under low drive gains. Without sensed joints
+(the truth's estimator reads no encoders) the tick falls back to the IK's configuration.
 """
 
 from __future__ import annotations
@@ -39,14 +47,17 @@ import numpy as np
 from rtgait.control.foot_control import split_zmp
 from rtgait.robot.contact_wrenches import DEFAULT_FRICTION
 from rtgait.robot.inverse_dynamics import InverseDynamics, RequiredWrench
+from rtgait.robot.joint_limits import joint_limits
 from rtgait.robot.motion_rates import DEFAULT_RATE_FILTER, MotionRates
 
 if TYPE_CHECKING:
     from rtgait.control.settings import ControlTargets
     from rtgait.core.geometry.footsteps import SoleRect
+    from rtgait.estimation.state import Measurement
     from rtgait.interface.task_targets import IKTargets
     from rtgait.robot.contact_wrenches import WrenchDistribution
     from rtgait.robot.model import RobotModel
+    from rtgait.stack.measured_motion import MeasuredMotion
 
 __all__ = ["FeedForward", "commanded_wrench"]
 
@@ -63,6 +74,8 @@ class FeedForward:
         dt: the control period (s).
         friction: the floor's Coulomb friction coefficient.
         rate_filter: the time constant of the velocity's and acceleration's low-pass (s).
+        tracking: the sensed state and tracking acceleration to compute the torques at (module docstring); ``None``:
+            the IK's configuration and motion.
 
     Attributes:
         dynamics: the inverse dynamics (its distributor's ``qp_count`` counts the ticks the QP ran).
@@ -80,9 +93,11 @@ class FeedForward:
         dt: float,
         friction: float = DEFAULT_FRICTION,
         rate_filter: float = DEFAULT_RATE_FILTER,
+        tracking: MeasuredMotion | None = None,
     ) -> None:
         self.dynamics = InverseDynamics(robot, sole, friction)
-        self.rates = MotionRates(robot.model, dt, rate_filter)
+        self.tracking = tracking
+        self.rates = MotionRates(robot.model, dt, rate_filter, joint_limits(robot).velocity)
         self.sole = sole
         self.last: WrenchDistribution | None = None
         self.ticks = self.infeasible = 0
@@ -97,13 +112,18 @@ class FeedForward:
         targets: IKTargets,
         out: ControlTargets | None,
         shift: tuple[float, float] | None = None,
+        sensed: tuple[np.ndarray, np.ndarray, np.ndarray, Measurement] | None = None,
     ) -> np.ndarray:
         """The joints' feed-forward torques (N m, in joint order) for the IK's configuration ``q``, the IK's
         ``targets`` (their feet are the split's) and the controller's output (``None``: no controller; then
         ``shift`` (m), when given, moves the motion's ZMP as the controller's ``p_cmd - p_ref`` does, e.g. the start
-        transition's law, :mod:`rtgait.sim.start_balance`)."""
+        transition's law, :mod:`rtgait.sim.start_balance`). ``sensed``: the commanded joints (rad), the encoders'
+        positions (rad) and velocities (rad/s) and the tick's estimate, with which a ``tracking`` feed-forward
+        computes the torques at the sensed state (module docstring)."""
         v, a = self.rates.update(q)
         dynamics = self.dynamics
+        if self.tracking is not None and sensed is not None:
+            q, v, a = self.tracking.update(q, v, a, *sensed)
         required = dynamics.update(q, v, a)
         left, right = targets.left_foot, targets.right_foot
         frames = dynamics.sole_frames
@@ -128,7 +148,10 @@ class FeedForward:
         self.ticks += 1
         if distribution.residual > _INFEASIBLE:
             self.infeasible += 1
-        return dynamics.torques(distribution.wrenches)
+        torques = dynamics.torques(distribution.wrenches)
+        if self.tracking is not None and sensed is not None:
+            torques += self.tracking.feedback
+        return torques
 
 
 def commanded_wrench(

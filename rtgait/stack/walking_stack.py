@@ -10,7 +10,8 @@ The velocity reference is the joints' finite difference over the control period,
 / dt``. The IK makes one Gauss-Newton iteration a tick from the last tick's solution (the targets move little in a
 period). With a :class:`~rtgait.stack.feedforward.FeedForward`, the command also carries the feed-forward torques of the
 IK's motion with the wrenches the controller asks of the feet (whole-body inverse dynamics); without one (the
-default) it carries none.
+default) it carries none. A feed-forward that tracks from the sensed state (torque drive, its ``tracking`` set) gets
+the tick's encoder readings (those :meth:`WalkingStack.estimate` was given) and estimate.
 
 Between the estimate and the control a loop may act on the planner (footstep changes, velocity commands due at this
 tick): :meth:`WalkingStack.estimate` and :meth:`WalkingStack.control` are the two halves of :meth:`WalkingStack.tick`.
@@ -121,6 +122,7 @@ class WalkingStack:
         self.feedforward = feedforward
         self._fault: Fault | None = None  # found by estimate(), logged by the control() of the same tick
         self._tilted = False  # whether the walk has sloped footholds (set at the start)
+        self._readings: SensorReadings | None = None  # the last estimate's, for a feed-forward at the sensed state
 
     @property
     def q(self) -> np.ndarray:
@@ -131,6 +133,7 @@ class WalkingStack:
         """This tick's walking state (the first half of :meth:`tick`); ``None`` when the safety layer finds a fault
         in the readings or the estimate, or has tripped before (module docstring)."""
         safety = self.safety
+        self._readings = readings
         if safety.damping:
             safety.observe_joints(readings)
             return None
@@ -183,16 +186,21 @@ class WalkingStack:
         return self.control(t, self.estimate(readings, truth))
 
     def hold(
-        self, targets: IKTargets, t: float = math.nan, zmp_shift: tuple[float, float] | None = None
+        self,
+        targets: IKTargets,
+        t: float = math.nan,
+        zmp_shift: tuple[float, float] | None = None,
+        measurement: Measurement | None = None,
     ) -> StackOutput:
         """The joints for IK targets given directly, the controller left out (e.g. a start transition; ``t`` (s)
         stamps a fault); the damping command once the safety layer has tripped. ``zmp_shift`` (m): a balance law's
         ``p_cmd - p_ref``, which the feed-forward torques carry (:meth:`FeedForward.torques
-        <rtgait.stack.feedforward.FeedForward.torques>`)."""
+        <rtgait.stack.feedforward.FeedForward.torques>`). ``measurement``: this tick's estimate (of
+        :meth:`estimate`), for a feed-forward that tracks from the sensed state; the output carries none."""
         if self.safety.damping:
             return self._damp(t)
         try:
-            return self._command(t, targets, None, None, None, zmp_shift)
+            return self._command(t, targets, None, None, None, zmp_shift, measurement)
         except _BAD_INPUT as error:
             return self._damp(t, _error(error))
 
@@ -214,6 +222,7 @@ class WalkingStack:
         out: ControlTargets | None,
         offsets: FootOffsets | None,
         zmp_shift: tuple[float, float] | None = None,
+        sensed_state: Measurement | None = None,
     ) -> StackOutput:
         q, _ = self.ik.solve(targets, self._q, max_iterations=1, tolerance=0.0, errors=False)
         joints = q[7:]
@@ -230,8 +239,13 @@ class WalkingStack:
             joints, velocities = clipped, (clipped - previous) / self.dt
         velocities = clip.velocities(velocities)
         torques = None
-        if self.feedforward is not None:
-            torques = self.feedforward.torques(q, targets, out, zmp_shift)
+        feedforward = self.feedforward
+        if feedforward is not None:
+            sensed = None
+            state, readings = measurement or sensed_state, self._readings
+            if feedforward.tracking is not None and state is not None and readings is not None:
+                sensed = (joints, readings.joint_positions, readings.joint_velocities, state)
+            torques = feedforward.torques(q, targets, out, zmp_shift, sensed)
             if not math.isfinite(float(torques.sum())):
                 return self._damp(t, ("bad-command", "the feed-forward torques are NaN or infinite"))
             torques = clip.torques(torques)

@@ -131,7 +131,9 @@ def test_sample_at_infinity_or_far_ahead_returns_at_once():
     began = time.perf_counter()
     with pytest.raises(ValueError, match="at least once per step"):
         p.sample(1e4)
-    assert time.perf_counter() - began < 0.005
+    # Walking the plan out to 1e4 s step by step costs about 1.8 s on a quiet machine; a refusal is microseconds.
+    # The bound sits between the two with room for a loaded machine.
+    assert time.perf_counter() - began < 0.2
     p.sample(0.5)  # the planner is still usable
     finite = OnlinePlanner(cfg, straight_walk(cfg, 200, 0.05))
     finite.start(0.0)

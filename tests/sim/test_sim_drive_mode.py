@@ -106,3 +106,51 @@ def test_summary_reports_the_drives(g1_robot_gains):
         LoopOptions(drive="current")
     with pytest.raises(ValueError, match="feed-forward"):
         LoopOptions(drive="torque", feedforward=False)
+
+
+def test_summary_peak_envelope_is_the_motor_bound_at_the_joint_speed(g1):
+    from rtgait.sim.drive_summary import ComTracking, drive_summary
+
+    sim = build_sim_model(g1, SimConfig(meshes=False, gains="robot", motor_model=True))
+    motors = sim.motors
+    n = len(sim.joint_names)
+    knee = sim.joint_names.index("left_knee_joint")
+    torque, speed = np.zeros((3, n)), np.zeros((3, n))
+    # Tick 1: the knee at 40 % of its peak torque while turning, along its torque, at a speed past its corner.
+    w0, wc, peak = motors.no_load_speed[knee], motors.corner_speed[knee], motors.peak_torque[knee]
+    speed[1, knee] = wc + 0.5 * (w0 - wc)
+    torque[1, knee] = 0.4 * peak
+    drive = drive_summary(sim, {}, torque, speed, None, 3, ComTracking())
+    envelope = drive["peak_envelope"]
+    bound = min(peak * 0.5, sim.actuation.effort_limit[knee])  # the envelope half-way down from the corner
+    assert envelope["joint"] == "left_knee_joint" and envelope["tick"] == 1
+    assert envelope["bound"] == pytest.approx(bound)
+    assert envelope["ratio"] == pytest.approx(0.4 * peak / bound)
+    assert drive["feedforward_clipped_share"] is None
+    # Without the joints' speeds no envelope is known.
+    assert drive_summary(sim, {}, torque, None, None, 3, ComTracking())["peak_envelope"] is None
+
+
+def test_the_settle_holds_the_posture_under_the_robot_s_gains(g1_robot_gains):
+    # Settled with the stiff gains, the knees are where half-sitting puts them (under G1's own 100 N m/rad, with no
+    # feed-forward, they sagged by a quarter radian); the drives' own gains are back for the run.
+    sim = g1_robot_gains
+    data = sim.new_data()
+    knee = sim.joint_names.index("left_knee_joint")
+    q_half = sim.robot.q_half_sitting[7:]
+    assert abs(data.qpos[sim.qpos_index][knee] - q_half[knee]) < 0.01
+    np.testing.assert_allclose(sim.model.actuator_gainprm[:, 0], sim.actuation.kp)
+    np.testing.assert_allclose(-sim.model.actuator_biasprm[:, 2], sim.actuation.kd)
+
+
+def test_torque_drive_adds_the_tracking_damping_to_the_drives(g1_robot_gains):
+    from rtgait.stack.measured_motion import MeasuredMotion
+
+    tracking = MeasuredMotion(g1_robot_gains.robot)
+    kp, kd = torque_gains(g1_robot_gains)
+    kp_t, kd_t = torque_gains(g1_robot_gains, tracking)
+    np.testing.assert_allclose(kp_t, kp)
+    np.testing.assert_allclose(kd_t, kd + tracking.damping)
+    loop = standing_loop(g1_robot_gains, drive="torque")
+    assert loop.stack.feedforward.tracking is not None
+    np.testing.assert_allclose(loop.drive_gains[1], kd_t)
