@@ -83,3 +83,16 @@ def test_the_floor_goes_down_to_the_lowest_level_and_flat_adds_nothing() -> None
     assert model.geom_pos[floor][2] == pytest.approx(-0.9)
     model, _ = _scene(Flat(), SimConfig())
     assert model.ngeom == 1
+
+
+def test_the_robot_stands_on_the_top_landing_of_stairs_down(talos) -> None:
+    from rtgait.sim.model import build_sim_model
+
+    stairs = Stairs(0.15, 0.25, 6, "down")
+    sim = build_sim_model(talos, SimConfig(meshes=False), terrain=stairs)
+    assert sim.terrain is stairs
+    floor = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+    assert sim.model.geom_pos[floor][2] == pytest.approx(-0.9)
+    data = sim.new_data()  # settled on the landing before the first stair, 0.9 m above the floor
+    for site in (sim.left_sole_site, sim.right_sole_site):
+        assert abs(data.site_xpos[site][2]) < 0.005
