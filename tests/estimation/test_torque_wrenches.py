@@ -45,7 +45,7 @@ def _torques_for(legs: Legs, wrenches: np.ndarray, specific: np.ndarray) -> np.n
 
 def test_the_legs_are_handed_the_finite_differenced_motion():
     legs = Legs()
-    estimate = TorqueWrenches(legs, cutoff=math.inf)
+    estimate = TorqueWrenches(legs, cutoff=math.inf, acceleration_cutoff=math.inf)
     rng = np.random.default_rng(5)
     velocities = [rng.normal(size=legs.joint_count) for _ in range(3)]
     gyro = [tuple(rng.normal(size=3)) for _ in range(3)]
@@ -62,6 +62,28 @@ def test_the_legs_are_handed_the_finite_differenced_motion():
     expected = np.array(specific) - np.cross(alpha, p) - np.cross(w, np.cross(w, p)) - 2.0 * np.cross(w, u)
     np.testing.assert_allclose(last[1][:3], expected, rtol=1e-12)
     assert last[0] == gyro[2]
+
+
+def test_the_accelerations_are_low_passed_from_the_first_difference_on():
+    # y_k = beta y_k-1 + (1 - beta) x_k on each finite-differenced acceleration, started at the first difference.
+    legs = Legs()
+    cutoff = 30.0
+    estimate = TorqueWrenches(legs, cutoff=math.inf, acceleration_cutoff=cutoff)
+    rng = np.random.default_rng(7)
+    velocities = [rng.normal(size=legs.joint_count) for _ in range(6)]
+    gyro = [tuple(rng.normal(size=3)) for _ in range(6)]
+    zero = np.zeros(legs.joint_count)
+    for k in range(6):
+        estimate.update(DT, velocities[k], zero, gyro[k], (0.0, 0.0, G), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    beta = math.exp(-2.0 * math.pi * cutoff * DT)
+    joints = (velocities[1] - velocities[0]) / DT
+    base = (np.array(gyro[1]) - np.array(gyro[0])) / DT
+    for k in range(2, 6):
+        joints = beta * joints + (1.0 - beta) * (velocities[k] - velocities[k - 1]) / DT
+        base = beta * base + (1.0 - beta) * (np.array(gyro[k]) - np.array(gyro[k - 1])) / DT
+        np.testing.assert_allclose(legs.calls[k][2], joints, rtol=1e-12)
+        np.testing.assert_allclose(legs.calls[k][1][3:], base, rtol=1e-12)
+    np.testing.assert_allclose(legs.calls[1][2], (velocities[1] - velocities[0]) / DT, rtol=1e-12)
 
 
 def test_an_imu_off_a_spinning_base_gives_the_origins_specific_force():
@@ -110,6 +132,8 @@ def test_bad_settings_are_refused():
     assert DEFAULT_WRENCH_CUTOFF > 0.0
     with pytest.raises(ValueError, match="cut-off"):
         TorqueWrenches(legs, cutoff=0.0)
+    with pytest.raises(ValueError, match="accelerations' filter cut-off"):
+        TorqueWrenches(legs, acceleration_cutoff=-1.0)
     legs.leg_joints = (tuple(range(6)), tuple(range(7, 12)))
     with pytest.raises(ValueError, match="leg_joints"):
         TorqueWrenches(legs)
