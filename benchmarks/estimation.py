@@ -5,8 +5,9 @@ Every walk here is the adaptive controller acting on the state the kinematic-ine
 simulated sensors (``state="estimated"``), each robot at its own physics step; the errors are ``summary.json``'s
 ``estimation`` (:mod:`rtgait.sim.estimation_errors`: RMS over the walk's ticks of the COM, the COM relative to the
 stance sole, the COM velocity, the DCM and the DCM relative to the stance sole, the ZMP; the largest DCM error; the
-share of ticks whose feet's load states are right; the step landings missed and the worst detection delay, apart from
-the re-landings of a foot that bounced).
+share of ticks whose feet's load states are right, and of foot-ticks wrongly loaded (f.on) and wrongly unloaded
+(f.off); the step landings missed, their detection delay's median, 95th percentile and worst, apart from the
+re-landings of a foot that bounced; the worst step lift-off's delay).
 
 * **Walks**: fig8 and, with ``--velocity-walks``, the walks by velocity command of ``benchmarks/sim.py --walks
   --velocity-walks`` (0.3 m/s forward, 0.1 m/s backward, 0.1 m/s sideways, 0.3 rad/s turning, and one changing
@@ -111,14 +112,17 @@ def _errors(row: dict[str, Any]) -> str:
         f"{_mm(row.get('com_rms'), digits=2):>6} {_mm(row.get('com_relative_rms'), digits=2):>6} "
         f"{_mm(row.get('com_velocity_rms')):>7} {_mm(row.get('dcm_rms'), digits=2):>6} {_mm(row.get('dcm_max')):>6} "
         f"{_mm(row.get('dcm_relative_rms'), digits=2):>6} {_mm(row.get('zmp_rms')):>6} "
-        f"{_mm(row.get('contact_agreement'), 100.0, 2):>7} {row.get('landings_missed', '-')!s:>6} "
-        f"{_mm(delay):>6}"
+        f"{_mm(row.get('contact_agreement'), 100.0, 2):>7} {_mm(row.get('contact_false_loaded'), 100.0, 2):>5} "
+        f"{_mm(row.get('contact_false_unloaded'), 100.0, 2):>5} {row.get('landings_missed', '-')!s:>6} "
+        f"{_mm(row.get('landing_delay_median'), digits=0):>4} {_mm(row.get('landing_delay_p95'), digits=0):>4} "
+        f"{_mm(delay, digits=0):>5} {_mm(row.get('liftoff_delay_worst'), digits=0):>5}"
     )
 
 
 HEADER = (f"{'COM':>6} {'rel.':>6} {'vel.':>7} {'DCM':>6} {'max':>6} {'rel.':>6} {'ZMP':>6} {'contact':>7} "
-          f"{'missed':>6} {'delay':>6}")  # fmt: skip
-UNITS = f"{'mm':>6} {'mm':>6} {'mm/s':>7} {'mm':>6} {'mm':>6} {'mm':>6} {'mm':>6} {'%':>7} {'steps':>6} {'ms':>6}"
+          f"{'f.on':>5} {'f.off':>5} {'missed':>6} {'med':>4} {'p95':>4} {'worst':>5} {'lift':>5}")  # fmt: skip
+UNITS = (f"{'mm':>6} {'mm':>6} {'mm/s':>7} {'mm':>6} {'mm':>6} {'mm':>6} {'mm':>6} {'%':>7} {'%':>5} {'%':>5} "
+         f"{'steps':>6} {'ms':>4} {'ms':>4} {'ms':>5} {'ms':>5}")  # fmt: skip
 
 
 def print_tables(report: dict[str, Any]) -> None:

@@ -16,16 +16,23 @@ truth:
   plan is re-anchored on those landings, does not feel;
 * ``contact_agreement``: the share of ticks at which both feet's load states (loaded or not, after the landing
   hysteresis) are the truth's. The truth's are the ground-truth estimator's: the true vertical forces through
-  :class:`~rtgait.estimation.load.LoadHysteresis` with its default thresholds (:func:`loaded_states`);
+  :class:`~rtgait.estimation.load.LoadHysteresis` with its default thresholds (:func:`loaded_states`).
+  ``contact_false_loaded`` and ``contact_false_unloaded`` split the disagreement by foot and tick: the share of
+  ticks with a foot loaded in the estimate and not in the truth, and the other way round (their sum is at least
+  ``1 - contact_agreement``: a tick may be wrong on both feet);
 * landings: a foot's load state turning on after at least ``min_unloaded_time`` in the air (the rule of
   :mod:`rtgait.estimation.load`), on each side. The truth's are *step landings* after at least
   :data:`RELANDING_AIR_TIME` in the air, and *re-landings* after less: a foot that touched, bounced off for longer
   than the load detection's least flight and came down again, which an estimate may see as part of the step's
   landing. In time order, each true step landing is matched with the estimate's nearest landing of the same foot
   within :data:`LANDING_WINDOW` not matched yet; its delay is the estimate's time minus the truth's (s, negative:
-  seen early). ``landing_delay_worst`` is the delay of largest magnitude, ``landings_missed`` the step landings
+  seen early). ``landing_delay_worst`` is the delay of largest magnitude, ``landing_delay_median`` and
+  ``landing_delay_p95`` the median and 95th percentile of the delays, ``landings_missed`` the step landings
   without a match; the re-landings are then matched likewise (``relandings_missed``), and ``landings_extra`` counts
-  the estimate's landings matched with none.
+  the estimate's landings matched with none;
+* lift-offs: a foot's load state turning off before at least :data:`RELANDING_AIR_TIME` in the air (a step's
+  lift-off, not a bounce), matched with the estimate's nearest turn-off of the same foot within
+  :data:`LANDING_WINDOW`; ``liftoff_delay_median`` and ``liftoff_delay_worst`` as the landings' (s).
 """
 
 from __future__ import annotations
@@ -40,7 +47,7 @@ from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADE
 
 __all__ = [
     "LANDING_WINDOW", "RELANDING_AIR_TIME", "EstimationErrors", "StateTrack", "estimation_errors", "landing_times",
-    "loaded_states",
+    "liftoff_times", "loaded_states",
 ]  # fmt: skip
 
 LANDING_WINDOW = (-0.05, 0.3)
@@ -91,6 +98,11 @@ class EstimationErrors:
         landings_extra: the estimate's landings matched with none of the truth's.
         landing_delay_worst: the detection delay of largest magnitude (s), ``None`` without a matched landing.
         landing_delay_median: the median detection delay (s), ``None`` likewise.
+        landing_delay_p95: the delays' 95th percentile (s), ``None`` likewise.
+        contact_false_loaded: share of foot-ticks loaded in the estimate and not in the truth (per tick).
+        contact_false_unloaded: share of foot-ticks loaded in the truth and not in the estimate (per tick).
+        liftoff_delay_median, liftoff_delay_worst: the step lift-offs' detection delays (s), ``None`` without a
+            matched one.
         landing_delays: every matched step landing's detection delay (s), in time order (not in :meth:`summary`).
     """
 
@@ -110,6 +122,11 @@ class EstimationErrors:
     landings_extra: int
     landing_delay_worst: float | None
     landing_delay_median: float | None
+    landing_delay_p95: float | None = None
+    contact_false_loaded: float = math.nan
+    contact_false_unloaded: float = math.nan
+    liftoff_delay_median: float | None = None
+    liftoff_delay_worst: float | None = None
     landing_delays: tuple[float, ...] = ()
 
     def summary(self) -> dict[str, Any]:
@@ -157,6 +174,22 @@ def landing_times(
     return sorted(found)
 
 
+def liftoff_times(
+    times: np.ndarray, loaded: np.ndarray, min_air_time: float = RELANDING_AIR_TIME
+) -> list[tuple[float, int]]:
+    """The lift-offs in a run of load states ``loaded`` (``(k, 2)`` at ``times``, s): ``(t, side)`` where a foot's
+    state turns off and stays off at least ``min_air_time`` (s; or to the end of the run), in time order."""
+    found = []
+    for side in (0, 1):
+        change = np.diff(loaded[:, side].astype(np.int8))
+        rises = np.flatnonzero(change == 1) + 1
+        for fall in np.flatnonzero(change == -1) + 1:
+            after = rises[rises > fall]
+            if not len(after) or times[after[0]] - times[fall] >= min_air_time:
+                found.append((float(times[fall]), side))
+    return sorted(found)
+
+
 def _rms(error: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum(error * error, axis=1)))) if len(error) else math.nan
 
@@ -199,6 +232,7 @@ def estimation_errors(
     used: set[int] = set()
     delays = _matched(steps, seen, used)
     relandings_seen = _matched(relandings, seen, used)
+    liftoff_delays = _matched(liftoff_times(times, truth.loaded), liftoff_times(times, estimate.loaded, 0.0), set())
     distance = np.hypot(dcm[:, 0], dcm[:, 1])
     zmp_rms = None
     if estimate.zmp is not None and truth.zmp is not None:
@@ -221,6 +255,11 @@ def estimation_errors(
         landings_extra=len(seen) - len(used),
         landing_delay_worst=float(max(delays, key=abs)) if delays else None,
         landing_delay_median=float(np.median(delays)) if delays else None,
+        landing_delay_p95=float(np.percentile(delays, 95.0)) if delays else None,
+        contact_false_loaded=float(np.mean(np.sum(estimate.loaded & ~truth.loaded, axis=1))) if n else math.nan,
+        contact_false_unloaded=float(np.mean(np.sum(~estimate.loaded & truth.loaded, axis=1))) if n else math.nan,
+        liftoff_delay_median=float(np.median(liftoff_delays)) if liftoff_delays else None,
+        liftoff_delay_worst=float(max(liftoff_delays, key=abs)) if liftoff_delays else None,
         landing_delays=tuple(float(d) for d in delays),
     )
 

@@ -28,7 +28,7 @@ from rtgait.interface.truth import GroundTruth
 from rtgait.sim.contact_reading import ContactSums
 from rtgait.sim.drives import Drives
 from rtgait.sim.ground_truth import GroundTruthReader
-from rtgait.sim.sensors import SensorModel
+from rtgait.sim.sensors import SensorModel, applied_damping
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
 if TYPE_CHECKING:
@@ -69,8 +69,18 @@ class SimRobot:
         """The sensors' readings now (:mod:`rtgait.sim.sensors`: after a physics step, of the state it started
         from, like :meth:`ground_truth`), sampled at ``data.time``. Each call is one control tick of the noise's
         walks and the latency: call it once a tick."""
-        data = self.data
-        return self.sensors.read(data.sensordata, float(data.time))
+        data, sensors = self.data, self.sensors
+        damping = None
+        if sensors.joint_torques:
+            # The drives' torque over the step from the sampled state, not MuJoCo's of that state alone.
+            n, start, model = sensors.layout.joints, sensors.layout.start, self._model
+            ranges = model.actuator_forcerange
+            limited = model.actuator_forcelimited.astype(bool)
+            damping = applied_damping(
+                self.drives.kd, data.sensordata[start + n : start + 2 * n], data.qvel[self.sim.dof_index],
+                data.actuator_force, np.where(limited, ranges[:, 0], -np.inf), np.where(limited, ranges[:, 1], np.inf),
+            )  # fmt: skip
+        return sensors.read(data.sensordata, float(data.time), damping)
 
     def write(self, command: JointCommand) -> None:
         """The drives' command for the coming control period (module docstring; without a command delay the arrays

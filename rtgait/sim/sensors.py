@@ -20,6 +20,13 @@ SensorSettings`), one reading per control tick of period ``dt``:
   before the step integrates the servos' damping implicitly: it disagrees with the velocity the simulation goes on
   to have by about 0.3 m/s^2 RMS on a walk (``docs/robots.md``, "Sensors"). The first reading, which has no period
   before it, is MuJoCo's;
+* the joint torque is the one the drive applied over the physics step that starts at the reading's state: MuJoCo's
+  actuator force of that state, ``kp e - kd dq``, is integrated with its damping at the step's end velocity
+  (``implicitfast``), so the torque that moved the joint is ``kp e - kd dq_end``, the reading's plus
+  ``kd (dq - dq_end)`` (nothing while the drive saturates: the integrator drops the damping then). A real drive's
+  torque (a strain gauge's, a motor current's) is the one that moves the joint; MuJoCo's reading differs from it by
+  the damping's change over one step, which on G1's stiff legs made the legs' wrench from their torques err by 6 N
+  RMS on a swinging foot with noise-free sensors (``docs/estimation.md``);
 * the IMU filter's orientation ``q_m = q_e q``, an error rotation in the world frame: white roll and pitch, and a yaw
   that drifts at a rate drawn once per run (``yaw = rate t``, ``t`` from the first reading).
 
@@ -49,7 +56,7 @@ if TYPE_CHECKING:
     from rtgait.interface.sensor_spec import SensorSpec
     from rtgait.sim.model import SimModel
 
-__all__ = ["SensorModel"]
+__all__ = ["SensorModel", "applied_damping"]
 
 _new_tuple = tuple.__new__  # a NamedTuple made from a tuple at once, without its generated __new__'s argument parsing
 
@@ -131,14 +138,19 @@ class SensorModel:
         self._stamps = [0.0] * (self.latency + 1)
         self.ticks = 0
 
-    def read(self, sensordata: np.ndarray, t: float) -> SensorReadings:
+    def read(self, sensordata: np.ndarray, t: float, damping: np.ndarray | None = None) -> SensorReadings:
         """The reading of this control tick from MuJoCo's ``sensordata`` (true values, see the module docstring),
-        sampled at ``t`` (s), delivered :attr:`latency` ticks late."""
+        sampled at ``t`` (s), delivered :attr:`latency` ticks late; ``damping``: each joint's ``kd (dq - dq_end)``
+        over the physics step from the sampled state (N m, joint order; 0 where the drive saturates), added to the
+        torques (:func:`applied_damping`)."""
         layout = self.layout
         size, ring, k = layout.size, self._ring, self.ticks
         slot = k % len(ring)
         values = ring[slot]
         values[:] = sensordata[layout.start : layout.stop]
+        if damping is not None:
+            n = layout.joints
+            values[2 * n : 3 * n] += damping
         if self._imu_at >= 0:
             self._mean_specific_force(values, t)
         values += self._offset
@@ -223,3 +235,14 @@ class SensorModel:
             right = _new_tuple(Wrench, (tuple(w[6:9]), tuple(w[9:12])))
         torques = values[2 * n : 3 * n] if self.joint_torques else None
         return _new_tuple(SensorReadings, (t, values[:n], values[n : 2 * n], torques, imu, left, right))
+
+
+def applied_damping(
+    kd: np.ndarray, velocity: np.ndarray, velocity_end: np.ndarray, force: np.ndarray, lower: np.ndarray,
+    upper: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """``kd (dq - dq_end)`` per joint (N m): what the implicit integration of a drive's damping adds to its actuator
+    force of the state at joint velocities ``velocity`` over the step that ends at ``velocity_end`` (rad/s), zero for
+    a drive whose ``force`` is at its range ``[lower, upper]`` (module docstring)."""
+    free = (force > lower) & (force < upper)
+    return np.where(free, kd * (velocity - velocity_end), 0.0)

@@ -45,7 +45,7 @@ def _torques_for(legs: Legs, wrenches: np.ndarray, specific: np.ndarray) -> np.n
 
 def test_the_legs_are_handed_the_finite_differenced_motion():
     legs = Legs()
-    estimate = TorqueWrenches(legs, cutoff=math.inf)
+    estimate = TorqueWrenches(legs, cutoff=math.inf, acceleration_cutoff=math.inf)
     rng = np.random.default_rng(5)
     velocities = [rng.normal(size=legs.joint_count) for _ in range(3)]
     gyro = [tuple(rng.normal(size=3)) for _ in range(3)]
@@ -62,6 +62,48 @@ def test_the_legs_are_handed_the_finite_differenced_motion():
     expected = np.array(specific) - np.cross(alpha, p) - np.cross(w, np.cross(w, p)) - 2.0 * np.cross(w, u)
     np.testing.assert_allclose(last[1][:3], expected, rtol=1e-12)
     assert last[0] == gyro[2]
+
+
+def test_the_accelerations_are_low_passed_from_the_first_difference_on():
+    # y_k = beta y_k-1 + (1 - beta) x_k on each finite-differenced acceleration, started at the first difference.
+    legs = Legs()
+    cutoff = 30.0
+    estimate = TorqueWrenches(legs, cutoff=math.inf, acceleration_cutoff=cutoff, contact_cutoff=math.inf)
+    rng = np.random.default_rng(7)
+    velocities = [rng.normal(size=legs.joint_count) for _ in range(6)]
+    gyro = [tuple(rng.normal(size=3)) for _ in range(6)]
+    wrenches = rng.normal(size=(2, 6)) * 50.0
+    specific = np.array([0.0, 0.0, G])
+    torques = _torques_for(legs, wrenches, specific)
+    for k in range(6):
+        estimate.update(DT, velocities[k], torques, gyro[k], tuple(specific), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    assert len(legs.calls) == 6  # one evaluation of the legs' dynamics a tick
+    beta = math.exp(-2.0 * math.pi * cutoff * DT)
+    joints = (velocities[1] - velocities[0]) / DT
+    base = (np.array(gyro[1]) - np.array(gyro[0])) / DT
+    np.testing.assert_allclose(legs.calls[1][2], joints, rtol=1e-12)
+    for k in range(2, 6):
+        joints = beta * joints + (1.0 - beta) * (velocities[k] - velocities[k - 1]) / DT
+        base = beta * base + (1.0 - beta) * (np.array(gyro[k]) - np.array(gyro[k - 1])) / DT
+        np.testing.assert_allclose(legs.calls[k][2], joints, rtol=1e-12)
+        np.testing.assert_allclose(legs.calls[k][1][3:], base, rtol=1e-12)
+    # These legs' dynamics do not depend on the joint accelerations: the contact forces are the torques' wrenches.
+    np.testing.assert_allclose(estimate.contact_forces, wrenches[:, 0:3], atol=1e-9)
+
+
+def test_the_contact_forces_are_low_passed_at_their_own_cut_off():
+    legs = Legs()
+    estimate = TorqueWrenches(legs, cutoff=30.0, contact_cutoff=60.0)
+    specific = np.array([0.0, 0.0, G])
+    before = np.array([[1.0, -2.0, 150.0, 0.5, -1.0, 0.1], [0.0, 0.0, 80.0, 0.0, 0.0, 0.0]])
+    after = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [-3.0, 4.0, 200.0, 1.0, 2.0, -0.2]])
+    zero = np.zeros(legs.joint_count)
+    for wrenches in (before, after, after, after):
+        reported = estimate.update(DT, zero, _torques_for(legs, wrenches, specific), (0.0, 0.0, 0.0), tuple(specific),
+                                   (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))  # fmt: skip
+    slow, fast = math.exp(-2.0 * math.pi * 30.0 * DT), math.exp(-2.0 * math.pi * 60.0 * DT)
+    np.testing.assert_allclose(reported, after + (before - after) * slow**3, atol=1e-9)
+    np.testing.assert_allclose(estimate.contact_forces, (after + (before - after) * fast**3)[:, 0:3], atol=1e-9)
 
 
 def test_an_imu_off_a_spinning_base_gives_the_origins_specific_force():
@@ -110,6 +152,10 @@ def test_bad_settings_are_refused():
     assert DEFAULT_WRENCH_CUTOFF > 0.0
     with pytest.raises(ValueError, match="cut-off"):
         TorqueWrenches(legs, cutoff=0.0)
+    with pytest.raises(ValueError, match="accelerations' filter cut-off"):
+        TorqueWrenches(legs, acceleration_cutoff=-1.0)
+    with pytest.raises(ValueError, match="contact forces' filter cut-off"):
+        TorqueWrenches(legs, contact_cutoff=0.0)
     legs.leg_joints = (tuple(range(6)), tuple(range(7, 12)))
     with pytest.raises(ValueError, match="leg_joints"):
         TorqueWrenches(legs)

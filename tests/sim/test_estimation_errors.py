@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
-from rtgait.sim.estimation_errors import StateTrack, estimation_errors, landing_times, loaded_states
+from rtgait.sim.estimation_errors import StateTrack, estimation_errors, landing_times, liftoff_times, loaded_states
 
 WEIGHT = 900.0
 """The robot's weight in these tests (N): landing at 25 N, release at 12.5 N."""
@@ -112,6 +112,16 @@ def test_landings_are_matched_once_and_their_delays_signed():
     assert errors.landing_delay_median == pytest.approx(0.5 * (0.007 - 0.004))
     assert errors.landing_delays == pytest.approx((-0.004, 0.007)) and "landing_delays" not in errors.summary()
     assert errors.contact_agreement == pytest.approx(1.0 - (5 + 4 + 7 + 60) / n)
+    # Loaded too long: the left foot 5 ticks at its lift-off and 4 before its landing, the right one through its
+    # bounce; unloaded too long: the right foot the 7 ticks its landing was late.
+    assert errors.contact_false_loaded == pytest.approx((5 + 4 + 60) / n)
+    assert errors.contact_false_unloaded == pytest.approx(7 / n)
+    assert errors.landing_delay_p95 == pytest.approx(-0.004 + 0.95 * 0.011)
+    # The step lift-offs (0.3 s in the air after them; the bounce's 60 ms is not one): left seen 5 ms late, right on
+    # time.
+    assert liftoff_times(times, truth_loaded) == [(0.3, 0), (1.2, 1)]
+    assert errors.liftoff_delay_worst == pytest.approx(0.005)
+    assert errors.liftoff_delay_median == pytest.approx(0.0025)
     # Seen apart, 3 ms late: matched, not an extra landing.
     seen[1510:1573, 1] = False
     estimate = StateTrack(estimate.com, estimate.com_velocity, estimate.dcm, estimate.soles, estimate.normal_force,
