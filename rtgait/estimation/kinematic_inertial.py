@@ -27,7 +27,8 @@ Each tick, with the base frame's kinematics (:class:`~rtgait.estimation.kinemati
 4. **Velocity.** With ``w`` the gyro's angular velocity in the world, a foot ``i`` held still gives the base
    origin's velocity ``-(w x R p_i) - R p_i'`` (``p_i'`` from the joint velocities); their force-weighted mean, moved
    to the IMU (``+ w x R p_I + R p_I'``), is blended with the IMU's acceleration ``R_WI f + g`` by the complementary
-   filter of :mod:`rtgait.estimation.velocity_filter` (3.5 Hz).
+   filter of :mod:`rtgait.estimation.velocity_filter` (3.5 Hz). A loaded foot that turns in the world rocks about its
+   centre of pressure, not its origin: that point is held still instead (:mod:`rtgait.estimation.contact_point`).
 5. **COM and DCM.** ``c = p + R c_B``, ``c' = v_B + w x R c_B + R c_B'`` (``c_B``, ``c_B'`` from the joints),
    ``xi = c + c'/w0`` with the planner's ``w0``.
 6. **Feet states, ZMP, landings** from the soles' estimated poses and wrenches (:mod:`rtgait.estimation.feet`,
@@ -41,8 +42,11 @@ from __future__ import annotations
 import math
 from typing import Literal
 
+from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.geometry.hull import sole_extents
 from rtgait.estimation.anchors import FootAnchors, Pose
 from rtgait.estimation.attitude_filter import DEFAULT_ATTITUDE_CUTOFF, AttitudeFilter
+from rtgait.estimation.contact_point import rocking_correction
 from rtgait.estimation.feet import FeetFromWrenches
 from rtgait.estimation.kinematics import RobotKinematics
 from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
@@ -91,6 +95,9 @@ class KinematicInertialEstimator:
         yaw: where the base's yaw comes from: ``"feet"`` (the feet in contact) or ``"imu"``.
         start_feet: the standing soles' world poses ``(x, y, z, yaw)``, left then right, that fix the world frame
             at the first update (the plan's standing feet); ``None``: the feet's midpoint at the origin.
+        rocking: hold each loaded foot's centre of pressure still in the kinematic velocity, not its sole origin
+            (:mod:`rtgait.estimation.contact_point`: a foot rocking on an edge turns about it); ``False``: the origin.
+        sole: the sole rectangle that bounds the centre of pressure there; ``None``: unbounded.
     """
 
     reads_truth = False
@@ -112,6 +119,8 @@ class KinematicInertialEstimator:
         wrench_cutoff: float = DEFAULT_WRENCH_CUTOFF,
         yaw: YawSource = "feet",
         start_feet: tuple[Pose, Pose] | None = None,
+        rocking: bool = True,
+        sole: SoleRect | None = None,
     ) -> None:
         if not (math.isfinite(omega) and omega > 0.0):
             raise ValueError(f"omega must be > 0 (1/s), got {omega}")
@@ -127,6 +136,8 @@ class KinematicInertialEstimator:
         ):
             raise ValueError(f"start_feet must be two finite poses (x, y, z, yaw), got {start_feet!r}")
         self.kinematics, self.omega, self.gravity, self.yaw = kinematics, float(omega), float(gravity), yaw
+        self.rocking = bool(rocking)
+        self._extents = (None, None) if sole is None else (sole_extents(sole, True), sole_extents(sole, False))
         self.start_feet = start_feet
         if wrenches is None:
             wrenches = "torques" if kinematics.foot_sensors is None else "sensors"
@@ -244,6 +255,17 @@ class KinematicInertialEstimator:
             wz * ox - wx * oz + ovy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy),
             wx * oy - wy * ox + ovz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz),
         ))  # fmt: skip
+        if self.rocking:
+            # A loaded foot that rocks turns about its centre of pressure, not its sole origin (contact_point).
+            feet = []
+            if positive_left > 0.0:
+                feet.append((left_sole.rotation, left_sole.angular_velocity, wrench_left, wl, self._extents[0]))
+            if positive_right > 0.0:
+                feet.append((right_sole.rotation, right_sole.angular_velocity, wrench_right, wr, self._extents[1]))
+            if feet:
+                bx, by, bz = mat_vec(rot, rocking_correction((wx, wy, wz), tuple(feet)))
+                kx, ky, kz = kinematic
+                kinematic = (kx + bx, ky + by, kz + bz)
         fx, fy, fz = mat_vec(rot, specific)
         vix, viy, viz = self.velocity.update(dt, kinematic, (fx, fy, fz - self.gravity))
         # 5. COM and its velocity: c = p + R c_B, c' = v_I + R (w_B x (c_B - p_I) + c_B' - p_I').
