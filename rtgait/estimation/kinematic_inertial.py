@@ -175,6 +175,7 @@ class KinematicInertialEstimator:
         self._loaded = (True, True)  # the first tick's feet anchor the world frame
         self._weight_left = 0.5
         self._yaw_offset = 0.0
+        self._base_velocity = _ZERO3
         self._t: float | None = None
 
     def update(self, readings: SensorReadings | None, truth: GroundTruth | None = None) -> Measurement:
@@ -237,11 +238,14 @@ class KinematicInertialEstimator:
         lx, ly, lz = left_rel = mat_vec(rot, left_sole.position)
         rx, ry, rz = right_rel = mat_vec(rot, right_sole.position)
         px, py, pz = anchors.base_position(wl, left_rel, right_rel)
+        # Without a foot on the ground (a flight, a fall), no anchor holds: both follow their soles, and the base keeps
+        # the yaw the last tick gave it and moves on at its estimated velocity (the inertial estimate alone, below).
+        standing = loaded_left or loaded_right
+        if not standing:
+            bvx, bvy, bvz = self._base_velocity
+            px, py, pz = px + dt * bvx, py + dt * bvy, pz + dt * bvz
         left_pos = (px + lx, py + ly, pz + lz)
         right_pos = (px + rx, py + ry, pz + rz)
-        # Without a foot on the ground (a flight, a fall), no anchor holds: both follow their soles, and the base keeps
-        # the yaw and place the last tick gave it.
-        standing = loaded_left or loaded_right
         anchors.settle(wl, (*left_pos, yaw_of(r_left)), (*right_pos, yaw_of(r_right)), standing)
         # 4. Velocity, worked out in the base frame (B) and turned into the world once: the base origin's with each
         # stance foot held still, u = -sum_i w_i (w_B x p_i + p_i'), moved to the IMU (+ w_B x p_I + p_I'), blended
@@ -267,7 +271,11 @@ class KinematicInertialEstimator:
                 kx, ky, kz = kinematic
                 kinematic = (kx + bx, ky + by, kz + bz)
         fx, fy, fz = mat_vec(rot, specific)
-        vix, viy, viz = self.velocity.update(dt, kinematic, (fx, fy, fz - self.gravity))
+        # In flight no foot is held still: the accelerometer alone carries the velocity.
+        vix, viy, viz = self.velocity.update(dt, kinematic if standing else None, (fx, fy, fz - self.gravity))
+        # The base origin's velocity, v_I - R (w_B x p_I + p_I'), for a flight's next tick.
+        mx, my, mz = mat_vec(rot, (wy * oz - wz * oy + ovx, wz * ox - wx * oz + ovy, wx * oy - wy * ox + ovz))
+        self._base_velocity = (vix - mx, viy - my, viz - mz)
         # 5. COM and its velocity: c = p + R c_B, c' = v_I + R (w_B x (c_B - p_I) + c_B' - p_I').
         (cx, cy, cz), (cvx, cvy, cvz) = kin.com, kin.com_velocity
         dx, dy, dz = cx - ox, cy - oy, cz - oz
