@@ -9,15 +9,15 @@ with the controller on the estimate, one part of which is replaced by the simula
 
 Each impulse of ``--impulses`` (N s, along ``--direction`` degrees in the world) is one walk; the answer is whether it
 survived (no fall, at rest at the end). Survival near a threshold is not monotonic in the impulse, hence a scan rather
-than a bisection. The sensors are the description's (noise x1, seed 0); the estimator is updated from them each tick
-beside the ground-truth estimator, so both see the same instant (a run with sensor latency delays the estimated part
-only).
+than a bisection. Without ``--impulses``, fig8 unpushed, at ``--noise`` times the sensors' noise with ``--latency``
+control periods (default the description's: noise x1, seed 0). The estimator is updated from the sensors each tick
+beside the ground-truth estimator (with a latency, the estimated part is late, the truth's is not).
 
 The MuJoCo loop builds its estimator by name (:func:`rtgait.stack.estimators.make_estimator`); this script swaps in
 the composed one and reads the sensors through the loop's robot, which is why it patches the loop module's names.
 
 Usage: ``python benchmarks/estimate_attribution.py --robot R --part feet|com|none|all [--direction DEG]
-[--impulses 20,30,40]``
+[--impulses 20,30,40] [--noise F] [--latency L]``
 """
 
 from __future__ import annotations
@@ -79,30 +79,54 @@ def main() -> None:
     parser.add_argument("--robot", default="talos", help="built-in robot (default talos)")
     parser.add_argument("--part", choices=PARTS, required=True, help="the part taken from the truth")
     parser.add_argument("--direction", type=float, default=0.0, help="push direction, deg in the world (default 0)")
-    parser.add_argument("--impulses", required=True, help="comma-separated impulses, N s")
+    parser.add_argument("--impulses", help="comma-separated impulses, N s (default: none, the walk unpushed)")
+    parser.add_argument("--noise", type=float, default=1.0, help="sensor noise factor (default 1)")
+    parser.add_argument("--latency", type=int, help="sensor latency, control periods (default the description's)")
     args = parser.parse_args()
-    try:
-        impulses = [float(value) for value in args.impulses.split(",")]
-    except ValueError:
-        parser.error(f"--impulses must be comma-separated numbers, got {args.impulses!r}")
-    if not all(math.isfinite(value) and value > 0.0 for value in impulses):
-        parser.error(f"--impulses must be > 0 N s, got {args.impulses!r}")
+    impulses: list[float | None] = [None]
+    if args.impulses is not None:
+        try:
+            impulses = [float(value) for value in args.impulses.split(",")]
+        except ValueError:
+            parser.error(f"--impulses must be comma-separated numbers, got {args.impulses!r}")
+        if not all(value is not None and math.isfinite(value) and value > 0.0 for value in impulses):
+            parser.error(f"--impulses must be > 0 N s, got {args.impulses!r}")
+    if not (math.isfinite(args.noise) and args.noise >= 0.0) or (args.latency is not None and args.latency < 0):
+        parser.error("--noise must be a factor >= 0 and --latency whole periods >= 0")
 
     import pushes
 
+    from rtgait.core.push import Push
+    from rtgait.io.sim_run import mujoco_messages, simulate
+    from rtgait.robot.model import RobotModel
+    from rtgait.scenario.loading import load_scenario
+    from rtgait.sim.config import SensorSettings
+    from rtgait.sim.loop_options import LoopOptions
+    from rtgait.sim.model import SimConfig, build_sim_model
+
     if args.part in ("feet", "com"):
         install(args.part)
-    pushes._init_worker(None, "truth" if args.part == "all" else "estimated")
-    robot, _, scenario = pushes._setup(args.robot, "fig8")
+    robot, scenario = RobotModel.load(args.robot), load_scenario("fig8")
+    sensors = SensorSettings(noise=args.noise, latency=args.latency)
+    sim = build_sim_model(robot, SimConfig(meshes=False, sensors=sensors))
     start = pushes.push_site(scenario, robot, "single").start
     u = (math.cos(math.radians(args.direction)), math.sin(math.radians(args.direction)))
+    options = LoopOptions(state="truth" if args.part == "all" else "estimated")
     outcomes = []
     for impulse in impulses:
-        force = impulse / pushes.PUSH_DURATION
-        survived = pushes.survives(args.robot, "fig8", "adaptive", (start, force * u[0], force * u[1]))
-        outcomes.append(f"{impulse:g} {'walks' if survived else 'falls'}")
+        push = None
+        if impulse is not None:
+            force = impulse / pushes.PUSH_DURATION
+            push = Push(start, pushes.PUSH_DURATION, (force * u[0], force * u[1], 0.0))
+        with mujoco_messages():
+            result = simulate(scenario, robot, sim=sim, controller="adaptive", push=push, options=options)
+        outcome = "walks" if not result.fell and result.ended_at_rest else "does not end at rest"
+        if result.fell:
+            outcome = f"falls at {result.fall_time:.1f} s"
+        outcomes.append(outcome if impulse is None else f"{impulse:g} N s {outcome}")
         print(outcomes[-1], flush=True)
-    print(f"{args.robot}, {args.direction:g} deg, the {args.part} part from the truth: {', '.join(outcomes)}")
+    print(f"{args.robot}, noise x{args.noise:g}, latency {args.latency}, {args.direction:g} deg, the {args.part} part "
+          f"from the truth: {', '.join(outcomes)}")  # fmt: skip
 
 
 if __name__ == "__main__":
