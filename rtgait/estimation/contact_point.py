@@ -34,35 +34,42 @@ Extents = tuple[float, float, float, float]
 
 def rocking_correction(
     angular_velocity: Vec3,
-    feet: tuple[tuple[tuple[float, ...], Vec3, tuple[float, ...], float, Extents | None], ...],
+    rotation: tuple[float, ...],
+    relative_angular_velocity: Vec3,
+    wrench: tuple[float, ...],
+    share: float,
+    extents: Extents | None,
 ) -> Vec3:
-    """The correction (m/s, base frame) to add to the flat-foot kinematic velocity of the base (module docstring).
+    """One loaded foot's term of the correction (m/s, base frame) to add to the flat-foot kinematic velocity of the
+    base, ``-s_i w_i x (R_i c_i)`` (module docstring); sum it over the loaded feet.
 
     Args:
         angular_velocity: the base's angular velocity ``w`` (rad/s, base frame).
-        feet: each loaded foot's ``(rotation, relative angular velocity, wrench, share, extents)``: the sole's
-            rotation in the base frame (row-major 3x3), its angular velocity relative to the base from the joints
-            (rad/s, base frame), the ground's wrench on it in the sole frame about its origin ``(fx, fy, fz, tx, ty,
-            tz)`` (N, N m), its share ``s_i`` of the odometry, and the sole's rectangle that bounds the centre of
-            pressure (``None``: unbounded). A foot without a positive normal force is held at its origin.
+        rotation: the sole's rotation in the base frame (row-major 3x3).
+        relative_angular_velocity: its angular velocity relative to the base from the joints (rad/s, base frame).
+        wrench: the ground's wrench on it in the sole frame about its origin ``(fx, fy, fz, tx, ty, tz)`` (N, N m).
+        share: its share ``s_i`` of the odometry.
+        extents: the sole's rectangle that bounds the centre of pressure (``None``: unbounded).
+
+    A foot without a positive normal force is held at its origin (no correction).
     """
-    wx, wy, wz = angular_velocity
-    cx = cy = cz = 0.0
-    for r, (ux, uy, uz), wrench, share, extents in feet:
-        fz = wrench[2]
-        if not fz > 0.0 or share == 0.0:
-            continue
-        px, py = -wrench[4] / fz, wrench[3] / fz  # the centre of pressure in the sole frame
-        if extents is not None:
-            x_min, x_max, y_min, y_max = extents
-            px = x_min if px < x_min else x_max if px > x_max else px
-            py = y_min if py < y_min else y_max if py > y_max else py
-        px, py = share * px, share * py
-        dx = r[0] * px + r[1] * py  # s_i R_i c_i, base frame
-        dy = r[3] * px + r[4] * py
-        dz = r[6] * px + r[7] * py
-        fx, fy, fz = wx + ux, wy + uy, wz + uz  # the foot's angular velocity in the world, base frame
-        cx -= fy * dz - fz * dy
-        cy -= fz * dx - fx * dz
-        cz -= fx * dy - fy * dx
-    return (cx, cy, cz)
+    fz = wrench[2]
+    if not fz > 0.0:
+        return (0.0, 0.0, 0.0)
+    px, py = -wrench[4] / fz, wrench[3] / fz  # the centre of pressure in the sole frame
+    if extents is not None:
+        x_min, x_max, y_min, y_max = extents
+        px = x_min if px < x_min else x_max if px > x_max else px
+        py = y_min if py < y_min else y_max if py > y_max else py
+    px, py = share * px, share * py
+    r = rotation
+    dx = r[0] * px + r[1] * py  # s_i R_i c_i, base frame
+    dy = r[3] * px + r[4] * py
+    dz = r[6] * px + r[7] * py
+    ux, uy, uz = relative_angular_velocity
+    fx, fy, fz = (
+        angular_velocity[0] + ux,
+        angular_velocity[1] + uy,
+        angular_velocity[2] + uz,
+    )  # the foot's, in the world
+    return (fz * dy - fy * dz, fx * dz - fz * dx, fy * dx - fx * dy)

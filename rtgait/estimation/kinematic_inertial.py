@@ -175,7 +175,9 @@ class KinematicInertialEstimator:
         self._loaded = (True, True)  # the first tick's feet anchor the world frame
         self._weight_left = 0.5
         self._yaw_offset = 0.0
-        self._base_velocity = _ZERO3
+        self._last_motion: tuple[tuple[float, ...], tuple[float, float, float], tuple[float, float, float]] | None = (
+            None
+        )
         self._t: float | None = None
 
     def update(self, readings: SensorReadings | None, truth: GroundTruth | None = None) -> Measurement:
@@ -241,9 +243,11 @@ class KinematicInertialEstimator:
         # Without a foot on the ground (a flight, a fall), no anchor holds: both follow their soles, and the base keeps
         # the yaw the last tick gave it and moves on at its estimated velocity (the inertial estimate alone, below).
         standing = loaded_left or loaded_right
-        if not standing:
-            bvx, bvy, bvz = self._base_velocity
-            px, py, pz = px + dt * bvx, py + dt * bvy, pz + dt * bvz
+        if not standing and self._last_motion is not None:
+            # The base origin's velocity at the last tick, v_I - R (w_B x p_I + p_I').
+            last_rot, relative, (vx, vy, vz) = self._last_motion
+            mx, my, mz = mat_vec(last_rot, relative)
+            px, py, pz = px + dt * (vx - mx), py + dt * (vy - my), pz + dt * (vz - mz)
         left_pos = (px + lx, py + ly, pz + lz)
         right_pos = (px + rx, py + ry, pz + rz)
         anchors.settle(wl, (*left_pos, yaw_of(r_left)), (*right_pos, yaw_of(r_right)), standing)
@@ -254,28 +258,31 @@ class KinematicInertialEstimator:
         (rx, ry, rz), (rvx, rvy, rvz) = right_sole.position, right_sole.velocity
         (ox, oy, oz), (ovx, ovy, ovz) = imu_frame.position, imu_frame.velocity
         wr = 1.0 - wl
-        kinematic = mat_vec(rot, (
-            wy * oz - wz * oy + ovx - wl * (wy * lz - wz * ly + lvx) - wr * (wy * rz - wz * ry + rvx),
-            wz * ox - wx * oz + ovy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy),
-            wx * oy - wy * ox + ovz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz),
-        ))  # fmt: skip
+        # A loaded foot that rocks turns about its centre of pressure, not its sole origin (contact_point).
+        bx = by = bz = 0.0
         if self.rocking:
-            # A loaded foot that rocks turns about its centre of pressure, not its sole origin (contact_point).
-            feet = []
+            w_base, extents = (wx, wy, wz), self._extents
             if positive_left > 0.0:
-                feet.append((left_sole.rotation, left_sole.angular_velocity, wrench_left, wl, self._extents[0]))
+                bx, by, bz = rocking_correction(
+                    w_base, left_sole.rotation, left_sole.angular_velocity, wrench_left, wl, extents[0]
+                )
             if positive_right > 0.0:
-                feet.append((right_sole.rotation, right_sole.angular_velocity, wrench_right, wr, self._extents[1]))
-            if feet:
-                bx, by, bz = mat_vec(rot, rocking_correction((wx, wy, wz), tuple(feet)))
-                kx, ky, kz = kinematic
-                kinematic = (kx + bx, ky + by, kz + bz)
+                ax, ay, az = rocking_correction(
+                    w_base, right_sole.rotation, right_sole.angular_velocity, wrench_right, wr, extents[1]
+                )
+                bx, by, bz = bx + ax, by + ay, bz + az
+        # The IMU's velocity relative to the base origin, w_B x p_I + p_I' (base frame).
+        sx, sy, sz = wy * oz - wz * oy + ovx, wz * ox - wx * oz + ovy, wx * oy - wy * ox + ovz
+        kinematic = mat_vec(rot, (
+            sx - wl * (wy * lz - wz * ly + lvx) - wr * (wy * rz - wz * ry + rvx) + bx,
+            sy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy) + by,
+            sz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz) + bz,
+        ))  # fmt: skip
         fx, fy, fz = mat_vec(rot, specific)
         # In flight no foot is held still: the accelerometer alone carries the velocity.
-        vix, viy, viz = self.velocity.update(dt, kinematic if standing else None, (fx, fy, fz - self.gravity))
-        # The base origin's velocity, v_I - R (w_B x p_I + p_I'), for a flight's next tick.
-        mx, my, mz = mat_vec(rot, (wy * oz - wz * oy + ovx, wz * ox - wx * oz + ovy, wx * oy - wy * ox + ovz))
-        self._base_velocity = (vix - mx, viy - my, viz - mz)
+        velocity = self.velocity.update(dt, kinematic if standing else None, (fx, fy, fz - self.gravity))
+        vix, viy, viz = velocity
+        self._last_motion = (rot, (sx, sy, sz), velocity)  # for a flight's next tick (step 3)
         # 5. COM and its velocity: c = p + R c_B, c' = v_I + R (w_B x (c_B - p_I) + c_B' - p_I').
         (cx, cy, cz), (cvx, cvy, cvz) = kin.com, kin.com_velocity
         dx, dy, dz = cx - ox, cy - oy, cz - oz

@@ -41,8 +41,13 @@ def flat_foot_odometry(p: np.ndarray, p_dot: np.ndarray, w: np.ndarray) -> np.nd
     return -np.cross(w, p) - p_dot
 
 
-def foot(r: np.ndarray, u: np.ndarray, wrench: tuple[float, ...], share: float = 1.0, extents=SOLE):
-    return (tuple(r.ravel()), tuple(u), wrench, share, extents)
+def correction(w: np.ndarray, *feet: tuple) -> np.ndarray:
+    """The sum of the feet's terms, each ``(rotation, relative angular velocity, wrench[, share[, extents]])``."""
+    total = np.zeros(3)
+    for r, u, wrench, *rest in feet:
+        share, extents = (rest + [1.0, SOLE][len(rest) :])[:2]
+        total += rocking_correction(tuple(w), tuple(r.ravel()), tuple(u), wrench, share, extents)
+    return total
 
 
 @pytest.mark.parametrize("contact", [(0.13, -0.05), (0.13, 0.07), (-0.1, 0.0), (0.02, 0.03)])
@@ -50,7 +55,7 @@ def test_a_foot_rocking_on_a_corner_gives_the_base_its_velocity(contact):
     v, w = RNG.normal(0.0, 0.3, 3), RNG.normal(0.0, 0.5, 3)
     p, r, p_dot, u, wrench = rocking_foot(v, w, contact)
     flat = flat_foot_odometry(p, p_dot, w)
-    corrected = flat + np.array(rocking_correction(tuple(w), (foot(r, u, wrench),)))
+    corrected = flat + correction(w, (r, u, wrench))
     np.testing.assert_allclose(corrected, v, atol=1e-12)
     # The origin-held odometry errs by the foot's turn about its contact, w_foot x (R c).
     arm = r @ np.array([contact[0], contact[1], 0.0])
@@ -64,8 +69,8 @@ def test_two_feet_by_their_shares():
     right = rocking_foot(v, w, (-0.1, -0.05), fz=100.0)
     shares = (0.75, 0.25)
     flat = sum(s * flat_foot_odometry(f[0], f[2], w) for s, f in zip(shares, (left, right), strict=True))
-    feet = tuple(foot(f[1], f[3], f[4], s) for s, f in zip(shares, (left, right), strict=True))
-    np.testing.assert_allclose(flat + np.array(rocking_correction(tuple(w), feet)), v, atol=1e-12)
+    feet = [(f[1], f[3], f[4], s) for s, f in zip(shares, (left, right), strict=True)]
+    np.testing.assert_allclose(flat + correction(w, *feet), v, atol=1e-12)
 
 
 def test_a_foot_flat_and_still_in_the_world_is_not_corrected():
@@ -73,7 +78,7 @@ def test_a_foot_flat_and_still_in_the_world_is_not_corrected():
     w = RNG.normal(0.0, 0.5, 3)
     r = rotation(RNG.normal(size=3), 0.05)
     wrench = (0.0, 0.0, 400.0, 0.05 * 400.0, -0.12 * 400.0, 0.0)  # its centre of pressure near the toe
-    assert rocking_correction(tuple(w), (foot(r, -w, wrench),)) == pytest.approx((0.0, 0.0, 0.0), abs=1e-15)
+    np.testing.assert_allclose(correction(w, (r, -w, wrench)), np.zeros(3), atol=1e-15)
 
 
 def test_a_centre_of_pressure_off_the_sole_is_held_on_its_edge():
@@ -83,14 +88,14 @@ def test_a_centre_of_pressure_off_the_sole_is_held_on_its_edge():
     p, r, p_dot, u, _ = rocking_foot(v, w, (SOLE[1], SOLE[2]))
     fz = 60.0
     wrong = (0.0, 0.0, fz, SOLE[2] * fz, -(SOLE[1] + 0.3) * fz, 0.0)
-    corrected = flat_foot_odometry(p, p_dot, w) + np.array(rocking_correction(tuple(w), (foot(r, u, wrong),)))
+    corrected = flat_foot_odometry(p, p_dot, w) + correction(w, (r, u, wrong))
     np.testing.assert_allclose(corrected, v, atol=1e-12)
-    unbounded = np.array(rocking_correction(tuple(w), (foot(r, u, wrong, extents=None),)))
+    unbounded = correction(w, (r, u, wrong, 1.0, None))
     assert np.linalg.norm(flat_foot_odometry(p, p_dot, w) + unbounded - v) > 1e-2
 
 
 def test_a_foot_without_a_positive_normal_force_is_held_at_its_origin():
-    w = (0.1, -0.2, 0.3)
+    w = np.array([0.1, -0.2, 0.3])
     r = rotation(np.array([1.0, 0.0, 0.0]), 0.1)
     for fz in (0.0, -5.0):
-        assert rocking_correction(w, (foot(r, np.ones(3), (0.0, 0.0, fz, 1.0, 2.0, 0.0)),)) == (0.0, 0.0, 0.0)
+        assert correction(w, (r, np.ones(3), (0.0, 0.0, fz, 1.0, 2.0, 0.0))).tolist() == [0.0, 0.0, 0.0]
