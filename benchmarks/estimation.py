@@ -23,10 +23,17 @@ or with ``--json`` one JSON document.
 ``--shadow`` measures the estimator alone instead, as a tuning bench: fig8 walked on the simulator's truth (the same
 walk for every estimator setting) with the estimator updated in the shadow from the sensors each tick, with
 ``--yaw feet|imu`` and ``--velocity-cutoff HZ``; the same errors, at ``--noise`` (its first value) and ``--seed``.
+With ``--push IMPULSE`` (N s) the walk on the truth is pushed as ``benchmarks/pushes.py --phase single`` pushes it
+(0.1 s on the base at mid single support of the middle step, along ``--push-direction`` degrees in the world,
+default 0: forward in fig8's middle step), and the report adds the errors over the push window, from the push's start
+to :data:`PUSH_WINDOW` after: the DCM's and the COM velocity's RMS and largest error, the DCM estimate's delay (the
+shift of the true DCM that fits the estimate best, :func:`best_delay`) and the ticks at which the estimate has a foot
+loaded that the truth has in the air (false contacts, which the controller may take for a landing).
 
 Usage: ``python benchmarks/estimation.py [--robot R ...] [--velocity-walks] [--quick] [--walk-time S]
 [--noise F ...] [--latency L ...] [--no-degradation] [--workers N] [--json]`` or ``python benchmarks/estimation.py
---shadow [--robot R] [--scenario fig8] [--noise F] [--seed N] [--yaw feet|imu] [--velocity-cutoff HZ]``
+--shadow [--robot R] [--scenario fig8] [--noise F] [--seed N] [--yaw feet|imu] [--velocity-cutoff HZ]
+[--push N_S [--push-direction DEG]]``
 """
 
 from __future__ import annotations
@@ -38,7 +45,10 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/sim.py, for its walks
 
@@ -46,6 +56,11 @@ NOISE = (0.0, 1.0, 2.0, 4.0)
 """The sensor noise factors of the degradation table."""
 LATENCY = (0, 1, 2, 3)
 """Its latencies (control periods)."""
+PUSH_WINDOW = 0.6
+"""The push window of ``--shadow --push`` (s from the push's start): the push (0.1 s), the swing it cuts short and the
+landing after it."""
+MAX_DELAY = 0.05
+"""The largest delay :func:`best_delay` looks for (s)."""
 
 
 def _job(robot: str, walk: str, seconds: float, noise: float = 1.0, latency: int | None = None) -> dict[str, Any]:
@@ -148,12 +163,55 @@ def print_tables(report: dict[str, Any]) -> None:
 
 
 # ----- the estimator alone, in the shadow of a walk on the truth ----------------------------------------------------
-def shadow(robot_name: str, scenario_name: str, noise: float, seed: int, **settings: object) -> dict[str, Any]:
-    """The errors of the estimator with ``settings`` (:class:`~rtgait.estimation.kinematic_inertial.
-    KinematicInertialEstimator`'s) updated each tick from the sensors of a walk driven on the truth (module
-    docstring), against the ground-truth estimator's state of the same instant."""
+def best_delay(times: np.ndarray, estimate: np.ndarray, truth: np.ndarray, window: np.ndarray) -> float:
+    """The delay ``d`` (s, ``0 <= d <= MAX_DELAY``, a whole number of ticks) that minimises the RMS of
+    ``estimate(t) - truth(t - d)`` over the ticks of ``window`` (rows of ``(k, n)`` arrays at the ticks ``times``):
+    how late the estimate follows the truth."""
     import numpy as np
 
+    dt = float(np.median(np.diff(times)))
+    rows = np.nonzero(window)[0]
+    best, best_rms = 0.0, math.inf
+    for lag in range(round(MAX_DELAY / dt) + 1):
+        if rows[0] - lag < 0:
+            break
+        rms = float(np.sqrt(np.mean(np.sum((estimate[rows] - truth[rows - lag]) ** 2, axis=1))))
+        if rms < best_rms:
+            best, best_rms = lag * dt, rms
+    return best
+
+
+def push_errors(times: np.ndarray, estimate: Any, truth: Any, start: float) -> dict[str, Any]:
+    """The errors over the push window from ``start`` (s) of the :class:`~rtgait.sim.estimation_errors.StateTrack`
+    ``estimate`` against ``truth`` (whose ``loaded`` is set): DCM and COM velocity RMS and largest (m, m/s), the DCM's
+    delay (s) and the ticks of false contacts."""
+    import numpy as np
+
+    window = (times >= start) & (times <= start + PUSH_WINDOW)
+    dcm = np.linalg.norm(estimate.dcm[window] - truth.dcm[window], axis=1)
+    velocity = np.linalg.norm(estimate.com_velocity[window, :2] - truth.com_velocity[window, :2], axis=1)
+    false = estimate.loaded[window] & ~truth.loaded[window]
+    return {
+        "push_dcm_rms": float(np.sqrt(np.mean(dcm**2))), "push_dcm_max": float(dcm.max()),
+        "push_com_velocity_rms": float(np.sqrt(np.mean(velocity**2))), "push_com_velocity_max": float(velocity.max()),
+        "push_dcm_delay": best_delay(times, estimate.dcm, truth.dcm, window),
+        "push_false_contact_ticks": int(false.any(axis=1).sum()),
+        "push_first_false_contact": (float(times[window][false.any(axis=1)][0] - start) if false.any() else None),
+    }  # fmt: skip
+
+
+def shadow(
+    robot_name: str, scenario_name: str, noise: float, seed: int, push: tuple[float, float] | None = None,
+    **settings: object,
+) -> dict[str, Any]:  # fmt: skip
+    """The errors of the estimator with ``settings`` (:class:`~rtgait.estimation.kinematic_inertial.
+    KinematicInertialEstimator`'s) updated each tick from the sensors of a walk driven on the truth (module
+    docstring), against the ground-truth estimator's state of the same instant; ``push``: ``(impulse, direction)``
+    (N s, deg) of a push at mid single support of the middle step, and the push window's errors."""
+    import numpy as np
+    from pushes import PUSH_DURATION, push_site
+
+    from rtgait.core.push import Push
     from rtgait.estimation.ground_truth import GroundTruthEstimator
     from rtgait.io.sim_run import _controller, robot_and_scenario_options
     from rtgait.robot.model import RobotModel
@@ -172,7 +230,14 @@ def shadow(robot_name: str, scenario_name: str, noise: float, seed: int, **setti
     walk = robot_scenario(scenario, robot)
     level, changes, stop_after = _controller(walk, None, "adaptive", sim, robot_and_scenario_options(robot, scenario))
     # On the truth: the loop reads no sensor, so each tick's readings are read here once.
-    loop = ClosedLoop(sim, level, LoopOptions(changes=changes, stop_after_steps=stop_after, state="truth"))
+    pushes: tuple[Push, ...] = ()
+    if push is not None:
+        start = push_site(scenario, robot, "single").start
+        force = push[0] / PUSH_DURATION
+        direction = math.radians(push[1])
+        pushes = (Push(start, PUSH_DURATION, (force * math.cos(direction), force * math.sin(direction), 0.0)),)
+    options = LoopOptions(changes=changes, stop_after_steps=stop_after, state="truth", pushes=pushes)
+    loop = ClosedLoop(sim, level, options)
     _, left, right = start_pose(level.planner)
     estimator = kinematic_inertial_estimator(
         robot, level.planner.w, start_feet=(tuple(left), tuple(right)), **settings
@@ -201,9 +266,14 @@ def shadow(robot_name: str, scenario_name: str, noise: float, seed: int, **setti
             zmp=np.array([m.zmp for m in states]),
         )
 
-    errors = estimation_errors(np.array(times), track(0), track(1), weight)
-    return {"robot": robot_name, "scenario": scenario_name, "noise": noise, "seed": seed, **settings,
-            "fell": loop.fell, **errors.summary(), "landing_delays": list(errors.landing_delays)}  # fmt: skip
+    at = np.array(times)
+    errors = estimation_errors(at, track(0), track(1), weight)
+    report = {"robot": robot_name, "scenario": scenario_name, "noise": noise, "seed": seed, **settings,
+              "fell": loop.fell, **errors.summary(), "landing_delays": list(errors.landing_delays)}  # fmt: skip
+    if push is not None:
+        report |= {"push_impulse": push[0], "push_direction": push[1], "push_start": pushes[0].start,
+                   **push_errors(at, track(0), track(1), pushes[0].start)}  # fmt: skip
+    return report
 
 
 def main() -> None:
@@ -222,6 +292,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0, help="--shadow: the sensors' seed (default 0)")
     parser.add_argument("--yaw", choices=("feet", "imu"), default="feet", help="--shadow: the base's yaw source")
     parser.add_argument("--velocity-cutoff", type=float, default=3.5, help="--shadow: velocity filter cut-off, Hz")
+    parser.add_argument("--no-rocking", action="store_true", help="--shadow: hold the sole origins still, not the CoPs")
+    parser.add_argument("--push", type=float, help="--shadow: a push at mid single support of the middle step, N s")
+    parser.add_argument("--push-direction", type=float, default=0.0, help="--shadow: its direction, deg (default 0)")
     args = parser.parse_args()
     args.robots = args.robots or ["talos", "g1"]
     args.noise = args.noise or list(NOISE)
@@ -229,8 +302,11 @@ def main() -> None:
     if any(not (math.isfinite(n) and n >= 0.0) for n in args.noise) or any(n < 0 for n in args.latency):
         parser.error("--noise must be finite factors >= 0 and --latency whole periods >= 0")
     if args.shadow:
-        report = shadow(args.robots[0], args.scenario, args.noise[0], args.seed, yaw=args.yaw,
-                        velocity_cutoff=args.velocity_cutoff)  # fmt: skip
+        if args.push is not None and not (math.isfinite(args.push) and args.push > 0.0):
+            parser.error(f"--push must be an impulse > 0 N s, got {args.push}")
+        push = None if args.push is None else (args.push, args.push_direction)
+        report = shadow(args.robots[0], args.scenario, args.noise[0], args.seed, push, yaw=args.yaw,
+                        velocity_cutoff=args.velocity_cutoff, rocking=not args.no_rocking)  # fmt: skip
         print(json.dumps(report))
         return
     began = time.perf_counter()

@@ -27,7 +27,8 @@ Each tick, with the base frame's kinematics (:class:`~rtgait.estimation.kinemati
 4. **Velocity.** With ``w`` the gyro's angular velocity in the world, a foot ``i`` held still gives the base
    origin's velocity ``-(w x R p_i) - R p_i'`` (``p_i'`` from the joint velocities); their force-weighted mean, moved
    to the IMU (``+ w x R p_I + R p_I'``), is blended with the IMU's acceleration ``R_WI f + g`` by the complementary
-   filter of :mod:`rtgait.estimation.velocity_filter` (3.5 Hz).
+   filter of :mod:`rtgait.estimation.velocity_filter` (3.5 Hz). A loaded foot that turns in the world rocks about its
+   centre of pressure, not its origin: that point is held still instead (:mod:`rtgait.estimation.contact_point`).
 5. **COM and DCM.** ``c = p + R c_B``, ``c' = v_B + w x R c_B + R c_B'`` (``c_B``, ``c_B'`` from the joints),
    ``xi = c + c'/w0`` with the planner's ``w0``.
 6. **Feet states, ZMP, landings** from the soles' estimated poses and wrenches (:mod:`rtgait.estimation.feet`,
@@ -41,8 +42,11 @@ from __future__ import annotations
 import math
 from typing import Literal
 
+from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.geometry.hull import sole_extents
 from rtgait.estimation.anchors import FootAnchors, Pose
 from rtgait.estimation.attitude_filter import DEFAULT_ATTITUDE_CUTOFF, AttitudeFilter
+from rtgait.estimation.contact_point import rocking_correction
 from rtgait.estimation.feet import FeetFromWrenches
 from rtgait.estimation.kinematics import RobotKinematics
 from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
@@ -92,6 +96,9 @@ class KinematicInertialEstimator:
         yaw: where the base's yaw comes from: ``"feet"`` (the feet in contact) or ``"imu"``.
         start_feet: the standing soles' world poses ``(x, y, z, yaw)``, left then right, that fix the world frame
             at the first update (the plan's standing feet); ``None``: the feet's midpoint at the origin.
+        rocking: hold each loaded foot's centre of pressure still in the kinematic velocity, not its sole origin
+            (:mod:`rtgait.estimation.contact_point`: a foot rocking on an edge turns about it); ``False``: the origin.
+        sole: the sole rectangle that bounds the centre of pressure there; ``None``: unbounded.
     """
 
     reads_truth = False
@@ -113,6 +120,8 @@ class KinematicInertialEstimator:
         wrench_cutoff: float = DEFAULT_WRENCH_CUTOFF,
         yaw: YawSource = "feet",
         start_feet: tuple[Pose, Pose] | None = None,
+        rocking: bool = True,
+        sole: SoleRect | None = None,
     ) -> None:
         if not (math.isfinite(omega) and omega > 0.0):
             raise ValueError(f"omega must be > 0 (1/s), got {omega}")
@@ -128,6 +137,8 @@ class KinematicInertialEstimator:
         ):
             raise ValueError(f"start_feet must be two finite poses (x, y, z, yaw), got {start_feet!r}")
         self.kinematics, self.omega, self.gravity, self.yaw = kinematics, float(omega), float(gravity), yaw
+        self.rocking = bool(rocking)
+        self._extents = (None, None) if sole is None else (sole_extents(sole, True), sole_extents(sole, False))
         self.start_feet = start_feet
         if wrenches is None:
             wrenches = "torques" if kinematics.foot_sensors is None else "sensors"
@@ -165,6 +176,9 @@ class KinematicInertialEstimator:
         self._loaded = (True, True)  # the first tick's feet anchor the world frame
         self._weight_left = 0.5
         self._yaw_offset = 0.0
+        self._last_motion: tuple[tuple[float, ...], tuple[float, float, float], tuple[float, float, float]] | None = (
+            None
+        )
         self._t: float | None = None
 
     def update(self, readings: SensorReadings | None, truth: GroundTruth | None = None) -> Measurement:
@@ -227,11 +241,16 @@ class KinematicInertialEstimator:
         lx, ly, lz = left_rel = mat_vec(rot, left_sole.position)
         rx, ry, rz = right_rel = mat_vec(rot, right_sole.position)
         px, py, pz = anchors.base_position(wl, left_rel, right_rel)
+        # Without a foot on the ground (a flight, a fall), no anchor holds: both follow their soles, and the base keeps
+        # the yaw the last tick gave it and moves on at its estimated velocity (the inertial estimate alone, below).
+        standing = loaded_left or loaded_right
+        if not standing and self._last_motion is not None:
+            # The base origin's velocity at the last tick, v_I - R (w_B x p_I + p_I').
+            last_rot, relative, (vx, vy, vz) = self._last_motion
+            mx, my, mz = mat_vec(last_rot, relative)
+            px, py, pz = px + dt * (vx - mx), py + dt * (vy - my), pz + dt * (vz - mz)
         left_pos = (px + lx, py + ly, pz + lz)
         right_pos = (px + rx, py + ry, pz + rz)
-        # Without a foot on the ground (a flight, a fall), no anchor holds: both follow their soles, and the base keeps
-        # the yaw and place the last tick gave it.
-        standing = loaded_left or loaded_right
         anchors.settle(wl, (*left_pos, yaw_of(r_left)), (*right_pos, yaw_of(r_right)), standing)
         # 4. Velocity, worked out in the base frame (B) and turned into the world once: the base origin's with each
         # stance foot held still, u = -sum_i w_i (w_B x p_i + p_i'), moved to the IMU (+ w_B x p_I + p_I'), blended
@@ -240,13 +259,31 @@ class KinematicInertialEstimator:
         (rx, ry, rz), (rvx, rvy, rvz) = right_sole.position, right_sole.velocity
         (ox, oy, oz), (ovx, ovy, ovz) = imu_frame.position, imu_frame.velocity
         wr = 1.0 - wl
+        # A loaded foot that rocks turns about its centre of pressure, not its sole origin (contact_point).
+        bx = by = bz = 0.0
+        if self.rocking:
+            w_base, extents = (wx, wy, wz), self._extents
+            if positive_left > 0.0:
+                bx, by, bz = rocking_correction(
+                    w_base, left_sole.rotation, left_sole.angular_velocity, wrench_left, wl, extents[0]
+                )
+            if positive_right > 0.0:
+                ax, ay, az = rocking_correction(
+                    w_base, right_sole.rotation, right_sole.angular_velocity, wrench_right, wr, extents[1]
+                )
+                bx, by, bz = bx + ax, by + ay, bz + az
+        # The IMU's velocity relative to the base origin, w_B x p_I + p_I' (base frame).
+        sx, sy, sz = wy * oz - wz * oy + ovx, wz * ox - wx * oz + ovy, wx * oy - wy * ox + ovz
         kinematic = mat_vec(rot, (
-            wy * oz - wz * oy + ovx - wl * (wy * lz - wz * ly + lvx) - wr * (wy * rz - wz * ry + rvx),
-            wz * ox - wx * oz + ovy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy),
-            wx * oy - wy * ox + ovz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz),
+            sx - wl * (wy * lz - wz * ly + lvx) - wr * (wy * rz - wz * ry + rvx) + bx,
+            sy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy) + by,
+            sz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz) + bz,
         ))  # fmt: skip
         fx, fy, fz = mat_vec(rot, specific)
-        vix, viy, viz = self.velocity.update(dt, kinematic, (fx, fy, fz - self.gravity))
+        # In flight no foot is held still: the accelerometer alone carries the velocity.
+        velocity = self.velocity.update(dt, kinematic if standing else None, (fx, fy, fz - self.gravity))
+        vix, viy, viz = velocity
+        self._last_motion = (rot, (sx, sy, sz), velocity)  # for a flight's next tick (step 3)
         # 5. COM and its velocity: c = p + R c_B, c' = v_I + R (w_B x (c_B - p_I) + c_B' - p_I').
         (cx, cy, cz), (cvx, cvy, cvz) = kin.com, kin.com_velocity
         dx, dy, dz = cx - ox, cy - oy, cz - oz

@@ -18,6 +18,10 @@ encoders' differentiation noise; the integrated acceleration drifts with the acc
 gravity that an orientation error leaks in (``b tau`` of velocity error for a bias ``b``: 4.5 mm/s for 0.1 m/s^2 at
 3.5 Hz). auto_stabilizer settled on 3.5 Hz on its robots (4 Hz oscillated after impacts, 3 Hz lagged): the default
 :data:`DEFAULT_VELOCITY_CUTOFF`.
+
+Without a kinematic velocity (no foot on the ground: a flight after a push, a fall) the filter integrates the
+accelerometer alone, ``v^_k = v^_k-1 + dt a_k``: the legs then measure nothing, and their velocity, held to a foot
+in the air, would pull the estimate toward the swinging feet's motion.
 """
 
 from __future__ import annotations
@@ -51,16 +55,18 @@ class ComplementaryVelocity:
         self._alpha = 0.0
 
     def update(
-        self, dt: float, velocity: tuple[float, float, float], acceleration: tuple[float, float, float]
+        self, dt: float, velocity: tuple[float, float, float] | None, acceleration: tuple[float, float, float]
     ) -> tuple[float, float, float]:
-        """The filtered velocity (m/s) after ``dt`` (s) from the kinematic ``velocity`` (m/s) and the mean
-        ``acceleration`` (m/s^2, gravity removed) over that period; ``dt <= 0`` (a repeated reading) keeps the
-        state."""
+        """The filtered velocity (m/s) after ``dt`` (s) from the kinematic ``velocity`` (m/s; ``None``: none, the
+        accelerometer alone) and the mean ``acceleration`` (m/s^2, gravity removed) over that period; ``dt <= 0`` (a
+        repeated reading) keeps the state."""
         state = self._state
         if state is None:
-            out = velocity
+            out = (0.0, 0.0, 0.0) if velocity is None else velocity
         elif dt <= 0.0:
             return state
+        elif velocity is None:
+            out = (state[0] + dt * acceleration[0], state[1] + dt * acceleration[1], state[2] + dt * acceleration[2])
         else:
             if dt != self._dt:  # alpha for this period, recomputed only when the period changes
                 self._dt, self._alpha = dt, (math.exp(-dt / self.tau) if self.tau > 0.0 else 0.0)

@@ -49,7 +49,7 @@ def kinematic_inertial_estimator(
         raise ValueError(f"{robot.name} has no IMU in its [sensors]: the kinematic-inertial estimator needs one")
     feet = None if spec.feet is None else (spec.feet.left, spec.feet.right)
     kinematics = PinocchioKinematics(robot, spec.imu.frame, feet)
-    settings = {"gravity": gravity, "start_feet": start_feet, **options}
+    settings = {"gravity": gravity, "start_feet": start_feet, "sole": robot.description.sole, **options}
     return KinematicInertialEstimator(kinematics, omega, **settings)  # type: ignore[arg-type]
 
 

@@ -59,6 +59,41 @@ def test_the_velocity_filter_keeps_the_kinematics_low_frequencies():
     assert out[0] == pytest.approx(1.0 - math.exp(-1.0), abs=0.01)
 
 
+def test_the_velocity_filter_has_noise_and_bias_as_its_cut_off_says_and_no_lag():
+    # A plant whose velocity swings at 1.5 Hz (a walk's sway, steps and a push's rise): the legs' velocity with white
+    # noise, the accelerometer's mean acceleration with white noise of density n and a bias b (G1's sensors). The
+    # estimate errs by the low-passed leg noise, sigma sqrt(dt / 2 tau), the high-passed integrated accelerometer
+    # noise, n sqrt(tau / 2), and b tau, and it is not late.
+    rng = np.random.default_rng(7)
+    dt, cutoff, sigma, density, bias = 0.002, 3.5, 0.025, 1.2e-3, 0.05
+    tau = 1.0 / (2.0 * math.pi * cutoff)
+    t = np.arange(0.0, 20.0, dt)
+    truth = 0.3 * np.sin(2.0 * math.pi * 1.5 * t) + 0.1 * t
+    legs = truth + rng.normal(0.0, sigma, t.size)
+    accelerometer = np.diff(truth, prepend=truth[0]) / dt + bias + rng.normal(0.0, density / math.sqrt(dt), t.size)
+    f = ComplementaryVelocity(cutoff)
+    estimate = np.array([f.update(dt if k else 0.0, (legs[k], 0.0, 0.0), (accelerometer[k], 0.0, 0.0))[0]
+                         for k in range(t.size)])  # fmt: skip
+    error = (estimate - truth)[t > 5.0 * tau]
+    noise = math.hypot(sigma * math.sqrt(dt / (2.0 * tau)), density * math.sqrt(tau / 2.0))
+    assert abs(float(np.mean(error)) - bias * tau) < 0.2 * bias * tau
+    assert float(np.std(error)) == pytest.approx(noise, rel=0.1)
+    # The shift of the truth that fits the estimate best: none (a 3.5 Hz low-pass alone would be 45 ms late).
+    late = [float(np.mean((estimate[20:] - truth[20 - lag : t.size - lag]) ** 2)) for lag in range(20)]
+    assert int(np.argmin(late)) == 0
+
+
+def test_the_velocity_filter_integrates_the_accelerometer_alone_without_legs():
+    # In flight the legs measure nothing: the estimate is the last one plus the integrated acceleration, exactly.
+    f = ComplementaryVelocity(3.5)
+    f.update(0.0, (0.5, -0.2, 0.1), (0.0, 0.0, 0.0))
+    for _ in range(50):
+        out = f.update(DT, None, (1.0, 2.0, -9.81))
+    assert out == pytest.approx((0.5 + 50 * DT, -0.2 + 100 * DT, 0.1 - 9.81 * 50 * DT), abs=1e-12)
+    # It takes the legs' velocity up again where they have one.
+    assert f.update(DT, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))[0] < out[0]
+
+
 def test_the_attitude_filter_tracks_a_turn_the_gyro_measures():
     f = AttitudeFilter()
     axis, rate = np.array([0.6, 0.0, 0.8]), 1.5  # rad/s, about a fixed body axis

@@ -300,3 +300,38 @@ print(round(m.com[2], 6))
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
     assert float(result.stdout) == pytest.approx(0.85)
+
+
+def test_a_robot_in_flight_moves_on_as_its_accelerometer_says():
+    # The robot leaves the ground (a hop after a push) and flies for 0.1 s with its joints still, pushed sideways as
+    # it falls: nothing anchors it, the accelerometer alone carries it.
+    robot = RigidRobot(FEET)
+    e = estimator(robot)
+    r, zero = rot(0.0, 0.0, 0.2), np.zeros(3)
+    p0, v0 = np.array([0.1, 0.0, 0.75]), np.array([0.3, -0.2, 0.5])
+    a = np.array([1.0, 2.0, -G])  # the push's acceleration and gravity
+    # Standing, the base moves at v0 over the feet until the take-off at 0.1 s, from p0.
+    for k in range(101):
+        t = k * DT
+        e.update(robot.readings(t, p0 + v0 * (t - 0.1), r, v0, zero, zero, (300.0, 288.6)))
+    robot.place(p0, r, zero, zero)
+    standing = robot.state  # the legs as they were at the take-off, still relative to the base from now on
+    assert standing is not None
+    still = [FrameMotion(sole.position, sole.rotation, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)) for sole in standing[2:4]]
+    flying = standing._replace(left_sole=still[0], right_sole=still[1])
+    specific = r.T @ (a + np.array([0.0, 0.0, G]))
+    for k in range(1, 101):
+        t = 0.1 + k * DT
+        v = v0 + a * k * DT  # the truth
+        imu = ImuReading(quat(r), (0.0, 0.0, 0.0), tuple(specific))
+        robot.state = flying
+        zeros = np.zeros(12)
+        no_load = Wrench((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+        m = e.update(SensorReadings(t, zeros, zeros, None, imu, no_load, no_load))
+    p = p0 + v0 * 0.1 + 0.5 * a * 0.1**2
+    # The tick at which the feet are seen to leave still blends in the legs' (zero) velocity: a fraction dt / tau of
+    # the velocity, about 2 %, and what that costs the position over the flight.
+    tau = 1.0 / (2.0 * math.pi * 3.5)
+    np.testing.assert_allclose(m.com_vel, v, atol=2.0 * DT / tau * np.linalg.norm(v0))
+    np.testing.assert_allclose(m.com, p + r @ COM_IN_BASE, atol=2.0 * DT / tau * np.linalg.norm(v0) * 0.1)
+    assert not m.left.loaded and not m.right.loaded
