@@ -55,6 +55,7 @@ if TYPE_CHECKING:
     from rtgait.control.settings import ControlTargets
     from rtgait.core.geometry.footsteps import SoleRect
     from rtgait.estimation.state import Measurement
+    from rtgait.interface.body_kinematics import BodyKinematics
     from rtgait.interface.task_targets import IKTargets
     from rtgait.robot.contact_wrenches import WrenchDistribution
     from rtgait.robot.model import RobotModel
@@ -118,14 +119,15 @@ class FeedForward:
         targets: IKTargets,
         out: ControlTargets | None,
         shift: tuple[float, float] | None = None,
-        sensed: tuple[np.ndarray, np.ndarray, np.ndarray, Measurement] | None = None,
+        sensed: tuple[np.ndarray, np.ndarray, np.ndarray, Measurement, BodyKinematics | None] | None = None,
     ) -> np.ndarray:
         """The joints' feed-forward torques (N m, in joint order) for the IK's configuration ``q``, the IK's
         ``targets`` (their feet are the split's) and the controller's output (``None``: no controller; then
         ``shift`` (m), when given, moves the motion's ZMP as the controller's ``p_cmd - p_ref`` does, e.g. the start
         transition's law, :mod:`rtgait.sim.start_balance`). ``sensed``: the commanded joints (rad), the encoders'
         positions (rad) and velocities (rad/s) and the tick's estimate, with which a ``tracking`` feed-forward
-        computes the torques at the sensed state (module docstring)."""
+        computes the torques at the sensed state (module docstring), and the estimator's kinematics of those encoder
+        readings (``None``: computed again, :mod:`rtgait.stack.measured_motion`)."""
         v, a = self.rates.update(q)
         joint_velocities = v[6:]  # the IK motion's, for the friction's compensation (before the sensed state's)
         dynamics = self.dynamics
