@@ -47,9 +47,11 @@ def _stats(micro: np.ndarray) -> dict[str, float]:
     return {"median": float(np.median(micro)), "p99": float(np.percentile(micro, 99))} if len(micro) else {}
 
 
-def _sensed(robot: RobotModel, q: np.ndarray, support: str) -> Measurement:
-    """An estimate whose feet are the IK's soles at ``q``, those of ``support`` loaded."""
-    model, data = robot.model, robot.model.createData()
+def _sensed(robot: RobotModel, q: np.ndarray, support: str, data: pin.Data | None = None) -> Measurement:
+    """An estimate whose feet are the IK's soles at ``q``, those of ``support`` loaded (``data``: the model's data to
+    use, default a new one)."""
+    model = robot.model
+    data = model.createData() if data is None else data
     pin.framesForwardKinematics(model, data, q)
     feet = []
     for side, frame in (("left", robot.left_sole_id), ("right", robot.right_sole_id)):
@@ -71,6 +73,7 @@ def run(robot_name: str, dt: float, sensed: bool = False, shared: bool = True) -
     ik = WholeBodyIK(robot, max_iterations=1, tolerance=0.0)
     tracking = MeasuredMotion(robot) if sensed else None
     kinematics = PinocchioKinematics(robot) if sensed and shared else None  # the estimator's, untimed
+    scratch = robot.model.createData()
     feedforward = FeedForward(robot, scenario.sole, dt, tracking=tracking)
     first = IKTargets(
         values[0, SampleColumns.cog], values[0, SampleColumns.left_foot], values[0, SampleColumns.right_foot]
@@ -98,7 +101,7 @@ def run(robot_name: str, dt: float, sensed: bool = False, shared: bool = True) -
         if tracking is not None:  # the encoders read the IK's joints at its last rates
             joints, velocities = q[7:], feedforward.rates.velocity[6:].copy()
             body = None if kinematics is None else kinematics.update(joints, velocities)
-            state = (joints, joints, velocities, _sensed(robot, q, str(walk.support[k])), body)
+            state = (joints, joints, velocities, _sensed(robot, q, str(walk.support[k]), scratch), body)
         start = clock()
         feedforward.torques(q, targets, out, None, state)
         ff_time[k - 1] = clock() - start
