@@ -52,6 +52,8 @@ class SharedKinematics:
         return body
 
     def __getattr__(self, name: str) -> object:
+        if name == "wrapped":  # not set yet (a copy being built): no recursion
+            raise AttributeError(name)
         return getattr(self.wrapped, name)
 
 
