@@ -8,11 +8,13 @@ how many ticks each method served.
 
 With ``--sensed`` the feed-forward is torque drive's, computed at the sensed state
 (:mod:`rtgait.stack.measured_motion`): the encoders read the IK's joints and their rates, the estimate's feet are the
-IK's soles (the support's feet loaded); ``sensed_state_us`` is the sensed state's own part.
+IK's soles (the support's feet loaded); ``sensed_state_us`` is the sensed state's own part. The estimator's kinematics
+of the encoders' readings, which the stack shares with the sensed state, are computed outside the timed part (the
+estimator runs them in any case); ``--unshared`` times the sensed state computing its own instead.
 
 Wall times on a shared virtual machine vary from run to run: run it a few times.
 
-Usage: ``python benchmarks/feedforward.py [--json] [--robot NAME] [--dt S] [--sensed]``
+Usage: ``python benchmarks/feedforward.py [--json] [--robot NAME] [--dt S] [--sensed [--unshared]]``
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from rtgait.core.planner.sample import SampleColumns
 from rtgait.estimation.state import FootState, Measurement
 from rtgait.interface.task_targets import FootOffsets, IKTargets
 from rtgait.robot.ik import WholeBodyIK
+from rtgait.robot.kinematics import PinocchioKinematics
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.loading import load_scenario
@@ -44,9 +47,11 @@ def _stats(micro: np.ndarray) -> dict[str, float]:
     return {"median": float(np.median(micro)), "p99": float(np.percentile(micro, 99))} if len(micro) else {}
 
 
-def _sensed(robot: RobotModel, q: np.ndarray, support: str) -> Measurement:
-    """An estimate whose feet are the IK's soles at ``q``, those of ``support`` loaded."""
-    model, data = robot.model, robot.model.createData()
+def _sensed(robot: RobotModel, q: np.ndarray, support: str, data: pin.Data | None = None) -> Measurement:
+    """An estimate whose feet are the IK's soles at ``q``, those of ``support`` loaded (``data``: the model's data to
+    use, default a new one)."""
+    model = robot.model
+    data = model.createData() if data is None else data
     pin.framesForwardKinematics(model, data, q)
     feet = []
     for side, frame in (("left", robot.left_sole_id), ("right", robot.right_sole_id)):
@@ -60,13 +65,15 @@ def _sensed(robot: RobotModel, q: np.ndarray, support: str) -> Measurement:
     return Measurement(0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), nan2, nan2, 800.0, feet[0], feet[1], (), 0)
 
 
-def run(robot_name: str, dt: float, sensed: bool = False) -> dict:
+def run(robot_name: str, dt: float, sensed: bool = False, shared: bool = True) -> dict:
     robot = RobotModel.load(robot_name)
     scenario = dataclasses.replace(robot_scenario(load_scenario("fig8"), robot), dt=dt)
     walk = rollout(OnlinePlanner(scenario.planner_config(), scenario.strides()), dt, scenario.sole, scenario.changes)
     values = walk.values
     ik = WholeBodyIK(robot, max_iterations=1, tolerance=0.0)
     tracking = MeasuredMotion(robot) if sensed else None
+    kinematics = PinocchioKinematics(robot) if sensed and shared else None  # the estimator's, untimed
+    scratch = robot.model.createData()
     feedforward = FeedForward(robot, scenario.sole, dt, tracking=tracking)
     first = IKTargets(
         values[0, SampleColumns.cog], values[0, SampleColumns.left_foot], values[0, SampleColumns.right_foot]
@@ -92,7 +99,9 @@ def run(robot_name: str, dt: float, sensed: bool = False) -> dict:
         out = ControlTargets(k * dt, cog, left, right, FootOffsets(), zmp, zmp, (0.0, 0.0), str(walk.support[k]), 0, ())
         state = None
         if tracking is not None:  # the encoders read the IK's joints at its last rates
-            state = (q[7:], q[7:], feedforward.rates.velocity[6:].copy(), _sensed(robot, q, str(walk.support[k])))
+            joints, velocities = q[7:], feedforward.rates.velocity[6:].copy()
+            body = None if kinematics is None else kinematics.update(joints, velocities)
+            state = (joints, joints, velocities, _sensed(robot, q, str(walk.support[k]), scratch), body)
         start = clock()
         feedforward.torques(q, targets, out, None, state)
         ff_time[k - 1] = clock() - start
@@ -111,6 +120,7 @@ def run(robot_name: str, dt: float, sensed: bool = False) -> dict:
         "robot": robot.name,
         "dt": dt,
         "sensed": sensed,
+        "shared_kinematics": sensed and shared,
         "ticks": n,
         "ik_us": _stats(ik_time * 1e6),
         "feedforward_us": _stats(ff_time * 1e6),
@@ -127,8 +137,10 @@ def main() -> None:
     parser.add_argument("--robot", default="talos", help="built-in robot name or description file (default talos)")
     parser.add_argument("--dt", type=float, default=0.001, help="control period (s), default 0.001")
     parser.add_argument("--sensed", action="store_true", help="torque drive's feed-forward, at the sensed state")
+    parser.add_argument("--unshared", action="store_true",
+                        help="with --sensed: the sensed state runs its own kinematics")  # fmt: skip
     args = parser.parse_args()
-    result = run(args.robot, args.dt, args.sensed)
+    result = run(args.robot, args.dt, args.sensed, not args.unshared)
     if args.json:
         print(json.dumps(result))
         return

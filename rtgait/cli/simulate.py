@@ -94,6 +94,13 @@ def add_parser(commands: Any) -> None:
         "the feed-forward torques of inverse dynamics under a tenth of the robot's gains",
     )
     simulate.add_argument(
+        "--motor-model",
+        action="store_true",
+        help="--model mujoco: the drives as the robot's motors run (its description's motor types: torque-speed "
+        "envelope, Coulomb and viscous joint friction) with its command delay (a command applied a control period "
+        "late); without it the drives are ideal within their torque limits, with no delay (docs/robots.md)",
+    )
+    simulate.add_argument(
         "--control",
         metavar="FILE",
         help="the controller's settings from the [control] table of a TOML file (gains, filters, landing handling: "
@@ -224,7 +231,7 @@ def run(args: argparse.Namespace) -> int:
     options, chosen = controller_settings(robot.description, scenario, args.control, control_pairs)
     config = dataclasses.replace(
         _physics_config(robot, args.control_dt, args.physics_dt), gains=args.gains, sensors=sensors,
-        model_error=model_error,
+        model_error=model_error, motor_model=args.motor_model, command_delay=None if args.motor_model else 0,
     )  # fmt: skip
     _check_gains(robot, args.gains, args.drive)
     for push in pushes:
@@ -379,7 +386,8 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path, 
     from rtgait.robot.physical_checks import TOTAL_MASS_RANGE
     from rtgait.viz.run_data import PENDULUM_FIGURE, figure_file
 
-    for option, why in (("velocity", "walks by command"), ("html", "the 3D replay"), ("physics_dt", "its step")):
+    for option, why in (("velocity", "walks by command"), ("html", "the 3D replay"), ("physics_dt", "its step"),
+                        ("motor_model", "the drives' motors")):  # fmt: skip
         if getattr(args, option):
             raise ScenarioError(f"--{option.replace('_', '-')} ({why}) is for --model mujoco")
     for option, default in (("state", DEFAULT_STATE), ("sensor_noise", 1.0), ("sensor_seed", 0), ("latency", None),

@@ -90,6 +90,7 @@ from rtgait.sim.start_balance import StartBalance, minimum_jerk_rates, needs_bal
 from rtgait.sim.tick_log import TickLog
 from rtgait.stack.estimators import make_estimator
 from rtgait.stack.feedforward import FeedForward
+from rtgait.stack.friction_compensation import FrictionCompensation
 from rtgait.stack.measured_motion import MeasuredMotion
 from rtgait.stack.setup import start_pose
 from rtgait.stack.walking_stack import WalkingStack
@@ -231,7 +232,10 @@ class ClosedLoop:
         feed = None
         if options.feeds_forward(sim.config.gains):
             tracking = MeasuredMotion(robot, track=options.drive == "torque")
-            feed = FeedForward(robot, controller.sole, dt, friction=sim.config.friction, tracking=tracking)
+            # With the motor model the joints have their gears' friction, which the drives partly compensate.
+            compensation = FrictionCompensation.of(robot) if sim.config.motor_model else None
+            feed = FeedForward(robot, controller.sole, dt, friction=sim.config.friction, tracking=tracking,
+                               friction_compensation=compensation)  # fmt: skip
         self.stack = WalkingStack(estimator, controller, ik, q, feedforward=feed)
         self.drive_gains = (
             torque_gains(sim, feed.tracking if feed is not None else None) if options.drive == "torque" else None

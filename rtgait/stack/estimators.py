@@ -1,6 +1,11 @@
 """The estimator a stack runs, by name: ``"truth"`` (the simulator's ground truth, for comparison) or
 ``"estimated"`` (the kinematic-inertial estimator on the robot's own sensors, with the robot's kinematics and the
-sensors of its description's ``[sensors]``)."""
+sensors of its description's ``[sensors]``).
+
+The kinematic-inertial estimator's kinematics are wrapped so that each tick's result stays readable
+(:class:`SharedKinematics`): the feed-forward at the sensed state places the robot from the same encoder readings, and
+takes the soles' placements and velocities relative to the base from there rather than running the kinematics again
+(:mod:`rtgait.stack.measured_motion`)."""
 
 from __future__ import annotations
 
@@ -12,14 +17,51 @@ from rtgait.estimation.kinematic_inertial import KinematicInertialEstimator
 from rtgait.robot.kinematics import PinocchioKinematics
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from rtgait.estimation.anchors import Pose
     from rtgait.estimation.estimator import Estimator
+    from rtgait.interface.body_kinematics import BodyKinematics
     from rtgait.interface.sensor_spec import SensorSpec
     from rtgait.robot.model import RobotModel
 
 __all__ = [
-    "DEFAULT_STATE", "STATE_SOURCES", "StateSource", "check_state", "kinematic_inertial_estimator", "make_estimator",
+    "DEFAULT_STATE", "STATE_SOURCES", "SharedKinematics", "StateSource", "check_state", "kinematic_inertial_estimator",
+    "make_estimator", "shared_kinematics",
 ]  # fmt: skip
+
+
+class SharedKinematics:
+    """A robot's kinematics for the estimator (:class:`~rtgait.robot.kinematics.PinocchioKinematics`) that keeps
+    the last :meth:`update`'s result in :attr:`last`; everything else is the wrapped kinematics'.
+
+    Args:
+        kinematics: the wrapped kinematics.
+    """
+
+    def __init__(self, kinematics: PinocchioKinematics) -> None:
+        self.wrapped = kinematics
+        self._update = kinematics.update
+        self.last: BodyKinematics | None = None
+        """The last :meth:`update`'s frames (``None`` before the first)."""
+
+    def update(self, joint_positions: np.ndarray, joint_velocities: np.ndarray) -> BodyKinematics:
+        """The wrapped kinematics' frames for the joints' positions (rad) and velocities (rad/s), kept in
+        :attr:`last`."""
+        self.last = body = self._update(joint_positions, joint_velocities)
+        return body
+
+    def __getattr__(self, name: str) -> object:
+        if name == "wrapped":  # not set yet (a copy being built): no recursion
+            raise AttributeError(name)
+        return getattr(self.wrapped, name)
+
+
+def shared_kinematics(estimator: Estimator) -> SharedKinematics | None:
+    """``estimator``'s kinematics when they keep their last result (:func:`kinematic_inertial_estimator`'s), else
+    ``None``."""
+    kinematics = getattr(estimator, "kinematics", None)
+    return kinematics if isinstance(kinematics, SharedKinematics) else None
 
 
 def kinematic_inertial_estimator(
@@ -48,7 +90,7 @@ def kinematic_inertial_estimator(
     if spec.imu is None:
         raise ValueError(f"{robot.name} has no IMU in its [sensors]: the kinematic-inertial estimator needs one")
     feet = None if spec.feet is None else (spec.feet.left, spec.feet.right)
-    kinematics = PinocchioKinematics(robot, spec.imu.frame, feet)
+    kinematics = SharedKinematics(PinocchioKinematics(robot, spec.imu.frame, feet))
     settings = {"gravity": gravity, "start_feet": start_feet, "sole": robot.description.sole, **options}
     return KinematicInertialEstimator(kinematics, omega, **settings)  # type: ignore[arg-type]
 

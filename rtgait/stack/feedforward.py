@@ -12,8 +12,9 @@ Per tick, from the IK's configuration ``q``:
    (:meth:`~rtgait.stack.walking_stack.WalkingStack.hold`) the motion's own ZMP in double support;
 4. the feet's wrenches nearest that split that sum to ``W`` within the soles' contact wrench cones
    (:mod:`rtgait.robot.contact_wrenches`: closed form, a QP when a cone binds);
-5. ``tau = RNEA_joints - sum J^T w`` (N m), which the stack's safety layer clips to the joints' torque limits and
-   counts (:mod:`rtgait.stack.command_limits`).
+5. ``tau = RNEA_joints - sum J^T w`` (N m), plus, on drives with friction, the part of it the drive compensates at
+   the IK motion's joint velocities (:mod:`rtgait.stack.friction_compensation`), which the stack's safety layer
+   clips to the joints' torque limits and counts (:mod:`rtgait.stack.command_limits`).
 
 **The wrench the DCM law commands.** The IK's motion follows the plan's COM (with the COM correction), so the
 motion's wrench has the plan's ZMP ``p_ref``, not the commanded ``p_cmd = p_ref + (1 + k_p / w) e + ...``: feet that
@@ -54,9 +55,11 @@ if TYPE_CHECKING:
     from rtgait.control.settings import ControlTargets
     from rtgait.core.geometry.footsteps import SoleRect
     from rtgait.estimation.state import Measurement
+    from rtgait.interface.body_kinematics import BodyKinematics
     from rtgait.interface.task_targets import IKTargets
     from rtgait.robot.contact_wrenches import WrenchDistribution
     from rtgait.robot.model import RobotModel
+    from rtgait.stack.friction_compensation import FrictionCompensation
     from rtgait.stack.measured_motion import MeasuredMotion
 
 __all__ = ["FeedForward", "commanded_wrench"]
@@ -76,6 +79,8 @@ class FeedForward:
         rate_filter: the time constant of the velocity's and acceleration's low-pass (s).
         tracking: the sensed state and tracking acceleration to compute the torques at (module docstring); ``None``:
             the IK's configuration and motion.
+        friction_compensation: the joints' friction to compensate at the IK motion's joint velocities
+            (:mod:`rtgait.stack.friction_compensation`); ``None``: none (ideal drives).
 
     Attributes:
         dynamics: the inverse dynamics (its distributor's ``qp_count`` counts the ticks the QP ran).
@@ -94,9 +99,11 @@ class FeedForward:
         friction: float = DEFAULT_FRICTION,
         rate_filter: float = DEFAULT_RATE_FILTER,
         tracking: MeasuredMotion | None = None,
+        friction_compensation: FrictionCompensation | None = None,
     ) -> None:
         self.dynamics = InverseDynamics(robot, sole, friction)
         self.tracking = tracking
+        self.friction_compensation = friction_compensation
         self.rates = MotionRates(robot.model, dt, rate_filter, joint_limits(robot).velocity)
         self.sole = sole
         self.last: WrenchDistribution | None = None
@@ -112,15 +119,17 @@ class FeedForward:
         targets: IKTargets,
         out: ControlTargets | None,
         shift: tuple[float, float] | None = None,
-        sensed: tuple[np.ndarray, np.ndarray, np.ndarray, Measurement] | None = None,
+        sensed: tuple[np.ndarray, np.ndarray, np.ndarray, Measurement, BodyKinematics | None] | None = None,
     ) -> np.ndarray:
         """The joints' feed-forward torques (N m, in joint order) for the IK's configuration ``q``, the IK's
         ``targets`` (their feet are the split's) and the controller's output (``None``: no controller; then
         ``shift`` (m), when given, moves the motion's ZMP as the controller's ``p_cmd - p_ref`` does, e.g. the start
         transition's law, :mod:`rtgait.sim.start_balance`). ``sensed``: the commanded joints (rad), the encoders'
         positions (rad) and velocities (rad/s) and the tick's estimate, with which a ``tracking`` feed-forward
-        computes the torques at the sensed state (module docstring)."""
+        computes the torques at the sensed state (module docstring), and the estimator's kinematics of those encoder
+        readings (``None``: computed again, :mod:`rtgait.stack.measured_motion`)."""
         v, a = self.rates.update(q)
+        joint_velocities = v[6:]  # the IK motion's, for the friction's compensation (before the sensed state's)
         dynamics = self.dynamics
         if self.tracking is not None and sensed is not None:
             q, v, a = self.tracking.update(q, v, a, *sensed)
@@ -151,6 +160,8 @@ class FeedForward:
         torques = dynamics.torques(distribution.wrenches)
         if self.tracking is not None and sensed is not None:
             torques += self.tracking.feedback
+        if self.friction_compensation is not None:
+            torques += self.friction_compensation.torques(joint_velocities)
         return torques
 
 

@@ -12,6 +12,13 @@ which is what gravity's torques at the joints depend on.
 ``J_b v_b + J_j dq = 0`` with ``J = [J_b J_j]`` the sole frame's Jacobian (its own axes; ``J_b``, 6x6, is the sole's
 adjoint seen from the base, always invertible).
 
+**Sharing the estimator's kinematics**: the kinematic-inertial estimator has already placed the soles relative to
+the base for the same encoder readings, with their velocities from the joints' (``p``, ``R``, ``u``, ``w``, base axes,
+:class:`~rtgait.interface.body_kinematics.BodyKinematics`). Given them, the base's twist needs no Jacobian: the sole
+is still when the base turns at ``-w`` and its origin moves at ``w x p - u`` (its own axes). One kinematics pass a tick
+fewer (the stack passes them, :mod:`rtgait.stack.estimators`); without them (a test, another estimator) the pass runs
+here.
+
 **Acceleration**: the IK motion's own ``a_ref`` (its base's and joints', consistent with both feet's targets), so that
 inverse dynamics at ``(q_s, v_s, a_ref)`` gives the torques of gravity and of the motion's inertia at the joints' real
 configuration, and the contact wrenches the motion needs.
@@ -70,6 +77,7 @@ from rtgait.robot.joint_inertia import carried_inertia
 
 if TYPE_CHECKING:
     from rtgait.estimation.state import Measurement
+    from rtgait.interface.body_kinematics import BodyKinematics
     from rtgait.robot.model import RobotModel
 
 __all__ = ["TRACKING_FREQUENCY", "MeasuredMotion"]
@@ -124,40 +132,53 @@ class MeasuredMotion:
         joints: np.ndarray,
         joint_velocities: np.ndarray,
         measurement: Measurement,
+        body: BodyKinematics | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(q_s, v_s, a_ref)`` (module docstring; arrays kept and rewritten by the next call), and the tracking
         torques in :attr:`feedback`, from the IK's
         configuration ``q_ref`` and its rates ``v_ref``, ``a_ref`` (Pinocchio's coordinates), the commanded joints
         ``joints_ref`` (rad; the IK's with the feet's tilts), the encoders' ``joints`` (rad) and
-        ``joint_velocities`` (rad/s) and the estimator's ``measurement`` (the stance sole's pose)."""
+        ``joint_velocities`` (rad/s) and the estimator's ``measurement`` (the stance sole's pose). ``body``: the
+        estimator's kinematics of those encoder readings (the soles relative to the base), which spares this tick its
+        own pass ("Sharing the estimator's kinematics"); ``None``: computed here."""
         model, data = self.model, self.data
         left, right = measurement.left, measurement.right
         side = 0 if left.normal_force >= right.normal_force else 1
         foot = left if side == 0 else right
         sole = self._soles[side]
         q, v, a = self.q, self.v, self.a
-        # The IK's base height over its stance sole (m), to compare with the sensed one's.
-        pin.forwardKinematics(model, data, q_ref)
-        base_ref = pin.XYZQUATToSE3(q_ref[:7])
-        height_ref = float(base_ref.translation[2] - pin.updateFramePlacement(model, data, sole).translation[2])
-        q[:] = q_ref
-        q[7:] = joints
-        # The joints' kinematics with the IK's base: the sole's placement relative to the base, and its Jacobian in
-        # its own axes (which does not depend on where the base is).
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacement(model, data, sole)
-        jacobian = pin.getFrameJacobian(model, data, sole, _LOCAL)
+        q[7:] = joints  # the base's coordinates below
+        v[6:] = joint_velocities
+        if body is None:
+            base_ref = pin.XYZQUATToSE3(q_ref[:7])
+            # The joints' kinematics with the IK's base: the sole's placement relative to the base, and its Jacobian
+            # in its own axes (which does not depend on where the base is); the base's twist from J_b v_b = -J_j dq.
+            q[:7] = q_ref[:7]
+            pin.computeJointJacobians(model, data, q)
+            sole_in_base = base_ref.actInv(pin.updateFramePlacement(model, data, sole))
+            jacobian = pin.getFrameJacobian(model, data, sole, _LOCAL)
+            v[:6] = np.linalg.solve(jacobian[:, :6], -(jacobian[:, 6:] @ joint_velocities))
+        else:
+            # The estimator's: the sole relative to the base at rest, moving at (u, w) from the joints alone (base
+            # axes); the base's twist that holds the sole still is (w x p - u, -w) in its own axes.
+            frame = body.left_sole if side == 0 else body.right_sole
+            px, py, pz = position = frame.position
+            ux, uy, uz = frame.velocity
+            wx, wy, wz = frame.angular_velocity
+            v[:6] = (wy * pz - wz * py - ux, wz * px - wx * pz - uy, wx * py - wy * px - uz, -wx, -wy, -wz)
+            sole_in_base = pin.SE3(np.array(frame.rotation).reshape(3, 3), np.array(position))
         x, y, z, yaw = foot.pose
         measured = pin.SE3(pin.rpy.rpyToMatrix(foot.roll, foot.pitch, yaw), np.array([x, y, z]))
-        base = measured * data.oMf[sole].inverse() * base_ref
+        base = measured * sole_in_base.inverse()
         q[:7] = pin.SE3ToXYZQUAT(base)
-        base_part, joint_part = jacobian[:, :6], jacobian[:, 6:]
-        v[6:] = joint_velocities
-        v[:6] = np.linalg.solve(base_part, -(joint_part @ joint_velocities))
         a[:] = a_ref
         fb = self.feedback
         if not self.track:
             return q, v, a
+        # The IK's base height over its stance sole (m), to compare with the sensed one's.
+        base_ref = pin.XYZQUATToSE3(q_ref[:7])
+        pin.forwardKinematics(model, data, q_ref)
+        height_ref = float(base_ref.translation[2] - pin.updateFramePlacement(model, data, sole).translation[2])
         # The base's height over the stance sole toward the IK's, in the base's acceleration.
         rotation, rotation_ref = base.rotation, base_ref.rotation
         height_error = height_ref - float(base.translation[2] - z)

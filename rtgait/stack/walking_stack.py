@@ -37,6 +37,7 @@ from rtgait.interface.task_targets import FootOffsets, IKTargets
 from rtgait.robot.ankles import AnkleJoints, add_ankle_offsets, find_ankle_joints
 from rtgait.robot.joint_inertia import damping_gains
 from rtgait.robot.joint_limits import joint_limits
+from rtgait.stack.estimators import shared_kinematics
 from rtgait.stack.safety import Fault, SafetyLayer
 
 if TYPE_CHECKING:
@@ -120,6 +121,7 @@ class WalkingStack:
             safety = SafetyLayer(joint_limits(robot), damping_gains(robot), controller.planner.config.cog_height)
         self.safety = safety
         self.feedforward = feedforward
+        self._kinematics = shared_kinematics(estimator)  # the estimator's, for a feed-forward at the sensed state
         self._fault: Fault | None = None  # found by estimate(), logged by the control() of the same tick
         self._tilted = False  # whether the walk has sloped footholds (set at the start)
         self._readings: SensorReadings | None = None  # the last estimate's, for a feed-forward at the sensed state
@@ -134,6 +136,8 @@ class WalkingStack:
         in the readings or the estimate, or has tripped before (module docstring)."""
         safety = self.safety
         self._readings = readings
+        if self._kinematics is not None:  # the estimator's kinematics of these readings, or none if it does not run
+            self._kinematics.last = None
         if safety.damping:
             safety.observe_joints(readings)
             return None
@@ -244,7 +248,8 @@ class WalkingStack:
             sensed = None
             state, readings = measurement or sensed_state, self._readings
             if feedforward.tracking is not None and state is not None and readings is not None:
-                sensed = (joints, readings.joint_positions, readings.joint_velocities, state)
+                body = None if self._kinematics is None else self._kinematics.last  # of this tick's encoder readings
+                sensed = (joints, readings.joint_positions, readings.joint_velocities, state, body)
             torques = feedforward.torques(q, targets, out, zmp_shift, sensed)
             if not math.isfinite(float(torques.sum())):
                 return self._damp(t, ("bad-command", "the feed-forward torques are NaN or infinite"))

@@ -268,6 +268,7 @@ def test_a_negative_velocity_command_walks_backward(
         (["--model-error", "one"], "invalid int value"),
         (["--model", "lipm", "--state", "truth"], "--state is for --model mujoco"),
         (["--model", "lipm", "--sensor-noise", "0"], "--sensor-noise is for --model mujoco"),
+        (["--model", "lipm", "--motor-model"], "--motor-model (the drives' motors) is for --model mujoco"),
     ],
 )
 @pytest.mark.usefixtures("no_physics")

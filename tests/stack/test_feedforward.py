@@ -132,3 +132,24 @@ def test_commanded_wrench_moves_the_zmp_and_keeps_the_moment_about_the_com():
     c = np.array(com)
     np.testing.assert_allclose(moved.moment - np.cross(c, moved.force), required.moment - np.cross(c, required.force))
     assert moved.force[2] == required.force[2]
+
+
+def test_the_friction_compensation_adds_its_torques_at_the_motion_s_joint_velocities(talos, walk):
+    # Two feed-forwards on the same moving configurations, one with friction compensation: they differ by
+    # alpha (F_c tanh(dq / v_s) + b dq) at the joint velocities of the IK's motion (its rates), computed here apart.
+    from rtgait.stack.friction_compensation import STICTION_SPEED, FrictionCompensation
+
+    coulomb = np.linspace(0.5, 2.0, len(talos.joint_names))
+    viscous = np.full(len(talos.joint_names), 0.3)
+    plain = FeedForward(talos, walk.sole, DT)
+    compensated = FeedForward(talos, walk.sole, DT, friction_compensation=FrictionCompensation(coulomb, viscous, 0.6))
+    stack = walking_stack(talos, walk, dt=DT, feedforward=True)
+    q = stack.hold(_standing(talos)).q
+    for k in range(50):
+        targets = _standing(talos, dy=5.0 * (k * DT) ** 2)  # the COM accelerating sideways at 10 m/s^2: the legs move
+        q = stack.hold(targets).q
+        difference = compensated.torques(q, targets, None) - plain.torques(q, targets, None)
+    dq = plain.rates.velocity[6:]
+    assert np.abs(dq).max() > 0.01, "the joints move"
+    expected = 0.6 * (coulomb * np.tanh(dq / STICTION_SPEED) + viscous * dq)
+    np.testing.assert_allclose(difference, expected, atol=1e-9)

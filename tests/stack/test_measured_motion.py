@@ -165,3 +165,30 @@ def test_without_tracking_only_the_state_is_sensed(talos):
     np.testing.assert_array_equal(tracking.damping, 0.0)
     np.testing.assert_array_equal(q[7:], joints)
     assert not np.allclose(q[3:7], q_ref[3:7]), "the base is the sensed one, tilted"
+
+
+@pytest.mark.parametrize("heavier", ["left", "right"])
+def test_the_estimators_kinematics_give_the_same_sensed_state(talos, heavier):
+    """The soles relative to the base from the estimator's kinematics place the base and give its twist as the
+    sensed state's own kinematics pass does (its Jacobian), for a bent, moving robot standing tilted."""
+    from rtgait.robot.kinematics import PinocchioKinematics
+
+    rng = np.random.default_rng(7)
+    nv = talos.model.nv
+    q_ref = talos.q_half_sitting.copy()
+    joints = q_ref[7:] + rng.normal(0.0, 0.05, nv - 6)
+    dq = rng.normal(0.0, 0.5, nv - 6)
+    q_true = q_ref.copy()
+    q_true[7:] = joints
+    tilt = pin.SE3(pin.rpy.rpyToMatrix(0.03, -0.02, 0.4), np.array([0.2, 0.1, 0.02]))
+    q_true[:7] = pin.SE3ToXYZQUAT(tilt * pin.XYZQUATToSE3(q_ref[:7]))
+    left, right = _soles(talos, q_true)
+    loads = (700.0, 200.0) if heavier == "left" else (200.0, 700.0)
+    sensed = _measurement(_foot(left, loads[0]), _foot(right, loads[1]))
+    body = PinocchioKinematics(talos).update(joints, dq)
+    zeros = np.zeros(nv)
+    own = [x.copy() for x in MeasuredMotion(talos).update(q_ref, zeros, zeros, q_ref[7:], joints, dq, sensed)]
+    shared = MeasuredMotion(talos).update(q_ref, zeros, zeros, q_ref[7:], joints, dq, sensed, body)
+    np.testing.assert_allclose(shared[0], own[0], atol=1e-12)
+    np.testing.assert_allclose(shared[1], own[1], atol=1e-10)
+    np.testing.assert_allclose(shared[2], own[2], atol=1e-9)

@@ -1,0 +1,94 @@
+"""Compensation of the joints' friction in the feed-forward torques, from the motor types of the robot description
+(:mod:`rtgait.robot.motor_types`): what a drive that knows its gears' friction only roughly adds to its torque.
+
+Per joint, at the reference's joint velocity ``dq_ref`` (rad/s)::
+
+    tau_f = alpha (F_c tanh(dq_ref / v_s) + b dq_ref)                                                  (N m)
+
+with ``F_c`` and ``b`` the description's Coulomb (N m) and viscous (N m s/rad) friction of the joint's motor type.
+
+**Why a fraction** ``alpha`` (:data:`IDENTIFIED_FRACTION`): a gear's friction is identified on a bench at one
+temperature and load, and the robot's differs from it (friction in planetary and harmonic gears falls as they warm
+up and grows with the load they carry, by some tens of per cent). Compensating more than the friction there is makes
+the drive push the joint along its motion (negative damping: the joint creeps and limit-cycles), compensating less
+leaves a friction that still opposes the motion. ``alpha = 0.7`` never compensates more than there is while the
+robot's friction is at least 70 % of the identified value (30 % below it, the spread assumed), and still removes
+most of the dead band a stiction of ``F_c`` makes on low-gain drives (``F_c / k_p``: 24-30 mrad on G1's legs).
+
+**Why the reference's velocity**, not the measured one: it is smooth (the IK's motion, low-passed) and known ahead,
+so the compensation neither amplifies the encoders' noise nor switches sign at every small vibration; at
+standstill it is zero, and the stiction that then holds the joint only helps. The sign is smoothed over
+:data:`STICTION_SPEED` (``v_s``): ten to a hundred times below the joints' speeds in a gait (0.5 to 5 rad/s), so a
+moving joint gets the full compensation and a reference hovering around zero none.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from rtgait.robot.model import RobotModel
+
+__all__ = ["IDENTIFIED_FRACTION", "STICTION_SPEED", "FrictionCompensation"]
+
+IDENTIFIED_FRACTION = 0.7
+"""``alpha``: the share of the identified friction compensated (module docstring)."""
+
+STICTION_SPEED = 0.05
+"""``v_s`` (rad/s): the speed over which the Coulomb part's sign is smoothed (module docstring)."""
+
+
+class FrictionCompensation:
+    """The module docstring's ``tau_f`` per joint.
+
+    Args:
+        coulomb: ``F_c`` per joint (N m), ``>= 0``.
+        viscous: ``b`` per joint (N m s/rad), ``>= 0``.
+        fraction: ``alpha``, in ``[0, 1]``.
+        speed: ``v_s`` (rad/s), ``> 0``.
+    """
+
+    def __init__(
+        self,
+        coulomb: np.ndarray,
+        viscous: np.ndarray,
+        fraction: float = IDENTIFIED_FRACTION,
+        speed: float = STICTION_SPEED,
+    ) -> None:
+        coulomb, viscous = np.asarray(coulomb, dtype=float), np.asarray(viscous, dtype=float)
+        if coulomb.shape != viscous.shape or coulomb.ndim != 1:
+            raise ValueError(f"coulomb and viscous friction must be two arrays of one shape, got {coulomb.shape} "
+                             f"and {viscous.shape}")  # fmt: skip
+        for name, values in (("coulomb", coulomb), ("viscous", viscous)):
+            if not (np.isfinite(values).all() and (values >= 0.0).all()):
+                raise ValueError(f"{name} friction must be finite and >= 0, got {values!r}")
+        if not (math.isfinite(fraction) and 0.0 <= fraction <= 1.0):
+            raise ValueError(f"the compensated fraction must be in [0, 1], got {fraction}")
+        if not (math.isfinite(speed) and speed > 0.0):
+            raise ValueError(f"the stiction speed must be > 0 rad/s, got {speed}")
+        self.coulomb = fraction * coulomb
+        """``alpha F_c`` per joint (N m)."""
+        self.viscous = fraction * viscous
+        """``alpha b`` per joint (N m s/rad)."""
+        self._per_speed = 1.0 / speed
+
+    @classmethod
+    def of(cls, robot: RobotModel, fraction: float = IDENTIFIED_FRACTION) -> FrictionCompensation:
+        """The compensation of ``robot``'s joints (``robot.joint_names`` order) from its description's motor types;
+        a joint without a motor type gets none."""
+        coulomb, viscous = [], []
+        for name in robot.joint_names:
+            motor = robot.description.joint_actuation(name).motor
+            coulomb.append(0.0 if motor is None else motor.coulomb_friction)
+            viscous.append(0.0 if motor is None else motor.viscous_friction)
+        return cls(np.array(coulomb), np.array(viscous), fraction)
+
+    def torques(self, velocity: np.ndarray) -> np.ndarray:
+        """``tau_f`` (N m, a new array) at the joints' reference velocities ``velocity`` (rad/s)."""
+        torque = np.tanh(velocity * self._per_speed)
+        torque *= self.coulomb
+        torque += self.viscous * velocity
+        return torque

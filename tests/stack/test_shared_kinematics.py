@@ -1,0 +1,32 @@
+"""The estimator's kinematics kept for the feed-forward at the sensed state: what the wrapped kinematics computed,
+and none for an estimator without them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pinocchio")
+
+from rtgait.robot.kinematics import PinocchioKinematics
+from rtgait.robot.model import RobotModel
+from rtgait.stack.estimators import SharedKinematics, make_estimator, shared_kinematics
+
+
+def test_the_last_update_is_kept_and_the_rest_is_the_wrapped_kinematics():
+    g1 = RobotModel.load("g1")
+    estimator = make_estimator("estimated", g1, 3.5)
+    kinematics = shared_kinematics(estimator)
+    assert isinstance(kinematics, SharedKinematics) and kinematics.last is None
+    joints = g1.q_half_sitting[7:] + 0.05
+    velocities = np.full(len(joints), 0.2)
+    body = kinematics.update(joints, velocities)
+    assert kinematics.last is body
+    own = PinocchioKinematics(g1).update(joints, velocities)  # the same frames from a kinematics of its own
+    np.testing.assert_allclose(body.left_sole.position, own.left_sole.position, atol=1e-12)
+    np.testing.assert_allclose(body.right_sole.velocity, own.right_sole.velocity, atol=1e-12)
+    assert kinematics.joint_count == len(joints)  # the wrapped kinematics' attributes
+
+
+def test_an_estimator_without_kinematics_shares_none():
+    assert shared_kinematics(make_estimator("truth", RobotModel.load("g1"), 3.5)) is None
