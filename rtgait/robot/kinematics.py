@@ -38,6 +38,8 @@ __all__ = ["PinocchioKinematics"]
 _ROOT = 1  # the free flyer's joint id in Pinocchio's models (0 is the universe)
 _AT_REST = (0.0, 0.0, 0.0)
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
+_COM_VALUES = 6  # the COM's position and velocity at the start of the kinematics' buffer
+_FRAME_VALUES = 18  # a frame's position, rotation, linear and angular velocity, after them
 
 
 class PinocchioKinematics:
@@ -100,7 +102,7 @@ class PinocchioKinematics:
             )
         # Views of the data's arrays that the forward kinematics rewrite in place: the COM, its velocity, the frames'
         # translations and rotations (column-major, flattened without a copy); the frames' velocities (linear then
-        # angular) are new arrays each tick. Each frame takes 18 values of the buffer.
+        # angular) are new arrays each tick.
         data = self.data
         frames = (robot.left_sole_id, robot.right_sole_id) + (() if self._imu_fixed is not None else (self._imu,))
         self._frames = (*frames[:2], frames[2] if len(frames) == 3 else -1)
@@ -109,6 +111,12 @@ class PinocchioKinematics:
             placement = data.oMf[frame]
             self._parts += [placement.translation, placement.rotation.T.reshape(9), np.zeros(6)]
         self._buffer = np.empty(sum(part.size for part in self._parts))
+        # The buffer's order for the outputs: each rotation turned row-major (R[r][c] from column-major 3 c + r), so
+        # that every output is a slice of one tuple.
+        order = list(range(self._buffer.size))
+        for k in range(_COM_VALUES, self._buffer.size, _FRAME_VALUES):
+            order[k + 3 : k + 12] = [k + 3 + 3 * c + r for r in range(3) for c in range(3)]
+        self._order = np.array(order)
         self.foot_sensors: tuple[ForceSensorMount, ForceSensorMount] | None = None
         if sensor_frames is not None:
             self.foot_sensors = tuple(  # type: ignore[assignment]
@@ -131,14 +139,15 @@ class PinocchioKinematics:
         if fixed is None:
             pin.updateFramePlacement(model, data, imu)
             parts[10] = pin.getFrameVelocity(model, data, imu, world).vector
-        # One copy of every value into a buffer and one conversion to Python floats.
-        values = np.concatenate(parts, out=self._buffer).tolist()
+        # One copy of every value into a buffer, one reordering and one conversion to Python floats.
+        values = tuple(np.concatenate(parts, out=self._buffer).take(self._order).tolist())
         if fixed is None:
-            fixed = _frame_motion(values, 42)
+            fixed = _frame_motion(values, _COM_VALUES + 2 * _FRAME_VALUES)
         return _new_tuple(
             BodyKinematics,
-            (tuple(values[0:3]), tuple(values[3:6]), _frame_motion(values, 6), _frame_motion(values, 24), fixed),
-        )
+            (values[0:3], values[3:6], _frame_motion(values, _COM_VALUES),
+             _frame_motion(values, _COM_VALUES + _FRAME_VALUES), fixed),
+        )  # fmt: skip
 
     def leg_dynamics(
         self, angular_velocity: tuple[float, float, float], acceleration: tuple[float, ...],
@@ -209,14 +218,11 @@ def _add_frame(model: pin.Model, name: str, frame: SensorFrame, field: str) -> i
     return int(model.addFrame(pin.Frame(name, link.parentJoint, link_id, placement, pin.FrameType.OP_FRAME)))
 
 
-def _frame_motion(values: list[float], k: int) -> FrameMotion:
-    """The frame whose 18 values start at ``values[k]``: position, rotation (Pinocchio's column-major storage, turned
-    row-major by slicing), linear and angular velocity."""
-    rotation = values[k + 3 : k + 12 : 3] + values[k + 4 : k + 12 : 3] + values[k + 5 : k + 12 : 3]
-    return _new_tuple(
-        FrameMotion,
-        (tuple(values[k : k + 3]), tuple(rotation), tuple(values[k + 12 : k + 15]), tuple(values[k + 15 : k + 18])),
-    )
+def _frame_motion(values: tuple[float, ...], k: int) -> FrameMotion:
+    """The frame whose 18 values start at ``values[k]``: position, rotation (row-major), linear and angular
+    velocity."""
+    return _new_tuple(FrameMotion, (values[k : k + 3], values[k + 3 : k + 12], values[k + 12 : k + 15],
+                                    values[k + 15 : k + 18]))  # fmt: skip
 
 
 def _columns(indices: tuple[int, ...], offset: int) -> slice | np.ndarray:
