@@ -223,11 +223,15 @@ class KinematicInertialEstimator:
         delta = anchors.yaw_correction(wl, yaw_of(r_left), yaw_of(r_right)) if feet_yaw else self._yaw_offset
         c, s = math.cos(delta), math.sin(delta)
         rot, r_left, r_right = turned(c, s, r_base), turned(c, s, r_left), turned(c, s, r_right)
-        lx, ly, lz = left_rel = mat_vec(rot, left_sole.position)
-        rx, ry, rz = right_rel = mat_vec(rot, right_sole.position)
+        # R v is written out for the six vectors R turns below: a call each would cost as much as its arithmetic.
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = rot
+        (lx, ly, lz), (lvx, lvy, lvz) = left_sole.position, left_sole.velocity
+        (rx, ry, rz), (rvx, rvy, rvz) = right_sole.position, right_sole.velocity
+        left_rel = (r00 * lx + r01 * ly + r02 * lz, r10 * lx + r11 * ly + r12 * lz, r20 * lx + r21 * ly + r22 * lz)
+        right_rel = (r00 * rx + r01 * ry + r02 * rz, r10 * rx + r11 * ry + r12 * rz, r20 * rx + r21 * ry + r22 * rz)
         px, py, pz = anchors.base_position(wl, left_rel, right_rel)
-        left_pos = (px + lx, py + ly, pz + lz)
-        right_pos = (px + rx, py + ry, pz + rz)
+        left_pos = (px + left_rel[0], py + left_rel[1], pz + left_rel[2])
+        right_pos = (px + right_rel[0], py + right_rel[1], pz + right_rel[2])
         # Without a foot on the ground (a flight, a fall), no anchor holds: both follow their soles, and the base keeps
         # the yaw and place the last tick gave it.
         standing = loaded_left or loaded_right
@@ -235,25 +239,24 @@ class KinematicInertialEstimator:
         # 4. Velocity, worked out in the base frame (B) and turned into the world once: the base origin's with each
         # stance foot held still, u = -sum_i w_i (w_B x p_i + p_i'), moved to the IMU (+ w_B x p_I + p_I'), blended
         # with the IMU's acceleration.
-        (lx, ly, lz), (lvx, lvy, lvz) = left_sole.position, left_sole.velocity
-        (rx, ry, rz), (rvx, rvy, rvz) = right_sole.position, right_sole.velocity
         (ox, oy, oz), (ovx, ovy, ovz) = imu_frame.position, imu_frame.velocity
         wr = 1.0 - wl
-        kinematic = mat_vec(rot, (
-            wy * oz - wz * oy + ovx - wl * (wy * lz - wz * ly + lvx) - wr * (wy * rz - wz * ry + rvx),
-            wz * ox - wx * oz + ovy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy),
-            wx * oy - wy * ox + ovz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz),
-        ))  # fmt: skip
-        fx, fy, fz = mat_vec(rot, specific)
-        vix, viy, viz = self.velocity.update(dt, kinematic, (fx, fy, fz - self.gravity))
+        ux = wy * oz - wz * oy + ovx - wl * (wy * lz - wz * ly + lvx) - wr * (wy * rz - wz * ry + rvx)
+        uy = wz * ox - wx * oz + ovy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy)
+        uz = wx * oy - wy * ox + ovz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz)
+        kinematic = (r00 * ux + r01 * uy + r02 * uz, r10 * ux + r11 * uy + r12 * uz, r20 * ux + r21 * uy + r22 * uz)
+        sx, sy, sz = specific
+        acceleration = (r00 * sx + r01 * sy + r02 * sz, r10 * sx + r11 * sy + r12 * sz,
+                        r20 * sx + r21 * sy + r22 * sz - self.gravity)  # fmt: skip
+        vix, viy, viz = self.velocity.update(dt, kinematic, acceleration)
         # 5. COM and its velocity: c = p + R c_B, c' = v_I + R (w_B x (c_B - p_I) + c_B' - p_I').
         (cx, cy, cz), (cvx, cvy, cvz) = kin.com, kin.com_velocity
         dx, dy, dz = cx - ox, cy - oy, cz - oz
-        ux, uy, uz = mat_vec(rot, (wy * dz - wz * dy + cvx - ovx, wz * dx - wx * dz + cvy - ovy,
-                                   wx * dy - wy * dx + cvz - ovz))  # fmt: skip
-        cx, cy, cz = mat_vec(rot, kin.com)
-        com = (px + cx, py + cy, pz + cz)
-        com_vel = (vix + ux, viy + uy, viz + uz)
+        ux, uy, uz = wy * dz - wz * dy + cvx - ovx, wz * dx - wx * dz + cvy - ovy, wx * dy - wy * dx + cvz - ovz
+        com = (px + (r00 * cx + r01 * cy + r02 * cz), py + (r10 * cx + r11 * cy + r12 * cz),
+               pz + (r20 * cx + r21 * cy + r22 * cz))  # fmt: skip
+        com_vel = (vix + (r00 * ux + r01 * uy + r02 * uz), viy + (r10 * ux + r11 * uy + r12 * uz),
+                   viz + (r20 * ux + r21 * uy + r22 * uz))  # fmt: skip
         # 6. The feet's states, the ZMP and the landings.
         # A force sensor does not count contact points: 1 while the foot carries more than the release force.
         sole_foot, release = self.feet.sole_foot, self._release
