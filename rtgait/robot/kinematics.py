@@ -83,6 +83,9 @@ class PinocchioKinematics:
         self._leg_columns = tuple(_columns(leg, 6) for leg in self.leg_joints)
         self._jacobians = np.empty((2, 6, len(self.leg_joints[0])))
         self._holding = np.empty((2, len(self.leg_joints[0])))
+        # Both legs' rows of the torques at once when the right leg's columns follow the left's: a view, no copy.
+        both = _columns(self.leg_joints[0] + self.leg_joints[1], 6)
+        self._both_legs = both if isinstance(both, slice) else None
         # The legs' dynamics: the gravity comes in as the base's specific force (module docstring); the rotors.
         model.gravity = pin.Motion.Zero()
         model.armature[6:] = joint_drives(robot)[1]
@@ -175,6 +178,9 @@ class PinocchioKinematics:
         columns_left, columns_right = self._leg_columns
         jacobians[0] = pin.getFrameJacobian(model, data, left, pin.LOCAL)[:, columns_left]
         jacobians[1] = pin.getFrameJacobian(model, data, right, pin.LOCAL)[:, columns_right]
+        both = self._both_legs
+        if both is not None:
+            return jacobians, torques[both].reshape(legs.shape)
         legs[0] = torques[columns_left]
         legs[1] = torques[columns_right]
         return jacobians, legs
