@@ -11,6 +11,14 @@ velocities; for joint torques also the inverse dynamics, the Jacobians and the t
 issue's goal for the whole update. ::
 
     python benchmarks/estimator.py --robot talos
+
+``--updates N`` runs the first update and ``N`` more, untimed, for instructions counts, which the machine's load does
+not change (instructions per update = the difference of the two ``Collected`` totals / 1000)::
+
+    valgrind --tool=callgrind --callgrind-out-file=/dev/null python benchmarks/estimator.py --updates 0
+    valgrind --tool=callgrind --callgrind-out-file=/dev/null python benchmarks/estimator.py --updates 1000
+
+(with ``PYTHONHASHSEED=0``: the strings' hashes, random otherwise, change the count a little).
 """
 
 from __future__ import annotations
@@ -103,8 +111,17 @@ def main() -> None:
     parser.add_argument("--robot", default="talos", help="built-in robot (default talos)")
     parser.add_argument("--seconds", type=float, default=3.0, help="walk recorded, s (default 3)")
     parser.add_argument("--repeats", type=int, default=10, help="blocks timed (default 10)")
+    parser.add_argument("--updates", type=int, default=None,
+                        help="only the first update and this many more, untimed (instruction counts)")  # fmt: skip
     args = parser.parse_args()
     readings, estimator, _ = record(args.robot, args.seconds)
+    if args.updates is not None:
+        if not 0 <= args.updates < len(readings):
+            parser.error(f"--updates must be within 0..{len(readings) - 1} (the readings recorded), got {args.updates}")
+        for reading in readings[: args.updates + 1]:
+            estimator.update(reading)
+        print(json.dumps({"robot": args.robot, "updates": args.updates}))
+        return
     kinematics = estimator.kinematics
     outputs = [kinematics.update(r.joint_positions, r.joint_velocities) for r in readings]
 
