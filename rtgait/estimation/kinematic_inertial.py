@@ -186,11 +186,14 @@ class KinematicInertialEstimator:
         r_left, r_right = mat_mul(r_base, left_sole.rotation), mat_mul(r_base, right_sole.rotation)
         # The gyro measures the IMU's body: the base turns at w_B = R_BI w_I less the IMU's turn relative to the base;
         # the accelerometer's specific force in the base frame, R_BI f_I.
-        mount = imu_frame.rotation
-        wx, wy, wz = mat_vec(mount, imu.angular_velocity)
+        # R_BI v written out on the mount's nine entries, as R v below.
+        m00, m01, m02, m10, m11, m12, m20, m21, m22 = imu_frame.rotation
+        (gx, gy, gz), (fx, fy, fz) = imu.angular_velocity, imu.linear_acceleration
         rwx, rwy, rwz = imu_frame.angular_velocity
-        wx, wy, wz = wx - rwx, wy - rwy, wz - rwz
-        specific = mat_vec(mount, imu.linear_acceleration)
+        wx = m00 * gx + m01 * gy + m02 * gz - rwx
+        wy = m10 * gx + m11 * gy + m12 * gz - rwy
+        wz = m20 * gx + m21 * gy + m22 * gz - rwz
+        specific = (m00 * fx + m01 * fy + m02 * fz, m10 * fx + m11 * fy + m12 * fz, m20 * fx + m21 * fy + m22 * fz)
         # 2. The ground's wrenches on the soles, in the sole frames.
         torques = self._torques
         if torques is None:

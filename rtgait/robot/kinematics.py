@@ -38,6 +38,9 @@ __all__ = ["PinocchioKinematics"]
 _ROOT = 1  # the free flyer's joint id in Pinocchio's models (0 is the universe)
 _AT_REST = (0.0, 0.0, 0.0)
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
+# The calls of a tick, bound once (a module attribute lookup each otherwise).
+_center_of_mass, _frame_placement, _frame_velocity = pin.centerOfMass, pin.updateFramePlacement, pin.getFrameVelocity
+_WORLD = pin.LOCAL_WORLD_ALIGNED
 _COM_VALUES = 6  # the COM's position and velocity at the start of the kinematics' buffer
 _FRAME_VALUES = 18  # a frame's position, rotation, linear and angular velocity, after them
 
@@ -131,17 +134,17 @@ class PinocchioKinematics:
         model, data, q, v = self.model, self.data, self._q, self._v
         q[7:] = joint_positions
         v[6:] = joint_velocities
-        pin.centerOfMass(model, data, q, v, False)  # forward kinematics (positions, velocities), COM, COM velocity
+        _center_of_mass(model, data, q, v, False)  # forward kinematics (positions, velocities), COM, COM velocity
         left, right, imu = self._frames
-        pin.updateFramePlacement(model, data, left)
-        pin.updateFramePlacement(model, data, right)
-        parts, world = self._parts, pin.LOCAL_WORLD_ALIGNED
-        parts[4] = pin.getFrameVelocity(model, data, left, world).vector
-        parts[7] = pin.getFrameVelocity(model, data, right, world).vector
+        _frame_placement(model, data, left)
+        _frame_placement(model, data, right)
+        parts = self._parts
+        parts[4] = _frame_velocity(model, data, left, _WORLD).vector
+        parts[7] = _frame_velocity(model, data, right, _WORLD).vector
         fixed = self._imu_fixed
         if fixed is None:
-            pin.updateFramePlacement(model, data, imu)
-            parts[10] = pin.getFrameVelocity(model, data, imu, world).vector
+            _frame_placement(model, data, imu)
+            parts[10] = _frame_velocity(model, data, imu, _WORLD).vector
         # One copy of every value into a buffer, one reordering and one conversion to Python floats.
         values = tuple(np.concatenate(parts, out=self._buffer).take(self._order).tolist())
         if fixed is None:
