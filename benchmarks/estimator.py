@@ -5,9 +5,20 @@ then times :meth:`KinematicInertialEstimator.update` over them, and apart the Pi
 estimator's own work (the kinematics' outputs replayed); for a robot whose feet's wrenches come from the joint
 torques, also the legs' inverse dynamics (Pinocchio, part of the own work). Each is run in blocks of the whole
 recording; a block's median per update is taken, and the least of the blocks is printed (JSON, microseconds): on a
-shared machine the other blocks are those another process interrupted. ::
+shared machine the other blocks are those another process interrupted. ``compiled_us`` is the floor of the update's
+compiled calls alone, with the least Python around them (Pinocchio's forward kinematics, COM, frame placements and
+velocities; for joint torques also the inverse dynamics, the Jacobians and the two LAPACK solves); ``goal_us`` the
+issue's goal for the whole update. ::
 
     python benchmarks/estimator.py --robot talos
+
+``--updates N`` runs the first update and ``N`` more, untimed, for instructions counts, which the machine's load does
+not change (instructions per update = the difference of the two ``Collected`` totals / 1000)::
+
+    valgrind --tool=callgrind --callgrind-out-file=/dev/null python benchmarks/estimator.py --updates 0
+    valgrind --tool=callgrind --callgrind-out-file=/dev/null python benchmarks/estimator.py --updates 1000
+
+(with ``PYTHONHASHSEED=0``: the strings' hashes, random otherwise, change the count a little).
 """
 
 from __future__ import annotations
@@ -18,6 +29,8 @@ import statistics
 import time
 
 import numpy as np
+import pinocchio as pin
+from scipy.linalg.lapack import dgesv
 
 from rtgait.io.sim_run import _controller, robot_and_scenario_options
 from rtgait.robot.model import RobotModel
@@ -66,13 +79,49 @@ def blocks(run, items: list, repeats: int) -> float:
     return best * 1e6
 
 
+GOAL_US = 20.0
+"""The goal for one update (us, median): issue 20."""
+
+
+def compiled_calls(kinematics, torques: bool):
+    """One update's compiled calls alone (see the module docstring), as a function of the readings."""
+    model, data, q, v = kinematics.model, kinematics.data, kinematics._q, kinematics._v
+    frames = [frame for frame in kinematics._frames if frame >= 0]
+    soles, legs = kinematics._soles, kinematics._leg_columns
+    accelerations, rhs, world = np.zeros(model.nv), np.ones(len(kinematics.leg_joints[0])), pin.LOCAL_WORLD_ALIGNED
+
+    def run(r) -> None:
+        q[7:] = r.joint_positions
+        v[6:] = r.joint_velocities
+        pin.centerOfMass(model, data, q, v, False)
+        for frame in frames:
+            pin.updateFramePlacement(model, data, frame)
+            pin.getFrameVelocity(model, data, frame, world)
+        if torques:
+            pin.rnea(model, data, q, v, accelerations)
+            pin.computeJointJacobians(model, data)
+            for sole, columns in zip(soles, legs, strict=True):
+                dgesv(pin.getFrameJacobian(model, data, sole, pin.LOCAL)[:, columns].T, rhs)
+
+    return run
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robot", default="talos", help="built-in robot (default talos)")
     parser.add_argument("--seconds", type=float, default=3.0, help="walk recorded, s (default 3)")
     parser.add_argument("--repeats", type=int, default=10, help="blocks timed (default 10)")
+    parser.add_argument("--updates", type=int, default=None,
+                        help="only the first update and this many more, untimed (instruction counts)")  # fmt: skip
     args = parser.parse_args()
     readings, estimator, _ = record(args.robot, args.seconds)
+    if args.updates is not None:
+        if not 0 <= args.updates < len(readings):
+            parser.error(f"--updates must be within 0..{len(readings) - 1} (the readings recorded), got {args.updates}")
+        for reading in readings[: args.updates + 1]:
+            estimator.update(reading)
+        print(json.dumps({"robot": args.robot, "updates": args.updates}))
+        return
     kinematics = estimator.kinematics
     outputs = [kinematics.update(r.joint_positions, r.joint_velocities) for r in readings]
 
@@ -90,6 +139,7 @@ def main() -> None:
             kinematics.leg_dynamics((0.0, 0.0, 0.0), upright, accelerations)
 
         legs["leg_dynamics_us"] = round(blocks(with_legs, readings, args.repeats) - alone, 2)
+    compiled = blocks(compiled_calls(kinematics, estimator.wrenches == "torques"), readings, args.repeats)
     # The estimator's own work: the kinematics' outputs of the same readings handed back without computing them.
     replay = iter(())
     estimator._kinematics_update = lambda q, v: next(replay)
@@ -101,6 +151,7 @@ def main() -> None:
     print(json.dumps({
         "robot": args.robot, "updates": len(readings), "wrenches": estimator.wrenches,
         "update_us": round(whole, 2), "kinematics_us": round(alone, 2), "own_us": round(own, 2), **legs,
+        "compiled_us": round(compiled, 2), "goal_us": GOAL_US,
     }))  # fmt: skip
 
 

@@ -8,8 +8,10 @@ contact measurement, and ``mj_step`` again without the no-slip solver and withou
 show what each costs; then, inside one more run of the walk, the mean time per tick of each part of the real
 loop (``in_loop_*_us``: IK, physics, controller, measurement, feed-forward torques, contact record, complete log,
 servos, walk inputs and the loop's own ``rest``), which is what the real-time factor pays: each part there runs with
-the caches the others leave, about twice as slow as alone. ``machine_reference_us`` is the best time of
-``sum(range(1000))`` before and after (about 9 us on the usual machine): quote it with any timing.
+the caches the others leave, about twice as slow as alone; and ``in_loop_stack_us``, the whole control tick of the
+walk (:class:`~rtgait.stack.walking_stack.WalkingStack`'s estimate and control: safety checks, estimator, controller,
+IK, feed-forward, joint command) per tick that ran it, the timers of its parts inside. ``machine_reference_us`` is the
+best time of ``sum(range(1000))`` before and after (about 9 us on the usual machine): quote it with any timing.
 
 Wall times on a shared virtual machine vary from run to run: run it a few times.
 
@@ -164,8 +166,8 @@ def in_loop_parts(
     from rtgait.sim.loop import ClosedLoop
 
     clock = time.perf_counter
-    spent = dict.fromkeys((*IN_LOOP_PARTS, "tick"), 0.0)
-    ticks = [0]
+    spent = dict.fromkeys((*IN_LOOP_PARTS, "tick", "stack"), 0.0)
+    ticks, stack_ticks = [0], [0]
 
     def timed(part: str, call: Any) -> Any:
         def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -194,6 +196,14 @@ def in_loop_parts(
         robot.drives.command = timed("servo", robot.drives.command)  # type: ignore[method-assign]
         robot._apply = timed("servo", robot.drives.apply)  # the substeps call the drives through it
         loop._walk_inputs = timed("inputs", loop._walk_inputs)
+        # The whole control tick: the stack's estimate and control as the loop calls them (bound in its hot tuple).
+        estimate, control = loop._hot[0], loop._hot[1]
+
+        def counted_control(*args: Any) -> Any:
+            stack_ticks[0] += 1
+            return control(*args)
+
+        loop._hot = (timed("stack", estimate), timed("stack", counted_control), *loop._hot[2:])
 
     def step(loop: ClosedLoop) -> bool:
         began = clock()
@@ -216,6 +226,7 @@ def in_loop_parts(
     report = {f"in_loop_{part}_us": spent[part] / n * 1e6 for part in IN_LOOP_PARTS}
     report["in_loop_tick_us"] = spent["tick"] / n * 1e6
     report["in_loop_rest_us"] = (spent["tick"] - sum(spent[part] for part in IN_LOOP_PARTS)) / n * 1e6
+    report["in_loop_stack_us"] = spent["stack"] / max(stack_ticks[0], 1) * 1e6
     return report
 
 
@@ -517,6 +528,8 @@ def main() -> None:
     print(f"inside one run, per tick (mean): {report['in_loop_tick_us']:.0f} us")
     for part in (*IN_LOOP_PARTS, "rest"):
         print(f"  {part.replace('_', ' ')}: {report[f'in_loop_{part}_us']:.1f} us")
+    print(f"the stack's control tick (safety, estimator, controller, IK), per walking tick: "
+          f"{report['in_loop_stack_us']:.1f} us")  # fmt: skip
     before, after = report["machine_reference_us"]
     print(f"machine reference, sum(range(1000)): {before:.1f} us before, {after:.1f} us after (~9 usually)")
 

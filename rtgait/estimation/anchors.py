@@ -98,14 +98,21 @@ class FootAnchors:
         way."""
         poses = self.poses
         assert poses is not None
-        gains = (1.0 - weight_left, weight_left) if standing else (1.0, 1.0)
-        for i, (pose, gain) in enumerate(((left, gains[0]), (right, gains[1]))):
-            if gain == 0.0:
-                continue
-            x, y, z, yaw = poses[i]
-            poses[i] = (
-                x + gain * (pose[0] - x),
-                y + gain * (pose[1] - y),
-                z + gain * (pose[2] - z),
-                yaw + gain * math.remainder(pose[3] - yaw, math.tau),
-            )
+        gain_left, gain_right = (1.0 - weight_left, weight_left) if standing else (1.0, 1.0)
+        # A foot without gain keeps its anchor.
+        if gain_left != 0.0:
+            poses[0] = _pulled(poses[0], left, gain_left)
+        if gain_right != 0.0:
+            poses[1] = _pulled(poses[1], right, gain_right)
+
+
+def _pulled(anchor: Pose, pose: Pose, gain: float) -> Pose:
+    """``anchor`` moved toward ``pose`` by ``gain`` (the yaw along the shorter way)."""
+    x, y, z, yaw = anchor
+    px, py, pz, pyaw = pose
+    return (
+        x + gain * (px - x),
+        y + gain * (py - y),
+        z + gain * (pz - z),
+        yaw + gain * math.remainder(pyaw - yaw, math.tau),
+    )

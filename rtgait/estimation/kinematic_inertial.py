@@ -201,11 +201,14 @@ class KinematicInertialEstimator:
         r_left, r_right = mat_mul(r_base, left_sole.rotation), mat_mul(r_base, right_sole.rotation)
         # The gyro measures the IMU's body: the base turns at w_B = R_BI w_I less the IMU's turn relative to the base;
         # the accelerometer's specific force in the base frame, R_BI f_I.
-        mount = imu_frame.rotation
-        wx, wy, wz = mat_vec(mount, imu.angular_velocity)
+        # R_BI v written out on the mount's nine entries, as R v below.
+        m00, m01, m02, m10, m11, m12, m20, m21, m22 = imu_frame.rotation
+        (gx, gy, gz), (fx, fy, fz) = imu.angular_velocity, imu.linear_acceleration
         rwx, rwy, rwz = imu_frame.angular_velocity
-        wx, wy, wz = wx - rwx, wy - rwy, wz - rwz
-        specific = mat_vec(mount, imu.linear_acceleration)
+        wx = m00 * gx + m01 * gy + m02 * gz - rwx
+        wy = m10 * gx + m11 * gy + m12 * gz - rwy
+        wz = m20 * gx + m21 * gy + m22 * gz - rwz
+        specific = (m00 * fx + m01 * fy + m02 * fz, m10 * fx + m11 * fy + m12 * fz, m20 * fx + m21 * fy + m22 * fz)
         # 2. The ground's wrenches on the soles, in the sole frames.
         torques = self._torques
         if torques is None:
@@ -238,8 +241,12 @@ class KinematicInertialEstimator:
         delta = anchors.yaw_correction(wl, yaw_of(r_left), yaw_of(r_right)) if feet_yaw else self._yaw_offset
         c, s = math.cos(delta), math.sin(delta)
         rot, r_left, r_right = turned(c, s, r_base), turned(c, s, r_left), turned(c, s, r_right)
-        lx, ly, lz = left_rel = mat_vec(rot, left_sole.position)
-        rx, ry, rz = right_rel = mat_vec(rot, right_sole.position)
+        # R v is written out for the six vectors R turns below: a call each would cost as much as its arithmetic.
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = rot
+        (lx, ly, lz), (lvx, lvy, lvz) = left_sole.position, left_sole.velocity
+        (rx, ry, rz), (rvx, rvy, rvz) = right_sole.position, right_sole.velocity
+        left_rel = (r00 * lx + r01 * ly + r02 * lz, r10 * lx + r11 * ly + r12 * lz, r20 * lx + r21 * ly + r22 * lz)
+        right_rel = (r00 * rx + r01 * ry + r02 * rz, r10 * rx + r11 * ry + r12 * rz, r20 * rx + r21 * ry + r22 * rz)
         px, py, pz = anchors.base_position(wl, left_rel, right_rel)
         # Without a foot on the ground (a flight, a fall), no anchor holds: both follow their soles, and the base keeps
         # the yaw the last tick gave it and moves on at its estimated velocity (the inertial estimate alone, below).
@@ -249,14 +256,12 @@ class KinematicInertialEstimator:
             last_rot, relative, (vx, vy, vz) = self._last_motion
             mx, my, mz = mat_vec(last_rot, relative)
             px, py, pz = px + dt * (vx - mx), py + dt * (vy - my), pz + dt * (vz - mz)
-        left_pos = (px + lx, py + ly, pz + lz)
-        right_pos = (px + rx, py + ry, pz + rz)
+        left_pos = (px + left_rel[0], py + left_rel[1], pz + left_rel[2])
+        right_pos = (px + right_rel[0], py + right_rel[1], pz + right_rel[2])
         anchors.settle(wl, (*left_pos, yaw_of(r_left)), (*right_pos, yaw_of(r_right)), standing)
         # 4. Velocity, worked out in the base frame (B) and turned into the world once: the base origin's with each
         # stance foot held still, u = -sum_i w_i (w_B x p_i + p_i'), moved to the IMU (+ w_B x p_I + p_I'), blended
         # with the IMU's acceleration.
-        (lx, ly, lz), (lvx, lvy, lvz) = left_sole.position, left_sole.velocity
-        (rx, ry, rz), (rvx, rvy, rvz) = right_sole.position, right_sole.velocity
         (ox, oy, oz), (ovx, ovy, ovz) = imu_frame.position, imu_frame.velocity
         wr = 1.0 - wl
         # A loaded foot that rocks turns about its centre of pressure, not its sole origin (contact_point).
@@ -274,24 +279,25 @@ class KinematicInertialEstimator:
                 bx, by, bz = bx + ax, by + ay, bz + az
         # The IMU's velocity relative to the base origin, w_B x p_I + p_I' (base frame).
         sx, sy, sz = wy * oz - wz * oy + ovx, wz * ox - wx * oz + ovy, wx * oy - wy * ox + ovz
-        kinematic = mat_vec(rot, (
-            sx - wl * (wy * lz - wz * ly + lvx) - wr * (wy * rz - wz * ry + rvx) + bx,
-            sy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy) + by,
-            sz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz) + bz,
-        ))  # fmt: skip
-        fx, fy, fz = mat_vec(rot, specific)
+        ux = sx - wl * (wy * lz - wz * ly + lvx) - wr * (wy * rz - wz * ry + rvx) + bx
+        uy = sy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy) + by
+        uz = sz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz) + bz
+        kinematic = (r00 * ux + r01 * uy + r02 * uz, r10 * ux + r11 * uy + r12 * uz, r20 * ux + r21 * uy + r22 * uz)
+        qx, qy, qz = specific
+        acceleration = (r00 * qx + r01 * qy + r02 * qz, r10 * qx + r11 * qy + r12 * qz,
+                        r20 * qx + r21 * qy + r22 * qz - self.gravity)  # fmt: skip
         # In flight no foot is held still: the accelerometer alone carries the velocity.
-        velocity = self.velocity.update(dt, kinematic if standing else None, (fx, fy, fz - self.gravity))
+        velocity = self.velocity.update(dt, kinematic if standing else None, acceleration)
         vix, viy, viz = velocity
         self._last_motion = (rot, (sx, sy, sz), velocity)  # for a flight's next tick (step 3)
         # 5. COM and its velocity: c = p + R c_B, c' = v_I + R (w_B x (c_B - p_I) + c_B' - p_I').
         (cx, cy, cz), (cvx, cvy, cvz) = kin.com, kin.com_velocity
         dx, dy, dz = cx - ox, cy - oy, cz - oz
-        ux, uy, uz = mat_vec(rot, (wy * dz - wz * dy + cvx - ovx, wz * dx - wx * dz + cvy - ovy,
-                                   wx * dy - wy * dx + cvz - ovz))  # fmt: skip
-        cx, cy, cz = mat_vec(rot, kin.com)
-        com = (px + cx, py + cy, pz + cz)
-        com_vel = (vix + ux, viy + uy, viz + uz)
+        ux, uy, uz = wy * dz - wz * dy + cvx - ovx, wz * dx - wx * dz + cvy - ovy, wx * dy - wy * dx + cvz - ovz
+        com = (px + (r00 * cx + r01 * cy + r02 * cz), py + (r10 * cx + r11 * cy + r12 * cz),
+               pz + (r20 * cx + r21 * cy + r22 * cz))  # fmt: skip
+        com_vel = (vix + (r00 * ux + r01 * uy + r02 * uz), viy + (r10 * ux + r11 * uy + r12 * uz),
+                   viz + (r20 * ux + r21 * uy + r22 * uz))  # fmt: skip
         # 6. The feet's states, the ZMP and the landings.
         # A force sensor does not count contact points: 1 while the foot carries more than the release force.
         sole_foot, release = self.feet.sole_foot, self._release

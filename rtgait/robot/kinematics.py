@@ -38,6 +38,11 @@ __all__ = ["PinocchioKinematics"]
 _ROOT = 1  # the free flyer's joint id in Pinocchio's models (0 is the universe)
 _AT_REST = (0.0, 0.0, 0.0)
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
+# The calls of a tick, bound once (a module attribute lookup each otherwise).
+_center_of_mass, _frame_placement, _frame_velocity = pin.centerOfMass, pin.updateFramePlacement, pin.getFrameVelocity
+_WORLD = pin.LOCAL_WORLD_ALIGNED
+_COM_VALUES = 6  # the COM's position and velocity at the start of the kinematics' buffer
+_FRAME_VALUES = 18  # a frame's position, rotation, linear and angular velocity, after them
 
 
 class PinocchioKinematics:
@@ -81,6 +86,9 @@ class PinocchioKinematics:
         self._leg_columns = tuple(_columns(leg, 6) for leg in self.leg_joints)
         self._jacobians = np.empty((2, 6, len(self.leg_joints[0])))
         self._holding = np.empty((2, len(self.leg_joints[0])))
+        # Both legs' rows of the torques at once when the right leg's columns follow the left's: a view, no copy.
+        both = _columns(self.leg_joints[0] + self.leg_joints[1], 6)
+        self._both_legs = both if isinstance(both, slice) else None
         # The legs' dynamics: the gravity comes in as the base's specific force (module docstring); the rotors.
         model.gravity = pin.Motion.Zero()
         model.armature[6:] = joint_drives(robot)[1]
@@ -100,7 +108,7 @@ class PinocchioKinematics:
             )
         # Views of the data's arrays that the forward kinematics rewrite in place: the COM, its velocity, the frames'
         # translations and rotations (column-major, flattened without a copy); the frames' velocities (linear then
-        # angular) are new arrays each tick. Each frame takes 18 values of the buffer.
+        # angular) are new arrays each tick.
         data = self.data
         frames = (robot.left_sole_id, robot.right_sole_id) + (() if self._imu_fixed is not None else (self._imu,))
         self._frames = (*frames[:2], frames[2] if len(frames) == 3 else -1)
@@ -109,6 +117,12 @@ class PinocchioKinematics:
             placement = data.oMf[frame]
             self._parts += [placement.translation, placement.rotation.T.reshape(9), np.zeros(6)]
         self._buffer = np.empty(sum(part.size for part in self._parts))
+        # The buffer's order for the outputs: each rotation turned row-major (R[r][c] from column-major 3 c + r), so
+        # that every output is a slice of one tuple.
+        order = list(range(self._buffer.size))
+        for k in range(_COM_VALUES, self._buffer.size, _FRAME_VALUES):
+            order[k + 3 : k + 12] = [k + 3 + 3 * c + r for r in range(3) for c in range(3)]
+        self._order = np.array(order)
         self.foot_sensors: tuple[ForceSensorMount, ForceSensorMount] | None = None
         if sensor_frames is not None:
             self.foot_sensors = tuple(  # type: ignore[assignment]
@@ -120,25 +134,26 @@ class PinocchioKinematics:
         model, data, q, v = self.model, self.data, self._q, self._v
         q[7:] = joint_positions
         v[6:] = joint_velocities
-        pin.centerOfMass(model, data, q, v, False)  # forward kinematics (positions, velocities), COM, COM velocity
+        _center_of_mass(model, data, q, v, False)  # forward kinematics (positions, velocities), COM, COM velocity
         left, right, imu = self._frames
-        pin.updateFramePlacement(model, data, left)
-        pin.updateFramePlacement(model, data, right)
-        parts, world = self._parts, pin.LOCAL_WORLD_ALIGNED
-        parts[4] = pin.getFrameVelocity(model, data, left, world).vector
-        parts[7] = pin.getFrameVelocity(model, data, right, world).vector
+        _frame_placement(model, data, left)
+        _frame_placement(model, data, right)
+        parts = self._parts
+        parts[4] = _frame_velocity(model, data, left, _WORLD).vector
+        parts[7] = _frame_velocity(model, data, right, _WORLD).vector
         fixed = self._imu_fixed
         if fixed is None:
-            pin.updateFramePlacement(model, data, imu)
-            parts[10] = pin.getFrameVelocity(model, data, imu, world).vector
-        # One copy of every value into a buffer and one conversion to Python floats.
-        values = np.concatenate(parts, out=self._buffer).tolist()
+            _frame_placement(model, data, imu)
+            parts[10] = _frame_velocity(model, data, imu, _WORLD).vector
+        # One copy of every value into a buffer, one reordering and one conversion to Python floats.
+        values = tuple(np.concatenate(parts, out=self._buffer).take(self._order).tolist())
         if fixed is None:
-            fixed = _frame_motion(values, 42)
+            fixed = _frame_motion(values, _COM_VALUES + 2 * _FRAME_VALUES)
         return _new_tuple(
             BodyKinematics,
-            (tuple(values[0:3]), tuple(values[3:6]), _frame_motion(values, 6), _frame_motion(values, 24), fixed),
-        )
+            (values[0:3], values[3:6], _frame_motion(values, _COM_VALUES),
+             _frame_motion(values, _COM_VALUES + _FRAME_VALUES), fixed),
+        )  # fmt: skip
 
     def leg_dynamics(
         self, angular_velocity: tuple[float, float, float], acceleration: tuple[float, ...],
@@ -166,6 +181,9 @@ class PinocchioKinematics:
         columns_left, columns_right = self._leg_columns
         jacobians[0] = pin.getFrameJacobian(model, data, left, pin.LOCAL)[:, columns_left]
         jacobians[1] = pin.getFrameJacobian(model, data, right, pin.LOCAL)[:, columns_right]
+        both = self._both_legs
+        if both is not None:
+            return jacobians, torques[both].reshape(legs.shape)
         legs[0] = torques[columns_left]
         legs[1] = torques[columns_right]
         return jacobians, legs
@@ -209,14 +227,11 @@ def _add_frame(model: pin.Model, name: str, frame: SensorFrame, field: str) -> i
     return int(model.addFrame(pin.Frame(name, link.parentJoint, link_id, placement, pin.FrameType.OP_FRAME)))
 
 
-def _frame_motion(values: list[float], k: int) -> FrameMotion:
-    """The frame whose 18 values start at ``values[k]``: position, rotation (Pinocchio's column-major storage, turned
-    row-major by slicing), linear and angular velocity."""
-    rotation = values[k + 3 : k + 12 : 3] + values[k + 4 : k + 12 : 3] + values[k + 5 : k + 12 : 3]
-    return _new_tuple(
-        FrameMotion,
-        (tuple(values[k : k + 3]), tuple(rotation), tuple(values[k + 12 : k + 15]), tuple(values[k + 15 : k + 18])),
-    )
+def _frame_motion(values: tuple[float, ...], k: int) -> FrameMotion:
+    """The frame whose 18 values start at ``values[k]``: position, rotation (row-major), linear and angular
+    velocity."""
+    return _new_tuple(FrameMotion, (values[k : k + 3], values[k + 3 : k + 12], values[k + 12 : k + 15],
+                                    values[k + 15 : k + 18]))  # fmt: skip
 
 
 def _columns(indices: tuple[int, ...], offset: int) -> slice | np.ndarray:
