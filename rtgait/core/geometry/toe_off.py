@@ -1,0 +1,136 @@
+"""Toe-off: the rear heel lifting about the toe before a step that changes height, and the foot levelling again early
+in its swing.
+
+Climbing (or descending) a stair, the rear foot stays a tread below (above) the COG's new height; with its sole level
+the leg runs out of length or its ankle out of dorsiflexion at the end of the double support. Walking robots on
+stairs (HRP-4 with lipm_walking_controller, PAL's Talos) roll the rear foot onto its toe instead. Here a rear foot
+whose next foothold differs in height by more than :data:`MIN_RISE` pitches about its toe line by
+
+    theta = THETA * smooth(s),       s = clip((z_x - t) / (d - t), 0, 1),       smooth(s) = 3 s^2 - 2 s^3
+
+in the double support before its swing, where ``z_x`` is the ZMP's distance ahead of the rear foot's sole point
+along its heading, ``t`` the sole's toe (its ``front``) and ``d`` the front foot's distance. The heel starts to rise
+only once the ZMP is ahead of the toe line: from then on the support is the hull of the rear toe line and the front
+foot, and the planner's ZMP, a straight line from the rear foot to the front foot in double support and on the
+front foot at the lift-off (``s = 1``), lies in it. In the swing that follows the foot, on its toe at the lift-off,
+levels again over the first :data:`RELEASE` of its horizontal progress ``u`` (as in :mod:`foot_tilt`):
+
+    theta = THETA (1 - smooth(u / RELEASE)).
+
+Pitching by ``theta`` about the toe moves the sole point (the target, under the ankle) from ``p`` to
+
+    p' = p + Rz(yaw) [ (Ry(pitch + theta) - Ry(pitch)) (-t, 0, 0) ]
+
+so that the toe stays where it was; the pitch of the target grows by ``theta`` (positive: heel up, ``Ry``).
+Footholds of one height add nothing: a flat walk is unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from rtgait.core.geometry.footsteps import Footstep
+
+__all__ = ["MIN_RISE", "RELEASE", "THETA", "changes_height", "toe_off_feet", "toe_pitch"]
+
+THETA = 0.5
+"""Largest toe-off pitch (rad, about 29 degrees): the heel up by ``front sin(THETA)`` at the lift-off, about the
+angle human stair climbing and lipm_walking_controller's stairs show; below the toe joint-free sole's 90 degrees
+by a wide margin (the contact stays on the toe line)."""
+
+MIN_RISE = 0.01
+"""Height change of a step (m) from which the rear foot rolls onto its toe; smaller steps walk as on the flat."""
+
+RELEASE = 0.3
+"""Fraction of a swing's horizontal progress over which the sole levels again after a toe-off."""
+
+_AT = 1e-6
+"""Distance (m) within which a foot target counts as standing on a foothold."""
+
+
+def _smooth(s: float) -> float:
+    return s * s * (3.0 - 2.0 * s)
+
+
+def _index(prints: Sequence[Footstep], foot: Sequence[float]) -> int | None:
+    """Index of the foothold ``foot`` stands on, ``None`` when it is off every foothold (swinging)."""
+    for i, step in enumerate(prints):
+        if abs(step.x - foot[0]) < _AT and abs(step.y - foot[1]) < _AT and abs(step.z - foot[2]) < _AT:
+            return i
+    return None
+
+
+def _next_own(prints: Sequence[Footstep], i: int) -> Footstep | None:
+    side = prints[i].side
+    return next((step for step in prints[i + 1 :] if step.side == side), None)
+
+
+def toe_pitch(
+    prints: Sequence[Footstep], front: float, foot: Sequence[float], other: Sequence[float], zmp: Sequence[float]
+) -> float:
+    """Toe-off pitch (rad, heel up) of the foot target ``foot`` (``(x, y, z, yaw, ...)``) while ``other`` is the
+    other foot's target and ``zmp`` the ZMP ``(x, y)`` (m); ``front`` is the sole's toe ahead of its sole point (m)
+    (module docstring). 0 when no step of the walk changes height by :data:`MIN_RISE`."""
+    own = _index(prints, foot)
+    there = _index(prints, other)
+    if own is not None and there is not None:  # double support: only the rear foot (the earlier foothold) rolls
+        if own > there:
+            return 0.0
+        landing = _next_own(prints, own)
+        if landing is None or abs(landing.z - prints[own].z) < MIN_RISE:
+            return 0.0
+        c, s = math.cos(foot[3]), math.sin(foot[3])
+        ahead = (zmp[0] - foot[0]) * c + (zmp[1] - foot[1]) * s
+        reach = (other[0] - foot[0]) * c + (other[1] - foot[1]) * s
+        if reach <= front:
+            return 0.0
+        return THETA * _smooth(min(1.0, max(0.0, (ahead - front) / (reach - front))))
+    if own is not None or there is None:
+        return 0.0
+    # ``foot`` swings while ``other`` stands on foothold ``there``: it left the previous foothold of its side.
+    side = prints[there].side
+    lift = next((i for i in range(there - 1, -1, -1) if prints[i].side != side), None)
+    if lift is None:
+        return 0.0
+    a = prints[lift]
+    b = _next_own(prints, lift)
+    if b is None or abs(b.z - a.z) < MIN_RISE:
+        return 0.0
+    dx, dy = b.x - a.x, b.y - a.y
+    length2 = dx * dx + dy * dy
+    u = 1.0 if length2 == 0.0 else min(1.0, max(0.0, ((foot[0] - a.x) * dx + (foot[1] - a.y) * dy) / length2))
+    return THETA * (1.0 - _smooth(min(1.0, u / RELEASE)))
+
+
+def _rolled(foot: Sequence[float], front: float, theta: float) -> tuple[float, ...]:
+    """``foot`` (6 values, with its pitch and roll) turned by ``theta`` about its toe line (module docstring)."""
+    x, y, z, yaw, pitch, roll = foot[:6]
+    forward = front * (math.cos(pitch) - math.cos(pitch + theta))  # along the heading
+    up = front * (math.sin(pitch + theta) - math.sin(pitch))
+    return (x + forward * math.cos(yaw), y + forward * math.sin(yaw), z + up, yaw, pitch + theta, roll)
+
+
+def toe_off_feet(
+    prints: Sequence[Footstep],
+    front: float,
+    left: Sequence[float],
+    right: Sequence[float],
+    zmp: Sequence[float],
+) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The feet targets ``(x, y, z, yaw, pitch, roll)`` with each foot's toe-off (:func:`toe_pitch`) applied."""
+    theta_left = toe_pitch(prints, front, left, right, zmp)
+    theta_right = toe_pitch(prints, front, right, left, zmp)
+    return (
+        _rolled(left, front, theta_left) if theta_left else tuple(left),
+        _rolled(right, front, theta_right) if theta_right else tuple(right),
+    )
+
+
+def changes_height(prints: Sequence[Footstep]) -> bool:
+    """Whether a step of ``prints`` changes height by :data:`MIN_RISE` or more (a toe-off somewhere)."""
+    for i in range(len(prints)):
+        landing = _next_own(prints, i)
+        if landing is not None and abs(landing.z - prints[i].z) >= MIN_RISE:
+            return True
+    return False
