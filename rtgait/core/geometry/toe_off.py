@@ -34,10 +34,11 @@ from rtgait.core.geometry.footsteps import Footstep
 
 __all__ = ["MIN_RISE", "RELEASE", "THETA", "changes_height", "toe_off_feet", "toe_pitch"]
 
-THETA = 0.5
-"""Largest toe-off pitch (rad, about 29 degrees): the heel up by ``front sin(THETA)`` at the lift-off, about the
-angle human stair climbing and lipm_walking_controller's stairs show; below the toe joint-free sole's 90 degrees
-by a wide margin (the contact stays on the toe line)."""
+THETA = 0.4
+"""Largest toe-off pitch (rad, 23 degrees): the heel up by ``front sin(THETA)`` (4 cm for Talos, 5 cm for G1) at the
+lift-off. The heel rises while the ZMP crosses from the rear toe line to the front foot, a tenth of a second in the
+middle of the built-in stairs' 0.3 s double support, so the roll's peak rate is about ``12 THETA`` rad/s: 0.4 keeps it
+under Talos's ankle pitch speed limit (5.8 rad/s)."""
 
 MIN_RISE = 0.01
 """Height change of a step (m) from which the rear foot rolls onto its toe; smaller steps walk as on the flat."""
@@ -66,6 +67,11 @@ def _next_own(prints: Sequence[Footstep], i: int) -> Footstep | None:
     return next((step for step in prints[i + 1 :] if step.side == side), None)
 
 
+def _previous_own(prints: Sequence[Footstep], i: int) -> Footstep | None:
+    side = prints[i].side
+    return next((prints[j] for j in range(i - 1, -1, -1) if prints[j].side == side), None)
+
+
 def toe_pitch(
     prints: Sequence[Footstep], front: float, foot: Sequence[float], other: Sequence[float], zmp: Sequence[float]
 ) -> float:
@@ -75,15 +81,19 @@ def toe_pitch(
     own = _index(prints, foot)
     there = _index(prints, other)
     if own is not None and there is not None:  # double support: only the rear foot (the earlier foothold) rolls
-        if own > there:
+        rear, ahead_foot = (foot, other) if own < there else (other, foot)
+        c, s = math.cos(rear[3]), math.sin(rear[3])
+        ahead = (zmp[0] - rear[0]) * c + (zmp[1] - rear[1]) * s  # the ZMP ahead of the rear sole point
+        reach = (ahead_foot[0] - rear[0]) * c + (ahead_foot[1] - rear[1]) * s
+        if reach <= front:
             return 0.0
+        if own > there:  # the front foot, landed on its toe after a step down, flattens before the ZMP leaves the rear
+            previous = _previous_own(prints, own)
+            if previous is None or prints[own].z > previous.z - MIN_RISE:
+                return 0.0
+            return THETA * (1.0 - _smooth(min(1.0, max(0.0, ahead / front))))
         landing = _next_own(prints, own)
         if landing is None or abs(landing.z - prints[own].z) < MIN_RISE:
-            return 0.0
-        c, s = math.cos(foot[3]), math.sin(foot[3])
-        ahead = (zmp[0] - foot[0]) * c + (zmp[1] - foot[1]) * s
-        reach = (other[0] - foot[0]) * c + (other[1] - foot[1]) * s
-        if reach <= front:
             return 0.0
         return THETA * _smooth(min(1.0, max(0.0, (ahead - front) / (reach - front))))
     if own is not None or there is None:
@@ -100,7 +110,10 @@ def toe_pitch(
     dx, dy = b.x - a.x, b.y - a.y
     length2 = dx * dx + dy * dy
     u = 1.0 if length2 == 0.0 else min(1.0, max(0.0, ((foot[0] - a.x) * dx + (foot[1] - a.y) * dy) / length2))
-    return THETA * (1.0 - _smooth(min(1.0, u / RELEASE)))
+    theta = THETA * (1.0 - _smooth(min(1.0, u / RELEASE)))
+    if b.z < a.z - MIN_RISE:  # a step down lands toe first: the toe turns down over the swing's last RELEASE
+        theta += THETA * _smooth(min(1.0, max(0.0, (u - 1.0 + RELEASE) / RELEASE)))
+    return theta
 
 
 def _rolled(foot: Sequence[float], front: float, theta: float) -> tuple[float, ...]:
