@@ -32,7 +32,7 @@ from collections.abc import Sequence
 
 from rtgait.core.geometry.footsteps import Footstep
 
-__all__ = ["MIN_RISE", "RELEASE", "THETA", "changes_height", "toe_off_feet", "toe_pitch"]
+__all__ = ["MIN_RISE", "NEAR", "RELEASE", "THETA", "changes_height", "toe_off_feet", "toe_pitch"]
 
 THETA = 0.4
 """Largest toe-off pitch (rad, 23 degrees): the heel up by ``front sin(THETA)`` (4 cm for Talos, 5 cm for G1) at the
@@ -46,20 +46,25 @@ MIN_RISE = 0.01
 RELEASE = 0.3
 """Fraction of a swing's horizontal progress over which the sole levels again after a toe-off."""
 
-_AT = 1e-6
-"""Distance (m) within which a foot target counts as standing on a foothold."""
+NEAR = 0.02
+"""Distance (m) within which a foot target counts as standing on a foothold of its side: the closed loop's targets
+follow the measured landings, millimetres off the plan's footholds."""
 
 
 def _smooth(s: float) -> float:
     return s * s * (3.0 - 2.0 * s)
 
 
-def _index(prints: Sequence[Footstep], foot: Sequence[float]) -> int | None:
-    """Index of the foothold ``foot`` stands on, ``None`` when it is off every foothold (swinging)."""
+def _index(prints: Sequence[Footstep], foot: Sequence[float], side: str) -> int | None:
+    """Index of the ``side`` foothold ``foot`` stands on (the nearest within :data:`NEAR`), ``None`` when it is off
+    every one (swinging)."""
+    best, index = NEAR * NEAR, None
     for i, step in enumerate(prints):
-        if abs(step.x - foot[0]) < _AT and abs(step.y - foot[1]) < _AT and abs(step.z - foot[2]) < _AT:
-            return i
-    return None
+        if step.side == side:
+            d2 = (step.x - foot[0]) ** 2 + (step.y - foot[1]) ** 2 + (step.z - foot[2]) ** 2
+            if d2 < best:
+                best, index = d2, i
+    return index
 
 
 def _next_own(prints: Sequence[Footstep], i: int) -> Footstep | None:
@@ -73,13 +78,18 @@ def _previous_own(prints: Sequence[Footstep], i: int) -> Footstep | None:
 
 
 def toe_pitch(
-    prints: Sequence[Footstep], front: float, foot: Sequence[float], other: Sequence[float], zmp: Sequence[float]
+    prints: Sequence[Footstep],
+    front: float,
+    foot: Sequence[float],
+    other: Sequence[float],
+    zmp: Sequence[float],
+    side: str,
 ) -> float:
-    """Toe-off pitch (rad, heel up) of the foot target ``foot`` (``(x, y, z, yaw, ...)``) while ``other`` is the
-    other foot's target and ``zmp`` the ZMP ``(x, y)`` (m); ``front`` is the sole's toe ahead of its sole point (m)
+    """Toe-off pitch (rad, heel up) of the ``side`` foot target ``foot`` (``(x, y, z, yaw, ...)``) while ``other`` is
+    the other foot's target and ``zmp`` the ZMP ``(x, y)`` (m); ``front`` is the sole's toe ahead of its sole point (m)
     (module docstring). 0 when no step of the walk changes height by :data:`MIN_RISE`."""
-    own = _index(prints, foot)
-    there = _index(prints, other)
+    own = _index(prints, foot, side)
+    there = _index(prints, other, "right" if side == "left" else "left")
     if own is not None and there is not None:  # double support: only the rear foot (the earlier foothold) rolls
         rear, ahead_foot = (foot, other) if own < there else (other, foot)
         c, s = math.cos(rear[3]), math.sin(rear[3])
@@ -132,8 +142,8 @@ def toe_off_feet(
     zmp: Sequence[float],
 ) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """The feet targets ``(x, y, z, yaw, pitch, roll)`` with each foot's toe-off (:func:`toe_pitch`) applied."""
-    theta_left = toe_pitch(prints, front, left, right, zmp)
-    theta_right = toe_pitch(prints, front, right, left, zmp)
+    theta_left = toe_pitch(prints, front, left, right, zmp, "left")
+    theta_right = toe_pitch(prints, front, right, left, zmp, "right")
     return (
         _rolled(left, front, theta_left) if theta_left else tuple(left),
         _rolled(right, front, theta_right) if theta_right else tuple(right),
