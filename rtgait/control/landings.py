@@ -29,9 +29,10 @@ from where the foot was last anchored. A refused touch-down is logged (``"touchd
   late_descent_limit`` (on higher ground the foot must not push the robot up); at the hold's end ``z <- max(z,
   z_floor)``; meanwhile the polygon and the ZMP split take both feet;
 * an *early* or *on time* landing of a swinging foot farther than :data:`SHORT_LANDING` from the swing's planned
-  foothold, no more than :data:`SKIM_HEIGHT` above it, met ground higher than
-  the plan before it was over its foothold (an unseen step: the sole on the step's edge, its heel over the lower
-  floor). It is not held or re-anchored there: the target stops descending at the height it touched,
+  foothold, its measured sole level (:data:`SKIM_TILT`) and between :data:`SKIM_MIN_HEIGHT` and :data:`SKIM_HEIGHT`
+  above it, met ground higher than the plan before it was over its foothold (an unseen step: the sole on the step's
+  edge, its heel over the lower floor). It is not held or re-anchored there: the target stops descending at the
+  measured height it touched, ``z_touch``,
   ``z = max(z_plan + z, z_touch + c min(1, d / SHORT_LANDING))`` (``d``: the plan's distance to the foothold,
   ``c``: :data:`SKIM_CLEARANCE`), and goes on with the plan's swing to the foothold, where it stands at that
   height (kept as the offset at the swing's end); the plan keeps its single support, and no step adjustment moves
@@ -68,7 +69,7 @@ if TYPE_CHECKING:
     from rtgait.core.planner.sample import SampleValues
     from rtgait.estimation.state import Landing, Measurement
 
-__all__ = ["SHORT_LANDING", "SKIM_CLEARANCE", "SKIM_HEIGHT", "FootLandings"]
+__all__ = ["SHORT_LANDING", "SKIM_CLEARANCE", "SKIM_HEIGHT", "SKIM_MIN_HEIGHT", "SKIM_TILT", "FootLandings"]
 
 _SIDES: tuple[Side, Side] = ("left", "right")
 
@@ -80,6 +81,15 @@ descent; an unseen 3 cm step met by the sole's toe is several centimetres short.
 SKIM_HEIGHT = 0.05
 """Highest ground (m) above the swing's foothold taken as met short of it: an unseen step (issue 22: up to 3 cm), with
 the swing's tracking error; a touch higher than that is not ground the sole can skim to its foothold."""
+
+SKIM_MIN_HEIGHT = 0.01
+"""Least height (m) of the measured sole above the swing's foothold for ground met short of it: the planned floor is
+met within a millimetre of its height (the estimator's landing heights on flat ground), as when a push brings a foot
+down early, and that foot must stand where it landed."""
+
+SKIM_TILT = 0.05
+"""Largest tilt (rad) of a sole, as measured at the touch, that met ground short of its foothold: flat on the top of
+a step. A sole touching with an edge (a foot brought down early by a push) has its sole point above the ground."""
 
 SKIM_CLEARANCE = 0.015
 """Height (m) a foot that met ground short of its foothold keeps above it on the way there: from
@@ -301,9 +311,10 @@ class FootLandings:
     def _short_of_foothold(
         self, landing: Landing, values: SampleValues, q: int, i: int
     ) -> tuple[float, float, float, float] | None:
-        """The height (m) foot ``i``'s target touched at, its foothold's height and place ``(x, y)``, when ``landing``
-        (in swing phase ``q``) is more than :data:`SHORT_LANDING` from the swing's planned foothold and at most
-        :data:`SKIM_HEIGHT` above it; ``None`` otherwise."""
+        """Where foot ``i`` met ground short of its foothold: ``(z_touch, z_foothold, x, y)`` (m), its measured sole
+        height and its foothold's height and place, when ``landing`` (in swing phase ``q``) is more than
+        :data:`SHORT_LANDING` from the foothold, ``z_touch`` between :data:`SKIM_MIN_HEIGHT` and :data:`SKIM_HEIGHT`
+        above it; ``None`` otherwise."""
         walk = self.planner.walk
         index = (q + 3) // 2  # single support q swings footprint F[(q + 3) // 2] (rtgait.core.geometry.footsteps)
         try:
@@ -312,10 +323,13 @@ class FootLandings:
             return None
         if foothold.side != _SIDES[i] or math.hypot(foothold.x - landing.x, foothold.y - landing.y) <= SHORT_LANDING:
             return None
-        touched = (values.lfoot_z if i == 0 else values.rfoot_z) + self._z[i]
-        if not 0.0 < touched - foothold.z <= SKIM_HEIGHT:
-            return None  # not ground a little higher than planned: a touch in mid-air, or no higher than the plan
-        return touched, foothold.z, foothold.x, foothold.y
+        # The measured sole height is the ground's: a floor the plan knows (a foot landing early under a push) is met
+        # at its height; ground higher than SKIM_HEIGHT is not a step the sole can skim onto.
+        if not SKIM_MIN_HEIGHT < landing.z - foothold.z <= SKIM_HEIGHT:
+            return None
+        if abs(landing.pitch) > SKIM_TILT or abs(landing.roll) > SKIM_TILT:
+            return None  # on an edge or a heel (a sole landing tilted under a push): its sole point is off the ground
+        return landing.z, foothold.z, foothold.x, foothold.y
 
     @property
     def skimming(self) -> bool:

@@ -4,7 +4,7 @@ in its swing.
 Climbing (or descending) a stair, the rear foot stays a tread below (above) the COG's new height; with its sole level
 the leg runs out of length or its ankle out of dorsiflexion at the end of the double support. Walking robots on
 stairs (HRP-4 with lipm_walking_controller, PAL's Talos) roll the rear foot onto its toe instead. Here a rear foot
-whose next foothold differs in height by more than :data:`MIN_RISE` pitches about its toe line by
+whose next foothold, both level, differs in height by :data:`MIN_RISE` or more (a stair) pitches about its toe line by
 
     theta = THETA * smooth(s),       s = clip((z_x - t) / (d - t), 0, 1),       smooth(s) = 3 s^2 - 2 s^3
 
@@ -16,6 +16,12 @@ front foot at the lift-off (``s = 1``), lies in it. In the swing that follows th
 levels again over the first :data:`RELEASE` of its horizontal progress ``u`` (as in :mod:`foot_tilt`):
 
     theta = THETA (1 - smooth(u / RELEASE)).
+
+After a step down the landing foot comes down toe first (the swing leg, straight, reaches the lower tread sooner):
+its toe turns down over the last :data:`RELEASE` of the swing's progress, ``theta = THETA smooth((u - 1 + RELEASE)
+/ RELEASE)``, and in the double support that follows the sole flattens, ``theta = THETA (1 - smooth(z_x / t))``
+with ``z_x`` the ZMP ahead of the rear foot: flat before the ZMP leaves the rear foot's sole, so that the ZMP is in
+the hull of the rear sole and the front toe line meanwhile, and the rear heel only rises after.
 
 Pitching by ``theta`` about the toe moves the sole point (the target, under the ankle) from ``p`` to
 
@@ -67,6 +73,14 @@ def _index(prints: Sequence[Footstep], foot: Sequence[float], side: str) -> int 
     return index
 
 
+def _rise(a: Footstep, b: Footstep) -> float:
+    """The height change (m) of a stair-like step from foothold ``a`` to ``b``: both level, heights :data:`MIN_RISE`
+    or more apart; 0 for any other step (a slope's footholds turn the soles to the surface instead: foot_tilt.py)."""
+    if a.pitch or a.roll or b.pitch or b.roll or abs(b.z - a.z) < MIN_RISE:
+        return 0.0
+    return b.z - a.z
+
+
 def _next_own(prints: Sequence[Footstep], i: int) -> Footstep | None:
     side = prints[i].side
     return next((step for step in prints[i + 1 :] if step.side == side), None)
@@ -99,11 +113,11 @@ def toe_pitch(
             return 0.0
         if own > there:  # the front foot, landed on its toe after a step down, flattens before the ZMP leaves the rear
             previous = _previous_own(prints, own)
-            if previous is None or prints[own].z > previous.z - MIN_RISE:
+            if previous is None or _rise(previous, prints[own]) >= 0.0:
                 return 0.0
             return THETA * (1.0 - _smooth(min(1.0, max(0.0, ahead / front))))
         landing = _next_own(prints, own)
-        if landing is None or abs(landing.z - prints[own].z) < MIN_RISE:
+        if landing is None or _rise(prints[own], landing) == 0.0:
             return 0.0
         return THETA * _smooth(min(1.0, max(0.0, (ahead - front) / (reach - front))))
     if own is not None or there is None:
@@ -115,13 +129,13 @@ def toe_pitch(
         return 0.0
     a = prints[lift]
     b = _next_own(prints, lift)
-    if b is None or abs(b.z - a.z) < MIN_RISE:
+    if b is None or _rise(a, b) == 0.0:
         return 0.0
     dx, dy = b.x - a.x, b.y - a.y
     length2 = dx * dx + dy * dy
     u = 1.0 if length2 == 0.0 else min(1.0, max(0.0, ((foot[0] - a.x) * dx + (foot[1] - a.y) * dy) / length2))
     theta = THETA * (1.0 - _smooth(min(1.0, u / RELEASE)))
-    if b.z < a.z - MIN_RISE:  # a step down lands toe first: the toe turns down over the swing's last RELEASE
+    if _rise(a, b) < 0.0:  # a step down lands toe first: the toe turns down over the swing's last RELEASE
         theta += THETA * _smooth(min(1.0, max(0.0, (u - 1.0 + RELEASE) / RELEASE)))
     return theta
 
@@ -151,9 +165,10 @@ def toe_off_feet(
 
 
 def changes_height(prints: Sequence[Footstep]) -> bool:
-    """Whether a step of ``prints`` changes height by :data:`MIN_RISE` or more (a toe-off somewhere)."""
+    """Whether a step of ``prints`` between level footholds changes height by :data:`MIN_RISE` or more (a toe-off
+    somewhere)."""
     for i in range(len(prints)):
         landing = _next_own(prints, i)
-        if landing is not None and abs(landing.z - prints[i].z) >= MIN_RISE:
+        if landing is not None and _rise(prints[i], landing) != 0.0:
             return True
     return False
