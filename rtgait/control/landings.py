@@ -27,7 +27,8 @@ from where the foot was last anchored. A refused touch-down is logged (``"touchd
 * an *early* landing holds the foot where it landed, ``(x_l, y_l, yaw_l)``, until the plan's double support, its
   target going on down with the plan to a floor, ``max(z_plan + z, z_floor)``, ``z_floor = z_plan(t_l) + z -
   late_descent_limit`` (on higher ground the foot must not push the robot up); at the hold's end ``z <- max(z,
-  z_floor)``; meanwhile the polygon and the ZMP split take both feet;
+  z_floor - z_foothold)`` (the plan stands at the foothold's height then); meanwhile the polygon and the ZMP split
+  take both feet;
 * an *early* or *on time* landing of a swinging foot farther than :data:`SHORT_LANDING` from the swing's planned
   foothold, its measured sole level (:data:`SKIM_TILT`) and between :data:`SKIM_MIN_HEIGHT` and :data:`SKIM_HEIGHT`
   above it, met ground higher than the plan before it was over its foothold (an unseen step: the sole on the step's
@@ -213,8 +214,8 @@ class FootLandings:
         self._phase = q
         for i in (0, 1):
             hold = self._hold[i]
-            if hold is not None:  # an early touch-down holds until the swing's end (the plan's z = 0 there)
-                self._z[i], self._hold[i] = max(self._z[i], hold[3]), None
+            if hold is not None:  # an early touch-down holds until the swing's end (the plan at its foothold there)
+                self._z[i], self._hold[i] = max(self._z[i], hold[3] - self._foothold_z(i)), None
             skim = self._skim[i]
             if skim is not None:  # ground met short of the foothold: it stands at the height it touched
                 self._z[i], self._skim[i] = max(self._z[i], skim[0] - skim[1]), None
@@ -330,6 +331,14 @@ class FootLandings:
         if abs(landing.pitch) > SKIM_TILT or abs(landing.roll) > SKIM_TILT:
             return None  # on an edge or a heel (a sole landing tilted under a push): its sole point is off the ground
         return landing.z, foothold.z, foothold.x, foothold.y
+
+    def _foothold_z(self, i: int) -> float:
+        """Height (m) of the foothold foot ``i``'s last swing went to (the plan's height for it at the swing's end);
+        0 when it is no longer kept."""
+        try:
+            return self.planner.walk.footprint((self._swing_phase[i] + 3) // 2).z
+        except IndexError:
+            return 0.0
 
     @property
     def skimming(self) -> bool:
