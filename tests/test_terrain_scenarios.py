@@ -108,8 +108,9 @@ def test_summary_reports_the_terrain_and_exported_footholds_keep_their_heights(t
 
 
 def test_physics_refuses_stairs_beyond_the_robot_s_legs_before_simulating(tmp_path, capsys):
-    # The scene builds every terrain; Talos's legs do not reach the 15 cm stairs with level soles (docs/method.md).
-    assert main(["simulate", "stairs-up", "--out", str(tmp_path / "sim")]) == 2
+    # The scene builds every terrain; going down Talos's 15 cm stairs, its swing leg does not reach the lower tread
+    # even landing toe first (docs/results.md).
+    assert main(["simulate", "stairs-down", "--out", str(tmp_path / "sim")]) == 2
     error = capsys.readouterr().err
     assert "step 2" in error and "out of reach for talos" in error
     assert not (tmp_path / "sim").exists()

@@ -234,6 +234,8 @@ class WalkingController:
             return False
         self._last_error_replan = t
         adjust = self.options.step_adjustment
+        if self.foot_landings.skimming:  # a foot on its way over ground it met early: its landing stays
+            adjust = None
         if self._only_crossing_catches(values, support, ex, ey) and not _lengthens(adjust):
             events.append(ControlEvent(t, "replan-skipped", support, "outward DCM error in single support"))
             return False

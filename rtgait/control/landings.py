@@ -9,6 +9,7 @@ logged with its kind; in the ``"adaptive"`` level it also acts. Settings (s, m, 
 
 * *re-landing*: the foot's last swing already ended on the ground, or the plan has it standing and ``q`` is not the
   phase right after its swing (a bounce, or a standing foot unloaded and loaded again);
+* a foot *skimming* over ground it met short of its foothold (below): its landings wait for the swing's end;
 * the plan has the foot swinging: *on time* when ``t_q + T_q - t <= on_time_window`` (the swing's height profile ends
   flat, so a stance side that gives 2 mm makes every landing that early), *early* when
   ``t - t_q >= early_touchdown_fraction T_q``, else *ignored* (a scuff);
@@ -26,7 +27,17 @@ from where the foot was last anchored. A refused touch-down is logged (``"touchd
 * an *early* landing holds the foot where it landed, ``(x_l, y_l, yaw_l)``, until the plan's double support, its
   target going on down with the plan to a floor, ``max(z_plan + z, z_floor)``, ``z_floor = z_plan(t_l) + z -
   late_descent_limit`` (on higher ground the foot must not push the robot up); at the hold's end ``z <- max(z,
-  z_floor)``; meanwhile the polygon and the ZMP split take both feet;
+  z_floor - z_foothold)`` (the plan stands at the foothold's height then); meanwhile the polygon and the ZMP split
+  take both feet;
+* an *early* or *on time* landing of a swinging foot farther than :data:`SHORT_LANDING` from the swing's planned
+  foothold, its measured sole level (:data:`SKIM_TILT`) and between :data:`SKIM_MIN_HEIGHT` and :data:`SKIM_HEIGHT`
+  above it, met ground higher than the plan before it was over its foothold (an unseen step: the sole on the step's
+  edge, its heel over the lower floor). It is not held or re-anchored there: the target stops descending at the
+  measured height it touched, ``z_touch``,
+  ``z = max(z_plan + z, z_touch + c min(1, d / SHORT_LANDING))`` (``d``: the plan's distance to the foothold,
+  ``c``: :data:`SKIM_CLEARANCE`), and goes on with the plan's swing to the foothold, where it stands at that
+  height (kept as the offset at the swing's end); the plan keeps its single support, and no step adjustment moves
+  the landing while it skims (:attr:`FootLandings.skimming`);
 * a *late* foot's target descends, ``z <- max(z - late_descent_speed dt, -late_descent_limit)`` per tick, while the
   other foot carries the robot (auto_stabilizer ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset``
   -0.02 m; the plan is not delayed). Once landed it stands at the ground's measured height ``z_g = min(0,
@@ -59,9 +70,31 @@ if TYPE_CHECKING:
     from rtgait.core.planner.sample import SampleValues
     from rtgait.estimation.state import Landing, Measurement
 
-__all__ = ["FootLandings"]
+__all__ = ["SHORT_LANDING", "SKIM_CLEARANCE", "SKIM_HEIGHT", "SKIM_MIN_HEIGHT", "SKIM_TILT", "FootLandings"]
 
 _SIDES: tuple[Side, Side] = ("left", "right")
+
+SHORT_LANDING = 0.03
+"""Distance (m) from the swing's planned foothold beyond which an early touch-down is ground met short of it (module
+docstring): a sag or a servo lag lands within millimetres of it, the horizontal swing being over before the last
+descent; an unseen 3 cm step met by the sole's toe is several centimetres short."""
+
+SKIM_HEIGHT = 0.05
+"""Highest ground (m) above the swing's foothold taken as met short of it: an unseen step (issue 22: up to 3 cm), with
+the swing's tracking error; a touch higher than that is not ground the sole can skim to its foothold."""
+
+SKIM_MIN_HEIGHT = 0.01
+"""Least height (m) of the measured sole above the swing's foothold for ground met short of it: the planned floor is
+met within a millimetre of its height (the estimator's landing heights on flat ground), as when a push brings a foot
+down early, and that foot must stand where it landed."""
+
+SKIM_TILT = 0.05
+"""Largest tilt (rad) of a sole, as measured at the touch, that met ground short of its foothold: flat on the top of
+a step. A sole touching with an edge (a foot brought down early by a push) has its sole point above the ground."""
+
+SKIM_CLEARANCE = 0.015
+"""Height (m) a foot that met ground short of its foothold keeps above it on the way there: from
+:data:`SHORT_LANDING` away on, lowered in proportion to the distance left to the height it touched."""
 
 
 class FootLandings:
@@ -89,6 +122,9 @@ class FootLandings:
         self._phase = -1  # the plan's phase at the last tick
         # Early touch-down: (x, y, yaw) where it landed, and the least height of its target (m).
         self._hold: list[tuple[float, float, float, float] | None] = [None, None]
+        # Early touch-down short of the foothold: the least height of its target (m) while it follows the plan.
+        # (height it touched, its foothold's height, x, y) (m).
+        self._skim: list[tuple[float, float, float, float] | None] = [None, None]
         self._late = [False, False]  # the swing ended in the air ...
         self._late_from = [math.inf, math.inf]  # ... and from when (s) it counts as late
         self._landed = [True, True]  # whether the foot's last swing ended on the ground
@@ -178,8 +214,11 @@ class FootLandings:
         self._phase = q
         for i in (0, 1):
             hold = self._hold[i]
-            if hold is not None:  # an early touch-down holds until the swing's end (the plan's z = 0 there)
-                self._z[i], self._hold[i] = max(self._z[i], hold[3]), None
+            if hold is not None:  # an early touch-down holds until the swing's end (the plan at its foothold there)
+                self._z[i], self._hold[i] = max(self._z[i], hold[3] - self._foothold_z(i)), None
+            skim = self._skim[i]
+            if skim is not None:  # ground met short of the foothold: it stands at the height it touched
+                self._z[i], self._skim[i] = max(self._z[i], skim[0] - skim[1]), None
             if self._swing_phase[i] != previous or previous < 0:
                 continue
             if self._blend[i] is not None:  # the swing is over: so is the blend of its foot's height
@@ -204,7 +243,9 @@ class FootLandings:
         i = 0 if landing.side == "left" else 1
         planner = self.planner
         swinging = support in _SIDES and _SIDES[i] != support  # the plan has this foot swinging
-        if self._landed[i] or not (swinging or q == self._swing_phase[i] + 1):
+        if self._skim[i] is not None and swinging:
+            kind = "skimming"  # on its way over ground it met short of its foothold: lands at the swing's end
+        elif self._landed[i] or not (swinging or q == self._swing_phase[i] + 1):
             kind = "re-landing"  # it bounced, or a standing foot was unloaded and loaded again
         elif swinging:
             start, duration = planner.phase_start(q), planner.timeline.duration(q)
@@ -217,7 +258,14 @@ class FootLandings:
         else:
             kind = "late" if self._late[i] and t >= self._late_from[i] else "on time"
         events.append(ControlEvent(t, "landing", landing.side, kind, landing.x, landing.y))
-        if kind == "ignored" or not self.adaptive:
+        if kind in ("ignored", "skimming") or not self.adaptive:
+            return False
+        if kind in ("early", "on time") and swinging and (z_touch := self._short_of_foothold(landing, values, q, i)):
+            # Ground higher than the plan met before the foothold: stop descending there, go on to the foothold.
+            self._blend[i] = None
+            self._skim[i] = z_touch
+            text = f"{z_touch[0] - z_touch[1]:+.3f} m above the foothold"
+            events.append(ControlEvent(t, "touchdown-skimmed", landing.side, text, landing.x, landing.y))
             return False
         anchor = self._anchor[i]
         if kind == "re-landing" and anchor is not None:
@@ -261,6 +309,42 @@ class FootLandings:
         events.append(ControlEvent(t, "touchdown", landing.side, f"footprint {index}", landing.x, landing.y))
         return True
 
+    def _short_of_foothold(
+        self, landing: Landing, values: SampleValues, q: int, i: int
+    ) -> tuple[float, float, float, float] | None:
+        """Where foot ``i`` met ground short of its foothold: ``(z_touch, z_foothold, x, y)`` (m), its measured sole
+        height and its foothold's height and place, when ``landing`` (in swing phase ``q``) is more than
+        :data:`SHORT_LANDING` from the foothold, ``z_touch`` between :data:`SKIM_MIN_HEIGHT` and :data:`SKIM_HEIGHT`
+        above it; ``None`` otherwise."""
+        walk = self.planner.walk
+        index = (q + 3) // 2  # single support q swings footprint F[(q + 3) // 2] (rtgait.core.geometry.footsteps)
+        try:
+            foothold = walk.footprint(index)
+        except IndexError:
+            return None
+        if foothold.side != _SIDES[i] or math.hypot(foothold.x - landing.x, foothold.y - landing.y) <= SHORT_LANDING:
+            return None
+        # The measured sole height is the ground's: a floor the plan knows (a foot landing early under a push) is met
+        # at its height; ground higher than SKIM_HEIGHT is not a step the sole can skim onto.
+        if not SKIM_MIN_HEIGHT < landing.z - foothold.z <= SKIM_HEIGHT:
+            return None
+        if abs(landing.pitch) > SKIM_TILT or abs(landing.roll) > SKIM_TILT:
+            return None  # on an edge or a heel (a sole landing tilted under a push): its sole point is off the ground
+        return landing.z, foothold.z, foothold.x, foothold.y
+
+    def _foothold_z(self, i: int) -> float:
+        """Height (m) of the foothold foot ``i``'s last swing went to (the plan's height for it at the swing's end);
+        0 when it is no longer kept."""
+        try:
+            return self.planner.walk.footprint((self._swing_phase[i] + 3) // 2).z
+        except IndexError:
+            return 0.0
+
+    @property
+    def skimming(self) -> bool:
+        """Whether a foot that met ground short of its foothold is going on to it (no step adjustment meanwhile)."""
+        return self._skim[0] is not None or self._skim[1] is not None
+
     # ----- heights and targets -------------------------------------------------------------------------------------
     def _update_heights(self, t: float) -> None:
         """This tick's height offsets of the feet's targets (m): a landing height blended out over the swing that
@@ -293,6 +377,13 @@ class FootLandings:
         if hold is not None:  # early touch-down: where it landed, down with the plan to a floor
             z = planned[2] + self._z[i]
             return (hold[0], hold[1], hold[3] if hold[3] > z else z, hold[2])  # max(z, floor), without the call
+        skim = self._skim[i]
+        if skim is not None:  # ground met short of the foothold: on with the plan, no lower than it touched
+            z = planned[2] + self._z[i]
+            # Clear of the ground it met while short of the foothold (a sole dragged on it would be loaded there).
+            away = math.hypot(planned[0] - skim[2], planned[1] - skim[3]) / SHORT_LANDING
+            floor = skim[0] + SKIM_CLEARANCE * (away if away < 1.0 else 1.0)
+            return (planned[0], planned[1], floor if floor > z else z, planned[3])
         return (planned[0], planned[1], planned[2] + self._z[i], planned[3])
 
     def targets(self, values: SampleValues) -> tuple[Pose, Pose]:

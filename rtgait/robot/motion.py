@@ -16,6 +16,7 @@ import numpy as np
 
 from rtgait.core.analysis.rollout import Rollout
 from rtgait.core.geometry.foot_tilt import is_tilted, tilted_feet
+from rtgait.core.geometry.toe_off import changes_height, toe_off_feet
 from rtgait.core.planner.config import PlannerConfig, VelocityLimits
 from rtgait.core.planner.sample import SampleColumns
 from rtgait.interface.task_targets import IKTargets
@@ -219,6 +220,14 @@ def whole_body_motion(
     if is_tilted(rollout.footprints):  # soles turned to the footholds' surfaces (foot_tilt.py)
         tilted = [tilted_feet(rollout.footprints, a, b) for a, b in zip(left, right, strict=True)]
         left, right = [a for a, _ in tilted], [b for _, b in tilted]
+    if changes_height(rollout.footprints):  # the rear heel rolls onto its toe before a step up or down (toe_off.py)
+        front = robot.description.sole.front
+        zmp = rollout.values[:, SampleColumns.zmp].tolist()
+        if not is_tilted(rollout.footprints):
+            left = [(*a[:4], 0.0, 0.0) for a in left]
+            right = [(*b[:4], 0.0, 0.0) for b in right]
+        rolled = [toe_off_feet(rollout.footprints, front, a, b, z) for a, b, z in zip(left, right, zmp, strict=True)]
+        left, right = [a for a, _ in rolled], [b for _, b in rolled]
     cog_rows = cog.tolist()
     limit = dict(ERROR_LIMITS)
     if limits:

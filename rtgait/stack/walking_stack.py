@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from rtgait.core.geometry.foot_tilt import is_tilted, tilted_feet
+from rtgait.core.geometry.toe_off import changes_height, toe_off_feet
 from rtgait.interface.command import JointCommand
 from rtgait.interface.task_targets import FootOffsets, IKTargets
 from rtgait.robot.ankles import AnkleJoints, add_ankle_offsets, find_ankle_joints
@@ -124,6 +125,7 @@ class WalkingStack:
         self._kinematics = shared_kinematics(estimator)  # the estimator's, for a feed-forward at the sensed state
         self._fault: Fault | None = None  # found by estimate(), logged by the control() of the same tick
         self._tilted = False  # whether the walk has sloped footholds (set at the start)
+        self._toe_off = False  # whether a step changes height: toe-offs (set at the start)
         self._readings: SensorReadings | None = None  # the last estimate's, for a feed-forward at the sensed state
 
     @property
@@ -168,6 +170,8 @@ class WalkingStack:
         planner = self.controller.planner
         # On sloped footholds the soles turn to their surfaces (foot_tilt.py); a walk by command has none.
         self._tilted = planner.n_steps is not None and is_tilted(planner.footprints())
+        # Before a step up or down the rear heel rolls onto its toe (toe_off.py).
+        self._toe_off = planner.n_steps is not None and changes_height(planner.footprints())
 
     def control(self, t: float, measurement: Measurement | None) -> StackOutput:
         """The controller's targets at ``t`` (s) for ``measurement``, through the IK to the joints (the second half
@@ -180,6 +184,11 @@ class WalkingStack:
             left, right = out.left_foot, out.right_foot
             if self._tilted:
                 left, right = tilted_feet(self.controller.planner.footprints(), left, right)
+            if self._toe_off:
+                if not self._tilted:
+                    left, right = (*left[:4], 0.0, 0.0), (*right[:4], 0.0, 0.0)
+                prints = self.controller.planner.footprints()
+                left, right = toe_off_feet(prints, self.ik.robot.description.sole.front, left, right, out.zmp_planned)
             targets = _new_tuple(IKTargets, (out.com, left, right, out.lean))
             return self._command(t, targets, measurement, out, out.offsets)
         except _BAD_INPUT as error:

@@ -30,3 +30,17 @@ def test_talos_walks_up_the_ramp_and_stands_on_it(talos, shorten) -> None:
     assert rise == pytest.approx(last.z, abs=0.01)
     # The soles lie on the ramp: tilted by its 10 degrees (within the 0.02 rad of ended_at_rest).
     np.testing.assert_allclose(result.sole_tilt[-1], math.radians(10.0), atol=0.02)
+
+
+def test_talos_meets_the_unseen_step_short_of_its_foothold_and_walks_onto_it(talos, shorten) -> None:
+    # The plan walks flat; the 3 cm step at x = 0.7 m is only in the scene. The swing onto it (step 4, planned at
+    # x = 0.8 m) touches it early, short of its foothold: the foot skims on to the foothold at the height it met
+    # (rtgait.control.landings) instead of standing on the edge.
+    scenario = shorten("unseen-step", 6)
+    result = simulate(scenario, talos)
+    assert result.state == "estimated"
+    skims = [event for event in result.events if event.kind == "touchdown-skimmed"]
+    assert skims, "the step met short of a foothold"
+    assert all(0.0 < float(event.detail.split()[0]) <= 0.05 for event in skims)  # m above the foothold
+    assert not result.fell and result.steps_completed == 7
+    assert result.ended_at_rest and result.tip_time is None

@@ -1,0 +1,32 @@
+"""Talos climbs the built-in 15 cm stairs kinematically only with its rear heel rolled onto the toe: the IK reaches
+every tick of ``stairs-up`` with the toe-off, and refuses the walk at step 2 without it (the reach check of
+rtgait.robot.motion); at the lift-off the solved sole is pitched by the toe-off's angle."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pin = pytest.importorskip("pinocchio")
+
+from rtgait.core.geometry import toe_off  # noqa: E402
+from rtgait.robot.motion import UnreachableError, whole_body_motion  # noqa: E402
+from tests.robot.conftest import planned_walk  # noqa: E402  (the robot's own COG height, stance and sole)
+
+
+def test_talos_reaches_the_stairs_with_the_toe_off_and_not_without(talos, monkeypatch) -> None:
+    walk = planned_walk(talos, "stairs-up")
+    motion = whole_body_motion(talos, walk)
+    assert motion.errors[:, 0].max() < 1e-4  # the COG tracked (m)
+    # The first lift-off onto the stairs (the left foot leaves the floor for the first tread): the solved sole's
+    # pitch, from the full model's forward kinematics, is the toe-off's.
+    k = int(np.flatnonzero(walk.support == "right")[0])  # the left foot's lift-off for the first tread
+    data = talos.model.createData()
+    pin.framesForwardKinematics(talos.model, data, motion.q[k])
+    sole = data.oMf[talos.left_sole_id].rotation
+    pitch = np.arcsin(-sole[2, 0])  # Ry(pitch): the sole's x axis dips by the pitch
+    assert pitch == pytest.approx(toe_off.THETA, abs=1e-3)
+
+    monkeypatch.setattr(toe_off, "THETA", 0.0)
+    with pytest.raises(UnreachableError, match=r"step 2 .* out of reach for talos"):
+        whole_body_motion(talos, walk)
