@@ -50,10 +50,12 @@ from rtgait.control.settings import (
     controller_step_adjustment,
     step_limits,
 )
+from rtgait.control.sole_level import SoleLevel, SoleLevelSettings
 from rtgait.core.geometry.footsteps import Footstep, Side, SoleRect, Stride, mean_heading
 from rtgait.core.geometry.support import support_polygon
 from rtgait.core.laws.feedback import DcmFeedback
 from rtgait.core.laws.hip_strategy import HipStrategy
+from rtgait.core.lipm.closed_form import GRAVITY
 from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.levels import ControllerLevel, check_level, level_config
 from rtgait.core.planner.online import OnlinePlanner
@@ -101,6 +103,10 @@ class WalkingController:
         closed = level != "open-loop"
         self.feedback = DcmFeedback(planner.w, options.dcm, dt) if closed else None
         self.foot = FootForceControl(options.foot, dt) if closed and options.foot is not None else None
+        # The soles' tilts seen while they stand flat (joint calibration errors), given back to the ankles.
+        level_on = closed and options.sole_level > 0.0
+        settings = SoleLevelSettings(time_constant=options.sole_level) if level_on else None
+        self.sole_level = SoleLevel(info.sole, info.mass * GRAVITY, dt, settings) if settings is not None else None
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         self._last_error_replan = -math.inf
         tau = options.measurement_filter
@@ -127,6 +133,8 @@ class WalkingController:
             self.foot.reset()
         if self.hip is not None:
             self.hip.reset()
+        if self.sole_level is not None:
+            self.sole_level.reset()
         self._filtered: list[float] | None = None  # zmp x, y; per foot: normal force, cop x, cop y
         self._replans = self._adjustments = 0
         self.foot_landings.reset()
@@ -191,6 +199,11 @@ class WalkingController:
                 offsets = self.foot.update(split, left_state, right_state, support)
                 left = (left[0], left[1], left[2] + offsets.left_height, left[3])
                 right = (right[0], right[1], right[2] + offsets.right_height, right[3])
+            if self.sole_level is not None:
+                lr, lp, rr, rp = self.sole_level.update(m.left, m.right, support)
+                o = offsets
+                offsets = _new_tuple(FootOffsets, (o.left_roll + lr, o.left_pitch + lp, o.left_height,
+                                                   o.right_roll + rr, o.right_pitch + rp, o.right_height))  # fmt: skip
         if leaning:
             com = (com[0] + external.offset[0], com[1] + external.offset[1], com[2])
         lean = None

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 from rtgait.control.foot_control import FootControlGains, FootOffsets
+from rtgait.control.sole_level import SoleLevelSettings
 from rtgait.core.laws.feedback import DcmFeedbackGains
 from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
 from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR
@@ -126,6 +127,9 @@ class ControllerOptions:
             sole), with the robot's lean limits (:attr:`RobotInfo.lean`).
         max_lean: the hip strategy's largest lean on each axis (rad); 0.25 (14 degrees) stays inside Talos's and
             G1's hip roll ranges (+-0.52 rad) with the walking's own roll on top.
+        sole_level: the closed levels learn the tilt each sole shows in the estimate while it stands flat and loaded
+            (the leg's joint calibration errors) and command the sole at it, so that the real one lands and stands
+            level (:mod:`rtgait.control.sole_level`): the learning's time constant (s) of stance; 0 turns it off.
     """
 
     dcm: DcmFeedbackGains = field(default_factory=lambda: DcmFeedbackGains(com_admittance=SIM_COM_ADMITTANCE))
@@ -145,6 +149,7 @@ class ControllerOptions:
     anchor_blend: float = 0.0
     hip_strategy: bool = True
     max_lean: float = 0.25
+    sole_level: float = SoleLevelSettings().time_constant
 
     def __post_init__(self) -> None:
         if not isinstance(self.dcm, DcmFeedbackGains):
@@ -183,6 +188,7 @@ _RANGES = {
     "relanding_tolerance": (0.0, 10.0, "m"),
     "anchor_blend": (0.0, 10.0, "s"),
     "max_lean": (0.0, 0.6, "rad"),
+    "sole_level": (0.0, 1e4, "s"),
 }
 _OPEN_BELOW = ("max_lean",)
 _CHOICES = {"measured_replanning": ("on-error", "always"), "com_reference": ("measured", "planned")}
