@@ -60,6 +60,7 @@ from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.levels import ControllerLevel, check_level, level_config
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.planner.sample import SampleValues
+from rtgait.estimation.dcm_bias import DcmBiasEstimator
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -107,6 +108,9 @@ class WalkingController:
         level_on = closed and options.sole_level > 0.0
         settings = SoleLevelSettings(time_constant=options.sole_level) if level_on else None
         self.sole_level = SoleLevel(info.sole, info.mass * GRAVITY, dt, settings) if settings is not None else None
+        # The offset of the estimated COM from the true one (the model's masses), from the measured ZMP.
+        self.dcm_bias = DcmBiasEstimator(planner.w, dt) if closed and options.dcm_bias else None
+        self._bias = (0.0, 0.0)
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         self._last_error_replan = -math.inf
         tau = options.measurement_filter
@@ -135,6 +139,9 @@ class WalkingController:
             self.hip.reset()
         if self.sole_level is not None:
             self.sole_level.reset()
+        if self.dcm_bias is not None:
+            self.dcm_bias.reset()
+        self._bias = (0.0, 0.0)
         self._filtered: list[float] | None = None  # zmp x, y; per foot: normal force, cop x, cop y
         self._replans = self._adjustments = 0
         self.foot_landings.reset()
@@ -159,6 +166,11 @@ class WalkingController:
     # ----- the tick ------------------------------------------------------------------------------------------------
     def tick(self, t: float, measurement: Measurement) -> ControlTargets:
         """The IK targets at ``t`` (s) for this tick's measurement (:class:`~rtgait.estimation.state.Measurement`)."""
+        if self.dcm_bias is not None:  # plan and feed back on the true COM state, as the measured ZMP has it
+            raw = measurement
+            heading = mean_heading(raw.left.pose[3], raw.right.pose[3])
+            bx, by = self._bias = self.dcm_bias.update(raw.dcm, raw.zmp, heading)
+            measurement = shifted_measurement(raw, (-bx, -by), (0.0, 0.0), self.planner.w)
         external = self.external
         leaning = external.active
         if leaning:  # plan and feed back in the frame of the unpulled pendulum (external_force.py)

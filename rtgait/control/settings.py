@@ -130,6 +130,9 @@ class ControllerOptions:
         sole_level: the closed levels learn the tilt each sole shows in the estimate while it stands flat and loaded
             (the leg's joint calibration errors) and command the sole at it, so that the real one lands and stands
             level (:mod:`rtgait.control.sole_level`): the learning's time constant (s) of stance; 0 turns it off.
+        dcm_bias: the closed levels estimate the bias of the estimated DCM from the measured ZMP
+            (:mod:`rtgait.estimation.dcm_bias`), feed back and plan on the unbiased COM state and shift the IK's COM
+            target by the bias (the model's COM is off the true one by it).
     """
 
     dcm: DcmFeedbackGains = field(default_factory=lambda: DcmFeedbackGains(com_admittance=SIM_COM_ADMITTANCE))
@@ -150,6 +153,7 @@ class ControllerOptions:
     hip_strategy: bool = True
     max_lean: float = 0.25
     sole_level: float = SoleLevelSettings().time_constant
+    dcm_bias: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.dcm, DcmFeedbackGains):
@@ -171,7 +175,7 @@ class ControllerOptions:
             if getattr(self, name) not in choices:
                 allowed = " or ".join(repr(choice) for choice in choices)
                 raise ValueError(f"ControllerOptions.{name} must be {allowed}, got {getattr(self, name)!r}")
-        for name in ("adapt_timing", "hip_strategy"):
+        for name in ("adapt_timing", "hip_strategy", "dcm_bias"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"ControllerOptions.{name} must be true or false, got {getattr(self, name)!r}")
 

@@ -55,10 +55,11 @@ class SoleLevelSettings:
     min_load: float = 0.3
     edge_margin: float = 0.01
     max_tilt: float = math.radians(3.0)
+    swing_time_constant: float = 0.05
 
     def __post_init__(self) -> None:
         ranges = {"time_constant": (0.0, 1e4), "min_load": (0.0, 1.0), "edge_margin": (0.0, 0.1),
-                  "max_tilt": (0.0, 0.1)}  # fmt: skip
+                  "max_tilt": (0.0, 0.1), "swing_time_constant": (0.0, 1e4)}  # fmt: skip
         for field in fields(self):
             low, high = ranges[field.name]
             value = getattr(self, field.name)
@@ -86,6 +87,7 @@ class SoleLevel:
             raise ValueError(f"dt must be a period > 0 s, got {dt}")
         self.settings = s = settings or SoleLevelSettings()
         self._gain = -math.expm1(-dt / s.time_constant)
+        self._swing_gain = 0.0 if s.swing_time_constant == 0.0 else -math.expm1(-dt / s.swing_time_constant)
         self._min_force = s.min_load * weight
         m = s.edge_margin
         # The inside of the sole by the margin, in the sole frame (x forward; y to the left, `inner` toward the
@@ -98,6 +100,7 @@ class SoleLevel:
     def reset(self) -> None:
         """Forget the learnt tilts."""
         self._tilts = [0.0, 0.0, 0.0, 0.0]  # left roll, left pitch, right roll, right pitch (rad)
+        self._command = [0.0, 0.0, 0.0, 0.0]  # the same order
 
     @property
     def tilts(self) -> tuple[float, float, float, float]:
@@ -105,16 +108,32 @@ class SoleLevel:
         lr, lp, rr, rp = self._tilts
         return lr, lp, rr, rp
 
+    @property
+    def command(self) -> tuple[float, float, float, float]:
+        """The tilts to add to the soles' commanded roll and pitch (rad), same order as :attr:`tilts`."""
+        lr, lp, rr, rp = self._command
+        return lr, lp, rr, rp
+
     def update(self, left: FootState, right: FootState, support: str) -> tuple[float, float, float, float]:
         """One tick of eq. (1) for each foot meant to carry load (``support``: ``"double"``, ``"left"``,
         ``"right"``) that does; returns :attr:`tilts`."""
-        if support != "right":
-            self._learn(0, left, self._y_left)
-        if support != "left":
-            self._learn(2, right, self._y_right)
-        return self.tilts
+        for index, foot, y_range, carries in ((0, left, self._y_left, support != "right"),
+                                              (2, right, self._y_right, support != "left")):  # fmt: skip
+            flat = carries and self._learn(index, foot, y_range)
+            command, tilts = self._command, self._tilts
+            if flat:  # on the ground: the learnt tilt
+                for k in (index, index + 1):
+                    command[k] += self._gain * (tilts[k] - command[k])
+            elif not foot.loaded and self._swing_gain > 0.0 and math.isfinite(foot.roll + foot.pitch):
+                # In the air: steer the sole to read its learnt tilt, i.e. to be level.
+                limit = self.settings.max_tilt
+                for k, measured in ((index, foot.roll), (index + 1, foot.pitch)):
+                    value = command[k] + self._swing_gain * (tilts[k] - measured)
+                    low, high = tilts[k] - limit, tilts[k] + limit
+                    command[k] = low if value < low else (high if value > high else value)
+        return self.command
 
-    def _learn(self, index: int, foot: FootState, y_range: tuple[float, float]) -> None:
+    def _learn(self, index: int, foot: FootState, y_range: tuple[float, float]) -> bool:
         cx, cy = foot.cop_local
         x_low, x_high = self._x
         flat = (
@@ -124,9 +143,10 @@ class SoleLevel:
             and y_range[0] <= cy <= y_range[1]
         )
         if not flat or not (math.isfinite(foot.roll) and math.isfinite(foot.pitch)):
-            return
+            return False
         limit = self.settings.max_tilt
         tilts, gain = self._tilts, self._gain
         for k, measured in ((index, foot.roll), (index + 1, foot.pitch)):
             value = tilts[k] + gain * (measured - tilts[k])
             tilts[k] = -limit if value < -limit else (limit if value > limit else value)
+        return True
