@@ -26,6 +26,12 @@ When no step catches the error, the plan is kept (:meth:`WalkingController._dcm_
 outward DCM error in single support unless step timing adaptation may hold the stance longer, and a later step's
 landing and timing are kept when no candidate for it catches the error (the core's ``on_failure="keep"``).
 
+On the closed levels, two corrections for a robot that is not its model (``docs/robots.md``, "Model error"): the
+DCM bias estimator (:mod:`rtgait.estimation.dcm_bias`, ``ControllerOptions.dcm_bias``) takes the offset of the
+estimated COM from the one the measured ZMP agrees with out of the measurement the levels act on (the log keeps the
+estimator's), and sole levelling (:mod:`rtgait.control.sole_level`, ``ControllerOptions.sole_level``) adds the tilt
+each sole shows while it stands flat to its commanded roll and pitch.
+
 All on Python floats; the support polygon (numpy) is rebuilt only when the feet in contact move.
 """
 
@@ -110,7 +116,6 @@ class WalkingController:
         self.sole_level = SoleLevel(info.sole, info.mass * GRAVITY, dt, settings) if settings is not None else None
         # The offset of the estimated COM from the true one (the model's masses), from the measured ZMP.
         self.dcm_bias = DcmBiasEstimator(planner.w, dt) if closed and options.dcm_bias else None
-        self._bias = (0.0, 0.0)
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         self._last_error_replan = -math.inf
         tau = options.measurement_filter
@@ -141,7 +146,6 @@ class WalkingController:
             self.sole_level.reset()
         if self.dcm_bias is not None:
             self.dcm_bias.reset()
-        self._bias = (0.0, 0.0)
         self._filtered: list[float] | None = None  # zmp x, y; per foot: normal force, cop x, cop y
         self._replans = self._adjustments = 0
         self.foot_landings.reset()
@@ -166,10 +170,10 @@ class WalkingController:
     # ----- the tick ------------------------------------------------------------------------------------------------
     def tick(self, t: float, measurement: Measurement) -> ControlTargets:
         """The IK targets at ``t`` (s) for this tick's measurement (:class:`~rtgait.estimation.state.Measurement`)."""
-        if self.dcm_bias is not None:  # plan and feed back on the true COM state, as the measured ZMP has it
+        if self.dcm_bias is not None:  # feed back and replan on the COM state the measured ZMP agrees with
             raw = measurement
             heading = mean_heading(raw.left.pose[3], raw.right.pose[3])
-            bx, by = self._bias = self.dcm_bias.update(raw.dcm, raw.zmp, heading)
+            bx, by = self.dcm_bias.update(raw.dcm, raw.zmp, heading)
             measurement = shifted_measurement(raw, (-bx, -by), (0.0, 0.0), self.planner.w)
         external = self.external
         leaning = external.active

@@ -131,8 +131,8 @@ class ControllerOptions:
             (the leg's joint calibration errors) and command the sole at it, so that the real one lands and stands
             level (:mod:`rtgait.control.sole_level`): the learning's time constant (s) of stance; 0 turns it off.
         dcm_bias: the closed levels estimate the bias of the estimated DCM from the measured ZMP
-            (:mod:`rtgait.estimation.dcm_bias`), feed back and plan on the unbiased COM state and shift the IK's COM
-            target by the bias (the model's COM is off the true one by it).
+            (:mod:`rtgait.estimation.dcm_bias`: the model's COM is off the true one) and feed back and replan on
+            the unbiased COM state.
     """
 
     dcm: DcmFeedbackGains = field(default_factory=lambda: DcmFeedbackGains(com_admittance=SIM_COM_ADMITTANCE))

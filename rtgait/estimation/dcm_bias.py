@@ -18,8 +18,8 @@ walk) and measurement noise ``v``. Its variances are densities, the same filter 
 
 The bias belongs to the robot's body, not to the world: when the robot turns by ``dpsi`` the estimated bias turns
 with it (its mean; the covariance is isotropic between the axes and kept). The unbiased COM is ``c - b``, the
-unbiased DCM ``y - b``; a position-controlled robot whose IK puts its model's COM at a target puts its true COM at the
-target ``- b``, so the target is shifted by ``+b``.
+unbiased DCM ``y - b``: the controller feeds back and replans on them (as mc_rtc does with its estimated bias), and
+the DCM law's integral and the COM admittance then move the COM target by what the IK's model puts the COM off.
 
 What it also takes for a bias: anything that holds the measured ZMP off the pendulum's on average (an external force,
 a ZMP error of the force sensors); whatever changes faster than its drift allows is left to the DCM feedback.
