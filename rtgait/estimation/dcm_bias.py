@@ -7,13 +7,16 @@ links weigh and sit a little elsewhere, so the estimated COM, and with it the DC
 drifts from that law by ``w b``. A Kalman filter on the state ``(xi, b)`` per horizontal axis, after the DCM bias
 estimator of mc_rtc's LIPM stabiliser (Benallegue's ``UnidimLipmDcmEstimator``, state-observation), separates them:
 
-    xi[k+1] = (1 + w dt) xi[k] - w dt p[k] + n_xi,      b[k+1] = b[k] + n_b,      y[k] = xi[k] + b[k] + v      (1)
+    xi[k+1] = e xi[k] - (e - 1) p[k] - h (p[k+1] - p[k]) + n_xi,    b[k+1] = b[k] + n_b,    y[k] = xi[k] + b[k] + v (1)
 
-with process noises ``n_xi`` (the measured ZMP's error through the pendulum) and ``n_b`` (the bias's drift, a random
-walk) and measurement noise ``v``. Its variances are densities, the same filter at any control period ``dt``:
-``Var n_xi = w^2 s_p^2 dt_0 dt``, ``Var n_b = s_b^2 dt``, ``Var v = s_y^2 dt_0 / dt`` with ``dt_0`` = 5 ms, at which
-``s_p`` = 0.05 m, ``s_y`` = 0.01 m and ``s_b`` = 1.4 mm/sqrt(s) are mc_rtc's defaults (ZMP error 0.05 m, DCM error
-0.01 m, bias drift 0.02 m per second per tick, i.e. 0.02 dt_0 per tick). The bias is clamped to ``max_bias`` (mc_rtc's
+with ``e = exp(w dt)`` and ``h = (e - 1 - w dt) / (w dt)``: the pendulum's exact step for a ZMP that goes linearly
+from one tick's measurement to the next (mc_rtc's filter takes the Euler step, ``1 + w dt`` and the held ZMP, whose
+error over a walk's ZMP would read as a bias of a fraction of a millimetre); process noises ``n_xi`` (the measured
+ZMP's error through the pendulum) and ``n_b`` (the bias's drift, a random walk) and measurement noise ``v``. Its
+variances are densities, the same filter at any control period ``dt``: ``Var n_xi = w^2 s_p^2 dt_0 dt``, ``Var n_b =
+s_b^2 dt``, ``Var v = s_y^2 dt_0 / dt`` with ``dt_0`` = 5 ms, at which ``s_p`` = 0.05 m, ``s_y`` = 0.01 m and
+``s_b`` = 1.4 mm/sqrt(s) are mc_rtc's defaults (ZMP error 0.05 m, DCM error 0.01 m, bias drift 0.02 m per second per
+tick, i.e. 0.02 dt_0 per tick). The bias is clamped to ``max_bias`` (mc_rtc's
 ``biasLimit``, 0.02 m). Both axes share the same matrices, so one covariance serves both (three numbers a tick).
 
 The bias belongs to the robot's body, not to the world: when the robot turns by ``dpsi`` the estimated bias turns
@@ -84,7 +87,10 @@ class DcmBiasEstimator:
             raise ValueError(f"dt must be a period > 0 s, got {dt}")
         self.settings = s = settings or DcmBiasSettings()
         self.w, self.dt = float(w), float(dt)
-        self._a = 1.0 + w * dt  # the DCM's transition; the ZMP enters with -w dt
+        a = w * dt
+        self._a = math.exp(a)  # the DCM's transition; the ZMPs of the two ticks enter as in eq. (1)
+        self._hold = math.expm1(a)
+        self._ramp = (math.expm1(a) - a) / a
         self._q_dcm = w * w * s.zmp_error**2 * REFERENCE_PERIOD * dt
         self._q_bias = s.bias_drift**2 * dt
         self._r = s.dcm_error**2 * REFERENCE_PERIOD / dt
@@ -113,8 +119,7 @@ class DcmBiasEstimator:
 
     def update(self, dcm: tuple[float, float], zmp: tuple[float, float], heading: float) -> tuple[float, float]:
         """One tick: the estimated DCM ``y`` (m), the measured ZMP ``p`` (m; NaN when no foot is loaded: the
-        prediction then holds the DCM's pendulum on the last ZMP) and the robot's heading (rad). Returns
-        :attr:`bias`."""
+        prediction then holds the last one) and the robot's heading (rad). Returns :attr:`bias`."""
         yx, yy = dcm
         if not (math.isfinite(yx) and math.isfinite(yy)):
             raise ValueError(f"dcm must be finite (m), got {dcm!r}")
@@ -131,12 +136,15 @@ class DcmBiasEstimator:
         if turn != 0.0:
             c, s = math.cos(turn), math.sin(turn)
             bias[0], bias[1] = c * bias[0] - s * bias[1], s * bias[0] + c * bias[1]
-        # Prediction over the last tick, with the ZMP that acted over it.
-        a, wdt = self._a, self.w * self.dt
+        # Prediction over the last tick, the ZMP going from the last measurement to this one.
+        a, hold, ramp = self._a, self._hold, self._ramp
         dcm_state = self._dcm
         px, py = self._zmp
-        dcm_state[0] = a * dcm_state[0] - wdt * px
-        dcm_state[1] = a * dcm_state[1] - wdt * py
+        if math.isfinite(zmp[0]) and math.isfinite(zmp[1]):
+            self._zmp = zmp
+        qx, qy = self._zmp
+        dcm_state[0] = a * dcm_state[0] - hold * px - ramp * (qx - px)
+        dcm_state[1] = a * dcm_state[1] - hold * py - ramp * (qy - py)
         p_xx, p_xb, p_bb = self._p
         p_xx = a * a * p_xx + self._q_dcm
         p_xb = a * p_xb
@@ -154,6 +162,4 @@ class DcmBiasEstimator:
         # P - K C P (C = [1, 1]).
         c_x, c_b = p_xx + p_xb, p_xb + p_bb
         self._p = [p_xx - k_x * c_x, p_xb - k_x * c_b, p_bb - k_b * c_b]
-        if math.isfinite(zmp[0]) and math.isfinite(zmp[1]):
-            self._zmp = zmp
         return self.bias
