@@ -170,11 +170,6 @@ class WalkingController:
     # ----- the tick ------------------------------------------------------------------------------------------------
     def tick(self, t: float, measurement: Measurement) -> ControlTargets:
         """The IK targets at ``t`` (s) for this tick's measurement (:class:`~rtgait.estimation.state.Measurement`)."""
-        if self.dcm_bias is not None:  # feed back and replan on the COM state the measured ZMP agrees with
-            raw = measurement
-            heading = mean_heading(raw.left.pose[3], raw.right.pose[3])
-            bx, by = self.dcm_bias.update(raw.dcm, raw.zmp, heading)
-            measurement = shifted_measurement(raw, (-bx, -by), (0.0, 0.0), self.planner.w)
         external = self.external
         leaning = external.active
         if leaning:  # plan and feed back in the frame of the unpulled pendulum (external_force.py)
@@ -182,6 +177,13 @@ class WalkingController:
             measurement = shifted_measurement(
                 measurement, (-external.offset[0], -external.offset[1]), (-rate[0], -rate[1]), self.planner.w
             )
+        if self.dcm_bias is not None:
+            # Feed back and replan on the COM state the measured ZMP agrees with; after the lean's shift, whose
+            # pendulum the measured ZMP drives, so that a known pull is no bias.
+            raw = measurement
+            heading = mean_heading(raw.left.pose[3], raw.right.pose[3])
+            bx, by = self.dcm_bias.update(raw.dcm, raw.zmp, heading)
+            measurement = shifted_measurement(raw, (-bx, -by), (0.0, 0.0), self.planner.w)
         planner, m = self.planner, measurement
         adaptive = self.level == "adaptive"
         events: list[ControlEvent] = []
