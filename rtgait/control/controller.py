@@ -110,12 +110,12 @@ class WalkingController:
         closed = level != "open-loop"
         self.feedback = DcmFeedback(planner.w, options.dcm, dt) if closed else None
         self.foot = FootForceControl(options.foot, dt) if closed and options.foot is not None else None
-        # The soles' tilts seen while they stand flat (joint calibration errors), given back to the ankles.
-        level_on = closed and options.sole_level > 0.0
-        settings = SoleLevelSettings(time_constant=options.sole_level) if level_on else None
+        # The soles' tilts seen while they stand flat (joint calibration errors), given back to the ankles, and the
+        # offset of the estimated COM from the true one (the model's masses), from the measured ZMP: made for every
+        # level (a switch may close the loop), acting in the closed ones.
+        settings = SoleLevelSettings(time_constant=options.sole_level) if options.sole_level > 0.0 else None
         self.sole_level = SoleLevel(info.sole, info.mass * GRAVITY, dt, settings) if settings is not None else None
-        # The offset of the estimated COM from the true one (the model's masses), from the measured ZMP.
-        self.dcm_bias = DcmBiasEstimator(planner.w, dt) if closed and options.dcm_bias else None
+        self.dcm_bias = DcmBiasEstimator(planner.w, dt) if options.dcm_bias else None
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         self._last_error_replan = -math.inf
         tau = options.measurement_filter
@@ -177,7 +177,8 @@ class WalkingController:
             measurement = shifted_measurement(
                 measurement, (-external.offset[0], -external.offset[1]), (-rate[0], -rate[1]), self.planner.w
             )
-        if self.dcm_bias is not None:
+        closed = self.level != "open-loop"
+        if self.dcm_bias is not None and closed:
             # Feed back and replan on the COM state the measured ZMP agrees with; after the lean's shift, whose
             # pendulum the measured ZMP drives, so that a known pull is no bias.
             raw = measurement
@@ -217,7 +218,7 @@ class WalkingController:
                 offsets = self.foot.update(split, left_state, right_state, support)
                 left = (left[0], left[1], left[2] + offsets.left_height, left[3])
                 right = (right[0], right[1], right[2] + offsets.right_height, right[3])
-            if self.sole_level is not None:
+            if self.sole_level is not None and closed:
                 lr, lp, rr, rp = self.sole_level.update(m.left, m.right, support)
                 o = offsets
                 offsets = _new_tuple(FootOffsets, (o.left_roll + lr, o.left_pitch + lp, o.left_height,
@@ -416,13 +417,22 @@ class WalkingController:
                 self.foot.inner = foot
             else:
                 self.foot = foot
+            if self.sole_level is not None:  # the learnt tilts kept, the soles' command from the plan's again
+                self.sole_level.restart_command()
+            if self.dcm_bias is not None:  # not updated in open-loop: it starts again from the measured DCM
+                self.dcm_bias.reset()
         elif level == "open-loop":  # down: fade the offsets out (nothing to fade before the start)
             ticks = max(1, round(LEVEL_FADE / self.dt))
             offset = self.feedback.com_offset if self.feedback is not None else (0.0, 0.0)
             offsets = self.foot.offsets if self.foot is not None else FootOffsets()
+            if self.sole_level is not None:  # the soles' levelling fades with the foot force control's tilts
+                lr, lp, rr, rp = self.sole_level.command
+                o = offsets
+                offsets = FootOffsets(o.left_roll + lr, o.left_pitch + lp, o.left_height,
+                                      o.right_roll + rr, o.right_pitch + rp, o.right_height)  # fmt: skip
             moved = any(offset) or any(offsets)
             self.feedback = FeedbackFade(self, None, offset, ticks) if moved else None
-            self.foot = FootFade(self, None, offsets, ticks) if moved and self.foot is not None else None
+            self.foot = FootFade(self, None, offsets, ticks) if moved else None
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         if level == "adaptive":
             self._last_error_replan = -math.inf

@@ -114,6 +114,11 @@ class SoleLevel:
         self._tilts = [0.0, 0.0, 0.0, 0.0]  # left roll, left pitch, right roll, right pitch (rad)
         self._command = [0.0, 0.0, 0.0, 0.0]  # the same order
 
+    def restart_command(self) -> None:
+        """Start the command from zero (the plan's soles) again, the learnt tilts kept: after a level switch that
+        did not apply it."""
+        self._command = [0.0, 0.0, 0.0, 0.0]
+
     @property
     def tilts(self) -> tuple[float, float, float, float]:
         """The learnt ``(left roll, left pitch, right roll, right pitch)`` (rad)."""
