@@ -239,7 +239,7 @@ def test_the_hip_strategy_stands_a_forward_push_the_feet_alone_do_not(robots):
     # upper body forward as well (rtgait.core.laws.hip_strategy), it walks 61 and 62 N s through at both. What the
     # controller does given the true state: on the estimate this push is beyond what Talos walks, at both steps.
     # The push was sized without the sole levelling and DCM bias filter, which are off here: with them on, the feet
-    # alone walk 61 N s through at 1 ms (the bias filter reads part of the push's aftermath as a bias).
+    # alone walk 61 N s through at 1 ms.
     model, sim = robots["talos"]
     scenario = short(4, 0.1)
     single = scenario.timing.start + scenario.timing.single_support + scenario.timing.double_support
