@@ -20,6 +20,11 @@ re-landings of a foot that bounced; the worst step lift-off's delay).
 The runs are spread over ``--workers`` processes (default 2) with a progress bar on stderr; the result is a table,
 or with ``--json`` one JSON document.
 
+``--model-error SEED[,SEED...]`` adds a table of walks with a model error (:mod:`rtgait.sim.model_error`: the
+simulated robot's masses, centres of mass and joint zeros drawn off its model from each seed): fig6, fig7, fig8 and,
+with ``--velocity-walks``, the walks by command, each robot and seed, on the estimate (sensors as described) and, with
+``--truth``, on the simulator's truth too; walked or not, the fall's time and the errors.
+
 ``--shadow`` measures the estimator alone instead, as a tuning bench: fig8 walked on the simulator's truth (the same
 walk for every estimator setting) with the estimator updated in the shadow from the sensors each tick, with
 ``--yaw feet|imu`` and ``--velocity-cutoff HZ``; the same errors, at ``--noise`` (its first value) and ``--seed``.
@@ -31,9 +36,9 @@ shift of the true DCM that fits the estimate best, :func:`best_delay`) and the t
 loaded that the truth has in the air (false contacts, which the controller may take for a landing).
 
 Usage: ``python benchmarks/estimation.py [--robot R ...] [--velocity-walks] [--quick] [--walk-time S]
-[--noise F ...] [--latency L ...] [--no-degradation] [--workers N] [--json]`` or ``python benchmarks/estimation.py
---shadow [--robot R] [--scenario fig8] [--noise F] [--seed N] [--yaw feet|imu] [--velocity-cutoff HZ]
-[--push N_S [--push-direction DEG]]``
+[--noise F ...] [--latency L ...] [--no-degradation] [--model-error SEEDS] [--truth] [--workers N] [--json]``
+or ``python benchmarks/estimation.py --shadow [--robot R] [--scenario fig8] [--noise F] [--seed N]
+[--yaw feet|imu] [--velocity-cutoff HZ] [--push N_S [--push-direction DEG]]``
 """
 
 from __future__ import annotations
@@ -63,20 +68,38 @@ MAX_DELAY = 0.05
 """The largest delay :func:`best_delay` looks for (s)."""
 
 
-def _job(robot: str, walk: str, seconds: float, noise: float = 1.0, latency: int | None = None) -> dict[str, Any]:
-    """A walk of ``benchmarks/sim.py``'s :func:`walk_case`, on the estimate, at these sensor settings."""
-    velocity = None if walk == "fig8" else walk
-    sensors = {"noise": noise, "latency": latency, "seed": 0}
-    return {"robot": robot, "scenario": "fig8", "controller": "adaptive", "velocity": velocity, "seconds": seconds,
-            "physics_dt": None, "options": {}, "sim_options": {"sensors": sensors}, "state": "estimated"}  # fmt: skip
+SCENARIOS = ("fig6", "fig7", "fig8")
+"""The scenarios walked as planned (the other walks are by velocity command, on fig8's timing)."""
 
 
-def _row(case: dict[str, Any]) -> dict[str, Any]:
+def _job(
+    robot: str,
+    walk: str,
+    seconds: float,
+    noise: float = 1.0,
+    latency: int | None = None,
+    model_error: int | None = None,
+    state: str = "estimated",
+) -> dict[str, Any]:
+    """A walk of ``benchmarks/sim.py``'s :func:`walk_case`, on the estimate (or ``state``), at these sensor settings
+    and with this model error seed."""
+    velocity = None if walk in SCENARIOS else walk
+    sim_options: dict[str, Any] = {"sensors": {"noise": noise, "latency": latency, "seed": 0}}
+    if model_error is not None:
+        sim_options["model_error"] = model_error
+    return {"robot": robot, "scenario": walk if velocity is None else "fig8", "controller": "adaptive",
+            "velocity": velocity, "seconds": seconds, "physics_dt": None, "options": {}, "sim_options": sim_options,
+            "state": state, "model_error": model_error}  # fmt: skip
+
+
+def _row(case: dict[str, Any], job: dict[str, Any]) -> dict[str, Any]:
     """The fields reported of one walk."""
     estimation = case["estimation"] or {}
     return {
         "robot": case["robot"],
         "walk": case["walk"],
+        "state": job["state"],
+        "model_error": job["model_error"],
         "noise": case["sensors"]["noise"],
         "latency": case["sensors"]["latency"],
         "walked": case["walked"],
@@ -100,7 +123,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if not args.no_degradation:
         jobs += [("degradation", _job(robot, "fig8", seconds, noise, latency))
                  for robot in args.robots for noise in args.noise for latency in args.latency]  # fmt: skip
-    rows: dict[str, list[dict[str, Any]]] = {"walks": [], "degradation": []}
+    for seed in args.model_error or []:
+        states = ("estimated", "truth") if args.truth else ("estimated",)
+        jobs += [("model_error", _job(robot, walk, seconds, model_error=seed, state=state))
+                 for robot in args.robots for walk in [*SCENARIOS, *names[1:]] for state in states]  # fmt: skip
+    rows: dict[str, list[dict[str, Any]]] = {"walks": [], "degradation": [], "model_error": []}
     order = {id(job): i for i, (_, job) in enumerate(jobs)}
     done: list[tuple[int, str, dict[str, Any]]] = []
     with ProcessPoolExecutor(args.workers) as pool:
@@ -108,7 +135,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         bar = tqdm(total=len(futures), desc="walks on the estimate", unit=" walk", disable=None, file=sys.stderr)
         for future in as_completed(futures):
             table, job = futures[future]
-            done.append((order[id(job)], table, _row(future.result())))
+            done.append((order[id(job)], table, _row(future.result(), job)))
             bar.update(1)
         bar.close()
     for _, table, row in sorted(done, key=lambda item: item[0]):
@@ -160,6 +187,14 @@ def print_tables(report: dict[str, Any]) -> None:
         print(f"{'':<6} {'':>5} {'':>4} {'':<22} {UNITS}")
         for row in report["degradation"]:
             print(f"{row['robot']:<6} {row['noise']:>5g} {row['latency']:>4} {outcome(row):<22} {_errors(row)}")
+    if report.get("model_error"):
+        print("\nwalks with a model error (seed), sensors as described")
+        print(f"{'robot':<6} {'walk':<18} {'seed':>4} {'state':<9} {'outcome':<22} {'ZMP':>6} {HEADER}")
+        print(f"{'':<6} {'':<18} {'':>4} {'':<9} {'':<22} {'mm':>6} {UNITS}")
+        for row in report["model_error"]:
+            zmp = _mm(row["zmp_vs_plan_rms"])
+            print(f"{row['robot']:<6} {row['walk']:<18} {row['model_error']:>4} {row['state']:<9} "
+                  f"{outcome(row):<22} {zmp:>6} {_errors(row)}")  # fmt: skip
 
 
 # ----- the estimator alone, in the shadow of a walk on the truth ----------------------------------------------------
@@ -276,6 +311,17 @@ def shadow(
     return report
 
 
+def _seeds(text: str) -> list[int]:
+    """``--model-error``'s comma-separated seeds (integers >= 0)."""
+    try:
+        seeds = [int(part) for part in text.split(",")]
+    except ValueError:
+        seeds = [-1]
+    if any(seed < 0 for seed in seeds):
+        raise argparse.ArgumentTypeError(f"seeds must be integers >= 0 separated by commas, got {text!r}")
+    return seeds
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robot", action="append", dest="robots", help="robot(s) (default talos and g1)")
@@ -285,6 +331,13 @@ def main() -> None:
     parser.add_argument("--noise", type=float, action="append", help=f"noise factor(s) (default {NOISE})")
     parser.add_argument("--latency", type=int, action="append", help=f"latency(ies), periods (default {LATENCY})")
     parser.add_argument("--no-degradation", action="store_true", help="the walks only")
+    parser.add_argument(
+        "--model-error",
+        type=_seeds,
+        metavar="SEED[,SEED...]",
+        help="a table of fig6, fig7, fig8 (and the walks by command) with each model error seed",
+    )
+    parser.add_argument("--truth", action="store_true", help="--model-error: on the simulator's truth too")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--json", action="store_true", help="print one JSON document")
     parser.add_argument("--shadow", action="store_true", help="the estimator alone, beside a walk on the truth")

@@ -26,6 +26,12 @@ When no step catches the error, the plan is kept (:meth:`WalkingController._dcm_
 outward DCM error in single support unless step timing adaptation may hold the stance longer, and a later step's
 landing and timing are kept when no candidate for it catches the error (the core's ``on_failure="keep"``).
 
+On the closed levels, two corrections for a robot that is not its model (``docs/robots.md``, "Model error"): the
+DCM bias estimator (:mod:`rtgait.estimation.dcm_bias`, ``ControllerOptions.dcm_bias``) takes the offset of the
+estimated COM from the one the measured ZMP agrees with out of the measurement the levels act on (the log keeps the
+estimator's), and sole levelling (:mod:`rtgait.control.sole_level`, ``ControllerOptions.sole_level``) adds the tilt
+each sole shows while it stands flat to its commanded roll and pitch.
+
 All on Python floats; the support polygon (numpy) is rebuilt only when the feet in contact move.
 """
 
@@ -50,14 +56,17 @@ from rtgait.control.settings import (
     controller_step_adjustment,
     step_limits,
 )
+from rtgait.control.sole_level import SoleLevel, SoleLevelSettings
 from rtgait.core.geometry.footsteps import Footstep, Side, SoleRect, Stride, mean_heading
 from rtgait.core.geometry.support import support_polygon
 from rtgait.core.laws.feedback import DcmFeedback
 from rtgait.core.laws.hip_strategy import HipStrategy
+from rtgait.core.lipm.closed_form import GRAVITY
 from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.levels import ControllerLevel, check_level, level_config
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.planner.sample import SampleValues
+from rtgait.estimation.dcm_bias import DcmBiasEstimator
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -101,6 +110,12 @@ class WalkingController:
         closed = level != "open-loop"
         self.feedback = DcmFeedback(planner.w, options.dcm, dt) if closed else None
         self.foot = FootForceControl(options.foot, dt) if closed and options.foot is not None else None
+        # The soles' tilts seen while they stand flat (joint calibration errors), given back to the ankles, and the
+        # offset of the estimated COM from the true one (the model's masses), from the measured ZMP: made for every
+        # level (a switch may close the loop), acting in the closed ones.
+        settings = SoleLevelSettings(time_constant=options.sole_level) if options.sole_level > 0.0 else None
+        self.sole_level = SoleLevel(info.sole, info.mass * GRAVITY, dt, settings) if settings is not None else None
+        self.dcm_bias = DcmBiasEstimator(planner.w, dt) if options.dcm_bias else None
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         self._last_error_replan = -math.inf
         tau = options.measurement_filter
@@ -127,6 +142,10 @@ class WalkingController:
             self.foot.reset()
         if self.hip is not None:
             self.hip.reset()
+        if self.sole_level is not None:
+            self.sole_level.reset()
+        if self.dcm_bias is not None:
+            self.dcm_bias.reset()
         self._filtered: list[float] | None = None  # zmp x, y; per foot: normal force, cop x, cop y
         self._replans = self._adjustments = 0
         self.foot_landings.reset()
@@ -158,6 +177,14 @@ class WalkingController:
             measurement = shifted_measurement(
                 measurement, (-external.offset[0], -external.offset[1]), (-rate[0], -rate[1]), self.planner.w
             )
+        closed = self.level != "open-loop"
+        if self.dcm_bias is not None and closed:
+            # Feed back and replan on the COM state the measured ZMP agrees with; after the lean's shift, whose
+            # pendulum the measured ZMP drives, so that a known pull is no bias.
+            raw = measurement
+            heading = mean_heading(raw.left.pose[3], raw.right.pose[3])
+            bx, by = self.dcm_bias.update(raw.dcm, raw.zmp, heading)
+            measurement = shifted_measurement(raw, (-bx, -by), (0.0, 0.0), self.planner.w)
         planner, m = self.planner, measurement
         adaptive = self.level == "adaptive"
         events: list[ControlEvent] = []
@@ -191,6 +218,11 @@ class WalkingController:
                 offsets = self.foot.update(split, left_state, right_state, support)
                 left = (left[0], left[1], left[2] + offsets.left_height, left[3])
                 right = (right[0], right[1], right[2] + offsets.right_height, right[3])
+            if self.sole_level is not None and closed:
+                lr, lp, rr, rp = self.sole_level.update(m.left, m.right, support)
+                o = offsets
+                offsets = _new_tuple(FootOffsets, (o.left_roll + lr, o.left_pitch + lp, o.left_height,
+                                                   o.right_roll + rr, o.right_pitch + rp, o.right_height))  # fmt: skip
         if leaning:
             com = (com[0] + external.offset[0], com[1] + external.offset[1], com[2])
         lean = None
@@ -387,13 +419,22 @@ class WalkingController:
                 self.foot.inner = foot
             else:
                 self.foot = foot
+            if self.sole_level is not None:  # the learnt tilts kept, the soles' command from the plan's again
+                self.sole_level.restart_command()
+            if self.dcm_bias is not None:  # not updated in open-loop: it starts again from the measured DCM
+                self.dcm_bias.reset()
         elif level == "open-loop":  # down: fade the offsets out (nothing to fade before the start)
             ticks = max(1, round(LEVEL_FADE / self.dt))
             offset = self.feedback.com_offset if self.feedback is not None else (0.0, 0.0)
             offsets = self.foot.offsets if self.foot is not None else FootOffsets()
+            if self.sole_level is not None:  # the soles' levelling fades with the foot force control's tilts
+                lr, lp, rr, rp = self.sole_level.command
+                o = offsets
+                offsets = FootOffsets(o.left_roll + lr, o.left_pitch + lp, o.left_height,
+                                      o.right_roll + rr, o.right_pitch + rp, o.right_height)  # fmt: skip
             moved = any(offset) or any(offsets)
             self.feedback = FeedbackFade(self, None, offset, ticks) if moved else None
-            self.foot = FootFade(self, None, offsets, ticks) if moved and self.foot is not None else None
+            self.foot = FootFade(self, None, offsets, ticks) if moved else None
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         if level == "adaptive":
             self._last_error_replan = -math.inf

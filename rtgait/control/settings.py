@@ -8,6 +8,7 @@ from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 from rtgait.control.foot_control import FootControlGains, FootOffsets
+from rtgait.control.sole_level import SoleLevelSettings
 from rtgait.core.laws.feedback import DcmFeedbackGains
 from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
 from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR
@@ -126,6 +127,12 @@ class ControllerOptions:
             sole), with the robot's lean limits (:attr:`RobotInfo.lean`).
         max_lean: the hip strategy's largest lean on each axis (rad); 0.25 (14 degrees) stays inside Talos's and
             G1's hip roll ranges (+-0.52 rad) with the walking's own roll on top.
+        sole_level: the closed levels learn the tilt each sole shows in the estimate while it stands flat and loaded
+            (the leg's joint calibration errors) and command the sole at it, so that the real one lands and stands
+            level (:mod:`rtgait.control.sole_level`): the learning's time constant (s) of stance; 0 turns it off.
+        dcm_bias: the closed levels estimate the bias of the estimated DCM from the measured ZMP
+            (:mod:`rtgait.estimation.dcm_bias`: the model's COM is off the true one) and feed back and replan on
+            the unbiased COM state.
     """
 
     dcm: DcmFeedbackGains = field(default_factory=lambda: DcmFeedbackGains(com_admittance=SIM_COM_ADMITTANCE))
@@ -145,6 +152,8 @@ class ControllerOptions:
     anchor_blend: float = 0.0
     hip_strategy: bool = True
     max_lean: float = 0.25
+    sole_level: float = SoleLevelSettings().time_constant
+    dcm_bias: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.dcm, DcmFeedbackGains):
@@ -166,7 +175,7 @@ class ControllerOptions:
             if getattr(self, name) not in choices:
                 allowed = " or ".join(repr(choice) for choice in choices)
                 raise ValueError(f"ControllerOptions.{name} must be {allowed}, got {getattr(self, name)!r}")
-        for name in ("adapt_timing", "hip_strategy"):
+        for name in ("adapt_timing", "hip_strategy", "dcm_bias"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"ControllerOptions.{name} must be true or false, got {getattr(self, name)!r}")
 
@@ -183,6 +192,7 @@ _RANGES = {
     "relanding_tolerance": (0.0, 10.0, "m"),
     "anchor_blend": (0.0, 10.0, "s"),
     "max_lean": (0.0, 0.6, "rad"),
+    "sole_level": (0.0, 1e4, "s"),
 }
 _OPEN_BELOW = ("max_lean",)
 _CHOICES = {"measured_replanning": ("on-error", "always"), "com_reference": ("measured", "planned")}

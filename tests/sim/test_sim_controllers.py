@@ -33,7 +33,9 @@ CONFIG = PlannerConfig(
 INFO = RobotInfo(mass=90.0, sole=SOLE, leg_length=0.84)
 WEIGHT = 90.0 * 9.81
 DT = 0.001
-EXACT = ControllerOptions(measurement_filter=0.0)
+EXACT = ControllerOptions(measurement_filter=0.0, dcm_bias=False)
+"""No filter on the measurement, and no DCM bias estimation: the synthetic measurements here hold the DCM off the plan
+without a ZMP to match (the bias filter would take that for a bias; its own tests are tests/estimation)."""
 
 
 def foot_state(pose, fz, cop, loaded) -> FootState:
@@ -93,6 +95,23 @@ def test_on_the_plan_every_level_gives_the_plan(level):
     # Open loop and stabilized: the same plan, no correction; adaptive: its plans from the measured (= planned) state
     # reproduce the plan to the connection's round-off.
     assert worst < (1e-6 if level == "adaptive" else 1e-12)
+
+
+@pytest.mark.parametrize("level", ["stabilized", "adaptive"])
+def test_on_the_plan_the_dcm_bias_filter_finds_no_bias(level):
+    """The plan's DCM and ZMP obey the pendulum, so the bias filter finds none: the targets stay on the plan, to its
+    discrete pendulum's difference from the plan's (a ZMP linear over each tick)."""
+    options = dataclasses.replace(EXACT, dcm_bias=True)
+    ctl, plan = controller(level, steps=2, options=options), reference(steps=2)
+    worst = 0.0
+    for k in range(round(plan.end_time / DT)):
+        t = k * DT
+        values, support, _ = plan.sample_values(t)
+        out = ctl.tick(t, on_plan(t, values, support))
+        worst = max(worst, *(abs(a - b) for a, b in zip(out.com, values.cog, strict=True)),
+                    abs(out.zmp_command[0] - values.zmp_x), abs(out.zmp_command[1] - values.zmp_y))  # fmt: skip
+    assert ctl.dcm_bias is not None and max(map(abs, ctl.dcm_bias.bias)) < 1e-6
+    assert worst < 1e-5
 
 
 def test_the_targets_are_the_plans_quantities_by_name():
