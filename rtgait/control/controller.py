@@ -134,6 +134,11 @@ class WalkingController:
         self._landings_update, self._landings_ik = self.foot_landings.update, self.foot_landings.ik_targets  # per tick
         self.reset()
 
+    def off_level_ground(self) -> None:
+        """Turn sole levelling off for this walk: it takes every tilt a sole standing flat shows for a calibration
+        error of its leg, which a sloped foothold or a heel rolled onto its toe before a step up is not."""
+        self.sole_level = None
+
     def reset(self) -> None:
         """Zero the feedback states and forget the feet's landing states (called by :meth:`start`)."""
         if self.feedback is not None:

@@ -34,6 +34,7 @@ loaded but not flat (landing, rolling onto an edge) ``u`` holds, and the ankle d
 What it cannot tell apart: a ground that is not level (taken for a calibration error of the foot that stood on it,
 up to ``max_tilt``) and an error of the IMU's roll and pitch (seen by both soles alike). Both are small on the flat
 floors walked here; the foot force control's ankle damping (:mod:`rtgait.control.foot_control`) acts on top of it.
+On a walk with sloped footholds or toe-offs the walking stack turns it off (``Controller.off_level_ground``).
 """
 
 from __future__ import annotations

@@ -172,6 +172,8 @@ class WalkingStack:
         self._tilted = planner.n_steps is not None and is_tilted(planner.footprints())
         # Before a step up or down the rear heel rolls onto its toe (toe_off.py).
         self._toe_off = planner.n_steps is not None and changes_height(planner.footprints())
+        if self._tilted or self._toe_off:  # sole levelling reads any tilt of a standing sole as the leg's error
+            self.controller.off_level_ground()
 
     def control(self, t: float, measurement: Measurement | None) -> StackOutput:
         """The controller's targets at ``t`` (s) for ``measurement``, through the IK to the joints (the second half
