@@ -46,10 +46,15 @@ def shorten() -> Any:
 def short_walk(talos: Any, talos_sim: Any) -> Any:
     """fig8's timing (quasi-real-time, T_s 0.7 s, T_dbl 0.1 s) for 3 steps of 0.05 m, then a 0.15 m one, the
     controller on the simulator's truth: its users check the simulation's mechanics and measures against MuJoCo's
-    state, not the estimator (the CI walks and ``test_sim_estimation`` walk on the estimate)."""
+    state, not the estimator (the CI walks and ``test_sim_estimation`` walk on the estimate). Sole levelling is off:
+    its users pin this walk's landings (two late, three re-anchored swings), which the levelling moves."""
+    from rtgait.control.settings import ControllerOptions
     from rtgait.core.analysis.rollout import ScheduledChange
     from rtgait.io.sim_run import simulate
     from rtgait.sim.loop_options import LoopOptions
 
     scenario = short_scenario("fig8", 4, (ScheduledChange(4, length=0.15),))
-    return scenario, simulate(scenario, talos, sim=talos_sim, options=LoopOptions(state="truth"))
+    options = ControllerOptions(sole_level=0.0)
+    return scenario, simulate(
+        scenario, talos, sim=talos_sim, options=LoopOptions(state="truth"), controller_options=options
+    )

@@ -70,8 +70,7 @@ def test_the_pd_law_with_torques_and_gains_at_one_physics_step(talos_sim, servo)
     expected = np.clip(pd(talos_sim, *command, q, dq), -limit, limit)
     np.testing.assert_allclose(data.actuator_force, expected, rtol=1e-10, atol=1e-8)
     assert body.damping is False
-    # The readings' joint torques are the drives'.
-    np.testing.assert_allclose(body.read().joint_torques, data.actuator_force, atol=5.0)
+    # The readings' joint torques (the drive's over the step, its damping implicit) are tests/sim/test_sensors.py's.
 
 
 def test_the_pd_law_at_every_substep_on_interpolated_references(g1_motors):
