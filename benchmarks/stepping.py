@@ -6,7 +6,8 @@
 * ``adjust_us``: one ``replan_now`` that needs a step adjustment (a push at mid single support, 24 directions and
   sizes): the plan from the measured state, the decision over ``grid**2`` candidates, the plan remade with the new
   landing; operators warm (each case is run twice and the second timed);
-* ``decision_us`` and ``candidates_per_s``: the decision alone (:func:`rtgait.core.laws.stepping.propose_landing`);
+* ``decision_us`` and ``candidates_per_s``: the decision alone
+  (:func:`rtgait.core.laws.landing_choice.propose_landing`);
 * ``timing_adaptation``: the same three with step timing adaptation on (``adapt_timing``: ``--durations`` single
   supports times the square of ``--timing-grid`` landings, 4 x 256 = 1,024 candidates by default), the operators of the
   candidate timings included (built in one batch at the decision when the plan starts mid-phase, as here: every case
@@ -28,7 +29,7 @@ import numpy as np
 
 from rtgait.core.geometry.footsteps import SoleRect, Timing
 from rtgait.core.geometry.support import support_polygon
-from rtgait.core.laws import stepping
+from rtgait.core.laws import landing_choice
 from rtgait.core.laws.feedback import DcmFeedback
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
@@ -87,7 +88,7 @@ def _pushed_planner(config: PlannerConfig, push: tuple[float, float]) -> tuple[O
 def adjust_cost(grid: int, durations: int | None = None) -> dict:
     config = _config(grid, durations)
     total, decision, retimed = [], [], 0
-    original = stepping.propose_landing
+    original = landing_choice.propose_landing
 
     def timed(*args, **kwargs):
         began = time.perf_counter()
