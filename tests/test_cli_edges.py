@@ -20,7 +20,7 @@ from rtgait.cli import simulate_options
 from rtgait.cli.main import main
 from rtgait.core.analysis.rollout import rollout
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.io.plan_files import summarize
+from rtgait.io.plan_summary import summarize
 from rtgait.outputs import staging_folders
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import DEFAULT_STEP_HEIGHT, DEFAULT_STEP_WIDTH, ScenarioError

@@ -21,7 +21,7 @@ from rtgait.cli.common import (
 from rtgait.cli.control_file import controller_settings
 from rtgait.cli.simulate_options import _push_values
 from rtgait.estimation.estimator import DEFAULT_STATE
-from rtgait.io.plan_files import pendulum_report
+from rtgait.io.plan_report import pendulum_report
 from rtgait.io.summary_json import summary_text
 from rtgait.outputs import check_destination, staged_outputs
 from rtgait.scenario.scenario import Scenario, ScenarioError

@@ -22,7 +22,8 @@ from rtgait.core import (
 from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, evaluate_walks
 from rtgait.core.planner import auto
 from rtgait.core.planner.auto import auto_options, window
-from rtgait.io.plan_files import plan_report, summarize
+from rtgait.io.plan_report import plan_report
+from rtgait.io.plan_summary import summarize
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import ScenarioError, parse_scenario
 

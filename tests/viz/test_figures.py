@@ -16,7 +16,7 @@ from matplotlib.lines import Line2D
 
 from rtgait.core.analysis.rollout import Rollout, rollout
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.io.plan_files import summarize
+from rtgait.io.plan_summary import summarize
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario
 from rtgait.viz.figures import DRAW, MARKER_GID, MIN_DEVIATION_SPAN
