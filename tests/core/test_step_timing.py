@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from rtgait.core.analysis.walk_family import FamilyKey, WalkFamily
+from rtgait.core.analysis.family_key import FamilyKey
+from rtgait.core.analysis.walk_family import WalkFamily
 from rtgait.core.geometry.footsteps import SoleRect, Stride, Timeline, Timing
 from rtgait.core.planner.online import SAMPLE_FIELDS, OnlinePlanner, PlannerConfig, straight_walk
 from rtgait.core.walk.walk import VelocityCommand
