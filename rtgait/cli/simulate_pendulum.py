@@ -32,7 +32,7 @@ def _simulate_pendulum(args: argparse.Namespace, scenario: Scenario, out: Path, 
     DCM law's gains and ``replan_dcm_error`` of the ``[control]`` tables (the rest acts on a robot only)."""
     from rtgait.io.pendulum_run import PENDULUM_FILES, simulate_pendulum, write_pendulum_outputs
     from rtgait.robot.physical_checks import TOTAL_MASS_RANGE
-    from rtgait.viz.run_data import PENDULUM_FIGURE, figure_file
+    from rtgait.viz.figure_files import PENDULUM_FIGURE, figure_file
 
     for option, why in (("velocity", "walks by command"), ("html", "the 3D replay"), ("physics_dt", "its step"),
                         ("motor_model", "the drives' motors")):  # fmt: skip

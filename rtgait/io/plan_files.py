@@ -20,7 +20,7 @@ from rtgait.io.plan_summary import summarize
 from rtgait.io.summary_json import summary_text
 from rtgait.outputs import Staging, staged_outputs, write_atomic
 from rtgait.scenario.scenario import Scenario
-from rtgait.viz.run_data import OBSTACLE_FIGURE, figure_file, plan_figure_files
+from rtgait.viz.figure_files import OBSTACLE_FIGURE, figure_file, plan_figure_files
 
 if TYPE_CHECKING:  # the robot layer is optional (the [robot] extra)
     from rtgait.core.obstacle.walk import ObstacleRun

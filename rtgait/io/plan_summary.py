@@ -14,7 +14,8 @@ from rtgait.core.analysis.rollout import Rollout
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.io.terrain_summary import footprint_entry, terrain_summary
 from rtgait.scenario.scenario import Scenario
-from rtgait.viz.run_data import margin_marker, plan_free_segments
+from rtgait.viz.margin_marker import margin_marker
+from rtgait.viz.run_data import plan_free_segments
 
 __all__ = ["auto_decisions", "summarize"]
 
@@ -79,7 +80,7 @@ def summarize(rollout: Rollout, scenario: Scenario) -> dict[str, Any]:
     """Key numbers of a rollout, JSON-serialisable (SI units; planning times in microseconds).
 
     ``zmp_margin_min`` is the smallest margin; ``zmp_margin_min_time``, ``_position`` and ``_support`` describe the
-    tick the figures mark, one of the ticks at that minimum chosen by :func:`rtgait.viz.run_data.margin_marker`
+    tick the figures mark, one of the ticks at that minimum chosen by :func:`rtgait.viz.margin_marker.margin_marker`
     (when the minimum is tied, the first tied tick at or after the first change's decision, else the first tied
     tick). ``nominal_footprints`` and ``free_segments`` are there so that the figures can be drawn again from the
     files alone (``rtgait plot``).

@@ -22,7 +22,8 @@ from matplotlib.patches import Polygon
 
 from rtgait.core.analysis.rollout import Rollout
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
-from rtgait.viz.run_data import PLAN_FIGURES, FigureInfo, PlanRun, figure_file, plan_figure_files
+from rtgait.viz.figure_files import PLAN_FIGURES, figure_file, plan_figure_files
+from rtgait.viz.run_data import FigureInfo, PlanRun
 from rtgait.viz.style import (
     BAND_COLOR,
     CHANGE_COLOR,
@@ -365,7 +366,7 @@ DRAW: dict[str, Callable[[PlanRun, FigureInfo], Figure]] = {
     "top_view": draw_top_view,
     "zmp_margin": draw_zmp_margin,
 }
-"""The four figures of ``rtgait plan`` by file stem (:data:`~rtgait.viz.run_data.PLAN_FIGURES` order)."""
+"""The four figures of ``rtgait plan`` by file stem (:data:`~rtgait.viz.figure_files.PLAN_FIGURES` order)."""
 
 
 def plot_zmp_cog(rollout: RunLike, info: FigureInfo, path: Path) -> Path:
@@ -424,7 +425,7 @@ def plot_multibody_zmp(
 
 
 def render_all(rollout: RunLike, info: FigureInfo, folder: Path, fmt: str = "png") -> list[Path]:
-    """Write the four figures (:data:`~rtgait.viz.run_data.PLAN_FIGURES`) into ``folder`` in the format ``fmt``
+    """Write the four figures (:data:`~rtgait.viz.figure_files.PLAN_FIGURES`) into ``folder`` in the format ``fmt``
     (png, pdf or svg); returns their paths."""
     run = _as_run(rollout)
     folder = Path(folder)

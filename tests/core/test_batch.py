@@ -16,7 +16,7 @@ from rtgait.core.geometry.hull import PointChain, outside_margin, sole_extents, 
 from rtgait.core.geometry.support import signed_margin, support_polygon
 from rtgait.io.plan_summary import summarize
 from rtgait.scenario.loading import load_scenario
-from rtgait.viz.run_data import MARGIN_TIE_TOLERANCE, margin_marker
+from rtgait.viz.margin_marker import MARGIN_TIE_TOLERANCE, margin_marker
 
 PAPER = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "sidestep")
 

@@ -20,8 +20,9 @@ from rtgait.io.plan_summary import summarize
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario
 from rtgait.viz.figures import DRAW, MARKER_GID, MIN_DEVIATION_SPAN
+from rtgait.viz.margin_marker import margin_marker
 from rtgait.viz.pendulum import PendulumRun, draw_pendulum
-from rtgait.viz.run_data import FigureInfo, PlanRun, margin_marker
+from rtgait.viz.run_data import FigureInfo, PlanRun
 from rtgait.viz.style import TIME_LABEL, CleanFormatter, save, signed_mm
 
 NEGATIVE_ZERO = re.compile(r"^[-\N{MINUS SIGN}]0(\.0*)?( mm)?$")

@@ -50,7 +50,7 @@ from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.online import OnlinePlanner
 
 TIE = 1e-9
-"""Margins (m) within this of the minimum are tied with it (``rtgait.viz.run_data.MARGIN_TIE_TOLERANCE``)."""
+"""Margins (m) within this of the minimum are tied with it (``rtgait.viz.margin_marker.MARGIN_TIE_TOLERANCE``)."""
 _STRUCTURE_TOLERANCE = 1e-9
 CHUNK = 4096
 """Cases evaluated together: large enough to amortise numpy's call overhead, small enough to stay in cache."""
@@ -207,8 +207,8 @@ class WalkFamily:
         auto connection is wanted (half-plane margin at :data:`AUTO_SAMPLES` samples per segment); ``predicted`` then
         has one column per window (``+inf`` for a window without free segments).
 
-        The time is ``rtgait plan``'s (:func:`rtgait.viz.run_data.margin_marker`): the tick of the minimum, and when
-        several ticks are within :data:`TIE` of it, the first of them at or after ``change_time`` (s; default the
+        The time is ``rtgait plan``'s (:func:`rtgait.viz.margin_marker.margin_marker`): the tick of the minimum, and
+        when several ticks are within :data:`TIE` of it, the first of them at or after ``change_time`` (s; default the
         first change's hand-over), else the first of them.
         """
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
