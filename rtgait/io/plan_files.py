@@ -158,7 +158,8 @@ def write_plan_outputs(
 
 
 def _write_figures(result: Rollout, scenario: Scenario, robot_run: RobotRun | None, staging: Staging, fmt: str) -> None:
-    from rtgait.viz.figures import FigureInfo, plot_multibody_zmp, render_all
+    from rtgait.viz.figures import FigureInfo, render_all
+    from rtgait.viz.multibody_figure import plot_multibody_zmp
 
     info = FigureInfo(
         title=f"{scenario.name} ({scenario.connection})",

@@ -19,7 +19,8 @@ from rtgait.core.planner.online import OnlinePlanner
 from rtgait.io.plan_summary import summarize
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario
-from rtgait.viz.figures import DRAW, MARKER_GID, MIN_DEVIATION_SPAN
+from rtgait.viz.deviation_figure import MIN_DEVIATION_SPAN
+from rtgait.viz.figures import DRAW, MARKER_GID
 from rtgait.viz.margin_marker import margin_marker
 from rtgait.viz.pendulum import PendulumRun, draw_pendulum
 from rtgait.viz.run_data import FigureInfo, PlanRun
