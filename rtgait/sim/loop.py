@@ -47,7 +47,8 @@ stack is built by :mod:`rtgait.sim.loop_stack`.
 viewer sets the velocity command, pushes, switches the controller level); :func:`rtgait.sim.run_loop.run_sim_loop`
 steps one to the walk's end. The record (:mod:`rtgait.sim.loop_record`) is the whole run, or for an open-ended run a
 ring of its last seconds, so that its memory stays bounded however long it lasts; :meth:`ClosedLoop.result` makes it a
-:class:`SimResult` with the walk's outcome (:mod:`rtgait.sim.loop_result`).
+:class:`SimResult` with the walk's outcome (:mod:`rtgait.sim.loop_result`). What a caller reads and does between
+ticks (the last tick's values, a push, the result) is :class:`~rtgait.sim.loop_readout.LoopReadout`'s.
 """
 
 from __future__ import annotations
@@ -60,8 +61,7 @@ from typing import TYPE_CHECKING
 import mujoco
 
 from rtgait.control.controller import ControlEvent, WalkingController
-from rtgait.core.geometry.footsteps import Footstep
-from rtgait.core.geometry.support import SUPPORT_CODES, SUPPORT_NAMES
+from rtgait.core.geometry.support import SUPPORT_CODES
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.push import Push
 from rtgait.interface.task_targets import IKTargets
@@ -78,8 +78,8 @@ from rtgait.sim.loop_options import (
     timing_headroom,
 )  # fmt: skip
 from rtgait.sim.loop_push import LivePush
+from rtgait.sim.loop_readout import LoopReadout
 from rtgait.sim.loop_record import TickRecord, TickValues
-from rtgait.sim.loop_result import loop_result
 from rtgait.sim.loop_stack import build_stack, open_loop_controller
 from rtgait.sim.loop_start import StartTransition, start_balance
 from rtgait.sim.model import SimModel
@@ -104,7 +104,7 @@ __all__ = [
 _NO_COG, _NO_FOOT = (math.nan,) * 3, (math.nan,) * 4  # the IK's targets while the stack damps
 
 
-class ClosedLoop:
+class ClosedLoop(LoopReadout):
     """The closed loop of :func:`~rtgait.sim.run_loop.run_sim_loop`, one control tick per :meth:`step` (see the
     module docstring).
 
@@ -438,64 +438,3 @@ class ClosedLoop:
             self._ended = time.perf_counter()
             self._pushes.clear()
             self._live.clear()
-
-    # ----- pushes --------------------------------------------------------------------------------------------------
-    def push(self, force: Sequence[float], duration: float = 0.1, body: str | None = None) -> Push:
-        """Push ``body`` (default the floating base) with ``force`` (N, world frame) for ``duration`` (s) from the
-        next tick on (:class:`~rtgait.sim.loop_push.LivePush`: one at a time, rewritten every tick so that a viewer
-        clearing the applied forces does not cut it short); it is added to :attr:`pushes`.
-
-        Raises:
-            ValueError: a force or duration that is not finite, beyond physical sense (:meth:`Push.check`), or an
-                unknown body.
-        """
-        push = self._live.start(self.time_of(self.k), force, duration, body)
-        self.pushes.append(push)
-        return push
-
-    @property
-    def push_acting(self) -> tuple[float, float, float] | None:
-        """The force (N) of the :meth:`push` acting at the last tick, or ``None``."""
-        return self._live.force
-
-    # ----- the last tick's values ----------------------------------------------------------------------------------
-    @property
-    def last(self) -> TickValues:
-        """The last tick's values (those of the first tick's start before any step)."""
-        row = (max(self.k, 1) - 1) % self.record.capacity
-        p = self.record.planned[row].tolist()
-        return TickValues(
-            self.t, self.phase, SUPPORT_NAMES[int(self.record.support[row])], (p[0], p[1]), (p[2], p[3]),
-            self.zmp_measured, (p[4], p[5]), (p[6], p[7]), tuple(self.cog_target), self.left_foot, self.right_foot,
-        )  # fmt: skip
-
-    @property
-    def base_position(self) -> tuple[float, float, float]:
-        """The floating base's position now (m): after the last tick's physics."""
-        x, y, z = self.data.qpos[0:3].tolist()
-        return x, y, z
-
-    @property
-    def steps_completed(self) -> int:
-        """Touch-downs completed so far (:class:`~rtgait.sim.contact.Landings`)."""
-        return self.landings.count
-
-    def footprints(self) -> list[Footstep]:
-        """The planner's footprints as planned now (the two standing feet before the walk starts)."""
-        if self.planner.started:
-            return self.planner.footprints()
-        return self.planner.footprints(1)[:2]
-
-    # ----- the result ----------------------------------------------------------------------------------------------
-    def result(self, wall_time: float | None = None) -> SimResult:
-        """The :class:`SimResult` of the ticks recorded (all, or the ring's last ones; at least one tick run).
-
-        ``wall_time`` (s): the loop's wall-clock time to report; default the time from the first tick to the last
-        (to now while the run goes on). An open-ended walk's :attr:`SimResult.walk_end` is its last tick's time.
-        """
-        if self.k == 0:
-            raise RuntimeError("no tick has run yet")
-        if wall_time is None:
-            assert self._began is not None
-            wall_time = (self._ended if self._ended is not None else time.perf_counter()) - self._began
-        return loop_result(self, wall_time, self._n_steps, self._walk_end)
