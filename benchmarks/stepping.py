@@ -141,17 +141,25 @@ def main() -> None:
         print(json.dumps(result))
         return
     tick, adjust, decide = result["tick_us"], result["adjust_us"], result["decision_us"]
-    print(f"tick (observe + sample + DCM feedback), 1 kHz, feedback=measured: median {tick['median']:.2f} us, "
-          f"p99 {tick['p99']:.2f} us over {tick['ticks']} ticks")
-    print(f"replan_now with a step adjustment over {result['candidates']} candidates: "
-          f"median {adjust['median']:.0f} us, p99 {adjust['p99']:.0f} us ({result['adjustments']} pushes)")
-    print(f"the decision alone: median {decide['median']:.0f} us, p99 {decide['p99']:.0f} us: "
-          f"{result['candidates_per_s']:.3g} candidates/s")
+    print(
+        f"tick (observe + sample + DCM feedback), 1 kHz, feedback=measured: median {tick['median']:.2f} us, "
+        f"p99 {tick['p99']:.2f} us over {tick['ticks']} ticks"
+    )
+    print(
+        f"replan_now with a step adjustment over {result['candidates']} candidates: "
+        f"median {adjust['median']:.0f} us, p99 {adjust['p99']:.0f} us ({result['adjustments']} pushes)"
+    )
+    print(
+        f"the decision alone: median {decide['median']:.0f} us, p99 {decide['p99']:.0f} us: "
+        f"{result['candidates_per_s']:.3g} candidates/s"
+    )
     timing = result["timing_adaptation"]
-    print(f"with timing adaptation ({args.durations} single supports x {args.timing_grid**2} landings): replan_now "
-          f"median {timing['adjust_us']['median']:.0f} us, p99 {timing['adjust_us']['p99']:.0f} us; the decision "
-          f"median {timing['decision_us']['median']:.0f} us; {timing['retimed']} of {timing['adjustments']} "
-          "shortened the step")
+    print(
+        f"with timing adaptation ({args.durations} single supports x {args.timing_grid**2} landings): replan_now "
+        f"median {timing['adjust_us']['median']:.0f} us, p99 {timing['adjust_us']['p99']:.0f} us; the decision "
+        f"median {timing['decision_us']['median']:.0f} us; {timing['retimed']} of {timing['adjustments']} "
+        "shortened the step"
+    )
 
 
 if __name__ == "__main__":

@@ -141,9 +141,7 @@ def test_tick_formatter_never_writes_a_negative_zero() -> None:
 
 def _tick_labels(figure: Figure) -> list[str]:
     figure.canvas.draw()  # tick labels are made at drawing time
-    return [
-        label.get_text() for ax in figure.axes for label in [*ax.get_xticklabels(), *ax.get_yticklabels()]
-    ]
+    return [label.get_text() for ax in figure.axes for label in [*ax.get_xticklabels(), *ax.get_yticklabels()]]
 
 
 def _pendulum_run() -> PendulumRun:
