@@ -29,7 +29,7 @@ import numpy as np  # noqa: E402
 from rtgait.core import OnlinePlanner, Timing, rollout  # noqa: E402
 from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, walk_family  # noqa: E402
 from rtgait.scenario.loading import load_scenario  # noqa: E402
-from rtgait.viz.run_data import margin_marker  # noqa: E402
+from rtgait.viz.margin_marker import margin_marker  # noqa: E402
 
 MODES = ("real-time", "quasi-real-time")
 DOUBLES = tuple(float(v) for v in np.round(np.geomspace(0.05, 1.5, 20), 3))

@@ -57,6 +57,7 @@ class ComposedEstimator:
 def install(part: str) -> None:
     """Make the MuJoCo loop build :class:`ComposedEstimator` for ``part`` (``feet`` or ``com``)."""
     import rtgait.sim.loop as loop
+    import rtgait.sim.loop_stack as loop_stack
     from rtgait.stack.estimators import make_estimator
 
     robot: dict[str, Any] = {}
@@ -71,7 +72,7 @@ def install(part: str) -> None:
         return ComposedEstimator(estimated, make_estimator("truth", model, omega, **kwargs), part, robot)
 
     loop.SimRobot = keep
-    loop.make_estimator = composed
+    loop_stack.make_estimator = composed
 
 
 def main() -> None:

@@ -6,7 +6,8 @@
 * ``adjust_us``: one ``replan_now`` that needs a step adjustment (a push at mid single support, 24 directions and
   sizes): the plan from the measured state, the decision over ``grid**2`` candidates, the plan remade with the new
   landing; operators warm (each case is run twice and the second timed);
-* ``decision_us`` and ``candidates_per_s``: the decision alone (:func:`rtgait.core.laws.stepping.propose_landing`);
+* ``decision_us`` and ``candidates_per_s``: the decision alone
+  (:func:`rtgait.core.laws.landing_choice.propose_landing`);
 * ``timing_adaptation``: the same three with step timing adaptation on (``adapt_timing``: ``--durations`` single
   supports times the square of ``--timing-grid`` landings, 4 x 256 = 1,024 candidates by default), the operators of the
   candidate timings included (built in one batch at the decision when the plan starts mid-phase, as here: every case
@@ -28,7 +29,7 @@ import numpy as np
 
 from rtgait.core.geometry.footsteps import SoleRect, Timing
 from rtgait.core.geometry.support import support_polygon
-from rtgait.core.laws import stepping
+from rtgait.core.laws import landing_choice
 from rtgait.core.laws.feedback import DcmFeedback
 from rtgait.core.laws.stepping import StepAdjustment
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
@@ -87,7 +88,7 @@ def _pushed_planner(config: PlannerConfig, push: tuple[float, float]) -> tuple[O
 def adjust_cost(grid: int, durations: int | None = None) -> dict:
     config = _config(grid, durations)
     total, decision, retimed = [], [], 0
-    original = stepping.propose_landing
+    original = landing_choice.propose_landing
 
     def timed(*args, **kwargs):
         began = time.perf_counter()
@@ -140,17 +141,25 @@ def main() -> None:
         print(json.dumps(result))
         return
     tick, adjust, decide = result["tick_us"], result["adjust_us"], result["decision_us"]
-    print(f"tick (observe + sample + DCM feedback), 1 kHz, feedback=measured: median {tick['median']:.2f} us, "
-          f"p99 {tick['p99']:.2f} us over {tick['ticks']} ticks")
-    print(f"replan_now with a step adjustment over {result['candidates']} candidates: "
-          f"median {adjust['median']:.0f} us, p99 {adjust['p99']:.0f} us ({result['adjustments']} pushes)")
-    print(f"the decision alone: median {decide['median']:.0f} us, p99 {decide['p99']:.0f} us: "
-          f"{result['candidates_per_s']:.3g} candidates/s")
+    print(
+        f"tick (observe + sample + DCM feedback), 1 kHz, feedback=measured: median {tick['median']:.2f} us, "
+        f"p99 {tick['p99']:.2f} us over {tick['ticks']} ticks"
+    )
+    print(
+        f"replan_now with a step adjustment over {result['candidates']} candidates: "
+        f"median {adjust['median']:.0f} us, p99 {adjust['p99']:.0f} us ({result['adjustments']} pushes)"
+    )
+    print(
+        f"the decision alone: median {decide['median']:.0f} us, p99 {decide['p99']:.0f} us: "
+        f"{result['candidates_per_s']:.3g} candidates/s"
+    )
     timing = result["timing_adaptation"]
-    print(f"with timing adaptation ({args.durations} single supports x {args.timing_grid**2} landings): replan_now "
-          f"median {timing['adjust_us']['median']:.0f} us, p99 {timing['adjust_us']['p99']:.0f} us; the decision "
-          f"median {timing['decision_us']['median']:.0f} us; {timing['retimed']} of {timing['adjustments']} "
-          "shortened the step")
+    print(
+        f"with timing adaptation ({args.durations} single supports x {args.timing_grid**2} landings): replan_now "
+        f"median {timing['adjust_us']['median']:.0f} us, p99 {timing['adjust_us']['p99']:.0f} us; the decision "
+        f"median {timing['decision_us']['median']:.0f} us; {timing['retimed']} of {timing['adjustments']} "
+        "shortened the step"
+    )
 
 
 if __name__ == "__main__":

@@ -16,11 +16,11 @@ import pytest
 from scenario_files import header_text
 
 from rtgait.cli import plan as plan_command
-from rtgait.cli import simulate as simulate_command
+from rtgait.cli import simulate_options
 from rtgait.cli.main import main
 from rtgait.core.analysis.rollout import rollout
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.io.plan_files import summarize
+from rtgait.io.plan_summary import summarize
 from rtgait.outputs import staging_folders
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import DEFAULT_STEP_HEIGHT, DEFAULT_STEP_WIDTH, ScenarioError
@@ -257,15 +257,15 @@ def walked_footprints(name: str, command_at: float | None) -> list[tuple[float, 
 @pytest.mark.parametrize("name", ["fig8", "fig8-real-time"])  # quasi-real-time, real-time
 def test_a_velocity_command_is_refused_exactly_when_it_would_change_nothing(name: str) -> None:
     scenario = load_scenario(name)
-    last = simulate_command.last_command_time(scenario)
+    last = simulate_options.last_command_time(scenario)
     nominal = walked_footprints(name, None)
     assert walked_footprints(name, last) != nominal  # the last moment a command counts
     assert walked_footprints(name, last + 0.001) == nominal  # one tick later it is ignored
     texts = ["0.1,0,0", f"0.25,0,0@{last!r}"]
-    simulate_command._check_command_times(texts, [(0.0, 0.1, 0, 0), (last, 0.25, 0, 0)], scenario)
+    simulate_options._check_command_times(texts, [(0.0, 0.1, 0, 0), (last, 0.25, 0, 0)], scenario)
     late = [(0.0, 0.1, 0, 0), (last + 0.001, 0.25, 0, 0)]
     with pytest.raises(ScenarioError, match="after the walk's last step is decided"):
-        simulate_command._check_command_times(["0.1,0,0", f"0.25,0,0@{last + 0.001!r}"], late, scenario)
+        simulate_options._check_command_times(["0.1,0,0", f"0.25,0,0@{last + 0.001!r}"], late, scenario)
 
 
 def test_a_late_velocity_command_is_refused_like_a_late_push(

@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from rtgait.scenario.loading import load_scenario
-from rtgait.scenario.scenario import GuidePath, ScenarioError, parse_scenario
+from rtgait.scenario.scenario import GuidePath, ScenarioError
+from rtgait.scenario.scenario_file import parse_scenario
 
 
 def _document(guide: dict) -> dict:

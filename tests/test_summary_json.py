@@ -47,9 +47,9 @@ def test_finite_values_are_kept_to_the_bit():
 @pytest.mark.parametrize("bad", [math.nan, math.inf])
 def test_a_plan_summary_with_a_measure_that_has_no_value_is_valid_json(tmp_path, monkeypatch, bad):
     from rtgait.cli.main import main
-    from rtgait.io import plan_files
+    from rtgait.io import plan_files, plan_summary
 
-    original = plan_files.summarize
+    original = plan_summary.summarize
 
     def summarize(result, scenario):  # a measure that cannot exist for this run, as a zero-mass robot gives
         summary = original(result, scenario)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, TextIO
 from rtgait.core.limits import MAX_ROLLOUT_TICKS
 from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
 from rtgait.scenario.scenario import Scenario, ScenarioError
-from rtgait.viz.run_data import FIGURE_FORMATS
+from rtgait.viz.figure_files import FIGURE_FORMATS
 
 if TYPE_CHECKING:
     from rtgait.estimation.estimator import StateSource

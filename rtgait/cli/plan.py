@@ -25,7 +25,8 @@ from rtgait.core.analysis.rollout import Rollout, rollout
 from rtgait.core.obstacle.walk import ObstacleRun, avoiding_rollout
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.io.obstacle_outputs import obstacle_runs
-from rtgait.io.plan_files import plan_files, plan_report, write_plan_outputs
+from rtgait.io.plan_files import plan_files, write_plan_outputs
+from rtgait.io.plan_report import plan_report
 from rtgait.outputs import OutputError, check_destination, write_text_atomic
 from rtgait.scenario.footholds import footstep_plan_text
 from rtgait.scenario.loading import load_scenario

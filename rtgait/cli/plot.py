@@ -19,14 +19,9 @@ from typing import Any
 
 from rtgait.cli.common import add_format_option, out_folder, require_extras
 from rtgait.outputs import check_destination, staged_outputs
-from rtgait.viz.run_data import (
-    PENDULUM_FIGURE,
-    RunFilesError,
-    figure_file,
-    plan_figure_files,
-    read_plan_run,
-    run_kind,
-)
+from rtgait.viz.figure_files import PENDULUM_FIGURE, figure_file, plan_figure_files
+from rtgait.viz.run_data import read_plan_run
+from rtgait.viz.run_files import RunFilesError, run_kind
 
 
 def add_parser(commands: Any) -> None:

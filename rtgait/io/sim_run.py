@@ -40,8 +40,9 @@ from rtgait.robot.controller_info import robot_info
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.scenario import Scenario
-from rtgait.sim.loop import LoopOptions, SimResult, run_sim_loop
+from rtgait.sim.loop import LoopOptions, SimResult
 from rtgait.sim.model import SimConfig, SimModel, build_sim_model
+from rtgait.sim.run_loop import run_sim_loop
 
 __all__ = [
     "SIM_CSV_COLUMNS",

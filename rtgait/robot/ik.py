@@ -30,6 +30,9 @@ limit, and the result is clipped. The solver is warm-started from the previous t
 millimetres per tick, one iteration leaves errors of micrometres, and more iterations are made (up to
 ``max_iterations``) only while an error is above the tolerance.
 
+The weights of the tasks and the errors a solution leaves in them are in :mod:`rtgait.robot.ik_terms`; the rotation
+errors of the orientation tasks in :mod:`rtgait.robot.rotation_errors`.
+
 Kinematics and Jacobians at a configuration are computed once (one ``computeJointJacobians``, then the COG
 Jacobian and the frame Jacobians, which reuse it) and kept: the evaluation that measures the errors of the
 returned solution is reused by the next tick's first step when it starts from that solution.
@@ -38,8 +41,6 @@ returned solution is reused by the next tick's first step when it starts from th
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -47,76 +48,17 @@ from scipy.linalg.lapack import dposv
 
 from rtgait.core.geometry.footsteps import mean_heading
 from rtgait.interface.task_targets import IKTargets
+from rtgait.robot.ik_terms import IKErrors, IKWeights
 from rtgait.robot.model import RobotModel
+from rtgait.robot.rotation_errors import _floats, _foot_error, _leaned_yaw_error
 
-__all__ = ["IKErrors", "IKTargets", "IKWeights", "WholeBodyIK"]
+__all__ = ["IKTargets", "WholeBodyIK"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 # Rows of the stacked task vector: COG 0:3, left foot 3:9 (position 3:6, orientation 6:9), right foot 9:15,
 # torso orientation 15:18, pelvis orientation 18:21.
 _N_TASKS = 21
 _dot, _fromiter = np.dot, np.fromiter
-
-
-class IKErrors(NamedTuple):
-    """Task errors of a solution, measured by forward kinematics at the returned configuration.
-
-    Attributes:
-        cog: distance from the COG to its target (m).
-        left_position, right_position: distance from each sole point to its target (m).
-        left_orientation, right_orientation: rotation angle from each sole to its target orientation (rad).
-        torso_orientation: rotation angle from the torso to upright with the feet's mean yaw (rad).
-        pelvis_orientation: the same for the pelvis (rad).
-        iterations: Gauss-Newton iterations made at this tick.
-    """
-
-    cog: float
-    left_position: float
-    left_orientation: float
-    right_position: float
-    right_orientation: float
-    torso_orientation: float
-    pelvis_orientation: float
-    iterations: int
-
-    @property
-    def feet_position(self) -> float:
-        """The larger of the two feet position errors (m)."""
-        return max(self.left_position, self.right_position)
-
-    @property
-    def feet_orientation(self) -> float:
-        """The larger of the two feet orientation errors (rad)."""
-        return max(self.left_orientation, self.right_orientation)
-
-
-class IKWeights(NamedTuple):
-    """Weights of the least-squares problem (squared-error weights, per unit of each task).
-
-    The feet come first (a foot that is not where planned changes the support polygon), then the COG (the
-    balance), then the torso and, far behind, the pelvis; the weights matter only when the targets cannot all be
-    reached. The damping and the posture pull are tiny: the damping bounds the steps where the Jacobian is nearly
-    singular, the pull decides whatever the tasks leave free (on robots with more moving joints than tasks), and
-    together they bias the tasks by about ``posture / task weight`` times the distance to the posture (below a
-    micrometre).
-
-    Attributes:
-        cog: per m^2.
-        foot_position: per m^2.
-        foot_orientation: per rad^2.
-        torso: per rad^2.
-        pelvis: per rad^2.
-        damping: on every velocity coordinate (m^2 or rad^2 per unit step).
-        posture: pull of the joints toward half-sitting (per rad^2).
-    """
-
-    cog: float = 1.0
-    foot_position: float = 4.0
-    foot_orientation: float = 1.0
-    torso: float = 1.0
-    pelvis: float = 0.01
-    damping: float = 1e-6
-    posture: float = 1e-8
 
 
 class WholeBodyIK:
@@ -374,82 +316,3 @@ def _outside(joints: list[float], lower: list[float], upper: list[float]) -> boo
         if value < low or value > high:
             return True
     return False
-
-
-def _floats(values: np.ndarray | Sequence[float]) -> Sequence[float]:
-    """A short vector as Python numbers: scalar arithmetic on numpy scalars is several times slower."""
-    return values.tolist() if isinstance(values, np.ndarray) else values
-
-
-def _leaned_yaw_error(
-    h: list[list[float]], c: float, s: float, lean: Sequence[float] | None
-) -> tuple[float, float, float]:
-    """World-frame rotation vector from rotation ``h`` to ``Exp(lean) Rz(yaw)`` (rad), ``c, s = cos(yaw), sin(yaw)``:
-    :func:`_yaw_error` when upright. With ``L = Exp(lean)``, ``L Rz R^T`` is ``Rz (L^T R)^T`` conjugated by ``L``, so
-    its log is ``L`` times the yaw error of ``L^T R``."""
-    if lean is None:
-        return _yaw_error(h, c, s)
-    lx, ly, lz = _floats(lean)
-    angle = math.sqrt(lx * lx + ly * ly + lz * lz)
-    if angle < 1e-12:
-        return _yaw_error(h, c, s)
-    L = _rotation(lx / angle, ly / angle, lz / angle, angle)
-    rows = [row[:3] for row in h[:3]]
-    # L^T R: entry (i, j) = sum_k L[k][i] R[k][j].
-    tilted = [[L[0][i] * rows[0][j] + L[1][i] * rows[1][j] + L[2][i] * rows[2][j] for j in range(3)] for i in range(3)]
-    ex, ey, ez = _yaw_error(tilted, c, s)
-    return (L[0][0] * ex + L[0][1] * ey + L[0][2] * ez, L[1][0] * ex + L[1][1] * ey + L[1][2] * ez,
-            L[2][0] * ex + L[2][1] * ey + L[2][2] * ez)  # fmt: skip
-
-
-def _foot_error(h: list[list[float]], foot: Sequence[float], yaw: float) -> tuple[float, float, float]:
-    """World-frame rotation vector from the sole rotation ``h`` to the target of ``foot``: ``Rz(yaw)`` (level), or
-    ``Rz(yaw) Ry(pitch) Rx(roll)`` when ``foot`` has a pitch and roll (its 5th and 6th values, rad). That target is
-    ``Exp(w) Rz(yaw)`` with ``w = Rz(yaw) log(Ry(pitch) Rx(roll))``, the lean form of :func:`_leaned_yaw_error`."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    if len(foot) < 6 or not (foot[4] or foot[5]):
-        return _yaw_error(h, c, s)
-    cp, sp, cr, sr = math.cos(foot[4]), math.sin(foot[4]), math.cos(foot[5]), math.sin(foot[5])
-    # Ry(p) Rx(r) = [[cp, sp sr, sp cr], [0, cr, -sr], [-sp, cp sr, cp cr]]; its log from the skew part and trace.
-    cos_angle = 0.5 * (cp + cr + cp * cr - 1.0)
-    ax, ay, az = 0.5 * (cp * sr + sr), 0.5 * (sp * cr + sp), 0.5 * (-sp * sr)
-    sin_angle = math.sqrt(ax * ax + ay * ay + az * az)
-    scale = math.atan2(sin_angle, cos_angle) / sin_angle
-    wx, wy, wz = scale * ax, scale * ay, scale * az
-    return _leaned_yaw_error(h, c, s, (c * wx - s * wy, s * wx + c * wy, wz))
-
-
-def _rotation(ux: float, uy: float, uz: float, angle: float) -> list[list[float]]:
-    """Rotation matrix of ``angle`` (rad) about the unit axis ``u`` (Rodrigues' formula)."""
-    c, s = math.cos(angle), math.sin(angle)
-    k = 1.0 - c
-    return [[c + k * ux * ux, k * ux * uy - s * uz, k * ux * uz + s * uy],
-            [k * uy * ux + s * uz, c + k * uy * uy, k * uy * uz - s * ux],
-            [k * uz * ux - s * uy, k * uz * uy + s * ux, c + k * uz * uz]]  # fmt: skip
-
-
-def _yaw_error(h: list[list[float]], c: float, s: float) -> tuple[float, float, float]:
-    """World-frame rotation vector from rotation ``h[:3][:3]`` to the level rotation of heading ``yaw`` (rad), given
-    as ``c, s = cos(yaw), sin(yaw)``.
-
-    That is log(Rz(yaw) R^T), from the skew part and the trace of ``E = Rz(yaw) R^T`` written out in scalars.
-    """
-    h0, h1, h2 = h[0], h[1], h[2]
-    r00, r01, r02 = h0[0], h0[1], h0[2]
-    r10, r11, r12 = h1[0], h1[1], h1[2]
-    r20, r21, r22 = h2[0], h2[1], h2[2]
-    vx = 0.5 * (r12 - (s * r20 + c * r21))
-    vy = 0.5 * ((c * r20 - s * r21) - r02)
-    vz = 0.5 * ((s * r00 + c * r01) - (c * r10 - s * r11))
-    cos_angle = 0.5 * ((c * r00 - s * r01) + (s * r10 + c * r11) + r22 - 1.0)
-    sin_angle = math.sqrt(vx * vx + vy * vy + vz * vz)
-    if cos_angle < -0.9:
-        # Near a half turn the skew part vanishes and loses the axis; Pinocchio's log recovers it.
-        rz = np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
-        rotation = np.array([row[:3] for row in h[:3]])
-        wx, wy, wz = pin.log3(rz @ rotation.T).tolist()
-        return wx, wy, wz
-    if sin_angle < 1e-12:
-        return vx, vy, vz
-    scale = math.atan2(sin_angle, cos_angle) / sin_angle
-    return scale * vx, scale * vy, scale * vz

@@ -41,7 +41,8 @@ from typing import Any
 
 from rtgait.core.geometry.footsteps import Footstep, Timing, standing_feet, stride_between
 from rtgait.core.limits import MAX_STEPS, MAX_STRIDE, MAX_SURFACE_TILT
-from rtgait.scenario.scenario import Scenario, ScenarioError, build_scenario, number, parse_common, walk_stance
+from rtgait.scenario.scenario import Scenario, ScenarioError
+from rtgait.scenario.scenario_file import build_scenario, number, parse_common, walk_stance
 from rtgait.scenario.terrain_table import parse_terrain
 from rtgait.scenario.tomlfile import TomlFiles
 

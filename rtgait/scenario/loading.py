@@ -6,7 +6,8 @@ from pathlib import Path
 from typing import Any
 
 from rtgait.scenario.footholds import parse_footstep_plan
-from rtgait.scenario.scenario import SCENARIO_FILES, Scenario, parse_scenario
+from rtgait.scenario.scenario import SCENARIO_FILES, Scenario
+from rtgait.scenario.scenario_file import parse_scenario
 
 __all__ = ["builtin_scenarios", "load_scenario", "parse_document"]
 

@@ -27,7 +27,8 @@ A file with ``[[footstep]]`` entries instead of ``walk.steps`` is a footstep pla
 own timing if wanted: :func:`load_scenario` hands it to :mod:`rtgait.scenario.footholds`, which returns a
 :class:`Scenario` too (``footholds`` set, per-step timings in ``timing.per_step``).
 
-Every problem with a file raises :class:`ScenarioError` with one line naming the offending field. Sizes and physical
+The TOML tables are read into a :class:`Scenario` by :mod:`rtgait.scenario.scenario_file`. Every problem with a file
+raises :class:`ScenarioError` with one line naming the offending field. Sizes and physical
 quantities are bounded by :mod:`rtgait.core.limits`, checked here so that the message names the TOML field; two
 ``[[walk.change]]`` entries for the same step are refused.
 """
@@ -38,7 +39,6 @@ import itertools
 import math
 import re
 from dataclasses import dataclass, field
-from typing import Any
 
 from rtgait.core.analysis.rollout import ScheduledChange
 from rtgait.core.geometry.footsteps import (
@@ -74,16 +74,9 @@ from rtgait.scenario.checks import (
     check_ticks,
     within,
 )
-from rtgait.scenario.fields import LENGTH_BOUNDS as _LENGTH_BOUNDS
-from rtgait.scenario.fields import WIDTH_BOUNDS as _WIDTH_BOUNDS
-from rtgait.scenario.fields import YAW_RULE as _YAW_RULE
-from rtgait.scenario.fields import choice as _choice
-from rtgait.scenario.fields import number as _number
-from rtgait.scenario.fields import parse_changes as _parse_changes
-from rtgait.scenario.fields import parse_guide as _parse_guide
 from rtgait.scenario.guide_path import GuidePath
-from rtgait.scenario.obstacles import check_seen_within, parse_obstacles, parse_robot_velocity
-from rtgait.scenario.terrain_table import TerrainSpec, parse_terrain
+from rtgait.scenario.obstacles import check_seen_within
+from rtgait.scenario.terrain_table import TerrainSpec
 from rtgait.scenario.tomlfile import SettingsPairs, TomlFiles
 
 __all__ = [
@@ -94,7 +87,6 @@ __all__ = [
     "GuidePath",
     "Scenario",
     "ScenarioError",
-    "parse_scenario",
 ]
 
 _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
@@ -296,132 +288,6 @@ class Scenario:
         if t.per_step:
             return Timeline(t, n, t.per_step).end_time
         return t.start + n * t.single_support + (n - 1) * t.double_support + t.end + t.settle
-
-
-# ----- TOML parsing ---------------------------------------------------------------------------------------------
-
-
-def parse_common(data: dict[str, Any]) -> dict[str, Any]:
-    """The parts a scenario and a footstep plan (:mod:`rtgait.scenario.footholds`) share: ``name``, ``description``,
-    ``connection``, ``auto_margin``, ``[robot]``, ``[timing]``, ``[control]`` and ``[[obstacle]]``, checked
-    (``[control]``'s keys by :mod:`rtgait.control.control_table` when applied), as :class:`Scenario` keywords."""
-    name = _FILES.string(data, "name")
-    if not _NAME_PATTERN.fullmatch(name):
-        raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
-    description = _FILES.string(data, "description") if "description" in data else ""
-    if "\n" in description:
-        raise ScenarioError("description must be a single line")
-    connection = _choice(data, "connection", "", ALL_CONNECTION_MODES)
-    auto_margin = 0.01
-    if "auto_margin" in data:
-        if connection != "auto":
-            raise ScenarioError(f'auto_margin is for connection = "auto", got connection = "{connection}"')
-        auto_margin = _number(data, "auto_margin", "", unit="m", bounds=(-MAX_AUTO_MARGIN, MAX_AUTO_MARGIN))
-
-    robot = _FILES.table(data["robot"], "robot")
-    _FILES.check_keys(robot, "robot", ("cog_height", "sole"), ("gravity", "mass", "velocity"))
-    cog_height = _number(robot, "cog_height", "robot", rule="> 0", unit="m", bounds=_COG_HEIGHT_BOUNDS)
-    gravity = 9.81
-    if "gravity" in robot:
-        gravity = _number(robot, "gravity", "robot", rule="> 0", unit="m/s^2", bounds=_GRAVITY_BOUNDS)
-    mass = _number(robot, "mass", "robot", rule="> 0", unit="kg", bounds=_MASS_BOUNDS) if "mass" in robot else None
-    sole_table = _FILES.table(robot["sole"], "robot.sole")
-    sides = ("front", "back", "inner", "outer")
-    _FILES.check_keys(sole_table, "robot.sole", sides, ())
-    sole_values = {key: _number(sole_table, key, "robot.sole", rule=">= 0", unit="m") for key in sides}
-    if sole_values["front"] + sole_values["back"] <= 0.0 or sole_values["inner"] + sole_values["outer"] <= 0.0:
-        raise ScenarioError("robot.sole must have a positive length (front + back) and width (inner + outer)")
-    sole = SoleRect(**sole_values)
-
-    timing_table = _FILES.table(data["timing"], "timing")
-    durations = ("single_support", "double_support")
-    extra_durations = ("start", "end", "settle")
-    _FILES.check_keys(timing_table, "timing", (*durations, "dt", "horizon_steps"), extra_durations)
-    timing_values = {
-        key: _number(timing_table, key, "timing", rule="> 0", unit="s", bounds=_PHASE_BOUNDS)
-        for key in (*durations, *extra_durations)
-        if key in timing_table
-    }
-    timing = Timing(**timing_values)
-    dt = _number(timing_table, "dt", "timing", rule="> 0", unit="s", bounds=(MIN_DT, MAX_PHASE_DURATION))
-    horizon_steps = _FILES.count(
-        timing_table["horizon_steps"], "timing.horizon_steps", high=MAX_HORIZON_STEPS, why=_HORIZON_WHY
-    )
-    control = _FILES.settings(data["control"], "control") if "control" in data else ()
-    velocity = parse_robot_velocity(robot["velocity"]) if "velocity" in robot else None
-    obstacles = parse_obstacles(data["obstacle"]) if "obstacle" in data else ()
-    return {
-        "name": name, "description": description, "connection": connection, "auto_margin": auto_margin,
-        "cog_height": cog_height, "gravity": gravity, "mass": mass, "sole": sole, "timing": timing, "dt": dt,
-        "horizon_steps": horizon_steps, "control": control, "velocity": velocity, "obstacles": obstacles,
-    }  # fmt: skip
-
-
-def walk_stance(walk: dict[str, Any]) -> tuple[float, float]:
-    """``step_width`` and ``step_height`` (m) of a ``[walk]`` table, checked; each :data:`DEFAULT_STEP_WIDTH` or
-    :data:`DEFAULT_STEP_HEIGHT` when not given (a scenario's table has both: its keys are checked first)."""
-    step_width = DEFAULT_STEP_WIDTH
-    if "step_width" in walk:
-        step_width = _number(walk, "step_width", "walk", rule="> 0", unit="m", bounds=_WIDTH_BOUNDS)
-    step_height = DEFAULT_STEP_HEIGHT
-    if "step_height" in walk:
-        step_height = _number(walk, "step_height", "walk", rule=">= 0", unit="m")
-    return step_width, step_height
-
-
-number = _number
-"""A finite number of a scenario-like file, checked and worded as the scenario's own fields (for
-:mod:`rtgait.scenario.footholds`)."""
-
-
-def build_scenario(**fields: Any) -> Scenario:
-    """:class:`Scenario` from parsed fields, its cross-field messages pointed at the TOML table they live in."""
-    try:
-        return Scenario(**fields)
-    except ScenarioError as error:
-        message = str(error)
-        if message.startswith("dt "):
-            message = "timing." + message
-        raise ScenarioError(message) from None
-
-
-def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
-    """Build a :class:`Scenario` from the parsed TOML document ``data`` (see the module docstring)."""
-    _FILES.check_keys(
-        data,
-        "",
-        ("name", "connection", "robot", "timing", "walk"),
-        ("description", "guide", "auto_margin", "control", "obstacle", "terrain"),
-    )
-    common = parse_common(data)
-    connection = common["connection"]
-
-    walk = _FILES.table(data["walk"], "walk")
-    walk_required = ("steps", "step_length", "step_width", "step_height")
-    _FILES.check_keys(walk, "walk", walk_required, ("yaw", "first_foot", "change"))
-    steps = _FILES.count(walk["steps"], "walk.steps", high=MAX_WALK_STEPS, why=_STEPS_WHY)
-    step_length = _number(walk, "step_length", "walk", unit="m", bounds=_LENGTH_BOUNDS)
-    step_width, step_height = walk_stance(walk)
-    yaw = _number(walk, "yaw", "walk", rule=_YAW_RULE, unit="rad") if "yaw" in walk else 0.0
-    first_foot = _choice(walk, "first_foot", "walk", ("right", "left")) if "first_foot" in walk else "right"
-    changes = _parse_changes(walk["change"], steps) if "change" in walk else ()
-    guide = _parse_guide(data["guide"]) if "guide" in data else None
-    if guide is not None and connection != "quasi-real-time":
-        raise ScenarioError("a [guide] walk uses the quasi-real-time connection (the paper's Section 6)")
-
-    return build_scenario(
-        **common,
-        steps=steps,
-        step_length=step_length,
-        step_width=step_width,
-        step_height=step_height,
-        changes=changes,
-        yaw=yaw,
-        first_foot=first_foot,
-        source=source,
-        guide=guide,
-        terrain=parse_terrain(data["terrain"], step_width) if "terrain" in data else None,
-    )
 
 
 # ----- finding scenarios ----------------------------------------------------------------------------------------

@@ -36,9 +36,10 @@ from rtgait.core.planner.levels import ControllerLevel
 from rtgait.core.planner.online import OnlinePlanner, VelocityCommand
 from rtgait.robot.controller_info import robot_info
 from rtgait.scenario.scenario import GuidePath, Scenario
-from rtgait.sim.loop import LoopOptions, run_sim_loop
+from rtgait.sim.loop import LoopOptions
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SimResult
+from rtgait.sim.run_loop import run_sim_loop
 
 __all__ = [
     "FORCE_FRACTION",

@@ -255,7 +255,7 @@ def _columns(result: SimResult, events: list[dict[str, Any]]) -> dict[str, np.nd
     """Every column's values (:func:`log_columns` order)."""
     log = result.log
     if log is None:
-        raise ValueError("the result has no tick log (it was not made by rtgait.sim.loop.run_sim_loop)")
+        raise ValueError("the result has no tick log (it was not made by rtgait.sim.run_loop.run_sim_loop)")
     n = len(result.times)
     linear, angular = log.base_velocity(result.base_position, result.cog)
     dcm = result.cog[:, 0:2] + log.cog_velocity[:, 0:2] / log.omega

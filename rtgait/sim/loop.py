@@ -37,63 +37,57 @@ and tilts beyond :attr:`FallLimits.tip_angle` has *tipped over*: recorded (:attr
 since a robot may recover from it.
 
 The walk starts from half-sitting, whose COG is higher than the planner's constant COG height: a short transition
-(:attr:`LoopOptions.start_ramp`, then :attr:`LoopOptions.start_hold` at rest) moves the IK's COG target to the walk's
-start before the planner's clock begins; it runs at negative times on the walk's clock, with no feedback.
+(:mod:`rtgait.sim.loop_start`) moves the IK's COG target to the walk's start before the planner's clock begins. The
+stack is built by :mod:`rtgait.sim.loop_stack`.
 
 ``open-loop`` gives the IK the planner's sample unchanged (the paper's assumption); the levels are described in
 :mod:`rtgait.control.controller`.
 
 :class:`ClosedLoop` is the loop one tick per :meth:`~ClosedLoop.step`, for callers that act between ticks (a live
-viewer sets the velocity command, pushes, switches the controller level); :func:`run_sim_loop` steps one to the
-walk's end. The record (:mod:`rtgait.sim.loop_record`) is the whole run, or for an open-ended run a ring of its last
-seconds, so that its memory stays bounded however long it lasts; :meth:`ClosedLoop.result` makes it a
-:class:`SimResult` with the walk's outcome (:mod:`rtgait.sim.loop_result`).
+viewer sets the velocity command, pushes, switches the controller level); :func:`rtgait.sim.run_loop.run_sim_loop`
+steps one to the walk's end. The record (:mod:`rtgait.sim.loop_record`) is the whole run, or for an open-ended run a
+ring of its last seconds, so that its memory stays bounded however long it lasts; :meth:`ClosedLoop.result` makes it a
+:class:`SimResult` with the walk's outcome (:mod:`rtgait.sim.loop_result`). What a caller reads and does between
+ticks (the last tick's values, a push, the result) is :class:`~rtgait.sim.loop_readout.LoopReadout`'s.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import mujoco
 
-from rtgait.control.controller import ControlEvent, ControllerOptions, WalkingController
-from rtgait.core.geometry.footsteps import Footstep
-from rtgait.core.geometry.support import SUPPORT_CODES, SUPPORT_NAMES
+from rtgait.control.controller import ControlEvent, WalkingController
+from rtgait.core.geometry.support import SUPPORT_CODES
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.push import Push
 from rtgait.interface.task_targets import IKTargets
-from rtgait.robot.controller_info import robot_info
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Pushes
-from rtgait.sim.drive_mode import torque_gains, with_gains
+from rtgait.sim.drive_mode import with_gains
 from rtgait.sim.drive_summary import ComTracking
 from rtgait.sim.loop_inputs import WalkInputs
 from rtgait.sim.loop_options import (
     LANDING_WINDOW,
     LoopOptions,
     end_tick,
-    minimum_jerk,
     run_length,
     timing_headroom,
 )  # fmt: skip
 from rtgait.sim.loop_push import LivePush
+from rtgait.sim.loop_readout import LoopReadout
 from rtgait.sim.loop_record import TickRecord, TickValues
-from rtgait.sim.loop_result import loop_result
+from rtgait.sim.loop_stack import build_stack, open_loop_controller
+from rtgait.sim.loop_start import StartTransition, start_balance
 from rtgait.sim.model import SimModel
 from rtgait.sim.result import SimResult
 from rtgait.sim.robot import SimRobot
 from rtgait.sim.row_packing import row_packer
-from rtgait.sim.start_balance import StartBalance, minimum_jerk_rates, needs_balance
 from rtgait.sim.tick_log import TickLog
-from rtgait.stack.estimators import make_estimator
-from rtgait.stack.feedforward import FeedForward
-from rtgait.stack.friction_compensation import FrictionCompensation
-from rtgait.stack.measured_motion import MeasuredMotion
 from rtgait.stack.setup import start_pose
-from rtgait.stack.walking_stack import WalkingStack
 
 if TYPE_CHECKING:
     from rtgait.estimation.state import Measurement
@@ -105,38 +99,31 @@ __all__ = [
     "LoopOptions",
     "SimResult",
     "TickValues",
-    "open_loop_controller",
-    "run_sim_loop",
 ]
 
-_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 _NO_COG, _NO_FOOT = (math.nan,) * 3, (math.nan,) * 4  # the IK's targets while the stack damps
 
 
-def open_loop_controller(sim: SimModel, planner: OnlinePlanner) -> WalkingController:
-    """The ``open-loop`` level around ``planner`` (not started): the plan alone, as the paper assumes."""
-    info = robot_info(sim.robot)
-    return WalkingController("open-loop", planner, info, sim.control_dt, ControllerOptions())
-
-
-class ClosedLoop:
-    """The closed loop of :func:`run_sim_loop`, one control tick per :meth:`step` (see the module docstring).
+class ClosedLoop(LoopReadout):
+    """The closed loop of :func:`~rtgait.sim.run_loop.run_sim_loop`, one control tick per :meth:`step` (see the
+    module docstring).
 
     Drive it by hand (``while loop.step(): ...``, e.g. a live viewer changing the velocity command, pushing or
-    switching the controller level between ticks) or through :func:`run_sim_loop`; :meth:`result` makes the
+    switching the controller level between ticks) or through :func:`~rtgait.sim.run_loop.run_sim_loop`;
+    :meth:`result` makes the
     :class:`SimResult` of the ticks recorded so far. After a step, :attr:`last` holds that tick's values (time,
     phase, planned, commanded and measured ZMP, measured and planned DCM, the IK's COG and feet targets),
     :meth:`footprints` the plan's footprints, :attr:`base_position` and :attr:`steps_completed` the outcome so far.
 
     Args:
-        sim, controller, options, ik, data: as :func:`run_sim_loop`.
+        sim, controller, options, ik, data: as :func:`~rtgait.sim.run_loop.run_sim_loop`.
         keep: how much to record: ``None`` (default) the whole run, whose length must then be known in advance (a
             walk of footsteps, ``stop_after_steps`` or ``duration``); a time (s) keeps a ring of the last
             ``keep`` seconds (at least one tick: ``keep=0`` records only the last tick), and a walk by command may
             then have no end (:attr:`n_ticks` is ``None``; it runs until the caller stops stepping).
 
     Raises:
-        ValueError: as :func:`run_sim_loop`; a negative ``keep``.
+        ValueError: as :func:`~rtgait.sim.run_loop.run_sim_loop`; a negative ``keep``.
     """
 
     def __init__(
@@ -218,27 +205,11 @@ class ClosedLoop:
         self.pushes: list[Push] = list(options.pushes)
         """The pushes of the run: the scheduled ones and those given to :meth:`push`."""
         self._live = LivePush(sim, data, planner.config.cog_height, self.gravity)  # push(), from a live session
-        # The robot behind its interface, and the stack that drives it: the ground-truth estimator reads the
-        # simulator's truth, the kinematic-inertial one the robot's sensors, its world frame the walk's standing feet
-        # (the DCM with the planner's w, the thresholds scaled to the robot's weight).
+        # The robot behind its interface, and the stack that drives it (loop_stack.py).
         self.robot = SimRobot(sim, data, q[7:])
-        estimator = make_estimator(
-            options.state, robot, planner.w, gravity=self.gravity,
-            start_feet=(tuple(self._left_start), tuple(self._right_start)),
-        )  # fmt: skip
-        # Feed-forward torques (the IK's motion through inverse dynamics, the DCM law's wrench at the feet) with the
-        # robot's gains or torque drive; torque drive adds its low gains to every command (drive_mode.py).
-        # They are computed at the sensed state; torque drive adds the tracking of the IK's motion (measured_motion.py).
-        feed = None
-        if options.feeds_forward(sim.config.gains):
-            tracking = MeasuredMotion(robot, track=options.drive == "torque")
-            # With the motor model the joints have their gears' friction, which the drives partly compensate.
-            compensation = FrictionCompensation.of(robot) if sim.config.motor_model else None
-            feed = FeedForward(robot, controller.sole, dt, friction=sim.config.friction, tracking=tracking,
-                               friction_compensation=compensation)  # fmt: skip
-        self.stack = WalkingStack(estimator, controller, ik, q, feedforward=feed)
-        self.drive_gains = (
-            torque_gains(sim, feed.tracking if feed is not None else None) if options.drive == "torque" else None
+        start_feet = (self._left_start, self._right_start)
+        self.stack, estimator, feed, self.drive_gains = build_stack(
+            sim, controller, ik, q, options, self.gravity, start_feet
         )
         """The gains every command carries (torque drive), ``None``: the drives' own."""
         self.com_tracking = ComTracking()
@@ -247,14 +218,14 @@ class ClosedLoop:
         """The walk's ticks at which the safety layer clipped a feed-forward torque; ``None``: no feed-forward."""
         self._torque_clips = self.stack.safety.clip.counts.torque
         self._clips_seen = 0
-        self.start_balance = None
+        self.start_balance = start_balance(
+            sim, controller, self.stack, self.drive_gains, self.gravity, (self._cog_start, *start_feet)
+        )
         """The start transition's DCM law (with feed-forward torques and a closed-loop level), ``None``: none."""
-        if feed is not None and controller.feedback is not None:
-            ankles = self.stack.ankles
-            kp = sim.actuation.kp if self.drive_gains is None else self.drive_gains[0]
-            stiffness = float(kp[ankles.left_pitch] + kp[ankles.right_pitch])
-            if needs_balance(stiffness, robot.mass, self.gravity, self._cog_start[2]):
-                self.start_balance = StartBalance(controller, self._left_start, self._right_start)
+        self._start = StartTransition(
+            self.stack, options.start_ramp, self._cog_half_sitting, self._cog_start, *start_feet,
+            self.start_balance, self._estimate,
+        )  # fmt: skip
         self.landings = Landings(max(min(planner.config.timing.double_support, LANDING_WINDOW), dt), self.threshold)
 
         # ----- loop state ----------------------------------------------------------------------------------------
@@ -270,7 +241,7 @@ class ClosedLoop:
         # (MuJoCo's arrays of fixed size are views that stay valid).
         robot_, stack = self.robot, self.stack
         self._hot = (
-            stack.estimate, stack.control, stack.hold, robot_.ground_truth, robot_.write, robot_.first_substep,
+            stack.estimate, stack.control, self._start.tick, robot_.ground_truth, robot_.write, robot_.first_substep,
             robot_.substep, self.contacts, self.landings, self._pushes.update, self._live.update, data, data.qpos,
             data.subtree_com[sim.base_body], data.site_xpos, data.actuator_force, sim.left_sole_site,
             sim.right_sole_site, sim.substeps, estimator.reads_truth, robot_.read, dt, k0,
@@ -321,7 +292,7 @@ class ClosedLoop:
         """
         if self._over:
             raise RuntimeError("the closed loop is over (fallen or at its last tick): make its result()")
-        (estimate, control, hold, ground_truth, write, first_substep, substep, contacts, landings, pushes, live_push,
+        (estimate, control, start, ground_truth, write, first_substep, substep, contacts, landings, pushes, live_push,
          data, qpos, base_com, site_xpos, actuator_force, left_site, right_site, n_sub, estimator_reads_truth, read,
          dt, k0, n_ticks) = self._hot  # fmt: skip
         ((pack_planned, planned_bytes, planned_row), (pack_cog, cog_bytes, cog_row), cog, bases, support, torque,
@@ -335,35 +306,11 @@ class ClosedLoop:
         live_push(t)
 
         # ----- references ---------------------------------------------------------------------------------------
-        if k < k0:
-            ramp = self.options.start_ramp
-            s = minimum_jerk(k * dt / ramp) if ramp > 0.0 else 1.0
-            target_cog = [a + s * (b - a) for a, b in zip(self._cog_half_sitting, self._cog_start, strict=True)]
+        if k < k0:  # the start transition (loop_start.py): no controller, no plan
+            made, target_cog, (planned_x, planned_y), (command_x, command_y), dcm, dcm_planned = start(k, t, dt)
             left_foot, right_foot = self._left_start, self._right_start
-            planned_x = command_x = target_cog[0]
-            planned_y = command_y = target_cog[1]
             code, phase = 0, -1
-            dcm = dcm_planned = (math.nan, math.nan)
-            out = measurement = truth = None  # no controller during the transition
-            targets = _new_tuple(IKTargets, (target_cog, left_foot, right_foot, None))
-            balance = self.start_balance
-            if balance is None and self.stack.feedforward is not None and self.stack.feedforward.tracking is not None:
-                made = hold(targets, t, None, self._estimate(t))  # the feed-forward torques at the sensed state
-            elif balance is None:
-                made = hold(targets, t)
-            else:  # soft drives: the DCM law around the ramp, through the feed-forward torques (start_balance.py)
-                state = self._estimate(t)
-                if state is None:  # the safety layer found a fault: the stack damps
-                    made = control(t, None)
-                else:
-                    rate, acceleration = minimum_jerk_rates(k * dt / ramp, ramp) if k * dt < ramp else (0.0, 0.0)
-                    delta = [b - a for a, b in zip(self._cog_half_sitting[:2], self._cog_start[:2], strict=True)]
-                    (command_x, command_y), (planned_x, planned_y), dcm_planned = balance.update(
-                        state.dcm, target_cog, (rate * delta[0], rate * delta[1]),
-                        (acceleration * delta[0], acceleration * delta[1]),
-                    )  # fmt: skip
-                    dcm = state.dcm
-                    made = hold(targets, t, (command_x - planned_x, command_y - planned_y), state)
+            out = measurement = truth = None
         else:
             # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
             if estimator_reads_truth:
@@ -491,110 +438,3 @@ class ClosedLoop:
             self._ended = time.perf_counter()
             self._pushes.clear()
             self._live.clear()
-
-    # ----- pushes --------------------------------------------------------------------------------------------------
-    def push(self, force: Sequence[float], duration: float = 0.1, body: str | None = None) -> Push:
-        """Push ``body`` (default the floating base) with ``force`` (N, world frame) for ``duration`` (s) from the
-        next tick on (:class:`~rtgait.sim.loop_push.LivePush`: one at a time, rewritten every tick so that a viewer
-        clearing the applied forces does not cut it short); it is added to :attr:`pushes`.
-
-        Raises:
-            ValueError: a force or duration that is not finite, beyond physical sense (:meth:`Push.check`), or an
-                unknown body.
-        """
-        push = self._live.start(self.time_of(self.k), force, duration, body)
-        self.pushes.append(push)
-        return push
-
-    @property
-    def push_acting(self) -> tuple[float, float, float] | None:
-        """The force (N) of the :meth:`push` acting at the last tick, or ``None``."""
-        return self._live.force
-
-    # ----- the last tick's values ----------------------------------------------------------------------------------
-    @property
-    def last(self) -> TickValues:
-        """The last tick's values (those of the first tick's start before any step)."""
-        row = (max(self.k, 1) - 1) % self.record.capacity
-        p = self.record.planned[row].tolist()
-        return TickValues(
-            self.t, self.phase, SUPPORT_NAMES[int(self.record.support[row])], (p[0], p[1]), (p[2], p[3]),
-            self.zmp_measured, (p[4], p[5]), (p[6], p[7]), tuple(self.cog_target), self.left_foot, self.right_foot,
-        )  # fmt: skip
-
-    @property
-    def base_position(self) -> tuple[float, float, float]:
-        """The floating base's position now (m): after the last tick's physics."""
-        x, y, z = self.data.qpos[0:3].tolist()
-        return x, y, z
-
-    @property
-    def steps_completed(self) -> int:
-        """Touch-downs completed so far (:class:`~rtgait.sim.contact.Landings`)."""
-        return self.landings.count
-
-    def footprints(self) -> list[Footstep]:
-        """The planner's footprints as planned now (the two standing feet before the walk starts)."""
-        if self.planner.started:
-            return self.planner.footprints()
-        return self.planner.footprints(1)[:2]
-
-    # ----- the result ----------------------------------------------------------------------------------------------
-    def result(self, wall_time: float | None = None) -> SimResult:
-        """The :class:`SimResult` of the ticks recorded (all, or the ring's last ones; at least one tick run).
-
-        ``wall_time`` (s): the loop's wall-clock time to report; default the time from the first tick to the last
-        (to now while the run goes on). An open-ended walk's :attr:`SimResult.walk_end` is its last tick's time.
-        """
-        if self.k == 0:
-            raise RuntimeError("no tick has run yet")
-        if wall_time is None:
-            assert self._began is not None
-            wall_time = (self._ended if self._ended is not None else time.perf_counter()) - self._began
-        return loop_result(self, wall_time, self._n_steps, self._walk_end)
-
-
-def run_sim_loop(
-    sim: SimModel,
-    controller: WalkingController | OnlinePlanner,
-    options: LoopOptions | None = None,
-    *,
-    ik: WholeBodyIK | None = None,
-    data: mujoco.MjData | None = None,
-    progress: Callable[[float], None] | None = None,
-) -> SimResult:
-    """Walk the controller's walk with the simulated robot ``sim`` in closed loop (see the module docstring): a
-    :class:`ClosedLoop` stepped to the walk's end, or until the robot falls.
-
-    Args:
-        sim: the MuJoCo model of the robot.
-        controller: a controller level (:func:`rtgait.control.controller.make_controller`, its period ``sim``'s
-            control period), or an online planner, walked ``open-loop``; its planner must not be started (its clock
-            starts at 0 after the start transition).
-        options: loop settings (start transition, pushes, fall limits, footstep changes).
-        ik: the whole-body IK to use (default: one with default weights on ``sim.robot``).
-        data: MuJoCo state to run in (reset to the start configuration first); a new one when ``None``.
-        progress: called now and then with the fraction of the planned time simulated, for long runs.
-
-    Returns:
-        The per-tick record and the outcome.
-
-    Raises:
-        ValueError: the walk has no planned end and no ``stop_after_steps``, a push names an unknown body, the IK
-            was built for another robot, or the controller for another control period.
-    """
-    loop = ClosedLoop(sim, controller, options, ik=ik, data=data)
-    n_ticks = loop.n_ticks
-    assert n_ticks is not None  # a whole record needs a known length
-    report_every = max(n_ticks // 50, 1)
-    step = loop.step
-    began = time.perf_counter()
-    k = 0
-    while step() and not loop.done:  # the run may grow: step timing adaptation can hold a stance longer
-        if progress is not None and k % report_every == 0:
-            progress(min(k / n_ticks, 1.0))
-        k += 1
-    wall = time.perf_counter() - began
-    if progress is not None:
-        progress(1.0)
-    return loop.result(wall_time=wall)

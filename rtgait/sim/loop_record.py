@@ -2,8 +2,8 @@
 of its last ticks for an open-ended run whose memory must stay bounded.
 
 The arrays are allocated once; the loop writes tick ``k`` into row ``k mod capacity`` in place, so a tick allocates
-nothing here. With ``capacity`` at least the walk's length (:func:`rtgait.sim.loop.run_sim_loop`) row ``k`` is tick
-``k`` and the ring never wraps. In a ring that has wrapped, the oldest rows have been overwritten: after ``n``
+nothing here. With ``capacity`` at least the walk's length (:func:`rtgait.sim.run_loop.run_sim_loop`) row ``k`` is
+tick ``k`` and the ring never wraps. In a ring that has wrapped, the oldest rows have been overwritten: after ``n``
 ticks, rows hold ticks ``n - capacity .. n - 1``, and :meth:`TickRecord.arrange` puts them back in tick order.
 
 The replay's configurations are taken every ``replay_every`` ticks only (the ticks ``k = 0, r, 2r, ...``), into a

@@ -20,15 +20,12 @@ the walk's start to its planned end, where the measured ZMP must be on the stanc
   out (``reanchored_ticks``). On a run that fell it stops earlier than the other two
   (:attr:`SimResult.commanded_motion_mask`): at the first tip-over, which is where such a fall began.
 
-**Slip** of a stance foot: a *stance* is a stretch of ticks over which the foot carries at least
-:data:`STANCE_FRACTION` of the weight; its slip is the largest horizontal distance of the sole point from where it
-was at the stance's first tick (and likewise the largest change of heading). :attr:`SimResult.foot_slip_max` is the
-largest over all stances: a robot that walks keeps it at a millimetre or two; one that is dragged does not.
+The slip of the stance feet is measured by :mod:`rtgait.sim.stance`; the JSON summary is made by
+:mod:`rtgait.sim.result_summary`.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
@@ -39,6 +36,8 @@ import numpy as np
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.geometry.support import SUPPORT_CODES
 from rtgait.core.push import Push
+from rtgait.sim.result_summary import _error_stats, result_summary
+from rtgait.sim.stance import STANCE_FRACTION, Stance, stances
 
 if TYPE_CHECKING:
     import pinocchio as pin
@@ -51,11 +50,7 @@ if TYPE_CHECKING:
     from rtgait.sim.tick_log import CompleteLog
     from rtgait.stack.safety import SafetyEvent
 
-__all__ = ["FALL_MARGIN", "REST_SPEED", "STANCE_FRACTION", "SimResult", "Stance", "stances"]
-
-STANCE_FRACTION = 0.1
-"""A foot is a stance foot, for the slip measure, while it carries at least this fraction of the weight: a foot
-that only touches (the end of a swing, the start of a lift-off) may scuff without the robot slipping."""
+__all__ = ["FALL_MARGIN", "REST_SPEED", "SimResult"]
 
 FALL_MARGIN = 0.5
 """The ZMP errors leave out the last this many seconds before a fall (s): the robot is falling, not walking, and
@@ -63,78 +58,6 @@ the commanded motion of an IK chasing a falling robot has no meaningful ZMP."""
 
 REST_SPEED = 0.02
 """Largest COM speed (m/s, averaged over the run's last 0.1 s) of a walk that ended at rest."""
-
-
-@dataclass(frozen=True)
-class Stance:
-    """One foot's stretch of ticks on the ground under load, and how far it slipped.
-
-    Attributes:
-        side: ``"left"`` or ``"right"``.
-        start, end: its first and last tick times (s, walk clock).
-        slip: largest horizontal distance of the sole point from its place at ``start`` (m).
-        yaw_slip: largest change of the sole's heading from ``start`` (rad).
-    """
-
-    side: str
-    start: float
-    end: float
-    slip: float
-    yaw_slip: float
-
-
-def stances(times: np.ndarray, normal_force: np.ndarray, sole_pose: np.ndarray, threshold: float) -> list[Stance]:
-    """The stances of both feet (module docstring): ``normal_force`` ``(k, 2)`` (N) above ``threshold`` (N), sole
-    poses ``(k, 2, 3)`` as ``(x, y, yaw)`` (m, rad)."""
-    found = []
-    for i, side in enumerate(("left", "right")):
-        loaded = np.r_[False, normal_force[:, i] >= threshold, False].astype(np.int8)
-        edges = np.flatnonzero(np.diff(loaded))
-        for begin, stop in zip(edges[::2], edges[1::2], strict=True):
-            pose = sole_pose[begin:stop, i]
-            moved = pose[:, 0:2] - pose[0, 0:2]
-            turned = np.abs(np.remainder(pose[:, 2] - pose[0, 2] + math.pi, 2.0 * math.pi) - math.pi)
-            found.append(
-                Stance(side, float(times[begin]), float(times[stop - 1]), float(np.hypot(*moved.T).max()),
-                       float(turned.max()))
-            )  # fmt: skip
-    return sorted(found, key=lambda s: s.start)
-
-
-def _number(value: float | None) -> float | None:
-    """A JSON-ready number: NaN and infinities become ``None`` (JSON has neither)."""
-    return None if value is None or not math.isfinite(value) else float(value)
-
-
-def _decision(decision: StepDecision) -> dict[str, Any]:
-    """One step adjustment, JSON-ready (s, m)."""
-    return {
-        "t": float(decision.t),
-        "step": int(decision.step),
-        "landing": [float(v) for v in decision.landing],
-        "emergency": bool(decision.emergency),
-        "reason": decision.reason,
-    }
-
-
-def _error_stats(measured: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> dict[str, float | int | None]:
-    """RMS, median, 95th percentile and largest distance (m), the RMS per axis, of ``measured - reference`` over
-    ``mask`` where both are known, and the number of ``ticks`` that makes. The median and the 95th percentile tell a
-    steady error from a few large ones, which the RMS and the largest mix in."""
-    mask = mask & np.isfinite(measured[:, 0]) & np.isfinite(reference[:, 0])
-    if not mask.any():
-        return {**dict.fromkeys(("rms", "median", "p95", "max", "rms_x", "rms_y")), "ticks": 0}
-    error = measured[mask] - reference[mask]
-    distance = np.hypot(*error.T)
-    return {
-        "rms": float(np.sqrt(np.mean(distance * distance))),
-        "median": float(np.median(distance)),
-        "p95": float(np.percentile(distance, 95.0)),
-        "max": float(np.max(distance)),
-        "rms_x": float(np.sqrt(np.mean(error[:, 0] ** 2))),
-        "rms_y": float(np.sqrt(np.mean(error[:, 1] ** 2))),
-        "ticks": int(mask.sum()),
-    }
 
 
 @dataclass(frozen=True, eq=False)
@@ -449,45 +372,4 @@ class SimResult:
         """The outcome as JSON-ready values (SI units; times on the walk's clock); with a model error, its compact
         record (:meth:`~rtgait.sim.model_error.ModelError.summary`) as ``model_error``; the state the controller
         acted on, the sensors' settings and, on the estimate, its errors (:attr:`estimation_errors`)."""
-        worst = max(self.stances, key=lambda s: s.slip, default=None)
-        summary: dict[str, Any] = {
-            "model": "mujoco",
-            "robot": self.robot,
-            "controller": self.controller,
-            "fell": self.fell,
-            "fall_time": _number(self.fall_time),
-            "fall_cause": self.fall_cause,
-            "tipped": self.tipped,
-            "tip_time": _number(self.tip_time),
-            "steps_planned": self.steps_planned,
-            "steps_completed": self.steps_completed,
-            "missed_landings": self.missed_landings,
-            "step_adjustments": self.step_adjustment_count,
-            "step_adjustment_log": [_decision(d) for d in self.step_adjustments],
-            "replans": self.replans,
-            "ended_at_rest": self.ended_at_rest,
-            "distance_walked": self.distance_walked,
-            "foot_slip_max": self.foot_slip_max,
-            "foot_slip_max_time": None if worst is None else worst.start,
-            "foot_yaw_slip_max": self.foot_yaw_slip_max,
-            "zmp_error": self.zmp_errors(),
-            "zmp_tracking_error_rms": _number(self.zmp_tracking_error_rms),
-            "zmp_tracking_error_max": _number(self.zmp_tracking_error_max),
-            "pushes": [push.summary() for push in self.pushes],
-            "simulated_time": self.duration,
-            "wall_time": self.wall_time,
-            "real_time_factor": self.real_time_factor,
-            "run_start": self.run_start,
-            "walk_end": self.walk_end,
-            "legs_touched": self.legs_touched,
-            "control_dt": self.control_dt,
-            "physics_dt": self.physics_dt,
-            "safety": self.safety,
-            "drive": self.drive,
-            "state": self.state,
-            "sensors": None if self.sensors is None else dataclasses.asdict(self.sensors),
-            "estimation": None if self.estimation_errors is None else self.estimation_errors.summary(),
-        }
-        if self.model_error is not None:
-            summary["model_error"] = self.model_error.summary()
-        return summary
+        return result_summary(self)

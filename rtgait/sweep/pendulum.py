@@ -68,7 +68,7 @@ def rolled_out(scenario: Scenario, method: str) -> dict[str, Any]:
     """One case by a rollout (what ``rtgait plan`` does), for what the batch does not take."""
     from rtgait.core.analysis.rollout import rollout
     from rtgait.core.planner.online import OnlinePlanner
-    from rtgait.viz.run_data import margin_marker
+    from rtgait.viz.margin_marker import margin_marker
 
     config = scenario.planner_config()
     if method == "preview":

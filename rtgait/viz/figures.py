@@ -4,7 +4,8 @@ Each ``draw_*`` function makes one figure from a :class:`~rtgait.viz.run_data.Pl
 finished run read back from its files) and a :class:`FigureInfo` (title, sole, the footprints as planned before any
 change); each ``plot_*`` function writes one to a path whose suffix picks the format (png, pdf, svg) and also takes
 a :class:`~rtgait.core.analysis.rollout.Rollout` directly. :func:`render_all` writes the four figures of ``rtgait
-plan``.
+plan``. The ZMP deviation figure is drawn by :mod:`rtgait.viz.deviation_figure`, the robot's multibody ZMP by
+:mod:`rtgait.viz.multibody_figure`; the marks they share are :mod:`rtgait.viz.plan_marks`.
 
 Conventions (:mod:`rtgait.viz.style`): positions in m, deviations and margins in mm, time in s from the walk's
 start, units in square brackets.
@@ -20,37 +21,39 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
-from rtgait.core.analysis.rollout import Rollout
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
-from rtgait.viz.run_data import PLAN_FIGURES, FigureInfo, PlanRun, figure_file, plan_figure_files
+from rtgait.viz.deviation_figure import draw_zmp_deviation
+from rtgait.viz.figure_files import PLAN_FIGURES, figure_file, plan_figure_files
+from rtgait.viz.plan_marks import (
+    RunLike,
+    _as_run,
+    _finish_time_panels,
+    _margin_caption,
+    _mark_changes,
+    _mark_outside,
+    _shade_double_support,
+)
+from rtgait.viz.run_data import FigureInfo, PlanRun
 from rtgait.viz.style import (
     BAND_COLOR,
-    CHANGE_COLOR,
     COG_COLOR,
-    DOUBLE_COLOR,
-    MINUS,
     REF_COLOR,
     SIDE_COLORS,
     TIME_LABEL,
     ZMP_COLOR,
     clean_ticks,
     new_figure,
-    runs,
     save,
-    signed_mm,
     span_limits,
 )
 
 __all__ = [
     "DRAW",
     "FIGURE_FILES",
-    "MIN_DEVIATION_SPAN",
     "FigureInfo",
     "draw_top_view",
     "draw_zmp_cog",
-    "draw_zmp_deviation",
     "draw_zmp_margin",
-    "plot_multibody_zmp",
     "plot_top_view",
     "plot_zmp_cog",
     "plot_zmp_deviation",
@@ -62,20 +65,9 @@ __all__ = [
 FIGURE_FILES = tuple(plan_figure_files("png"))
 """File names written by :func:`render_all` in the default format, in order."""
 
-MIN_DEVIATION_SPAN = 4.0
-"""Smallest y span (mm) of a deviation panel: a replan that keeps the ZMP within a fraction of a mm of its reference
-shows as the flat line it is, not as noise blown up to the panel's height."""
-
 MOVED_TOLERANCE = 1e-3  # a footprint moved by more than this (m, or rad of yaw) counts as changed
 MARKER_GID = "margin-marker"
 """``gid`` of the artist marking the minimum ZMP margin (top view, margin figure), for tools and tests."""
-
-RunLike = Rollout | PlanRun
-
-
-def _as_run(run: RunLike) -> PlanRun:
-    return run if isinstance(run, PlanRun) else PlanRun.from_rollout(run)
-
 
 # ----- data helpers ---------------------------------------------------------------------------------------------
 
@@ -101,57 +93,6 @@ def _moved(footprints: Sequence[Footstep], nominal: Sequence[Footstep] | None) -
         bool(np.hypot(a.x - b.x, a.y - b.y) > MOVED_TOLERANCE or abs(a.yaw - b.yaw) > MOVED_TOLERANCE)
         for a, b in zip(footprints, nominal, strict=True)
     ]
-
-
-# ----- drawing helpers ------------------------------------------------------------------------------------------
-
-
-def _shade_double_support(ax: Axes, run: PlanRun, label: bool) -> None:
-    for k, (t0, t1) in enumerate(runs(run.support == "double", run.times)):
-        text = "double support (both feet on the ground)" if label and k == 0 else None
-        ax.axvspan(t0, t1, color=DOUBLE_COLOR, alpha=0.6, lw=0, zorder=0, label=text)
-
-
-def _mark_changes(ax: Axes, run: PlanRun, label: bool) -> None:
-    for k, (t, step) in enumerate(run.changes):
-        text = "footstep change decided" if label and k == 0 else None
-        ax.axvline(t, color=CHANGE_COLOR, ls=":", lw=1.8, zorder=3, label=text)
-        # The step number on the marker links the time plot to the footprint numbers of the top view.
-        ax.annotate(f"step {step}", (t, 1.0), xycoords=("data", "axes fraction"), xytext=(3, -3),
-                    textcoords="offset points", va="top", fontsize=8, color=CHANGE_COLOR)  # fmt: skip
-
-
-def _mark_outside(ax: Axes, run: PlanRun, values: np.ndarray, label: bool) -> None:
-    outside = run.margin < 0.0
-    if outside.any():
-        ax.plot(run.times[outside], values[outside], ls="none", marker=".", ms=3, color="red", zorder=4,
-                label="ZMP outside the support polygon" if label else None)  # fmt: skip
-
-
-def _finish_time_panels(
-    figure: Figure, axes: Sequence[Axes], t: np.ndarray, title: str, legend_columns: int, legend: bool = True
-) -> None:
-    """Grid, time range and labels shared by the x-over-y panels against time."""
-    for ax in axes:
-        ax.grid(True, alpha=0.3)
-        ax.set_xlim(t[0], t[-1])
-    axes[-1].set_xlabel(TIME_LABEL)
-    axes[0].set_title("sagittal (x)", fontsize=10, loc="left")
-    axes[1].set_title("lateral (y)", fontsize=10, loc="left")
-    figure.suptitle(title)
-    if legend:
-        figure.legend(loc="outside lower center", ncol=legend_columns, fontsize=9)
-
-
-def _margin_caption(run: PlanRun) -> str:
-    """What the minimum-margin marker shows: the value, inside or out, when, and whether the minimum is tied."""
-    marker = run.marker
-    margin = run.zmp_margin_min
-    verdict = "OUTSIDE" if margin < 0.0 else "inside"
-    text = f"min ZMP margin {signed_mm(margin)} ({verdict}) at {run.times[marker.index]:.2f} s"
-    if marker.tied > 1:
-        text += f"\n(reached for {marker.tied_duration:.2f} s in all; marked: the {marker.reason})"
-    return text
 
 
 # ----- the figures ----------------------------------------------------------------------------------------------
@@ -198,77 +139,6 @@ def _heights_panel(ax: Axes, run: PlanRun) -> None:
     ax.set_ylabel("z [m]")
     ax.set_title("vertical (z): COG and feet", fontsize=10, loc="left")
     clean_ticks(ax)
-
-
-def _deviation_panel(ax: Axes, run: PlanRun, index: int, first: bool) -> None:
-    """One axis of :func:`draw_zmp_deviation`, in mm, scaled on the replans."""
-    t = run.times
-    deviation = (run.zmp[:, index] - run.zmp_ref[:, index]) * 1000.0
-    connecting = run.free_mask(initial=False)
-    initial = run.free_mask(initial=True) & ~connecting
-    for k, (t0, t1) in enumerate(runs(initial | connecting, t)):
-        ax.axvspan(
-            t0,
-            t1,
-            color=DOUBLE_COLOR,
-            alpha=0.6,
-            lw=0,
-            zorder=0,
-            label="free first segment of a plan (the ZMP may leave its reference)" if first and k == 0 else None,
-        )
-    # NaN outside the windows breaks the line there instead of drawing zeros that were never free.
-    ax.plot(t, np.where(connecting, deviation, np.nan), color=ZMP_COLOR, lw=1.6, zorder=3, gid="deviation-replans",
-            label=f"ZMP {MINUS} ZMP reference, replans" if first else None)  # fmt: skip
-    ax.plot(t, np.where(initial, deviation, np.nan), color=ZMP_COLOR, lw=1.2, ls="--", alpha=0.7, zorder=3,
-            gid="deviation-initial",
-            label=f"ZMP {MINUS} ZMP reference, initial plan (start from rest)" if first else None)  # fmt: skip
-    ax.axhline(0.0, color="black", lw=0.8, zorder=2)
-    # The initial plan always swings the ZMP far from its reference (the anticipatory shift that starts the COG
-    # moving from rest); scaled on it, the replans' deviations, which the figure is about, would be flat lines.
-    scale_on = connecting if connecting.any() else initial
-    low, high = span_limits(deviation[scale_on], MIN_DEVIATION_SPAN, include=0.0)
-    ax.set_ylim(low, high)
-    if connecting.any():
-        worst = int(np.argmax(np.where(connecting, np.abs(deviation), -1.0)))
-        ax.plot(t[worst], deviation[worst], "o", color="red", ms=5, zorder=4,
-                label="largest deviation of a replan" if first else None)  # fmt: skip
-        ax.annotate(f"{signed_mm(deviation[worst] / 1000.0)} at {t[worst]:.2f} s", (t[worst], deviation[worst]),
-                    xytext=(8, 0), textcoords="offset points", fontsize=8, color="red", va="center")  # fmt: skip
-    start = np.where(initial, deviation, np.nan)
-    if np.any(initial) and (np.nanmin(start) < low or np.nanmax(start) > high):
-        _mark_off_scale(ax, t, start, low, high)
-    _mark_changes(ax, run, first)
-    ax.set_ylabel(f"{'xy'[index]} deviation [mm]")
-    clean_ticks(ax)
-
-
-def _mark_off_scale(ax: Axes, t: np.ndarray, values: np.ndarray, low: float, high: float) -> None:
-    """Mark the initial plan's extreme, clipped off the scale, by a triangle on the axes' edge, and write its value
-    above the panel (inside it, the words would cover the replans' curves)."""
-    extreme = int(np.nanargmax(np.abs(values)))
-    below = values[extreme] < low
-    ax.plot(t[extreme], low if below else high, marker="v" if below else "^", ms=8, color=ZMP_COLOR, mec="black",
-            mew=0.6, clip_on=False, zorder=6, gid="deviation-off-scale")  # fmt: skip
-    arrow = "\N{BLACK DOWN-POINTING TRIANGLE}" if below else "\N{BLACK UP-POINTING TRIANGLE}"
-    ax.set_title(f"initial plan off scale ({arrow}): {signed_mm(values[extreme] / 1000.0)} at {t[extreme]:.2f} s",
-                 loc="right", fontsize=9, color=ZMP_COLOR)  # fmt: skip
-
-
-def draw_zmp_deviation(run: PlanRun, info: FigureInfo) -> Figure:
-    """``zmp - zmp_ref`` (mm) along x and y during the free first segment of each plan, where it can differ.
-
-    Outside those windows the planned ZMP is the footsteps' reference by construction, so only the windows are
-    drawn (shaded); the deviation is what absorbs a changed step. Each panel is scaled on the replans' deviation
-    (at least :data:`MIN_DEVIATION_SPAN` mm); the initial plan's start from rest is drawn dashed, clipped where it
-    leaves that scale, and its extreme written at the edge.
-    """
-    figure = new_figure(11, 6.5)
-    axes = figure.subplots(2, 1, sharex=True)
-    for index, ax in enumerate(axes):
-        _deviation_panel(ax, run, index, index == 0)
-    _finish_time_panels(figure, axes, run.times, f"{info.title}: ZMP deviation in the free first segments",
-                        legend_columns=3)  # fmt: skip
-    return figure
 
 
 def draw_top_view(run: PlanRun, info: FigureInfo) -> Figure:
@@ -365,7 +235,7 @@ DRAW: dict[str, Callable[[PlanRun, FigureInfo], Figure]] = {
     "top_view": draw_top_view,
     "zmp_margin": draw_zmp_margin,
 }
-"""The four figures of ``rtgait plan`` by file stem (:data:`~rtgait.viz.run_data.PLAN_FIGURES` order)."""
+"""The four figures of ``rtgait plan`` by file stem (:data:`~rtgait.viz.figure_files.PLAN_FIGURES` order)."""
 
 
 def plot_zmp_cog(rollout: RunLike, info: FigureInfo, path: Path) -> Path:
@@ -388,43 +258,8 @@ def plot_zmp_margin(rollout: RunLike, info: FigureInfo, path: Path) -> Path:
     return save(draw_zmp_margin(_as_run(rollout), info), path)
 
 
-def plot_multibody_zmp(
-    rollout: RunLike,
-    info: FigureInfo,
-    path: Path,
-    multibody_zmp: np.ndarray,
-    compensated_zmp: np.ndarray | None = None,
-    robot: str = "robot",
-) -> Path:
-    """Multibody ZMP of the robot's whole-body motion minus the planned ZMP (mm), along x and y against time,
-    before and, when given, after the angular-momentum compensation (the paper's Fig. 11)."""
-    run = _as_run(rollout)
-    figure = new_figure(11, 6.5)
-    axes = figure.subplots(2, 1, sharex=True)
-    t = run.times
-    for index, (ax, axis) in enumerate(zip(axes, "xy", strict=True)):
-        planned = run.zmp[:, index]
-        before = multibody_zmp[:, index] - planned
-        ax.plot(t, before * 1000, color=COG_COLOR, lw=1.3, zorder=2,
-                label=f"{axis}: without compensation (max {np.abs(before).max() * 1000:.1f} mm)")  # fmt: skip
-        if compensated_zmp is not None:
-            after = compensated_zmp[:, index] - planned
-            label = f"{axis}: with angular-momentum compensation (max {np.abs(after).max() * 1000:.1f} mm)"
-            ax.plot(t, after * 1000, color=ZMP_COLOR, lw=1.3, zorder=3, label=label)
-        ax.axhline(0.0, color="black", lw=0.8, zorder=1)
-        _shade_double_support(ax, run, label=index == 0)
-        _mark_changes(ax, run, index == 0)
-        ax.set_ylabel(f"{axis} error [mm]")
-        clean_ticks(ax)
-        ax.legend(loc="upper right", fontsize=8)
-    _finish_time_panels(
-        figure, axes, t, f"{info.title}: multibody ZMP minus planned ZMP ({robot})", legend_columns=3, legend=False
-    )
-    return save(figure, path)
-
-
 def render_all(rollout: RunLike, info: FigureInfo, folder: Path, fmt: str = "png") -> list[Path]:
-    """Write the four figures (:data:`~rtgait.viz.run_data.PLAN_FIGURES`) into ``folder`` in the format ``fmt``
+    """Write the four figures (:data:`~rtgait.viz.figure_files.PLAN_FIGURES`) into ``folder`` in the format ``fmt``
     (png, pdf or svg); returns their paths."""
     run = _as_run(rollout)
     folder = Path(folder)

@@ -16,7 +16,7 @@ from matplotlib.patches import Polygon
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
 from rtgait.core.obstacle.walk import ObstacleRun
-from rtgait.viz.run_data import OBSTACLE_FIGURE
+from rtgait.viz.figure_files import OBSTACLE_FIGURE
 from rtgait.viz.style import COG_COLOR, SIDE_COLORS, ZMP_COLOR, clean_ticks, new_figure, save
 
 __all__ = ["OBSTACLE_FIGURE", "draw_obstacle_walks", "plot_obstacle_walks", "verdict"]

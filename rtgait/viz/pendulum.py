@@ -21,7 +21,7 @@ from matplotlib.patches import Rectangle
 from rtgait.core.geometry.support import SUPPORT_NAMES
 from rtgait.core.pendulum.loop import ClosedLoopResult
 from rtgait.core.push import Push
-from rtgait.viz.run_data import SIM_CSV, SUMMARY, RunFilesError, read_floats, read_summary, read_table, require_keys
+from rtgait.viz.run_files import SIM_CSV, SUMMARY, RunFilesError, read_floats, read_summary, read_table, require_keys
 from rtgait.viz.style import (
     COG_COLOR,
     DOUBLE_COLOR,

@@ -4,17 +4,15 @@ The figures of ``rtgait plan`` are drawn from a small record, :class:`PlanRun`, 
 objects; it is made either from the rollout in memory (:meth:`PlanRun.from_rollout`) or from the run's files
 (:func:`read_plan_run`), so ``rtgait plot DIR`` remakes the very figures the run wrote: the files carry everything
 a figure shows (``trajectory.csv`` per tick, ``summary.json`` for the rest). The pendulum figure's record,
-:class:`rtgait.viz.pendulum.PendulumRun`, is read with the helpers here.
+:class:`rtgait.viz.pendulum.PendulumRun`, is read with the same readers.
 
-Also here, because ``summary.json`` and the figures must agree on it: which tick is *the* minimum ZMP margin
-(:func:`margin_marker`), and the figure file names for each format. No matplotlib: :mod:`rtgait.io.plan_files` uses this
-module on a core install.
+The files are read by :mod:`rtgait.viz.run_files`; which tick is *the* minimum ZMP margin, on which ``summary.json``
+and the figures must agree, is :mod:`rtgait.viz.margin_marker`; the figure file names are
+:mod:`rtgait.viz.figure_files`. No matplotlib: :mod:`rtgait.io.plan_files` uses these modules on a core install.
 """
 
 from __future__ import annotations
 
-import json
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,72 +22,23 @@ import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
 from rtgait.core.geometry.support import support_polygon
+from rtgait.viz.margin_marker import MarginMarker, margin_marker
+from rtgait.viz.run_files import (
+    PLAN_CSV,
+    SUMMARY,
+    RunFilesError,
+    read_floats,
+    read_summary,
+    read_table,
+    require_keys,
+)
 
 if TYPE_CHECKING:
     from rtgait.core.analysis.rollout import Rollout
 
-__all__ = [
-    "FIGURE_FORMATS",
-    "MARGIN_TIE_TOLERANCE",
-    "OBSTACLE_FIGURE",
-    "PENDULUM_FIGURE",
-    "PLAN_FIGURES",
-    "FigureInfo",
-    "MarginMarker",
-    "PlanRun",
-    "RunFilesError",
-    "figure_file",
-    "margin_marker",
-    "plan_figure_files",
-    "read_floats",
-    "read_plan_run",
-    "read_summary",
-    "read_table",
-    "require_keys",
-    "run_kind",
-]
-
-FIGURE_FORMATS = ("png", "pdf", "svg")
-"""File formats of the figures (``--format``); png is the default."""
-
-PLAN_FIGURES = ("zmp_cog", "zmp_deviation", "top_view", "zmp_margin")
-"""The figures of ``rtgait plan``, by file stem, in the order they are written and listed."""
-
-OBSTACLE_FIGURE = "obstacle"
-"""The figure of a plan with obstacles (:mod:`rtgait.viz.obstacle_figure`), by file stem."""
-
-PENDULUM_FIGURE = "pendulum"
-"""The figure of ``rtgait simulate --model lipm``, by file stem."""
-
-MARGIN_TIE_TOLERANCE = 1e-9
-"""Margins (m) within this of the minimum are tied with it: far below anything physical, far above the round-off of
-the margin computation and of the 10 significant digits the CSV files keep."""
+__all__ = ["FigureInfo", "PlanRun", "read_plan_run"]
 
 _TIME_TOLERANCE = 1e-9  # s: far below any control period, far above the round-off of tick times
-
-PLAN_CSV = "trajectory.csv"
-SIM_CSV = "sim.csv"
-SIM_PARQUET = "sim.parquet"
-SUMMARY = "summary.json"
-# Columns only the MuJoCo loop writes into its sim.csv (rtgait.io.sim_run.SIM_CSV_COLUMNS): a run that has them is a
-# simulation of the robot, whose figure is not drawn here.
-_MUJOCO_COLUMNS = ("base_qw", "left_contact")
-
-
-def figure_file(stem: str, fmt: str = "png") -> str:
-    """The file name of the figure ``stem`` in the format ``fmt`` (:data:`FIGURE_FORMATS`)."""
-    if fmt not in FIGURE_FORMATS:
-        raise ValueError(f"figure format must be one of {', '.join(FIGURE_FORMATS)}, got {fmt!r}")
-    return f"{stem}.{fmt}"
-
-
-def plan_figure_files(fmt: str = "png") -> list[str]:
-    """The file names of the four plan figures (:data:`PLAN_FIGURES`) in the format ``fmt``."""
-    return [figure_file(stem, fmt) for stem in PLAN_FIGURES]
-
-
-class RunFilesError(ValueError):
-    """A folder does not hold the files of a run the figures can be drawn from (one line, names the file)."""
 
 
 @dataclass(frozen=True)
@@ -106,56 +55,6 @@ class FigureInfo:
     title: str
     sole: SoleRect
     nominal_footprints: Sequence[Footstep] | None = None
-
-
-# ----- the minimum ZMP margin ----------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class MarginMarker:
-    """The tick shown as the walk's minimum ZMP margin, and how many ticks share that minimum.
-
-    Attributes:
-        index: the tick marked (and reported as ``zmp_margin_min_time`` in ``summary.json``).
-        tied: ticks whose margin is within :data:`MARGIN_TIE_TOLERANCE` of the minimum (1: a unique minimum).
-        tied_duration: how long the margin stays at its minimum over the walk (s): ``tied`` ticks of ``dt``.
-        reason: why this tick, for a figure's caption (empty for a unique minimum).
-    """
-
-    index: int
-    tied: int
-    tied_duration: float
-    reason: str
-
-
-def margin_marker(times: np.ndarray, margin: np.ndarray, change_times: Sequence[float] = ()) -> MarginMarker:
-    """Which tick to mark (and report) as the minimum ZMP margin.
-
-    The minimum is often reached at many ticks: a ZMP resting on the stance ankle in single support is the same
-    half sole width from the edges at every such tick, in every step. The first of them (what ``argmin`` gives) is
-    the first lift-off, which tells nothing about the walk. The rule:
-
-    * one tick at the minimum: that tick;
-    * several (within :data:`MARGIN_TIE_TOLERANCE`) and a footstep change decided in the walk: the first tied tick
-      at or after the first change's decision, the instant the figures are about (the margin while the change is
-      absorbed);
-    * otherwise (no change, or no tie after it): the first tied tick.
-
-    The minimum itself is ``margin.min()`` in every case.
-    """
-    margin = np.asarray(margin, dtype=float)
-    times = np.asarray(times, dtype=float)
-    tied = np.flatnonzero(margin <= margin.min() + MARGIN_TIE_TOLERANCE)
-    dt = float(times[1] - times[0]) if len(times) > 1 else 0.0
-    duration = len(tied) * dt
-    if len(tied) == 1:
-        return MarginMarker(int(tied[0]), 1, duration, "")
-    if len(change_times):
-        first_change = min(change_times)
-        after = tied[times[tied] >= first_change - 1e-12]
-        if len(after):
-            return MarginMarker(int(after[0]), len(tied), duration, "first after the change")
-    return MarginMarker(int(tied[0]), len(tied), duration, "first instant")
 
 
 # ----- a plan run ----------------------------------------------------------------------------------------------
@@ -256,64 +155,6 @@ def _footstep(entry: Any, where: str) -> Footstep:
         raise RunFilesError(f"{where}: a footprint must have x, y, yaw and side ({error})") from None
 
 
-def read_table(path: Path, required: Sequence[str]) -> dict[str, np.ndarray]:
-    """The columns of a CSV file written by rtgait, as text arrays by name; refuses one missing ``required``."""
-    try:
-        with open(path, encoding="utf-8") as stream, warnings.catch_warnings():
-            # An empty body is no warning here (its stream's repr would be the message): "no rows" is said below.
-            warnings.simplefilter("ignore")
-            header = stream.readline().strip().split(",")
-            # ndmin=2: a run of a single tick is still a table of one row.
-            table = np.loadtxt(stream, delimiter=",", dtype=str, ndmin=2)
-    except OSError as error:
-        raise RunFilesError(f"cannot read {path}: {error.strerror or error}") from None
-    except UnicodeDecodeError:
-        raise RunFilesError(f"cannot read {path}: not a text file") from None
-    except ValueError as error:  # numpy's "the number of columns changed from 27 to 22 at row 132; use `usecols`..."
-        detail = str(error).split(";")[0]
-        raise RunFilesError(f"cannot read {path}: it is cut short or damaged ({detail})") from None
-    if table.shape[0] < 1:  # first: a header cut short also lacks columns, but "cut short" is the news
-        raise RunFilesError(f"{path} has no rows: it is cut short or damaged")
-    missing = [name for name in required if name not in header]
-    if missing:
-        raise RunFilesError(f"{path} has no column {missing[0]}: not a file rtgait wrote for this kind of run")
-    if table.shape[1] != len(header):
-        raise RunFilesError(f"{path} has rows that do not match its header: it is cut short or damaged")
-    return {name: table[:, index] for index, name in enumerate(header)}
-
-
-def read_floats(columns: dict[str, np.ndarray], names: Sequence[str], path: Path) -> np.ndarray:
-    """The columns ``names`` of a :func:`read_table` as one float array ``(k, len(names))``."""
-    try:
-        return np.column_stack([columns[name].astype(float) for name in names])
-    except ValueError as error:
-        raise RunFilesError(f"{path}: a value of {', '.join(names)} is not a number ({error})") from None
-
-
-def read_summary(folder: Path) -> dict[str, Any]:
-    """The ``summary.json`` of the run in ``folder``."""
-    path = Path(folder) / SUMMARY
-    try:
-        summary = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise RunFilesError(f"{path} is missing: {folder} does not hold a finished rtgait run") from None
-    except (OSError, UnicodeDecodeError, ValueError) as error:
-        raise RunFilesError(f"cannot read {path}: {error}") from None
-    if not isinstance(summary, dict):
-        raise RunFilesError(f"{path} is not a run's summary (not a JSON object)")
-    return summary
-
-
-def require_keys(summary: dict[str, Any], keys: Sequence[str], folder: Path, kind: str) -> None:
-    """Refuse a summary without one of ``keys``: not the summary of ``kind`` run, or one older than the figures."""
-    missing = [key for key in keys if key not in summary]
-    if missing:
-        raise RunFilesError(
-            f"{Path(folder) / SUMMARY} has no {missing[0]!r}: not the summary of {kind} run, or one written by an "
-            "older rtgait (run it again)"
-        )
-
-
 def _canonical(polygon: np.ndarray) -> np.ndarray:
     """``polygon`` (counter-clockwise) without collinear vertices, starting at its lowest-x (then lowest-y) vertex.
 
@@ -398,40 +239,3 @@ def read_plan_run(folder: Path) -> tuple[PlanRun, FigureInfo, dict[str, Any]]:
         heights=heights,
     )
     return run, info, summary
-
-
-# ----- which kind of run ---------------------------------------------------------------------------------------
-
-
-def _csv_header(path: Path) -> list[str]:
-    try:
-        with open(path, encoding="utf-8") as stream:
-            return stream.readline().strip().split(",")
-    except (OSError, UnicodeDecodeError) as error:
-        raise RunFilesError(f"cannot read {path}: {error}") from None
-
-
-def run_kind(folder: Path) -> str:
-    """``"plan"``, ``"lipm"`` or ``"mujoco"``: the kind of finished run in ``folder``, told by its summary and its
-    files (``sim.parquet`` or the robot's columns of ``sim.csv`` for a MuJoCo simulation).
-
-    Raises:
-        RunFilesError: not a folder, or no run in it.
-    """
-    folder = Path(folder)
-    if not folder.is_dir():
-        raise RunFilesError(f"{folder} is not a folder" if folder.exists() else f"{folder} does not exist")
-    summary = read_summary(folder)
-    sim = folder / SIM_CSV
-    if summary.get("model") == "lipm":
-        return "lipm"
-    if (
-        (folder / SIM_PARQUET).is_file()
-        or summary.get("model") == "mujoco"
-        or "walk_start" in summary
-        or (sim.is_file() and set(_MUJOCO_COLUMNS) <= set(_csv_header(sim)))
-    ):
-        return "mujoco"
-    if (folder / PLAN_CSV).is_file() or "zmp_margin_min" in summary:
-        return "plan"
-    raise RunFilesError(f"{folder} holds no trajectory.csv (rtgait plan) or sim.csv (rtgait simulate)")

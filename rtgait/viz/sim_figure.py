@@ -25,7 +25,7 @@ import numpy as np
 
 from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.sim.log_file import LOG_FILE, parquet_available, read_sim_log
-from rtgait.viz.run_data import SIM_CSV, RunFilesError, read_floats, read_summary, read_table, require_keys
+from rtgait.viz.run_files import SIM_CSV, RunFilesError, read_floats, read_summary, read_table, require_keys
 from rtgait.viz.walk_title import velocity_commands, walk_title
 
 if TYPE_CHECKING:

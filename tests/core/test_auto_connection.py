@@ -22,9 +22,11 @@ from rtgait.core import (
 from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, evaluate_walks
 from rtgait.core.planner import auto
 from rtgait.core.planner.auto import auto_options, window
-from rtgait.io.plan_files import plan_report, summarize
+from rtgait.io.plan_report import plan_report
+from rtgait.io.plan_summary import summarize
 from rtgait.scenario.loading import load_scenario
-from rtgait.scenario.scenario import ScenarioError, parse_scenario
+from rtgait.scenario.scenario import ScenarioError
+from rtgait.scenario.scenario_file import parse_scenario
 
 SOLE = SoleRect(front=0.13, back=0.10, inner=0.07, outer=0.07)
 

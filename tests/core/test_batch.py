@@ -14,9 +14,9 @@ from rtgait.core.analysis.walk_family import TIE
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.geometry.hull import PointChain, outside_margin, sole_extents, two_box_hull, two_box_vertices
 from rtgait.core.geometry.support import signed_margin, support_polygon
-from rtgait.io.plan_files import summarize
+from rtgait.io.plan_summary import summarize
 from rtgait.scenario.loading import load_scenario
-from rtgait.viz.run_data import MARGIN_TIE_TOLERANCE, margin_marker
+from rtgait.viz.margin_marker import MARGIN_TIE_TOLERANCE, margin_marker
 
 PAPER = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "sidestep")
 

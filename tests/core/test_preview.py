@@ -12,7 +12,7 @@ from rtgait.core.analysis.batch import StraightWalk
 from rtgait.core.analysis.preview import PREVIEW_PERIOD, PreviewPlanner, evaluate_preview, preview_gains
 from rtgait.core.planner.sample import SAMPLE_FIELDS
 from rtgait.scenario.loading import load_scenario
-from rtgait.viz.run_data import margin_marker
+from rtgait.viz.margin_marker import margin_marker
 
 
 def test_gains_track_a_step_of_the_reference():

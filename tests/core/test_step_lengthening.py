@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 from pendulum_walk import CONFIG, MASS, PUSHED_STEP, SOLE, STRIDES, W
 
-from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits, remainder_options, single_support_options
+from rtgait.core.laws.step_timing import remainder_options, single_support_options
+from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
 from rtgait.core.pendulum.loop import run_pendulum_loop
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.push import Push

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from rtgait.core.analysis.walk_family import FamilyKey, WalkFamily
+from rtgait.core.analysis.family_key import FamilyKey
+from rtgait.core.analysis.walk_family import WalkFamily
 from rtgait.core.geometry.footsteps import SoleRect, Stride, Timeline, Timing
 from rtgait.core.planner.online import SAMPLE_FIELDS, OnlinePlanner, PlannerConfig, straight_walk
 from rtgait.core.walk.walk import VelocityCommand
@@ -137,9 +138,7 @@ def test_every_operator_is_built_at_start():
     planner = OnlinePlanner(config, straight_walk(config, len(PER_STEP) - 1, 0.1))
     planner.start(0.0)
     built = dict(planner._layouts)
-    shapes = {
-        planner.timeline.durations(q, planner._plan_span(q)) for q in range(0, 2 * planner.n_steps + 1, 2)
-    }
+    shapes = {planner.timeline.durations(q, planner._plan_span(q)) for q in range(0, 2 * planner.n_steps + 1, 2)}
     assert len(built) == len(shapes)  # one per distinct timing, none shared wrongly by shape
     for k in range(round(planner.end_time / DT) + 1):
         planner.sample_values(k * DT)

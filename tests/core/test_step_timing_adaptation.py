@@ -19,13 +19,9 @@ from rtgait.core.geometry.footsteps import Timing
 from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.support import signed_margin
 from rtgait.core.laws.capturability import max_capturable_impulse, reach_along
-from rtgait.core.laws.stepping import (
-    StepAdjustment,
-    SteppingLimits,
-    choose_step,
-    remainder_options,
-    single_support_options,
-)
+from rtgait.core.laws.landing_choice import choose_step
+from rtgait.core.laws.step_timing import remainder_options, single_support_options
+from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
 from rtgait.core.pendulum.loop import run_pendulum_loop
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
 from rtgait.core.push import Push

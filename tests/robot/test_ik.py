@@ -11,8 +11,9 @@ pin = pytest.importorskip("pinocchio")
 
 from rtgait.core.planner.sample import SampleColumns  # noqa: E402
 from rtgait.interface.task_targets import IKTargets  # noqa: E402
-from rtgait.robot.ik import WholeBodyIK, _yaw_error  # noqa: E402
+from rtgait.robot.ik import WholeBodyIK  # noqa: E402
 from rtgait.robot.model import RobotModel  # noqa: E402
+from rtgait.robot.rotation_errors import _yaw_error  # noqa: E402
 
 
 def yaw_matrix(yaw: float) -> np.ndarray:

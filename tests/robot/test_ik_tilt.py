@@ -11,7 +11,8 @@ import pytest
 pin = pytest.importorskip("pinocchio")
 
 from rtgait.interface.task_targets import IKTargets  # noqa: E402
-from rtgait.robot.ik import WholeBodyIK, _foot_error  # noqa: E402
+from rtgait.robot.ik import WholeBodyIK  # noqa: E402
+from rtgait.robot.rotation_errors import _foot_error  # noqa: E402
 
 
 def _target(yaw: float, pitch: float, roll: float) -> np.ndarray:

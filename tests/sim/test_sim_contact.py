@@ -14,8 +14,9 @@ from rtgait.core.geometry.footsteps import Stride  # noqa: E402
 from rtgait.core.planner.online import OnlinePlanner  # noqa: E402
 from rtgait.io.sim_run import simulate  # noqa: E402
 from rtgait.robot.motion import robot_scenario  # noqa: E402
-from rtgait.sim.loop import LoopOptions, run_sim_loop  # noqa: E402
+from rtgait.sim.loop import LoopOptions  # noqa: E402
 from rtgait.sim.model import SimConfig, build_sim_model  # noqa: E402
+from rtgait.sim.run_loop import run_sim_loop  # noqa: E402
 
 
 def feet_drift(sim, force: tuple[float, float, float], seconds: float) -> np.ndarray:

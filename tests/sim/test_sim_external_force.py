@@ -59,7 +59,8 @@ def pulled(talos, talos_sim, shorten):
     pytest.importorskip("mujoco")
     from rtgait.control.controller import ControllerOptions, make_controller
     from rtgait.robot.motion import robot_scenario
-    from rtgait.sim.loop import LoopOptions, run_sim_loop
+    from rtgait.sim.loop import LoopOptions
+    from rtgait.sim.run_loop import run_sim_loop
 
     walk = robot_scenario(shorten("fig8", 4), talos)
     base = talos_sim.base_body

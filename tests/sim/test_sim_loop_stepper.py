@@ -18,7 +18,8 @@ from rtgait.core.analysis.rollout import ScheduledChange
 from rtgait.core.push import Push
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.motion import robot_scenario
-from rtgait.sim.loop import ClosedLoop, LoopOptions, SimResult, run_sim_loop
+from rtgait.sim.loop import ClosedLoop, LoopOptions, SimResult
+from rtgait.sim.run_loop import run_sim_loop
 
 QUICK = LoopOptions(start_ramp=0.5, start_hold=0.3, after=0.3)
 # Fields that are not the run's outcome: the clock, and the Pinocchio model (an object, the same one each time).

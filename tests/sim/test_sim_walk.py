@@ -18,7 +18,8 @@ from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.push import Push
 from rtgait.io.sim_run import SIM_CSV_COLUMNS, sim_csv_columns, simulate, write_sim_outputs
 from rtgait.robot.motion import robot_scenario
-from rtgait.sim.loop import LoopOptions, run_sim_loop
+from rtgait.sim.loop import LoopOptions
+from rtgait.sim.run_loop import run_sim_loop
 
 
 def planned(scenario, robot):

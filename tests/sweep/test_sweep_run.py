@@ -14,7 +14,7 @@ from conftest import sweep
 import rtgait.sweep.executors as executors
 import rtgait.sweep.pendulum as pendulum
 from rtgait.core import OnlinePlanner, rollout
-from rtgait.io.plan_files import summarize
+from rtgait.io.plan_summary import summarize
 from rtgait.sweep.executors import LocalExecutor
 from rtgait.sweep.spec import case_scenario, load_spec
 from rtgait.sweep.store import read_results

@@ -16,12 +16,14 @@ from matplotlib.lines import Line2D
 
 from rtgait.core.analysis.rollout import Rollout, rollout
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.io.plan_files import summarize
+from rtgait.io.plan_summary import summarize
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario
-from rtgait.viz.figures import DRAW, MARKER_GID, MIN_DEVIATION_SPAN
+from rtgait.viz.deviation_figure import MIN_DEVIATION_SPAN
+from rtgait.viz.figures import DRAW, MARKER_GID
+from rtgait.viz.margin_marker import margin_marker
 from rtgait.viz.pendulum import PendulumRun, draw_pendulum
-from rtgait.viz.run_data import FigureInfo, PlanRun, margin_marker
+from rtgait.viz.run_data import FigureInfo, PlanRun
 from rtgait.viz.style import TIME_LABEL, CleanFormatter, save, signed_mm
 
 NEGATIVE_ZERO = re.compile(r"^[-\N{MINUS SIGN}]0(\.0*)?( mm)?$")
@@ -139,9 +141,7 @@ def test_tick_formatter_never_writes_a_negative_zero() -> None:
 
 def _tick_labels(figure: Figure) -> list[str]:
     figure.canvas.draw()  # tick labels are made at drawing time
-    return [
-        label.get_text() for ax in figure.axes for label in [*ax.get_xticklabels(), *ax.get_yticklabels()]
-    ]
+    return [label.get_text() for ax in figure.axes for label in [*ax.get_xticklabels(), *ax.get_yticklabels()]]
 
 
 def _pendulum_run() -> PendulumRun:

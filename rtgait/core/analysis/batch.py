@@ -36,7 +36,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rtgait.core.analysis.walk_family import ChangeShape, FamilyKey, WalkFamily, family_key
+from rtgait.core.analysis.family_key import ChangeShape, FamilyKey, family_key
+from rtgait.core.analysis.walk_family import WalkFamily
 from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.core.planner.auto import auto_options
 
@@ -65,7 +66,7 @@ class StraightWalk:
     changes: tuple[ScheduledChange, ...] = ()
 
     def shapes(self) -> tuple[ChangeShape, ...]:
-        """The changes as :class:`~rtgait.core.analysis.walk_family.ChangeShape` s, each handed over at its mode's
+        """The changes as :class:`~rtgait.core.analysis.family_key.ChangeShape` s, each handed over at its mode's
         deadline (auto: the quasi-real-time one, where its decision is made)."""
         mode = self.config.connection
         out = []

@@ -271,7 +271,8 @@ def evaluate_preview(walk: StraightWalk, theta: np.ndarray) -> tuple[np.ndarray,
     The loop is linear in the footprints, hence in ``theta``: it runs once with one column per parameter, and the
     cases are combined from it.
     """
-    from rtgait.core.analysis.walk_family import TIE, ChangeShape, affine_footprints, family_key
+    from rtgait.core.analysis.family_key import ChangeShape, affine_footprints, family_key
+    from rtgait.core.analysis.walk_family import TIE
 
     config, gains = walk.config, preview_gains(walk.config.cog_height, walk.config.gravity)
     theta = np.atleast_2d(np.asarray(theta, dtype=float))

@@ -22,17 +22,19 @@ linear function over the fixed points ``(s_t, b_t)``: a binary search on their h
 (:class:`~rtgait.core.geometry.hull.PointChain`). So a case costs a few dozen vector operations per phase, not one per
 tick. Where a phase's minimum is negative (the ZMP leaves the polygon) the exact outside distance is computed at every
 tick of that phase for those cases.
+
+A family's key and the affine footprints of its parameters are in :mod:`rtgait.core.analysis.family_key`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
-from rtgait.core.geometry.footsteps import Side, SoleRect, Stride, Timing, other_side
+from rtgait.core.analysis.family_key import FamilyKey, affine_footprints
+from rtgait.core.geometry.footsteps import Stride
 from rtgait.core.geometry.hull import (
     PointChain,
     outside_margin,
@@ -48,46 +50,10 @@ from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.online import OnlinePlanner
 
 TIE = 1e-9
-"""Margins (m) within this of the minimum are tied with it (``rtgait.viz.run_data.MARGIN_TIE_TOLERANCE``)."""
+"""Margins (m) within this of the minimum are tied with it (``rtgait.viz.margin_marker.MARGIN_TIE_TOLERANCE``)."""
 _STRUCTURE_TOLERANCE = 1e-9
 CHUNK = 4096
 """Cases evaluated together: large enough to amortise numpy's call overhead, small enough to stay in cache."""
-
-
-class ChangeShape(NamedTuple):
-    """Which strides a change sets, and when it is handed to the planner.
-
-    Attributes:
-        step: first step changed (1-based); through: last one.
-        length, width: whether it sets the length / the width of those strides.
-        decided_phase: handed over at the first tick at or after this phase's start (the rollout's deadline).
-    """
-
-    step: int
-    through: int
-    length: bool
-    width: bool
-    decided_phase: int
-
-
-@dataclass(frozen=True)
-class FamilyKey:
-    """Everything a family's cases share (SI units): see the module docstring."""
-
-    cog_height: float
-    gravity: float
-    timing: Timing
-    horizon_steps: int
-    first_degree: int
-    first_side: Side
-    sole: SoleRect
-    dt: float
-    steps: int
-    changes: tuple[ChangeShape, ...]
-
-    @property
-    def n_params(self) -> int:
-        return 3 + sum(int(c.length) + int(c.width) for c in self.changes)
 
 
 class FamilyResult(NamedTuple):
@@ -241,8 +207,8 @@ class WalkFamily:
         auto connection is wanted (half-plane margin at :data:`AUTO_SAMPLES` samples per segment); ``predicted`` then
         has one column per window (``+inf`` for a window without free segments).
 
-        The time is ``rtgait plan``'s (:func:`rtgait.viz.run_data.margin_marker`): the tick of the minimum, and when
-        several ticks are within :data:`TIE` of it, the first of them at or after ``change_time`` (s; default the
+        The time is ``rtgait plan``'s (:func:`rtgait.viz.margin_marker.margin_marker`): the tick of the minimum, and
+        when several ticks are within :data:`TIE` of it, the first of them at or after ``change_time`` (s; default the
         first change's hand-over), else the first of them.
         """
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
@@ -387,53 +353,9 @@ class WalkFamily:
         return value, tick, first, dev, windowed, (outside, exact if exact is not None else np.zeros((0, 0)))
 
 
-def affine_footprints(key: FamilyKey, applied: list[int]) -> tuple[np.ndarray, list[Side]]:
-    """Footprints ``F[0..n+1]`` as ``(n + 2, 2, P)`` coefficient arrays (``F @ theta`` in m) after the changes
-    ``applied`` (indices into ``key.changes``, in the order they are handed over), and each one's side."""
-    n, P = key.steps + 1, key.n_params
-    unit = np.eye(P)
-    lengths = [unit[1]] * key.steps + [np.zeros(P)]  # the closing step has length 0 and the nominal width
-    widths = [unit[2]] * n
-    column = 3
-    columns = []
-    for change in key.changes:
-        columns.append((column if change.length else None, column + change.length if change.width else None))
-        column += int(change.length) + int(change.width)
-    for c in applied:
-        change, (lc, wc) = key.changes[c], columns[c]
-        for i in range(change.step, change.through + 1):
-            if lc is not None:
-                lengths[i - 1] = unit[lc]
-            if wc is not None:
-                widths[i - 1] = unit[wc]
-    first = key.first_side
-    y0 = 0.5 * unit[2] * (1.0 if first == "left" else -1.0)
-    prints = [np.stack([np.zeros(P), y0]), np.stack([np.zeros(P), -y0])]
-    sides: list[Side] = [first, other_side(first)]
-    for i in range(n):
-        landing = other_side(sides[-1])
-        lateral = widths[i] if landing == "left" else -widths[i]
-        prints.append(prints[-1] + np.stack([lengths[i], lateral]))
-        sides.append(landing)
-    return np.stack(prints), sides
-
-
 def _check(ok: bool, q: int) -> None:
     if not ok:
         raise ValueError(f"phase {q}: the plan's ZMP does not have the shape the batched evaluation needs")
 
 
-def family_key(
-    config: PlannerConfig, sole: SoleRect, dt: float, steps: int, changes: tuple[ChangeShape, ...]
-) -> FamilyKey:
-    """The :class:`FamilyKey` of walks planned with ``config`` (its step width and connection do not matter)."""
-    return FamilyKey(
-        cog_height=config.cog_height, gravity=config.gravity, timing=config.timing, horizon_steps=config.horizon_steps,
-        first_degree=config.first_degree, first_side=config.first_side, sole=sole, dt=float(dt), steps=int(steps),
-        changes=tuple(changes),
-    )  # fmt: skip
-
-
-__all__ = [
-    "TIE", "ChangeShape", "FamilyKey", "FamilyResult", "WalkFamily", "affine_footprints", "family_key",
-]  # fmt: skip
+__all__ = ["TIE", "FamilyResult", "WalkFamily"]

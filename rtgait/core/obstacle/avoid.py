@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rtgait.core.analysis.batch import walk_family
-from rtgait.core.analysis.walk_family import ChangeShape, family_key
+from rtgait.core.analysis.family_key import ChangeShape, family_key
 from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride, stride_between
 from rtgait.core.obstacle.box import Obstacle
 from rtgait.core.obstacle.detour import Detour, StrideRules, blocked, no_detour, plan_detour

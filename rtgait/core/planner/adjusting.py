@@ -3,7 +3,7 @@ plan's free segment asks for a ZMP outside the support polygon.
 
 :class:`~rtgait.core.planner.online.OnlinePlanner` takes these methods from :class:`StepAdjusting` (a mixin, like
 :class:`~rtgait.core.planner.measured.MeasuredPlanning`, whose replans call :meth:`StepAdjusting._adjust_step`). The
-candidates are weighed by :func:`rtgait.core.laws.stepping.propose_landing`; the equations are in
+candidates are weighed by :func:`rtgait.core.laws.landing_choice.propose_landing`; the equations are in
 ``docs/closed_loop.md`` ("Step adjustment"). The mixin reads and writes the planner's state (the plan under way, the
 walk, the logs); it has no state of its own and is not meant to be used alone.
 """
@@ -17,14 +17,9 @@ import numpy as np
 from rtgait.core.geometry.footsteps import Stride
 from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.support import support_polygon
-from rtgait.core.laws.stepping import (
-    StepAdjustment,
-    StepDecision,
-    TimingOptions,
-    propose_landing,
-    remainder_options,
-    single_support_options,
-)
+from rtgait.core.laws.landing_choice import propose_landing
+from rtgait.core.laws.step_timing import TimingOptions, remainder_options, single_support_options
+from rtgait.core.laws.stepping import StepAdjustment, StepDecision
 from rtgait.core.lipm.pattern import MOVING_KINDS
 from rtgait.core.planner.active_plan import PlanLayout
 
@@ -143,8 +138,8 @@ class StepAdjusting:
         """The candidate timings of step ``k`` for the plan under way: the plan's segment whose duration changes,
         its candidate durations (s) and the step's single support under each (s); ``None`` when the step's timing
         cannot change. Swinging, the segment is the free one, the rest of the single support
-        (:func:`~rtgait.core.laws.stepping.remainder_options`); else the step's whole single support
-        (:func:`~rtgait.core.laws.stepping.single_support_options`)."""
+        (:func:`~rtgait.core.laws.step_timing.remainder_options`); else the step's whole single support
+        (:func:`~rtgait.core.laws.step_timing.single_support_options`)."""
         plan = self._plan
         if swinging:
             durations = remainder_options(adjust, plan.elapsed, plan.durations[0])
@@ -167,8 +162,8 @@ class StepAdjusting:
         return self._plan.layout.variants(segment, durations)
 
     def _timing_options(self, k: int, swinging: bool, adjust: StepAdjustment) -> TimingOptions | None:
-        """What :func:`~rtgait.core.laws.stepping.propose_landing` weighs for a new timing of step ``k``: the plans
-        under the candidate timings, from the same inputs ``y`` (the state and the footprints do not change; the
+        """What :func:`~rtgait.core.laws.landing_choice.propose_landing` weighs for a new timing of step ``k``: the
+        plans under the candidate timings, from the same inputs ``y`` (the state and the footprints do not change; the
         operators do: built ahead for the plans of double-support starts, in one batch per plan shape)."""
         found = self._timing_durations(k, swinging, adjust)
         if found is None:

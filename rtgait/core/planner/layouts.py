@@ -9,7 +9,7 @@ configuration, timeline and caches; it has no state of its own.
 
 from __future__ import annotations
 
-from rtgait.core.laws.stepping import single_support_options
+from rtgait.core.laws.step_timing import single_support_options
 from rtgait.core.lipm.pattern import PatternKey, PlanOperator
 from rtgait.core.planner.active_plan import PlanLayout
 
