@@ -1,0 +1,70 @@
+"""What a landing must show besides a load: a sole near the ground, and a force that lasts.
+
+A load on a swinging foot is taken for a touch-down only if the robot's own sensing agrees it can be one:
+
+* **Near the ground.** The sole's lowest corner is at most ``clearance`` above the ground, the ground being the
+  lowest corner of a loaded foot's sole (its anchor stands on it; both from the leg kinematics in one estimated
+  frame). With a sole rectangle ``x0 <= x <= x1``, ``y0 <= y <= y1`` about the sole origin ``o`` and the sole's
+  rotation ``R`` (row-major ``m``), a corner's height is ``o_z + m6 x + m7 y``, so the lowest is
+
+      z_low = o_z + min(m6 x0, m6 x1) + min(m7 y0, m7 y1)                                        (m)
+
+  and a foot lands only where ``z_low(swing) - z_low(stance) <= clearance``. The default,
+  :data:`DEFAULT_LANDING_CLEARANCE` = 35 mm, is the height of a step the plan does not know of (+-30 mm: the
+  controller's ``late_descent_limit`` reaches 20 mm below, a higher unseen step is the same order) plus the
+  kinematics' error on the height of one sole relative to the other (a few mm: encoder noise through two 0.7-0.9 m
+  legs and the IMU's tilt error over the feet's 0.2 m spread). Only the upper side is gated: a loaded foot below
+  the stance sole stands on lower ground. Without a foot on the ground there is no ground to compare with and no
+  gate.
+* **A force that lasts.** The load must stay above the landing force for ``sustain_time``
+  (:data:`DEFAULT_SUSTAIN_TIME`, 3 ms) before the foot counts as loaded. An ankle force sensor under a whipped foot
+  reads the foot's ringing inertia, its sign alternating from one 1 ms tick to the next (+330, -260, +64 N): a
+  component at 250-500 Hz, whose half period is 1-2 ms. A force that stays positive over 3 ms cannot be an
+  oscillation about zero faster than 167 Hz; the cost, 3 ms of delay, leaves most of the 10 ms a landing's
+  detection may take to the wrench's filters.
+
+Removing the foot's inertia from the sensor's reading (its mass times its acceleration from the encoders) is not
+done: differencing 1 kHz joint velocities gives the foot's acceleration with noise of order the landing threshold
+(``docs/estimation.md``).
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["DEFAULT_LANDING_CLEARANCE", "DEFAULT_SUSTAIN_TIME", "lowest_sole_height", "near_ground"]
+
+DEFAULT_LANDING_CLEARANCE = 0.035
+"""Highest a landing sole's lowest corner may be above the stance sole's (m): a 30 mm unseen step and 5 mm of the
+legs' kinematic error (module docstring)."""
+
+DEFAULT_SUSTAIN_TIME = 0.003
+"""Time a load must stay above the landing force before it counts (s): longer than the half period of the ankle
+sensor's 250-500 Hz ringing (module docstring)."""
+
+Extents = tuple[float, float, float, float]
+
+
+def lowest_sole_height(z: float, m: tuple[float, ...] | list[float], extents: Extents | None) -> float:
+    """Height (m) of the lowest corner of a sole at height ``z`` with row-major rotation ``m`` and extents ``(x0, x1,
+    y0, y1)`` about its origin (m); the origin's height without extents."""
+    if extents is None:
+        return z
+    x0, x1, y0, y1 = extents
+    m6, m7 = m[6], m[7]
+    ax, bx, ay, by = m6 * x0, m6 * x1, m7 * y0, m7 * y1
+    return z + (ax if ax < bx else bx) + (ay if ay < by else by)
+
+
+def near_ground(clearance: float, loaded: tuple[bool, bool], heights: tuple[float, float]) -> tuple[bool, bool]:
+    """Whether each foot (left, right) may land: the lowest sole heights ``heights`` (m, one frame), the feet's
+    load states ``loaded`` at the last tick. A foot may land when the other is in the air (no ground known) or its
+    sole is at most ``clearance`` above the other's; a loaded foot always."""
+    if math.isinf(clearance):
+        return True, True
+    left, right = heights
+    loaded_left, loaded_right = loaded
+    return (
+        loaded_left or not loaded_right or left - right <= clearance,
+        loaded_right or not loaded_left or right - left <= clearance,
+    )
