@@ -33,7 +33,7 @@ Each tick, with the base frame's kinematics (:class:`~rtgait.estimation.kinemati
    ``xi = c + c'/w0`` with the planner's ``w0``.
 6. **Feet states, ZMP, landings** from the soles' estimated poses and wrenches (:mod:`rtgait.estimation.feet`,
    :mod:`rtgait.estimation.load`), with the ground-truth estimator's thresholds; an unloaded foot is loaded (lands)
-   only when its sole is near the stance sole's height and its force lasts (:mod:`rtgait.estimation.landing_gate`).
+   only when its sole is near the stance sole's height (:mod:`rtgait.estimation.landing_gate`).
    ``contacts`` is 1 for a foot that carries more than the release force (a force sensor does not count contact
    points), ``other_contacts`` 0 (not sensed).
 """
