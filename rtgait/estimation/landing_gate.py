@@ -2,20 +2,21 @@
 
 A load on a swinging foot is taken for a touch-down only if the robot's own sensing agrees it can be one:
 
-* **Near the ground.** The sole's lowest corner is at most ``clearance`` above the ground, the ground being the
-  lowest corner of a loaded foot's sole (its anchor stands on it; both from the leg kinematics in one estimated
-  frame). With a sole rectangle ``x0 <= x <= x1``, ``y0 <= y <= y1`` about the sole origin ``o`` and the sole's
-  rotation ``R`` (row-major ``m``), a corner's height is ``o_z + m6 x + m7 y``, so the lowest is
+* **Near the ground.** The sole's lowest corner is at most ``clearance`` above the other sole's lowest corner, both
+  from the leg kinematics in one estimated frame. With a sole rectangle ``x0 <= x <= x1``, ``y0 <= y <= y1`` about
+  the sole origin ``o`` and the sole's rotation ``R`` (row-major ``m``), a corner's height is ``o_z + m6 x + m7 y``,
+  so the lowest is
 
       z_low = o_z + min(m6 x0, m6 x1) + min(m7 y0, m7 y1)                                        (m)
 
-  and a foot lands only where ``z_low(swing) - z_low(stance) <= clearance``. The default,
-  :data:`DEFAULT_LANDING_CLEARANCE` = 35 mm, is the height of a step the plan does not know of (+-30 mm: the
-  controller's ``late_descent_limit`` reaches 20 mm below, a higher unseen step is the same order) plus the
+  and an unloaded foot may become loaded only where ``z_low(foot) - z_low(other) <= clearance``. The other foot is
+  the ground's reference whether or not it is loaded: the stance foot stands on the ground (its anchor), and a foot
+  that is off the ground for a moment (a bounce, the ankle sensor's ringing taking it below the release force, a
+  flight) is above it, so a foot far above the other one cannot be touching level ground either. The default,
+  :data:`DEFAULT_LANDING_CLEARANCE` = 35 mm, is the height of a step the plan does not know of (+-30 mm) plus the
   kinematics' error on the height of one sole relative to the other (a few mm: encoder noise through two 0.7-0.9 m
-  legs and the IMU's tilt error over the feet's 0.2 m spread). Only the upper side is gated: a loaded foot below
-  the stance sole stands on lower ground. Without a foot on the ground there is no ground to compare with and no
-  gate.
+  legs and the IMU's tilt error over the feet's 0.2-0.3 m spread). Only the upper side is gated: a foot below the
+  other stands on lower ground. A loaded foot is not gated.
 * **A force that lasts** (``sustain_time``, off by default: :data:`DEFAULT_SUSTAIN_TIME`). An ankle force sensor
   under a whipped foot reads the foot's ringing inertia, its sign alternating from one 1 ms tick to the next (+330,
   -260, +64 N): a component at 250-500 Hz, half period 1-2 ms, which a load required to stay above the landing force
@@ -58,14 +59,10 @@ def lowest_sole_height(z: float, m: tuple[float, ...] | list[float], extents: Ex
 
 
 def near_ground(clearance: float, loaded: tuple[bool, bool], heights: tuple[float, float]) -> tuple[bool, bool]:
-    """Whether each foot (left, right) may land: the lowest sole heights ``heights`` (m, one frame), the feet's
-    load states ``loaded`` at the last tick. A foot may land when the other is in the air (no ground known) or its
-    sole is at most ``clearance`` above the other's; a loaded foot always."""
+    """Whether each foot (left, right) may become loaded: the lowest sole heights ``heights`` (m, one frame), the
+    feet's load states ``loaded`` at the last tick. A loaded foot may; an unloaded one if its sole is at most
+    ``clearance`` above the other's (loaded or not: the lower foot is on or above the ground)."""
     if math.isinf(clearance):
         return True, True
     left, right = heights
-    loaded_left, loaded_right = loaded
-    return (
-        loaded_left or not loaded_right or left - right <= clearance,
-        loaded_right or not loaded_left or right - left <= clearance,
-    )
+    return loaded[0] or left - right <= clearance, loaded[1] or right - left <= clearance
