@@ -70,27 +70,29 @@ class FeetFromWrenches:
     def sole_foot(
         self, index: int, t: float, wrench: tuple[float, float, float, float, float, float], count: int,
         position: tuple[float, float, float], m: tuple[float, ...], load_force: float | None = None,
+        near_ground: bool = True,
     ) -> tuple[FootState, Landing | None]:  # fmt: skip
         """One foot's state from the ground's wrench on it in its sole frame, ``(fx, fy, fz, tx, ty, tz)`` (N, N m,
         about the sole origin), and its sole frame's world position and row-major rotation (as :meth:`foot`);
-        ``load_force``: the vertical force (N) the load detection reads, default the wrench's."""
+        ``load_force``: the vertical force (N) the load detection reads, default the wrench's; ``near_ground``: whether
+        the foot, if unloaded, may become loaded (:meth:`~rtgait.estimation.load.LoadHysteresis.update`)."""
         lfx, lfy, lfz, ltx, lty, ltz = wrench
         m0, m1, m2, m3, m4, m5, m6, m7, m8 = m
         # The world components: R v.
         return self._state(
             index, t, m0 * lfx + m1 * lfy + m2 * lfz, m3 * lfx + m4 * lfy + m5 * lfz, m6 * lfx + m7 * lfy + m8 * lfz,
             m0 * ltx + m1 * lty + m2 * ltz, m3 * ltx + m4 * lty + m5 * ltz, m6 * ltx + m7 * lty + m8 * ltz,
-            lfz, ltx, lty, count, position, m, load_force,
+            lfz, ltx, lty, count, position, m, load_force, near_ground,
         )  # fmt: skip
 
     def _state(
         self, index: int, t: float, fx: float, fy: float, fz: float, tx: float, ty: float, tz: float, lfz: float,
         ltx: float, lty: float, count: int, position: list[float] | tuple[float, float, float], m: list[float] |
-        tuple[float, ...], load_force: float | None = None,
+        tuple[float, ...], load_force: float | None = None, near_ground: bool = True,
     ) -> tuple[FootState, Landing | None]:  # fmt: skip
         """The foot's state from its force and moment about the sole origin in the world (N, N m), their sole-frame
         normal force and tangential moment, and its sole frame's pose; the load detection reads ``load_force`` (N),
-        default ``fz``."""
+        default ``fz``, and lets the foot become loaded only if ``near_ground``."""
         ox, oy, oz = position
         m0, m1, _, m3, m4, _, m6, m7, m8 = m
         if lfz > self.min_force:
@@ -108,7 +110,7 @@ class FeetFromWrenches:
         roll = math.atan2(m7, m8)
         cosine = m8 if m8 < 1.0 else 1.0
         tilt = math.acos(cosine if cosine > -1.0 else -1.0)
-        loaded = self.load.update(index, fz if load_force is None else load_force, t)
+        loaded = self.load.update(index, fz if load_force is None else load_force, t, near_ground)
         landing = None
         if loaded is None:
             loaded = True

@@ -32,9 +32,10 @@ Each tick, with the base frame's kinematics (:class:`~rtgait.estimation.kinemati
 5. **COM and DCM.** ``c = p + R c_B``, ``c' = v_B + w x R c_B + R c_B'`` (``c_B``, ``c_B'`` from the joints),
    ``xi = c + c'/w0`` with the planner's ``w0``.
 6. **Feet states, ZMP, landings** from the soles' estimated poses and wrenches (:mod:`rtgait.estimation.feet`,
-   :mod:`rtgait.estimation.load`), with the ground-truth estimator's thresholds. ``contacts`` is 1 for a foot that
-   carries more than the release force (a force sensor does not count contact points), ``other_contacts`` 0 (not
-   sensed).
+   :mod:`rtgait.estimation.load`), with the ground-truth estimator's thresholds; an unloaded foot is loaded (lands)
+   only when its sole is near the stance sole's height (:mod:`rtgait.estimation.landing_gate`).
+   ``contacts`` is 1 for a foot that carries more than the release force (a force sensor does not count contact
+   points), ``other_contacts`` 0 (not sensed).
 """
 
 from __future__ import annotations
@@ -49,6 +50,12 @@ from rtgait.estimation.attitude_filter import DEFAULT_ATTITUDE_CUTOFF, AttitudeF
 from rtgait.estimation.contact_point import rocking_correction
 from rtgait.estimation.feet import FeetFromWrenches
 from rtgait.estimation.kinematics import RobotKinematics
+from rtgait.estimation.landing_gate import (
+    DEFAULT_LANDING_CLEARANCE,
+    DEFAULT_SUSTAIN_TIME,
+    lowest_sole_height,
+    near_ground,
+)
 from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
 from rtgait.estimation.rotations import mat_mul, mat_mul_t, mat_vec, quat_matrix, turned, yaw_of
 from rtgait.estimation.sole_wrenches import SoleWrench, sensor_wrench
@@ -98,7 +105,11 @@ class KinematicInertialEstimator:
             at the first update (the plan's standing feet); ``None``: the feet's midpoint at the origin.
         rocking: hold each loaded foot's centre of pressure still in the kinematic velocity, not its sole origin
             (:mod:`rtgait.estimation.contact_point`: a foot rocking on an edge turns about it); ``False``: the origin.
-        sole: the sole rectangle that bounds the centre of pressure there; ``None``: unbounded.
+        sole: the sole rectangle that bounds the centre of pressure there and gives the soles' lowest corners;
+            ``None``: unbounded, the sole origins' heights.
+        landing_clearance: highest an unloaded foot's sole may be above a loaded one's to become loaded (m);
+            ``inf``: no gate (:mod:`rtgait.estimation.landing_gate`).
+        sustain_time: how long an unloaded foot's load must last to count (s).
     """
 
     reads_truth = False
@@ -122,9 +133,13 @@ class KinematicInertialEstimator:
         start_feet: tuple[Pose, Pose] | None = None,
         rocking: bool = True,
         sole: SoleRect | None = None,
+        landing_clearance: float = DEFAULT_LANDING_CLEARANCE,
+        sustain_time: float = DEFAULT_SUSTAIN_TIME,
     ) -> None:
         if not (math.isfinite(omega) and omega > 0.0):
             raise ValueError(f"omega must be > 0 (1/s), got {omega}")
+        if math.isnan(landing_clearance) or landing_clearance < 0.0:
+            raise ValueError(f"landing_clearance must be >= 0 m (inf: no gate), got {landing_clearance}")
         if not (math.isfinite(gravity) and gravity > 0.0):
             raise ValueError(f"gravity must be > 0 m/s^2, got {gravity}")
         weight = kinematics.mass * gravity
@@ -153,7 +168,8 @@ class KinematicInertialEstimator:
         # the quasi-static estimate of an unloading stance leg is as good as a sensor's; only a swinging leg's errs.
         release = 0.5 * DEFAULT_LANDING_FRACTION * weight if release_force is None else float(release_force)
         release = min(release, landing)
-        self.load = LoadHysteresis(landing, release, min_unloaded_time)
+        self.load = LoadHysteresis(landing, release, min_unloaded_time, sustain_time)
+        self.landing_clearance = float(landing_clearance)
         self._release = release
         self.min_force = 1e-3 * weight if min_force is None else float(min_force)
         self.feet = FeetFromWrenches(self.load, self.min_force, ground_height)
@@ -306,9 +322,16 @@ class KinematicInertialEstimator:
             (flx, fly, flz), (frx, fry, frz) = torques.contact_forces
             load_left = r_left[6] * flx + r_left[7] * fly + r_left[8] * flz
             load_right = r_right[6] * frx + r_right[7] * fry + r_right[8] * frz
-        left, left_landing = sole_foot(0, t, wrench_left, 1 if fz_left > release else 0, left_pos, r_left, load_left)
+        # A swinging foot lands only near the stance sole's height (landing_gate).
+        extents = self._extents
+        near_left, near_right = near_ground(self.landing_clearance, self._loaded, (
+            lowest_sole_height(left_pos[2], r_left, extents[0]), lowest_sole_height(right_pos[2], r_right, extents[1])
+        ))  # fmt: skip
+        left, left_landing = sole_foot(
+            0, t, wrench_left, 1 if fz_left > release else 0, left_pos, r_left, load_left, near_left
+        )  # fmt: skip
         right, right_landing = sole_foot(
-            1, t, wrench_right, 1 if fz_right > release else 0, right_pos, r_right, load_right
+            1, t, wrench_right, 1 if fz_right > release else 0, right_pos, r_right, load_right, near_right
         )  # fmt: skip
         if torques is not None:
             # A foot the load detection has in the air carries nothing: what the torques give a swinging leg is the

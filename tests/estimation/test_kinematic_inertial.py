@@ -335,3 +335,34 @@ def test_a_robot_in_flight_moves_on_as_its_accelerometer_says():
     np.testing.assert_allclose(m.com_vel, v, atol=2.0 * DT / tau * np.linalg.norm(v0))
     np.testing.assert_allclose(m.com, p + r @ COM_IN_BASE, atol=2.0 * DT / tau * np.linalg.norm(v0) * 0.1)
     assert not m.left.loaded and not m.right.loaded
+
+
+def test_a_swinging_foot_loaded_high_above_the_ground_does_not_land():
+    # The right foot swings 50 mm above the left's sole with a 300 N spike on its sensor (a whipped foot's inertia):
+    # not loaded, no landing; back on the ground, its first load is a landing at once. A foot on a 20 mm step the plan
+    # did not know of lands too.
+    robot = RigidRobot(FEET)
+    e = estimator(robot)
+    p, r, zero = np.array([0.1, 0.0, 0.75]), rot(0.0, 0.0, 0.2), np.zeros(3)
+    weight = MASS * G
+    landings = []
+
+    def run(t0: float, t1: float, right: float, height: float) -> list[bool]:
+        x, y, _, yaw = FEET[1]
+        robot.feet[1] = (np.array([x, y, height]), rot(0.0, 0.0, yaw))
+        loaded = []
+        for k in range(round(t0 / DT), round(t1 / DT)):
+            m = e.update(robot.readings(k * DT, p, r, zero, zero, zero, (weight - right, right)))
+            landings.extend(m.landings)
+            loaded.append(m.right.loaded)
+        return loaded
+
+    run(0.0, 0.1, 0.5 * weight, 0.0)
+    run(0.1, 0.2, 0.0, 0.05)
+    assert not any(run(0.2, 0.205, 300.0, 0.05)) and landings == []
+    run(0.205, 0.3, 0.0, 0.05)
+    assert all(run(0.3, 0.35, 0.5 * weight, 0.0))
+    assert [(landing.side, landing.t) for landing in landings] == [("right", pytest.approx(0.3))]
+    run(0.35, 0.5, 0.0, 0.05)
+    run(0.5, 0.55, 0.5 * weight, 0.02)
+    assert len(landings) == 2 and landings[1].t == pytest.approx(0.5) and landings[1].z == pytest.approx(0.02)
