@@ -164,3 +164,18 @@ def test_a_bad_control_file_or_table_exits_2_with_one_line(tmp_path, write_scena
     err = capsys.readouterr().err
     assert err == "rtgait: error: scenario tuned: control.anchor_blend must be a number within [0, 10] s, got 20.0\n"
     assert not (tmp_path / "never").exists()
+
+
+@pytest.mark.parametrize(
+    ("name", "levelled"), [("fig8", True), ("stepping-stones", False), ("slope-up", False), ("unseen-step", False)]
+)
+def test_sole_levelling_is_off_by_default_off_the_flat_floor(name: str, levelled: bool, tmp_path: Path) -> None:
+    # The levelling reads a standing sole's tilt as its leg's calibration error: only a level floor under the whole
+    # sole makes that true. A [control] table still decides over the default.
+    scenario = load_scenario(name)
+    options, _ = controller_settings(load_robot("g1"), scenario, None, ())
+    assert (options.sole_level > 0.0) is levelled
+    control = tmp_path / "level.toml"
+    control.write_text("[control]\nsole_level = 0.5\n", encoding="utf-8")
+    options, _ = controller_settings(load_robot("g1"), scenario, str(control), read_control_file(str(control)))
+    assert options.sole_level == 0.5

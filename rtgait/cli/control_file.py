@@ -46,12 +46,13 @@ def controller_settings(
         rtgait.control.control_table.ControlSettingsError: a key or value the settings refuse (one line naming the
             file and the key).
     """
-    from rtgait.control.control_table import control_options
+    from rtgait.control.control_table import control_options, walk_defaults
 
     layers = [] if robot is None else [(f"robot {robot.name}", robot.control)]
     layers.append((f"scenario {scenario.name}", scenario.control))
     if control_file is not None:
         layers.append((f"--control {control_file}", file_pairs))
-    options = control_options(*layers)
+    terrain = None if scenario.terrain is None else scenario.terrain.terrain.kind
+    options = control_options(*layers, base=walk_defaults(terrain))
     chosen = {key: value for _, pairs in layers for key, value in pairs}
     return options, chosen

@@ -24,7 +24,9 @@ from rtgait.control.foot_control import FootControlGains
 from rtgait.control.settings import ControllerOptions
 from rtgait.core.laws.feedback import DcmFeedbackGains
 
-__all__ = ["DCM_KEYS", "FOOT_KEYS", "OPTION_KEYS", "ControlSettingsError", "apply_control", "control_options"]
+__all__ = [
+    "DCM_KEYS", "FOOT_KEYS", "OPTION_KEYS", "ControlSettingsError", "apply_control", "control_options", "walk_defaults",
+]  # fmt: skip
 
 OPTION_KEYS = tuple(f.name for f in dataclasses.fields(ControllerOptions) if f.name != "step_adjustment")
 """The keys of a ``[control]`` table: ``dcm`` and ``foot`` are its subtables (``foot`` may also be true or false)."""
@@ -40,6 +42,17 @@ _DEFAULT_FOOT = ControllerOptions().foot  # foot force control's gains when a ta
 
 class ControlSettingsError(ValueError):
     """A ``[control]`` key or value that the controller's settings refuse (one line naming the file and the key)."""
+
+
+def walk_defaults(terrain_kind: str | None) -> ControllerOptions:
+    """The settings a walk on ``terrain_kind`` (a ``[terrain]`` table's ``type``; ``None``: the flat floor) starts
+    from, under every ``[control]`` table: the defaults, with sole levelling off on any terrain but the flat floor.
+    The levelling (:mod:`rtgait.control.sole_level`) takes the tilt of a sole standing flat and loaded for its leg's
+    calibration error, which holds only with a level floor under the whole sole: G1's toes over a stone's edge
+    (a fall at 8.3 s of ``stepping-stones`` with it, 8 of 8 steps without), a ramp, a stair's toe-off are not."""
+    if terrain_kind in (None, "flat"):
+        return ControllerOptions()
+    return ControllerOptions(sole_level=0.0)
 
 
 def control_options(*layers: tuple[str, Pairs], base: ControllerOptions | None = None) -> ControllerOptions:

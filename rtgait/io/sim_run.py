@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterator, Sequence
 
 import mujoco
 
-from rtgait.control.control_table import control_options
+from rtgait.control.control_table import control_options, walk_defaults
 from rtgait.control.controller import ControllerOptions, WalkingController, make_controller
 from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
 from rtgait.core.obstacle.avoid import ObstacleReaction
@@ -176,12 +176,15 @@ def obstacle_reactions(walk: Scenario) -> tuple[tuple[float, ObstacleReaction], 
 def robot_and_scenario_options(
     robot: RobotModel, scenario: Scenario, base: ControllerOptions | None = None
 ) -> ControllerOptions:
-    """``base`` (default :class:`ControllerOptions`) with the ``[control]`` table of ``robot``'s description and
-    then the one of ``scenario`` applied (:func:`rtgait.control.control_table.control_options`).
+    """``base`` (default :func:`~rtgait.control.control_table.walk_defaults` for the scenario's terrain) with the
+    ``[control]`` table of ``robot``'s description and then the one of ``scenario`` applied
+    (:func:`rtgait.control.control_table.control_options`).
 
     Raises:
         rtgait.control.control_table.ControlSettingsError: a key or value the settings refuse.
     """
+    if base is None:
+        base = walk_defaults(None if scenario.terrain is None else scenario.terrain.terrain.kind)
     return control_options(
         (f"robot {robot.name}", robot.description.control), (f"scenario {scenario.name}", scenario.control), base=base
     )
