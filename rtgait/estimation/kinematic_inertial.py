@@ -170,6 +170,9 @@ class KinematicInertialEstimator:
         release = min(release, landing)
         self.load = LoadHysteresis(landing, release, min_unloaded_time, sustain_time)
         self.landing_clearance = float(landing_clearance)
+        self.ground_rise = 0.0
+        """The planned ground height under the left foot less under the right one (m), which the landing gate allows
+        on top of its clearance: set by whoever knows the walk (the walking stack, from its footholds) each tick."""
         self._release = release
         self.min_force = 1e-3 * weight if min_force is None else float(min_force)
         self.feet = FeetFromWrenches(self.load, self.min_force, ground_height)
@@ -326,7 +329,7 @@ class KinematicInertialEstimator:
         extents = self._extents
         near_left, near_right = near_ground(self.landing_clearance, self._loaded, (
             lowest_sole_height(left_pos[2], r_left, extents[0]), lowest_sole_height(right_pos[2], r_right, extents[1])
-        ))  # fmt: skip
+        ), self.ground_rise)  # fmt: skip
         left, left_landing = sole_foot(
             0, t, wrench_left, 1 if fz_left > release else 0, left_pos, r_left, load_left, near_left
         )  # fmt: skip

@@ -58,11 +58,16 @@ def lowest_sole_height(z: float, m: tuple[float, ...] | list[float], extents: Ex
     return z + (ax if ax < bx else bx) + (ay if ay < by else by)
 
 
-def near_ground(clearance: float, loaded: tuple[bool, bool], heights: tuple[float, float]) -> tuple[bool, bool]:
+def near_ground(
+    clearance: float, loaded: tuple[bool, bool], heights: tuple[float, float], rise: float = 0.0
+) -> tuple[bool, bool]:
     """Whether each foot (left, right) may become loaded: the lowest sole heights ``heights`` (m, one frame), the
     feet's load states ``loaded`` at the last tick. A loaded foot may; an unloaded one if its sole is at most
-    ``clearance`` above the other's (loaded or not: the lower foot is on or above the ground)."""
+    ``clearance`` above the other's (loaded or not: the lower foot is on or above the ground), plus the planned
+    ``rise`` of the ground under it: ``rise`` is the left foot's planned ground height less the right's (m), so a
+    foot landing on a planned stair tread higher than the other foot's is let down onto it."""
     if math.isinf(clearance):
         return True, True
     left, right = heights
-    return loaded[0] or left - right <= clearance, loaded[1] or right - left <= clearance
+    up_left, up_right = (rise, 0.0) if rise > 0.0 else (0.0, -rise)
+    return loaded[0] or left - right <= clearance + up_left, loaded[1] or right - left <= clearance + up_right

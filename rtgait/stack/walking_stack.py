@@ -32,7 +32,9 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from rtgait.core.geometry.foot_tilt import is_tilted, tilted_feet
+from rtgait.core.geometry.ground_height import changes_ground_height, ground_rise
 from rtgait.core.geometry.toe_off import changes_height, toe_off_feet
+from rtgait.estimation.kinematic_inertial import KinematicInertialEstimator
 from rtgait.interface.command import JointCommand
 from rtgait.interface.task_targets import FootOffsets, IKTargets
 from rtgait.robot.ankles import AnkleJoints, add_ankle_offsets, find_ankle_joints
@@ -126,6 +128,7 @@ class WalkingStack:
         self._fault: Fault | None = None  # found by estimate(), logged by the control() of the same tick
         self._tilted = False  # whether the walk has sloped footholds (set at the start)
         self._toe_off = False  # whether a step changes height: toe-offs (set at the start)
+        self._heights = False  # whether the footholds are at different heights (set at the start)
         self._readings: SensorReadings | None = None  # the last estimate's, for a feed-forward at the sensed state
 
     @property
@@ -172,6 +175,8 @@ class WalkingStack:
         self._tilted = planner.n_steps is not None and is_tilted(planner.footprints())
         # Before a step up or down the rear heel rolls onto its toe (toe_off.py).
         self._toe_off = planner.n_steps is not None and changes_height(planner.footprints())
+        # The landing gate lets a foot down onto ground the plan has higher than the other foot's (ground_height.py).
+        self._heights = planner.n_steps is not None and changes_ground_height(planner.footprints())
         if self._tilted or self._toe_off:  # sole levelling reads any tilt of a standing sole as the leg's error
             self.controller.off_level_ground()
 
@@ -191,6 +196,8 @@ class WalkingStack:
                     left, right = (*left[:4], 0.0, 0.0), (*right[:4], 0.0, 0.0)
                 prints = self.controller.planner.footprints()
                 left, right = toe_off_feet(prints, self.ik.robot.description.sole.front, left, right, out.zmp_planned)
+            if self._heights and isinstance(self.estimator, KinematicInertialEstimator):
+                self.estimator.ground_rise = ground_rise(self.controller.planner.footprints(), left, right)
             targets = _new_tuple(IKTargets, (out.com, left, right, out.lean))
             return self._command(t, targets, measurement, out, out.offsets)
         except _BAD_INPUT as error:

@@ -71,3 +71,14 @@ def test_a_sustained_load_counts_after_its_time_a_ringing_one_not():
     assert states == [False, False, False, None, True]  # loaded 3 ms after the force rose
     with pytest.raises(ValueError, match="sustain_time"):
         LoadHysteresis(25.0, 12.5, 0.05, -1.0)
+
+
+def test_a_planned_rise_lets_a_foot_down_onto_a_higher_tread_and_no_higher() -> None:
+    # A foot 0.15 m above the other is far off level ground, but on a stair tread the plan has 0.15 m up it lands;
+    # 0.15 m plus more than the clearance is still refused, and the other foot gets no allowance from the rise.
+    clearance, unloaded = DEFAULT_LANDING_CLEARANCE, (False, False)
+    assert near_ground(clearance, unloaded, (0.15, 0.0)) == (False, True)
+    assert near_ground(clearance, unloaded, (0.15, 0.0), rise=0.15) == (True, True)
+    assert near_ground(clearance, unloaded, (0.15 + clearance + 0.005, 0.0), rise=0.15) == (False, True)
+    assert near_ground(clearance, unloaded, (0.0, 0.15), rise=0.15) == (True, False)
+    assert near_ground(clearance, unloaded, (0.0, 0.15), rise=-0.15) == (True, True)
