@@ -44,3 +44,17 @@ def test_talos_meets_the_unseen_step_short_of_its_foothold_and_walks_onto_it(tal
     assert all(0.0 < float(event.detail.split()[0]) <= 0.05 for event in skims)  # m above the foothold
     assert not result.fell and result.steps_completed == 7
     assert result.ended_at_rest and result.tip_time is None
+
+
+def test_talos_climbs_stairs_and_ends_at_rest_on_a_tread(talos, shorten) -> None:
+    # 15 cm risers: each landing is up to 0.15 m above the stance sole, far beyond the landing gate's 35 mm for an
+    # unplanned step; the planned rise under the feet lets it land (rtgait.core.geometry.ground_height).
+    scenario = shorten("stairs-up", 5)
+    result = simulate(scenario, talos)
+    assert result.state == "estimated"
+    assert not result.fell and result.steps_completed == result.steps_planned
+    assert result.ended_at_rest
+    last = result.footprints[-1]
+    assert last.z >= 0.3 - 1e-9, "at least two treads up"
+    start = int(np.searchsorted(result.times, 0.0))
+    assert result.cog[-1, 2] - result.cog[start, 2] == pytest.approx(last.z, abs=0.01)
