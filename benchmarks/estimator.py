@@ -80,7 +80,7 @@ def blocks(run, items: list, repeats: int) -> float:
 
 
 GOAL_US = 20.0
-"""The goal for one update (us, median): issue 20."""
+"""The goal for one update (us, median)."""
 
 
 def compiled_calls(kinematics, torques: bool):

@@ -13,7 +13,7 @@ replan connects a genuinely new plan (3-step horizon, both axes). Reported:
 
 With ``--terrain`` every step also climbs or descends (``TERRAIN_RISE`` up for five steps, then down for five, over
 and over, as on a staircase): each plan carries its vertical column (the footholds' heights, the 3D-DCM/VRP form of
-``docs/method.md``), and its in-loop replan time is the one to compare with the level walk's (issue 22: under 2x).
+``docs/method.md``), and its in-loop replan time is the one to compare with the level walk's (the goal: under 2x).
 
 With ``--feedback measured`` the planner is told the measured COG state before every sample (``observe``; here the
 plan's own state of the tick before, as a robot that follows it), so every replan connects from it; ``observe_us`` is

@@ -1,4 +1,4 @@
-"""The built-in walks off the flat floor (issue 22) at the pendulum level: ``rtgait plan NAME`` works and draws the
+"""The built-in walks off the flat floor at the pendulum level: ``rtgait plan NAME`` works and draws the
 heights, and each walk's expected outcome holds against independent truths (the terrain, the full ZMP equation)."""
 
 from __future__ import annotations

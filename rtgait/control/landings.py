@@ -75,7 +75,7 @@ __all__ = ["SKIM_HEIGHT", "SKIM_MIN_HEIGHT", "SKIM_TILT", "FootLandings"]
 _SIDES: tuple[Side, Side] = ("left", "right")
 
 SKIM_HEIGHT = 0.05
-"""Highest ground (m) above the swing's foothold taken as met short of it: an unseen step (issue 22: up to 3 cm), with
+"""Highest ground (m) above the swing's foothold taken as met short of it: an unseen step (up to 3 cm), with
 the swing's tracking error; a touch higher than that is not ground the sole can skim to its foothold."""
 
 SKIM_MIN_HEIGHT = 0.01

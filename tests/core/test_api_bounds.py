@@ -1,6 +1,6 @@
 """The closed-loop API against whatever a sensor says: every argument bounded, a refused call changes nothing.
 
-Two parts. Focused cases, one per way the planner broke when a user fuzzed it (issue 19): a landing 1e9 m away, a
+Two parts. Focused cases, one per way the planner broke when a user fuzzed it: a landing 1e9 m away, a
 COM at 1e300 m, a landing turned 2.5 rad, a flat support polygon (Qhull's "initial simplex is flat"), the IndexError of
 a timing-adapted emergency stop, a refused landing that had already retargeted the walk; and each entry point's
 bounds. Then random call streams at 1 kHz (numpy Generator, fixed seeds) mixing every closed-loop call with NaN,

@@ -2,7 +2,7 @@
 the ground-truth estimator drives (the estimate in the shadow, so both see the same walk), and the closed loop
 walking on the estimate.
 
-Bounds: issue 20's goals for an estimator (COM relative to the stance sole 5 mm RMS, COM velocity 0.02 m/s RMS,
+Bounds: the goals for an estimator (COM relative to the stance sole 5 mm RMS, COM velocity 0.02 m/s RMS,
 DCM 10 mm RMS, the feet's contact states right in 99 % of ticks, landings seen within 10 ms), with the feet's
 force sensors (Talos). A robot without them (G1) estimates its feet's wrenches from the joint torques and the legs'
 dynamics, low-passed against the torques' noise, with a landing threshold above the estimate's error on a swinging
