@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 from rtgait.core.geometry.footsteps import Footstep
 
-__all__ = ["foot_tilt", "is_tilted", "tilted_feet"]
+__all__ = ["foot_tilt", "foothold_segment", "is_tilted", "tilted_feet"]
 
 
 def is_tilted(prints: Sequence[Footstep]) -> bool:
@@ -25,15 +25,19 @@ def is_tilted(prints: Sequence[Footstep]) -> bool:
     return any(foot.pitch or foot.roll for foot in prints)
 
 
-def foot_tilt(prints: Sequence[Footstep], side: str, x: float, y: float) -> tuple[float, float]:
-    """``(pitch, roll)`` (rad) of a ``side`` foot target at ``(x, y)`` (m) among the footholds ``prints`` (module
-    docstring); ``(0, 0)`` when ``prints`` has no foothold of that side."""
+def foothold_segment(prints: Sequence[Footstep], side: str, x: float, y: float) -> tuple[Footstep, Footstep, float]:
+    """The two consecutive footholds ``a, b`` of side ``side`` nearest to ``(x, y)`` (m) and the progress ``u`` in
+    [0, 1] along them (module docstring); ``a = b``, ``u = 0`` for a single foothold.
+
+    Raises:
+        ValueError: ``prints`` has no foothold of that side.
+    """
     own = [foot for foot in prints if foot.side == side]
     if not own:
-        return 0.0, 0.0
+        raise ValueError(f"no {side} foothold")
     if len(own) == 1:
-        return own[0].pitch, own[0].roll
-    best = (float("inf"), 0.0, 0.0)
+        return own[0], own[0], 0.0
+    best = (float("inf"), own[0], own[0], 0.0)
     for a, b in itertools.pairwise(own):
         dx, dy = b.x - a.x, b.y - a.y
         length2 = dx * dx + dy * dy
@@ -41,8 +45,17 @@ def foot_tilt(prints: Sequence[Footstep], side: str, x: float, y: float) -> tupl
         ex, ey = a.x + u * dx - x, a.y + u * dy - y
         distance2 = ex * ex + ey * ey
         if distance2 < best[0]:
-            best = (distance2, a.pitch + u * (b.pitch - a.pitch), a.roll + u * (b.roll - a.roll))
-    return best[1], best[2]
+            best = (distance2, a, b, u)
+    return best[1], best[2], best[3]
+
+
+def foot_tilt(prints: Sequence[Footstep], side: str, x: float, y: float) -> tuple[float, float]:
+    """``(pitch, roll)`` (rad) of a ``side`` foot target at ``(x, y)`` (m) among the footholds ``prints`` (module
+    docstring); ``(0, 0)`` when ``prints`` has no foothold of that side."""
+    if not any(foot.side == side for foot in prints):
+        return 0.0, 0.0
+    a, b, u = foothold_segment(prints, side, x, y)
+    return a.pitch + u * (b.pitch - a.pitch), a.roll + u * (b.roll - a.roll)
 
 
 def tilted_feet(

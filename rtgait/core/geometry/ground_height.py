@@ -13,9 +13,9 @@ the other foot's (:mod:`rtgait.estimation.landing_gate`).
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Sequence
 
+from rtgait.core.geometry.foot_tilt import foothold_segment
 from rtgait.core.geometry.footsteps import Footstep
 
 __all__ = ["changes_ground_height", "ground_height", "ground_rise"]
@@ -24,21 +24,10 @@ __all__ = ["changes_ground_height", "ground_height", "ground_rise"]
 def ground_height(prints: Sequence[Footstep], side: str, x: float, y: float) -> float:
     """The planned ground height (m) under a ``side`` foot target at ``(x, y)`` (m) among the footholds ``prints``
     (module docstring); 0 when ``prints`` has no foothold of that side."""
-    own = [foot for foot in prints if foot.side == side]
-    if not own:
+    if not any(foot.side == side for foot in prints):
         return 0.0
-    if len(own) == 1:
-        return own[0].z
-    best, height = float("inf"), 0.0
-    for a, b in itertools.pairwise(own):
-        dx, dy = b.x - a.x, b.y - a.y
-        length2 = dx * dx + dy * dy
-        u = 0.0 if length2 == 0.0 else min(1.0, max(0.0, ((x - a.x) * dx + (y - a.y) * dy) / length2))
-        ex, ey = a.x + u * dx - x, a.y + u * dy - y
-        distance2 = ex * ex + ey * ey
-        if distance2 < best:
-            best, height = distance2, a.z + u * (b.z - a.z)
-    return height
+    a, b, u = foothold_segment(prints, side, x, y)
+    return a.z + u * (b.z - a.z)
 
 
 def ground_rise(prints: Sequence[Footstep], left: Sequence[float], right: Sequence[float]) -> float:
