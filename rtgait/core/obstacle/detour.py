@@ -162,25 +162,8 @@ def plan_detour(
     sl = to_frame(np.array([[f.x, f.y] for f in prints]), origin)
     s, l0 = sl[:, 0], sl[:, 1]
     over = obstacle.can_step_over(rules.step_height, rules.clearance)
-    free = list(range(k0 + 1, len(prints)))  # the unknowns l_j
-    column = {j: c for c, j in enumerate(free)}
-    rows: list[np.ndarray] = []
-    bounds: list[float] = []  # each row r: rows[r] @ l_free >= bounds[r] - (the fixed footprints' share)
-
-    def add(coefficients: dict[int, float], low: float) -> None:
-        # coefficients over footprint indices; fixed footprints move to the right-hand side.
-        row = np.zeros(len(free))
-        for j, a in coefficients.items():
-            if j in column:
-                row[column[j]] += a
-            else:
-                low -= a * l0[j]
-        if not row.any():
-            if low > TOLERANCE:
-                raise NoDetourError(f"a committed footstep already breaks a bound by {low:.3g} m")
-            return
-        rows.append(row)
-        bounds.append(low)
+    bounds = LinearBounds(l0, k0, "a committed footstep already breaks a bound by {low:.3g} m")  # the unknowns l_j
+    add, free = bounds.add, bounds.free
 
     # The obstacle: every footprint within its s range on the chosen side of its keep-out rectangle, and, when it
     # cannot be stepped over, every swing's straight path where it crosses that range (linear in its two ends).
@@ -227,10 +210,7 @@ def plan_detour(
         add({i + 1: -1.0, i - 1: 1.0}, -cap)
     if not near:
         raise NoDetourError("no footstep comes near the obstacle")
-    A, b = np.array(rows), np.array(bounds)
-    start = l0[k0 + 1 :]
-    x = start + least_distance(A, b - A @ start)
-    violation = float(np.max(b - A @ x, initial=0.0))
+    x, violation = bounds.least_change()
     if violation > TOLERANCE:
         raise NoDetourError(
             f"passing {side} needs more sideways reach than the step limits allow (short by {violation:.3g} m)"
@@ -243,6 +223,48 @@ def plan_detour(
     detour = make_detour(side, prints, moved_prints, first_open)
     check_detour(prints, detour, obstacle, sole, rules, base)
     return detour
+
+
+class LinearBounds:
+    """Bounds ``A x >= b`` on one coordinate of the open footprints ``x = (c_j)``, ``j = k0 + 1 ..``, built a row
+    at a time over footprint indices; a committed footprint's share moves to the right-hand side at its value in
+    ``start`` (m), and a row left with no open footprint must already hold.
+
+    Args:
+        start: the coordinate of every footprint now (m).
+        k0: index of the last committed footprint.
+        committed: what a broken row of committed footprints means, for the :class:`NoDetourError`'s message.
+    """
+
+    def __init__(self, start: np.ndarray, k0: int, committed: str) -> None:
+        self.start, self.committed = start, committed
+        self.free = list(range(k0 + 1, len(start)))
+        self._column = {j: c for c, j in enumerate(self.free)}
+        self._rows: list[np.ndarray] = []
+        self._bounds: list[float] = []
+
+    def add(self, coefficients: dict[int, float], low: float) -> None:
+        """The row ``sum_j coefficients[j] c_j >= low`` (m)."""
+        row = np.zeros(len(self.free))
+        for j, a in coefficients.items():
+            if j in self._column:
+                row[self._column[j]] += a
+            else:
+                low -= a * self.start[j]
+        if not row.any():
+            if low > TOLERANCE:
+                raise NoDetourError(self.committed.format(low=low))
+            return
+        self._rows.append(row)
+        self._bounds.append(low)
+
+    def least_change(self) -> tuple[np.ndarray, float]:
+        """The open footprints' coordinates nearest their start that meet the rows (:func:`least_distance`), and by
+        how much (m) the least met row still falls short (0 when all are met)."""
+        A, b = np.array(self._rows), np.array(self._bounds)
+        start = self.start[self.free[0] :]
+        x = start + least_distance(A, b - A @ start)
+        return x, float(np.max(b - A @ x, initial=0.0))
 
 
 def least_distance(G: np.ndarray, h: np.ndarray) -> np.ndarray:
@@ -306,6 +328,6 @@ def no_detour(footprints: Sequence[Footstep], first_open: int) -> Detour:
 
 
 __all__ = [
-    "MOVED", "TOLERANCE", "Detour", "NoDetourError", "PassSide", "StrideRules", "blocked", "check_detour", "frame",
-    "least_distance", "make_detour", "no_detour", "plan_detour", "to_frame",
+    "MOVED", "TOLERANCE", "Detour", "LinearBounds", "NoDetourError", "PassSide", "StrideRules", "blocked",
+    "check_detour", "frame", "least_distance", "make_detour", "no_detour", "plan_detour", "to_frame",
 ]  # fmt: skip

@@ -30,12 +30,12 @@ from rtgait.core.obstacle.box import Obstacle
 from rtgait.core.obstacle.detour import (
     TOLERANCE,
     Detour,
+    LinearBounds,
     NoDetourError,
     StrideRules,
     blocked,
     check_detour,
     frame,
-    least_distance,
     make_detour,
     to_frame,
 )
@@ -99,24 +99,8 @@ def _split(
     rules: StrideRules,
 ) -> Detour:
     """The least change landing ``F[..split]`` before the box and ``F[split + 1..]`` after it."""
-    free = list(range(k0 + 1, len(prints)))
-    column = {j: c for c, j in enumerate(free)}
-    rows: list[np.ndarray] = []
-    bounds: list[float] = []
-
-    def add(coefficients: dict[int, float], low: float) -> None:
-        row = np.zeros(len(free))
-        for j, a in coefficients.items():
-            if j in column:
-                row[column[j]] += a
-            else:
-                low -= a * s0[j]
-        if not row.any():
-            if low > TOLERANCE:
-                raise NoDetourError(f"a committed footstep stands on the box (split after F[{split}])")
-            return
-        rows.append(row)
-        bounds.append(low)
+    bounds = LinearBounds(s0, k0, f"a committed footstep stands on the box (split after F[{split}])")
+    add, free = bounds.add, bounds.free
 
     for j, (front, back) in across.items():
         if j <= split:
@@ -137,10 +121,7 @@ def _split(
         cap = max(limits.length * math.sqrt(max(share, 0.0)), nominal)
         add({i + 1: 1.0, i: -1.0}, min(0.0, nominal))
         add({i + 1: -1.0, i: 1.0}, -cap)
-    A, b = np.array(rows), np.array(bounds)
-    start = s0[k0 + 1 :]
-    x = start + least_distance(A, b - A @ start)
-    violation = float(np.max(b - A @ x, initial=0.0))
+    x, violation = bounds.least_change()
     if violation > TOLERANCE:
         raise NoDetourError(f"landing F[..{split}] before it is short by {violation:.3g} m")
     o, R = frame(origin)
