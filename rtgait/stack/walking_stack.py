@@ -128,7 +128,7 @@ class WalkingStack:
         self._fault: Fault | None = None  # found by estimate(), logged by the control() of the same tick
         self._tilted = False  # whether the walk has sloped footholds (set at the start)
         self._toe_off = False  # whether a step changes height: toe-offs (set at the start)
-        self._heights = False  # whether the footholds are at different heights (set at the start)
+        self._heights = False  # footholds at different heights, an estimator with a landing gate (at the start)
         self._readings: SensorReadings | None = None  # the last estimate's, for a feed-forward at the sensed state
 
     @property
@@ -176,7 +176,11 @@ class WalkingStack:
         # Before a step up or down the rear heel rolls onto its toe (toe_off.py).
         self._toe_off = planner.n_steps is not None and changes_height(planner.footprints())
         # The landing gate lets a foot down onto ground the plan has higher than the other foot's (ground_height.py).
-        self._heights = planner.n_steps is not None and changes_ground_height(planner.footprints())
+        self._heights = (
+            planner.n_steps is not None
+            and changes_ground_height(planner.footprints())
+            and isinstance(self.estimator, KinematicInertialEstimator)
+        )
         if self._tilted or self._toe_off:  # sole levelling reads any tilt of a standing sole as the leg's error
             self.controller.off_level_ground()
 
@@ -189,15 +193,17 @@ class WalkingStack:
         try:
             out = self.controller.tick(t, measurement)
             left, right = out.left_foot, out.right_foot
-            if self._tilted:
-                left, right = tilted_feet(self.controller.planner.footprints(), left, right)
-            if self._toe_off:
-                if not self._tilted:
-                    left, right = (*left[:4], 0.0, 0.0), (*right[:4], 0.0, 0.0)
+            if self._tilted or self._toe_off or self._heights:  # off the flat floor: the footholds shape the feet
                 prints = self.controller.planner.footprints()
-                left, right = toe_off_feet(prints, self.ik.robot.description.sole.front, left, right, out.zmp_planned)
-            if self._heights and isinstance(self.estimator, KinematicInertialEstimator):
-                self.estimator.ground_rise = ground_rise(self.controller.planner.footprints(), left, right)
+                if self._tilted:
+                    left, right = tilted_feet(prints, left, right)
+                if self._toe_off:
+                    if not self._tilted:
+                        left, right = (*left[:4], 0.0, 0.0), (*right[:4], 0.0, 0.0)
+                    front = self.ik.robot.description.sole.front
+                    left, right = toe_off_feet(prints, front, left, right, out.zmp_planned)
+                if self._heights:
+                    self.estimator.ground_rise = ground_rise(prints, left, right)  # type: ignore[attr-defined]
             targets = _new_tuple(IKTargets, (out.com, left, right, out.lean))
             return self._command(t, targets, measurement, out, out.offsets)
         except _BAD_INPUT as error:
