@@ -197,4 +197,6 @@ def _write_replay(
         zmp=np.column_stack([result.column("zmp_x"), result.column("zmp_y")]),
         title=f"rtgait: {scenario.name} on {robot.name}",
         background=background,
+        terrain=None if scenario.terrain is None else scenario.terrain.terrain,
+        obstacles=scenario.obstacles,
     )

@@ -4,13 +4,21 @@ Meshcat paths, under ``/rtgait``::
 
     robot/<joint>            one group per joint that carries geometry, animated with the joint's world pose
     robot/<joint>/<geometry> the geometry, fixed in the joint frame (its placement, mesh scale and mirror)
-    footprints/<i>_<side>    one flat box per footprint (left and right in their own colours)
+    footprints/<i>_<side>    one flat box per footprint (left and right in their own colours), at its height and
+                             tilt (z, pitch, roll) off the flat floor
+    terrain/<name>           the terrain's boxes (:func:`rtgait.core.geometry.scene_boxes.terrain_boxes`: the
+                             MuJoCo scene's), when the walk is not on the flat floor; terrain/<name>/edges, their
+                             edges as dark lines
+    obstacles/<name>/seen    an obstacle's box (:func:`~rtgait.core.geometry.scene_boxes.obstacle_box`), animated:
+                             below the scene until the walk sees it, in place from then on; obstacles/<name>/ghost,
+                             the same box faint from the start (it stands in the physics all along)
     cog_path, zmp_path       lines; cog, zmp: markers that move with the robot
     planned_cog_path, planned_zmp_path   the planned lines, when a measured walk is drawn with its plan
 
-Below ``/rtgait`` everything is in the world frame of the inputs (z up, the ground at z = 0); ``/rtgait`` itself,
-meshcat's grid and axes carry one translation that puts the middle of the walk at the origin of the page's
-world, where the camera orbits.
+Below ``/rtgait`` everything is in the world frame of the inputs (z up, the flat ground at z = 0); ``/rtgait``
+itself, meshcat's grid and axes carry one translation that puts the middle of the walk at the origin of the page's
+world, where the camera orbits. On a terrain the grid is the floor under it, at its lowest level, and the ZMP is
+drawn on the terrain's surface (:func:`~rtgait.core.geometry.scene_boxes.ground_heights`).
 
 Footprints, paths, markers, primitive shapes and meshes other than STL are meshcat commands, recorded here with
 meshcat's own Python classes (no meshcat server is started). STL meshes go through
@@ -22,6 +30,7 @@ from __future__ import annotations
 
 import base64
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,6 +44,15 @@ from pinocchio.visualize import MeshcatVisualizer
 from scipy.spatial.transform import Rotation
 
 from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.geometry.scene_boxes import (
+    OBSTACLE_RGBA,
+    TERRAIN_RGBA,
+    SceneBox,
+    floor_level,
+    ground_heights,
+    terrain_boxes,
+)
+from rtgait.core.geometry.terrain import Flat, TerrainKind
 from rtgait.viz.replay_meshes import MeshLibrary, encode_mesh
 from rtgait.viz.replay_page import LegendEntry
 
@@ -55,16 +73,46 @@ GRID_CELL = 0.5  # m: meshcat's grid (20 m, 40 cells), moved under the walk by w
 CAMERA_DIRECTION = (0.45, -0.8, 0.5)  # from the walk's middle toward the camera, walking along +x: front right, above
 CAMERA_FOV = 45.0  # deg, vertical (meshcat's 75 deg bends the ends of a long walk)
 CAMERA_MARGIN = 1.12  # the walk's box fills at most 1/1.12 of the view, leaving room for the legend and clock
+GHOST_OPACITY = 0.3  # an obstacle not seen yet: in the physics, not yet in the walk's plan
+GHOST_SHRINK = 0.001  # m: the faint box sits just inside the solid one, which hides it once the obstacle is seen
+HIDDEN_DEPTH = 1000.0  # m: where an obstacle not yet seen waits, under the scene and out of the camera's view
+
+
+def _hex(rgba: tuple[float, ...]) -> int:
+    """0xRRGGBB of an RGBA colour (0..1)."""
+    r, g, b = (round(255 * c) for c in rgba[:3])
+    return (r << 16) | (g << 8) | b
+
+
+TERRAIN_COLOR = _hex(TERRAIN_RGBA)
+TERRAIN_EDGE_COLOR = 0x3A3833  # the boxes' edges, darker: a stair's nose shows from any side
+OBSTACLE_COLOR = _hex(OBSTACLE_RGBA)
 
 
 @dataclass(frozen=True)
 class Foot:
-    """A validated footprint: position (m), yaw (rad) and side."""
+    """A validated footprint: position (m), yaw (rad), side, and its height (m) and tilt (rad) off the flat floor."""
 
     x: float
     y: float
     yaw: float
     side: str
+    z: float = 0.0
+    pitch: float = 0.0
+    roll: float = 0.0
+
+
+@dataclass(frozen=True)
+class Ground:
+    """What the robot walks on besides the flat floor: the ``terrain`` (``None``: the flat floor) and the
+    ``obstacles``, each a box and when the walk sees it (s on the replay's clock, from 0)."""
+
+    terrain: TerrainKind | None = None
+    obstacles: tuple[tuple[SceneBox, float], ...] = ()
+
+    @property
+    def flat(self) -> bool:
+        return self.terrain is None or isinstance(self.terrain, Flat)
 
 
 @dataclass(frozen=True)
@@ -142,9 +190,10 @@ def build_scene(
     phases: list[tuple[float, str]],
     background: str,
     mesh_triangles: int | None,
+    ground: Ground = Ground(),
 ) -> Scene:
     """The replay's scene: robot at each keyframe (``frame_times`` from 0 s, ``frame_q`` on ``model``),
-    footprints, paths and markers, background, camera view and overlay."""
+    footprints, the terrain and obstacles of ``ground``, paths and markers, background, camera view and overlay."""
     recorder = _Recorder()
     vis = meshcat.Visualizer(window=recorder)
     data = model.createData()
@@ -159,18 +208,22 @@ def build_scene(
     library = MeshLibrary(mesh_triangles)
     robot, corners = _robot(model, visual_model, library, vis, joint_nodes, poses, joints)
     _draw_footprints(vis, footprints, sole)
-    markers = _draw_paths(vis, paths)
+    _draw_terrain(vis, ground)
+    lowest = min((foot.z for foot in footprints), default=None)
+    markers = _draw_paths(vis, paths, lambda xy: ground_heights(ground.terrain, xy, lowest))
+    markers += _draw_obstacles(vis, ground, frame_times)
     if background == "white":
         for key in ("top_color", "bottom_color"):
             vis["/Background"].set_property(key, [1.0, 1.0, 1.0])
 
-    box = _walk_box(corners, footprints, sole, paths)
+    box = _walk_box(corners, footprints, sole, paths, [box for box, _ in ground.obstacles])
     centre = 0.5 * (box[0] + box[1])
     # meshcat's orbit controls move the camera in the frame of its parent node but aim it with three.js' lookAt,
     # which reads the target in world coordinates: the two agree only for a target at the origin. So the world
     # moves instead: everything drawn here, meshcat's axes and its grid (by whole cells, so that its lines stay
     # on round coordinates) shift by -centre, and the camera orbits the middle of the walk.
-    cell = np.array([*(np.round(centre[:2] / GRID_CELL) * GRID_CELL), 0.0])
+    floor = 0.0 if ground.flat else floor_level(ground.terrain)  # type: ignore[arg-type]  # the grid: the floor
+    cell = np.array([*(np.round(centre[:2] / GRID_CELL) * GRID_CELL), floor])
     for node, offset in ((f"/{ROOT}", np.zeros(3)), ("/Axes", np.zeros(3)), ("/Grid", cell)):
         vis[node].set_transform(mtf.translation_matrix(offset - centre))
 
@@ -202,7 +255,7 @@ def build_scene(
         },
         "overlay": {"phases": [[t, label] for t, label in phases]},
     }
-    return Scene(scene_data, _legend(footprints, paths))
+    return Scene(scene_data, _legend(footprints, paths, ground))
 
 
 def _robot(
@@ -262,10 +315,65 @@ def _footprint_pose(foot: Foot, sole: SoleRect) -> np.ndarray:
     """Pose of the footprint's box centre (world): the inner edge is toward the other foot (-y for a left foot)."""
     cx = 0.5 * (sole.front - sole.back)
     cy = 0.5 * (sole.outer - sole.inner) if foot.side == "left" else 0.5 * (sole.inner - sole.outer)
-    pose = mtf.translation_matrix([foot.x, foot.y, 0.5 * FOOTPRINT_THICKNESS]) @ mtf.rotation_matrix(
+    pose = mtf.translation_matrix([foot.x, foot.y, foot.z + 0.5 * FOOTPRINT_THICKNESS]) @ mtf.rotation_matrix(
         foot.yaw, [0.0, 0.0, 1.0]
     )
+    if foot.pitch or foot.roll:  # the footprint's R = Rz(yaw) Ry(pitch) Rx(roll)
+        pose = pose @ mtf.rotation_matrix(foot.pitch, [0.0, 1.0, 0.0]) @ mtf.rotation_matrix(foot.roll, [1.0, 0.0, 0.0])
     return pose @ mtf.translation_matrix([cx, cy, 0.0])
+
+
+def _box_pose(box: SceneBox) -> np.ndarray:
+    pose = np.eye(4)
+    pose[:3, :3] = box.rotation
+    pose[:3, 3] = box.centre
+    return pose
+
+
+def _solid(box: SceneBox, shrink: float = 0.0) -> mg.Box:
+    return mg.Box([2.0 * (h - shrink) for h in box.half_size])
+
+
+def _draw_terrain(vis: meshcat.Visualizer, ground: Ground) -> None:
+    """The terrain's boxes, as MuJoCo's scene has them (none on the flat floor)."""
+    if ground.flat:
+        return
+    _, boxes = terrain_boxes(ground.terrain)  # type: ignore[arg-type]
+    material = mg.MeshLambertMaterial(color=TERRAIN_COLOR)
+    edges = mg.LineBasicMaterial(color=TERRAIN_EDGE_COLOR)
+    for box in boxes:
+        node = vis[f"/{ROOT}/terrain/{box.name}"]
+        node.set_object(_solid(box), material)
+        node.set_transform(_box_pose(box))
+        node["edges"].set_object(mg.LineSegments(mg.PointsGeometry(_box_edges(box).T), edges))
+
+
+def _box_edges(box: SceneBox) -> np.ndarray:
+    """The 12 edges of ``box`` in its own frame, as 24 segment end points ``(24, 3)`` (m)."""
+    corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * box.half_size
+    pairs = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]  # differ in one sign
+    return np.array([corners[i] for pair in pairs for i in pair])
+
+
+def _draw_obstacles(vis: meshcat.Visualizer, ground: Ground, frame_times: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """Each obstacle faint from the start and solid from when it is seen (module docstring); returns the animated
+    nodes and their positions per keyframe (m)."""
+    ghost = mg.MeshLambertMaterial(color=OBSTACLE_COLOR, transparent=True, opacity=GHOST_OPACITY)
+    solid = mg.MeshLambertMaterial(color=OBSTACLE_COLOR)
+    animated = []
+    for box, seen in ground.obstacles:
+        node = f"/{ROOT}/obstacles/{box.name}"
+        vis[f"{node}/ghost"].set_object(_solid(box, GHOST_SHRINK), ghost)
+        vis[f"{node}/ghost"].set_transform(_box_pose(box))
+        turn = _box_pose(box)
+        turn[:3, 3] = 0.0
+        vis[f"{node}/seen"].set_object(_solid(box), solid)
+        vis[f"{node}/seen"].set_transform(turn)
+        positions = np.tile(box.centre, (len(frame_times), 1))
+        positions[frame_times < seen - 1e-9, 2] -= HIDDEN_DEPTH
+        vis[node].set_transform(mtf.translation_matrix(positions[0]))
+        animated.append((node, positions))
+    return animated
 
 
 def _line(vis: meshcat.Visualizer, node: str, points: np.ndarray, color: int) -> None:
@@ -274,34 +382,43 @@ def _line(vis: meshcat.Visualizer, node: str, points: np.ndarray, color: int) ->
     )
 
 
-def _on_ground(xy: np.ndarray, lift: float) -> np.ndarray:
-    return np.column_stack([xy, np.full(len(xy), lift)])
+def _on_ground(xy: np.ndarray, lift: float, heights: np.ndarray | None = None) -> np.ndarray:
+    """Points ``xy`` ``lift`` (m) above the ground (at ``heights``, m; the flat floor without)."""
+    z = np.full(len(xy), lift) if heights is None else heights + lift
+    return np.column_stack([xy, z])
 
 
-def _draw_paths(vis: meshcat.Visualizer, paths: Paths) -> list[tuple[str, np.ndarray]]:
-    """Draw the COG and ZMP lines and their markers; return the markers' paths and per-frame positions (m)."""
+def _draw_paths(
+    vis: meshcat.Visualizer, paths: Paths, ground: Callable[[np.ndarray], np.ndarray] | None = None
+) -> list[tuple[str, np.ndarray]]:
+    """Draw the COG and ZMP lines and their markers, the ZMP at the ``ground``'s heights under it (m; the flat
+    floor without); return the markers' paths and per-frame positions (m)."""
+
+    def lifted(xy: np.ndarray, lift: float) -> np.ndarray:
+        return _on_ground(xy, lift, None if ground is None else ground(xy))
+
     markers = []
     if paths.planned_cog is not None:
         _line(vis, "planned_cog_path", paths.planned_cog, PLANNED_COG_COLOR)
     if paths.planned_zmp is not None:
-        _line(vis, "planned_zmp_path", _on_ground(paths.planned_zmp, 0.75 * PATH_LIFT), PLANNED_ZMP_COLOR)
+        _line(vis, "planned_zmp_path", lifted(paths.planned_zmp, 0.75 * PATH_LIFT), PLANNED_ZMP_COLOR)
     if paths.cog is not None and paths.frame_cog is not None:
         _line(vis, "cog_path", paths.cog, COG_COLOR)
         vis[f"/{ROOT}/cog"].set_object(mg.Sphere(0.025), mg.MeshLambertMaterial(color=COG_COLOR))
         vis[f"/{ROOT}/cog"].set_transform(mtf.translation_matrix(paths.frame_cog[0]))
         markers.append((f"/{ROOT}/cog", paths.frame_cog))
     if paths.zmp is not None and paths.frame_zmp is not None:
-        _line(vis, "zmp_path", _on_ground(paths.zmp, PATH_LIFT), ZMP_COLOR)
+        _line(vis, "zmp_path", lifted(paths.zmp, PATH_LIFT), ZMP_COLOR)
         # meshcat cylinders stand along three.js y; the rotation lays the disc flat on the ground.
         vis[f"/{ROOT}/zmp/disc"].set_object(mg.Cylinder(0.002, radius=0.02), mg.MeshLambertMaterial(color=ZMP_COLOR))
         vis[f"/{ROOT}/zmp/disc"].set_transform(mtf.rotation_matrix(math.pi / 2, [1.0, 0.0, 0.0]))
-        positions = _on_ground(paths.frame_zmp, PATH_LIFT)
+        positions = lifted(paths.frame_zmp, PATH_LIFT)
         vis[f"/{ROOT}/zmp"].set_transform(mtf.translation_matrix(positions[0]))
         markers.append((f"/{ROOT}/zmp", positions))
     return markers
 
 
-def _legend(footprints: list[Foot], paths: Paths) -> list[LegendEntry]:
+def _legend(footprints: list[Foot], paths: Paths, ground: Ground = Ground()) -> list[LegendEntry]:
     entries = [
         LegendEntry(f"{side} footprints", FOOT_COLORS[side], "box")
         for side in ("left", "right") if any(f.side == side for f in footprints)
@@ -316,12 +433,22 @@ def _legend(footprints: list[Foot], paths: Paths) -> list[LegendEntry]:
         entries.append(LegendEntry(f"ZMP path{suffix} and current ZMP (disc)", ZMP_COLOR, "marker"))
     if paths.planned_zmp is not None:
         entries.append(LegendEntry("ZMP path (planned)", PLANNED_ZMP_COLOR, "line"))
+    if ground.terrain is not None and not ground.flat:
+        entries.append(LegendEntry(f"terrain ({ground.terrain.kind}, as in MuJoCo)", TERRAIN_COLOR, "box"))
+    for _, seen in ground.obstacles:
+        entries.append(LegendEntry(f"obstacle (faint until seen at {seen:.2f} s)", OBSTACLE_COLOR, "box"))
     return entries
 
 
-def _walk_box(corners: list[np.ndarray], footprints: list[Foot], sole: SoleRect, paths: Paths) -> np.ndarray:
-    """Lowest and highest corner (m, world, shape ``(2, 3)``) of everything drawn, over the whole replay."""
+def _walk_box(
+    corners: list[np.ndarray], footprints: list[Foot], sole: SoleRect, paths: Paths, boxes: Sequence[SceneBox] = ()
+) -> np.ndarray:
+    """Lowest and highest corner (m, world, shape ``(2, 3)``) of everything drawn but the terrain, over the whole
+    replay (the terrain reaches metres beyond the walk)."""
     points = list(corners)
+    for box in boxes:
+        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
+        points.append(box.centre + (signs * box.half_size) @ np.asarray(box.rotation).T)
     for foot in footprints:
         pose = _footprint_pose(foot, sole)
         half = np.array([0.5 * (sole.front + sole.back), 0.5 * (sole.inner + sole.outer)])

@@ -15,6 +15,10 @@ than it is a box standing on it (:mod:`rtgait.core.geometry.terrain` gives the h
 The scene is finite where the height field is not: the level ground before and after the terrain reaches
 :data:`REACH` (m) beyond it and :data:`HALF_WIDTH` (m) to each side of the walk's line.
 
+A point of the ground plane that a viewer draws on the terrain (the ZMP) is drawn at :func:`ground_heights`: the
+terrain's height under it, ``max(h(x, y), z_low)`` with ``z_low`` the lowest foothold, so that a ZMP passing between
+stepping stones in double support stays on their level rather than in the pit.
+
 A box's orientation is ``R = Rz(yaw) Ry(pitch)``, its quaternion ``(w, x, y, z)`` the product of the two half-angle
 quaternions.
 """
@@ -25,12 +29,14 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from rtgait.core.geometry.terrain import PIT_DEPTH, Flat, Slope, Stairs, Step, SteppingStones, TerrainKind
 from rtgait.core.obstacle.box import Obstacle
 
 __all__ = [
     "FLAT_OBSTACLE", "HALF_WIDTH", "OBSTACLE_RGBA", "REACH", "SLOPE_THICKNESS", "TERRAIN_RGBA", "SceneBox",
-    "floor_level", "obstacle_box", "obstacle_box_name", "obstacle_boxes", "terrain_boxes",
+    "floor_level", "ground_heights", "obstacle_box", "obstacle_box_name", "obstacle_boxes", "terrain_boxes",
 ]  # fmt: skip
 
 REACH = 5.0
@@ -175,3 +181,13 @@ def obstacle_box(index: int, obstacle: Obstacle) -> SceneBox:
 def obstacle_boxes(obstacles: Sequence[Obstacle]) -> list[SceneBox]:
     """A box per obstacle, in their order."""
     return [obstacle_box(index, box) for index, box in enumerate(obstacles)]
+
+
+def ground_heights(terrain: TerrainKind | None, xy: np.ndarray, lowest: float | None = None) -> np.ndarray:
+    """Heights (m) at which points ``xy`` ``(n, 2)`` (m) of the ground are drawn on ``terrain`` (``None``: the flat
+    floor, 0): ``max(h(x, y), lowest)``, ``lowest`` the lowest foothold's height (m; ``None``: no bound)."""
+    xy = np.asarray(xy, dtype=float)
+    if terrain is None or isinstance(terrain, Flat):
+        return np.zeros(len(xy))
+    heights = np.asarray(terrain.height(xy[:, 0], xy[:, 1]), dtype=float).reshape(len(xy))
+    return heights if lowest is None else np.maximum(heights, lowest)
