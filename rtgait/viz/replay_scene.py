@@ -9,9 +9,9 @@ Meshcat paths, under ``/rtgait``::
     terrain/<name>           the terrain's boxes (:func:`rtgait.core.geometry.scene_boxes.terrain_boxes`: the
                              MuJoCo scene's), when the walk is not on the flat floor; terrain/<name>/edges, their
                              edges as dark lines
-    obstacles/<name>/seen    an obstacle's box (:func:`~rtgait.core.geometry.scene_boxes.obstacle_box`), animated:
-                             below the scene until the walk sees it, in place from then on; obstacles/<name>/ghost,
-                             the same box faint from the start (it stands in the physics all along)
+    obstacles/<name>/seen    an obstacle's box (:func:`~rtgait.core.geometry.scene_boxes.obstacle_box`, in
+                             .../seen/box), animated: below the scene until the walk sees it, in place from then on;
+                             obstacles/<name>/ghost, the same box faint from the start (in the physics all along)
     cog_path, zmp_path       lines; cog, zmp: markers that move with the robot
     planned_cog_path, planned_zmp_path   the planned lines, when a measured walk is drawn with its plan
 
@@ -362,13 +362,14 @@ def _draw_obstacles(vis: meshcat.Visualizer, ground: Ground, frame_times: np.nda
     solid = mg.MeshLambertMaterial(color=OBSTACLE_COLOR)
     animated = []
     for box, seen in ground.obstacles:
-        node = f"/{ROOT}/obstacles/{box.name}"
-        vis[f"{node}/ghost"].set_object(_solid(box, GHOST_SHRINK), ghost)
-        vis[f"{node}/ghost"].set_transform(_box_pose(box))
+        group = f"/{ROOT}/obstacles/{box.name}"
+        vis[f"{group}/ghost"].set_object(_solid(box, GHOST_SHRINK), ghost)
+        vis[f"{group}/ghost"].set_transform(_box_pose(box))
+        node = f"{group}/seen"  # animated: its position only, the box's turn fixed below it
         turn = _box_pose(box)
         turn[:3, 3] = 0.0
-        vis[f"{node}/seen"].set_object(_solid(box), solid)
-        vis[f"{node}/seen"].set_transform(turn)
+        vis[f"{node}/box"].set_object(_solid(box), solid)
+        vis[f"{node}/box"].set_transform(turn)
         positions = np.tile(box.centre, (len(frame_times), 1))
         positions[frame_times < seen - 1e-9, 2] -= HIDDEN_DEPTH
         vis[node].set_transform(mtf.translation_matrix(positions[0]))

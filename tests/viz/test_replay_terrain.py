@@ -103,9 +103,9 @@ def test_obstacles_are_the_mujoco_boxes_faint_until_seen_then_solid(tmp_path: Pa
         geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"obstacle_{index}")
         truth = _geom_pose(model, data, geom)
         node = f"/rtgait/obstacles/obstacle_{index}"
-        size, turn = solid[f"{node}/seen"]
+        size, turn = solid[f"{node}/seen/box"]
         np.testing.assert_allclose(size, 2.0 * model.geom_size[geom], atol=1e-12)
-        positions = decoded.positions[node]  # the animated node that carries the solid box
+        positions = decoded.positions[f"{node}/seen"]  # the animated node that carries the solid box
         seen = decoded.times >= obstacle.seen_at - 1e-6
         np.testing.assert_allclose(positions[seen], np.tile(truth[:3, 3], (seen.sum(), 1)), atol=1e-6)
         assert np.all(positions[~seen, 2] < -100.0)  # out of the scene before it is seen
@@ -113,6 +113,7 @@ def test_obstacles_are_the_mujoco_boxes_faint_until_seen_then_solid(tmp_path: Pa
         world[:3, 3] = positions[-1]
         np.testing.assert_allclose(world @ turn, truth, atol=1e-6)
         ghost_size, ghost_pose = solid[f"{node}/ghost"]
+        assert not any(f"{node}/ghost".startswith(moving) for moving in decoded.positions)  # under no animated node
         np.testing.assert_allclose(ghost_pose, truth, atol=1e-12)  # in place from the start, just inside the box
         assert np.all(ghost_size < size) and np.all(ghost_size > size - 0.01)
     assert (~(decoded.times >= OBSTACLES[0].seen_at - 1e-6)).sum() > 0  # the first one is seen during the replay
