@@ -30,25 +30,32 @@ _MARGIN_BELOW = 0.15  # m under the lowest sole
 _MARGIN_ABOVE = 0.1  # m over the highest sole
 
 
+def _cm(value: float) -> float:
+    """``value`` (m) to the nearest centimetre."""
+    return round(float(value) * 100.0) / 100.0
+
+
 def profile_line(terrain: TerrainKind) -> float:
     """The y (m) along which the profile is taken (module docstring)."""
     return 0.5 * terrain.row_spacing if isinstance(terrain, SteppingStones) else 0.0
 
 
-def draw_terrain_profile(ax: Axes, terrain: TerrainKind, sole_xz: np.ndarray) -> None:
+def draw_terrain_profile(ax: Axes, terrain: TerrainKind, sole_xz: np.ndarray, source: str = "measured") -> None:
     """Draw ``terrain``'s profile and the soles' paths onto ``ax``: ``sole_xz`` ``(k, 2, 2)``, per sample the
-    (left, right) soles' ``(x, z)`` (m; NaN rows are left out)."""
+    (left, right) soles' ``(x, z)`` (m; NaN rows are left out), ``source`` what they are (``"measured"``,
+    ``"planned"``), for the legend."""
     from rtgait.viz.style import SIDE_COLORS, clean_ticks
 
     finite = np.isfinite(sole_xz).all(axis=2)
     xs, zs = sole_xz[..., 0][finite], sole_xz[..., 1][finite]
     if xs.size == 0 or isinstance(terrain, Flat):
         return
-    x = np.linspace(float(xs.min()) - _MARGIN_X, float(xs.max()) + _MARGIN_X, PROFILE_SAMPLES)
+    # The view's limits on a 1 cm grid: a run read back from a CSV's 10 digits draws the very same profile.
+    x = np.linspace(_cm(xs.min() - _MARGIN_X), _cm(xs.max() + _MARGIN_X), PROFILE_SAMPLES)
     y = profile_line(terrain)
     h = np.asarray(terrain.height(x, np.full_like(x, y)), dtype=float)
-    bottom = max(float(h.min()), float(zs.min()) - _MARGIN_BELOW)
-    top = max(float(h.max()), float(zs.max())) + _MARGIN_ABOVE
+    bottom = max(float(h.min()), _cm(zs.min() - _MARGIN_BELOW))
+    top = _cm(max(float(h.max()), float(zs.max())) + _MARGIN_ABOVE)
     if bottom >= float(h.min()):
         bottom -= 0.05  # some ground under the lowest tread
     where = f" (y = {y:+.2f} m)" if y else ""
@@ -57,7 +64,7 @@ def draw_terrain_profile(ax: Axes, terrain: TerrainKind, sole_xz: np.ndarray) ->
     ax.plot(x, np.maximum(h, bottom), color="0.3", lw=0.8, zorder=2)
     for index, side in enumerate(("left", "right")):
         path = np.where(finite[:, index, None], sole_xz[:, index], math.nan)
-        ax.plot(path[:, 0], path[:, 1], color=SIDE_COLORS[side], lw=1.1, zorder=3, label=f"{side} sole (measured)")
+        ax.plot(path[:, 0], path[:, 1], color=SIDE_COLORS[side], lw=1.1, zorder=3, label=f"{side} sole ({source})")
     ax.set_xlim(float(x[0]), float(x[-1]))
     ax.set_ylim(bottom, top)
     ax.set_xlabel("x (world) [m]")
