@@ -31,9 +31,10 @@ from rtgait.core.geometry.scene_boxes import obstacle_box
 from rtgait.core.geometry.terrain import TERRAIN_CLASSES, TerrainKind
 from rtgait.core.obstacle.box import Obstacle
 from rtgait.outputs import write_text_atomic
+from rtgait.viz.replay_ground import Ground
 from rtgait.viz.replay_meshes import MESH_TRIANGLES
 from rtgait.viz.replay_page import BACKGROUNDS, page_html
-from rtgait.viz.replay_scene import COG_COLOR, FOOT_COLORS, ROOT, ZMP_COLOR, Foot, Ground, Paths, build_scene
+from rtgait.viz.replay_scene import COG_COLOR, FOOT_COLORS, ROOT, ZMP_COLOR, Foot, Paths, build_scene
 
 __all__ = [
     "BACKGROUNDS",

@@ -8,7 +8,7 @@ Meshcat paths, under ``/rtgait``::
                              tilt (z, pitch, roll) off the flat floor
     terrain/<name>           the terrain's boxes (:func:`rtgait.core.geometry.scene_boxes.terrain_boxes`: the
                              MuJoCo scene's), when the walk is not on the flat floor; terrain/<name>/edges, their
-                             edges as dark lines
+                             edges as dark lines (:mod:`rtgait.viz.replay_ground` draws these and the obstacles)
     obstacles/<name>/seen    an obstacle's box (:func:`~rtgait.core.geometry.scene_boxes.obstacle_box`, in
                              .../seen/box), animated: below the scene until the walk sees it, in place from then on;
                              obstacles/<name>/ghost, the same box faint from the start (in the physics all along)
@@ -44,15 +44,8 @@ from pinocchio.visualize import MeshcatVisualizer
 from scipy.spatial.transform import Rotation
 
 from rtgait.core.geometry.footsteps import SoleRect
-from rtgait.core.geometry.scene_boxes import (
-    OBSTACLE_RGBA,
-    TERRAIN_RGBA,
-    SceneBox,
-    floor_level,
-    ground_heights,
-    terrain_boxes,
-)
-from rtgait.core.geometry.terrain import Flat, TerrainKind
+from rtgait.core.geometry.scene_boxes import SceneBox, floor_level, ground_heights
+from rtgait.viz.replay_ground import FLAT_FLOOR, OBSTACLE_COLOR, TERRAIN_COLOR, Ground, draw_obstacles, draw_terrain
 from rtgait.viz.replay_meshes import MeshLibrary, encode_mesh
 from rtgait.viz.replay_page import LegendEntry
 
@@ -73,20 +66,6 @@ GRID_CELL = 0.5  # m: meshcat's grid (20 m, 40 cells), moved under the walk by w
 CAMERA_DIRECTION = (0.45, -0.8, 0.5)  # from the walk's middle toward the camera, walking along +x: front right, above
 CAMERA_FOV = 45.0  # deg, vertical (meshcat's 75 deg bends the ends of a long walk)
 CAMERA_MARGIN = 1.12  # the walk's box fills at most 1/1.12 of the view, leaving room for the legend and clock
-GHOST_OPACITY = 0.3  # an obstacle not seen yet: in the physics, not yet in the walk's plan
-GHOST_SHRINK = 0.001  # m: the faint box sits just inside the solid one, which hides it once the obstacle is seen
-HIDDEN_DEPTH = 1000.0  # m: where an obstacle not yet seen waits, under the scene and out of the camera's view
-
-
-def _hex(rgba: tuple[float, ...]) -> int:
-    """0xRRGGBB of an RGBA colour (0..1)."""
-    r, g, b = (round(255 * c) for c in rgba[:3])
-    return (r << 16) | (g << 8) | b
-
-
-TERRAIN_COLOR = _hex(TERRAIN_RGBA)
-TERRAIN_EDGE_COLOR = 0x3A3833  # the boxes' edges, darker: a stair's nose shows from any side
-OBSTACLE_COLOR = _hex(OBSTACLE_RGBA)
 
 
 @dataclass(frozen=True)
@@ -100,19 +79,6 @@ class Foot:
     z: float = 0.0
     pitch: float = 0.0
     roll: float = 0.0
-
-
-@dataclass(frozen=True)
-class Ground:
-    """What the robot walks on besides the flat floor: the ``terrain`` (``None``: the flat floor) and the
-    ``obstacles``, each a box and when the walk sees it (s on the replay's clock, from 0)."""
-
-    terrain: TerrainKind | None = None
-    obstacles: tuple[tuple[SceneBox, float], ...] = ()
-
-    @property
-    def flat(self) -> bool:
-        return self.terrain is None or isinstance(self.terrain, Flat)
 
 
 @dataclass(frozen=True)
@@ -190,7 +156,7 @@ def build_scene(
     phases: list[tuple[float, str]],
     background: str,
     mesh_triangles: int | None,
-    ground: Ground = Ground(),
+    ground: Ground = FLAT_FLOOR,
 ) -> Scene:
     """The replay's scene: robot at each keyframe (``frame_times`` from 0 s, ``frame_q`` on ``model``),
     footprints, the terrain and obstacles of ``ground``, paths and markers, background, camera view and overlay."""
@@ -208,10 +174,10 @@ def build_scene(
     library = MeshLibrary(mesh_triangles)
     robot, corners = _robot(model, visual_model, library, vis, joint_nodes, poses, joints)
     _draw_footprints(vis, footprints, sole)
-    _draw_terrain(vis, ground)
+    draw_terrain(vis, ground, ROOT)
     lowest = min((foot.z for foot in footprints), default=None)
     markers = _draw_paths(vis, paths, lambda xy: ground_heights(ground.terrain, xy, lowest))
-    markers += _draw_obstacles(vis, ground, frame_times)
+    markers += draw_obstacles(vis, ground, frame_times, ROOT)
     if background == "white":
         for key in ("top_color", "bottom_color"):
             vis["/Background"].set_property(key, [1.0, 1.0, 1.0])
@@ -323,60 +289,6 @@ def _footprint_pose(foot: Foot, sole: SoleRect) -> np.ndarray:
     return pose @ mtf.translation_matrix([cx, cy, 0.0])
 
 
-def _box_pose(box: SceneBox) -> np.ndarray:
-    pose = np.eye(4)
-    pose[:3, :3] = box.rotation
-    pose[:3, 3] = box.centre
-    return pose
-
-
-def _solid(box: SceneBox, shrink: float = 0.0) -> mg.Box:
-    return mg.Box([2.0 * (h - shrink) for h in box.half_size])
-
-
-def _draw_terrain(vis: meshcat.Visualizer, ground: Ground) -> None:
-    """The terrain's boxes, as MuJoCo's scene has them (none on the flat floor)."""
-    if ground.flat:
-        return
-    _, boxes = terrain_boxes(ground.terrain)  # type: ignore[arg-type]
-    material = mg.MeshLambertMaterial(color=TERRAIN_COLOR)
-    edges = mg.LineBasicMaterial(color=TERRAIN_EDGE_COLOR)
-    for box in boxes:
-        node = vis[f"/{ROOT}/terrain/{box.name}"]
-        node.set_object(_solid(box), material)
-        node.set_transform(_box_pose(box))
-        node["edges"].set_object(mg.LineSegments(mg.PointsGeometry(_box_edges(box).T), edges))
-
-
-def _box_edges(box: SceneBox) -> np.ndarray:
-    """The 12 edges of ``box`` in its own frame, as 24 segment end points ``(24, 3)`` (m)."""
-    corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * box.half_size
-    pairs = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]  # differ in one sign
-    return np.array([corners[i] for pair in pairs for i in pair])
-
-
-def _draw_obstacles(vis: meshcat.Visualizer, ground: Ground, frame_times: np.ndarray) -> list[tuple[str, np.ndarray]]:
-    """Each obstacle faint from the start and solid from when it is seen (module docstring); returns the animated
-    nodes and their positions per keyframe (m)."""
-    ghost = mg.MeshLambertMaterial(color=OBSTACLE_COLOR, transparent=True, opacity=GHOST_OPACITY)
-    solid = mg.MeshLambertMaterial(color=OBSTACLE_COLOR)
-    animated = []
-    for box, seen in ground.obstacles:
-        group = f"/{ROOT}/obstacles/{box.name}"
-        vis[f"{group}/ghost"].set_object(_solid(box, GHOST_SHRINK), ghost)
-        vis[f"{group}/ghost"].set_transform(_box_pose(box))
-        node = f"{group}/seen"  # animated: its position only, the box's turn fixed below it
-        turn = _box_pose(box)
-        turn[:3, 3] = 0.0
-        vis[f"{node}/box"].set_object(_solid(box), solid)
-        vis[f"{node}/box"].set_transform(turn)
-        positions = np.tile(box.centre, (len(frame_times), 1))
-        positions[frame_times < seen - 1e-9, 2] -= HIDDEN_DEPTH
-        vis[node].set_transform(mtf.translation_matrix(positions[0]))
-        animated.append((node, positions))
-    return animated
-
-
 def _line(vis: meshcat.Visualizer, node: str, points: np.ndarray, color: int) -> None:
     vis[f"/{ROOT}/{node}"].set_object(
         mg.Line(mg.PointsGeometry(_thin(points).T), mg.LineBasicMaterial(color=color, linewidth=2.0))
@@ -419,7 +331,7 @@ def _draw_paths(
     return markers
 
 
-def _legend(footprints: list[Foot], paths: Paths, ground: Ground = Ground()) -> list[LegendEntry]:
+def _legend(footprints: list[Foot], paths: Paths, ground: Ground = FLAT_FLOOR) -> list[LegendEntry]:
     entries = [
         LegendEntry(f"{side} footprints", FOOT_COLORS[side], "box")
         for side in ("left", "right") if any(f.side == side for f in footprints)
