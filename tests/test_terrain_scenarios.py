@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -85,10 +86,10 @@ def test_rtgait_plan_draws_the_heights(tmp_path):
     from rtgait.viz.run_data import PlanRun, read_plan_run
 
     run, info, _ = read_plan_run(out)  # as rtgait plan and rtgait plot draw it
-    assert run.heights is not None and len(draw_zmp_cog(run, info).axes) == 3  # x, y and the heights
+    assert run.heights is not None and len(draw_zmp_cog(run, info).axes) == 4  # x, y, the heights, the side view
     _, result = _roll("stepping-stones")  # level stones: no heights panel
     flat = PlanRun.from_rollout(result)
-    assert flat.heights is None and len(draw_zmp_cog(flat, info).axes) == 2
+    assert flat.heights is None and len(draw_zmp_cog(flat, replace(info, terrain=None)).axes) == 2
 
 
 def test_summary_reports_the_terrain_and_exported_footholds_keep_their_heights(tmp_path):

@@ -211,6 +211,10 @@ def run(args: argparse.Namespace) -> int:
     extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection, "walk": _walk_facts(walk)}
     if chosen:
         extra["control"] = chosen
+    if walk.terrain is not None:  # for the summary and the log, so that `rtgait plot` draws the terrain again
+        from rtgait.core.geometry.terrain import terrain_fields
+
+        extra["terrain"] = terrain_fields(walk.terrain.terrain)
     commands = schedule or ([(0.0, *velocity)] if velocity is not None else [])
     if commands:  # a walk by velocity command: its commands, for the summary's and the figures' titles
         extra["velocity"] = velocity_facts(commands)
@@ -314,6 +318,7 @@ def _write_simulation(
             replay=robot if args.html else None,
             sole=walk.sole,  # the sole the walk was planned with
             background=args.replay_background,
+            terrain=None if walk.terrain is None else walk.terrain.terrain, obstacles=walk.obstacles,
         )  # fmt: skip
         for name in summary["files"]:
             staging.add(name)

@@ -165,6 +165,7 @@ def _write_figures(result: Rollout, scenario: Scenario, robot_run: RobotRun | No
         title=f"{scenario.name} ({scenario.connection})",
         sole=scenario.sole,
         nominal_footprints=scenario.nominal_footprints(),
+        terrain=None if scenario.terrain is None else scenario.terrain.terrain,
     )
     for path in render_all(result, info, staging.folder, fmt):
         staging.add(path.name)
@@ -197,4 +198,6 @@ def _write_replay(
         zmp=np.column_stack([result.column("zmp_x"), result.column("zmp_y")]),
         title=f"rtgait: {scenario.name} on {robot.name}",
         background=background,
+        terrain=None if scenario.terrain is None else scenario.terrain.terrain,
+        obstacles=scenario.obstacles,
     )

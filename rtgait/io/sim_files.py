@@ -9,11 +9,14 @@ walk's clock (t = 0 when the walk starts; the start transition from half-sitting
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from rtgait.core.geometry.terrain import TerrainKind
+from rtgait.core.obstacle.box import Obstacle
 from rtgait.io.obstacle_outputs import sim_obstacle_lines
 from rtgait.io.summary_json import summary_text
 from rtgait.outputs import write_atomic, write_text_atomic
@@ -133,10 +136,13 @@ def write_sim_replay(
     sole: Any = None,
     title: str = "",
     background: str = "sky",
+    terrain: TerrainKind | None = None,
+    obstacles: Sequence[Obstacle] = (),
 ) -> Path:
     """Write ``path`` (HTML): the 3D replay of the SIMULATED motion from the walk's start on (its clock is the
-    walk's), with the planner's footprints, the measured COG and ZMP, the planned COG (the IK's target) and ZMP, and
-    the planned phase under the clock (needs meshcat; see :func:`rtgait.viz.replay.write_replay_html`).
+    walk's), with the planner's footprints, the measured COG and ZMP, the planned COG (the IK's target) and ZMP, the
+    planned phase under the clock, and the terrain and obstacles the walk was simulated with (needs meshcat; see
+    :func:`rtgait.viz.replay.write_replay_html`).
 
     Args:
         result: a simulated walk, with its configurations recorded (:attr:`SimResult.replay_q`).
@@ -146,6 +152,7 @@ def write_sim_replay(
             ``None``.
         title: the page title.
         background: ``"sky"`` or ``"white"`` (:func:`rtgait.viz.replay.write_replay_html`).
+        terrain, obstacles: the terrain (``None``: the flat floor) and the obstacles of the simulated scene.
 
     Returns:
         The path written.
@@ -180,6 +187,8 @@ def write_sim_replay(
         path_source="measured",
         title=title or f"rtgait: {result.robot} in MuJoCo",
         background=background,
+        terrain=terrain,
+        obstacles=obstacles,
     )
 
 
@@ -195,6 +204,8 @@ def write_sim_outputs(
     sole: Any = None,
     log: bool = True,
     background: str = "sky",
+    terrain: TerrainKind | None = None,
+    obstacles: Sequence[Obstacle] = (),
 ) -> dict[str, Any]:
     """Write ``sim.csv``, ``summary.json``, with ``log`` ``sim.parquet`` (when pyarrow is installed and the result has
     its tick log), with ``figure`` ``zmp_sim.<figure_format>``, with ``replay`` ``replay.html`` and, for a robot
@@ -212,6 +223,10 @@ def write_sim_outputs(
         sole: the replay's footprint rectangle (m): the sole the walk was planned with.
         background: the replay's background, ``"sky"`` or ``"white"``.
         log: also write ``sim.parquet``, the complete per-tick log (:mod:`rtgait.sim.log_file`, ``docs/logs.md``).
+        terrain: the terrain walked on (``None``: the flat floor): drawn in the replay and, when not flat, in the
+            figure's side view; ``extra``'s ``terrain`` entry (:func:`~rtgait.core.geometry.terrain.terrain_fields`)
+            lets ``rtgait plot`` draw it again.
+        obstacles: the scene's obstacles, drawn in the replay.
 
     Returns:
         The summary, also written as ``summary.json``: :meth:`SimResult.summary` (``fell``, ``fall_time``,
@@ -231,14 +246,15 @@ def write_sim_outputs(
         from rtgait.viz.sim_figure import ZmpSimRun, plot_zmp_sim
 
         name = sim_figure_file(figure_format)
-        run = ZmpSimRun.from_result(result, title)
+        run = ZmpSimRun.from_result(result, title, terrain)
         write_atomic(out / name, lambda path: plot_zmp_sim(run, path, figure_format))
         files.append(name)
     if replay is not None:
         label = f"{title} on {replay.name}" if title else replay.name
         write_sim_replay(
-            result, replay, out / "replay.html", sole=sole, title=f"rtgait: {label} in MuJoCo", background=background
-        )
+            result, replay, out / "replay.html", sole=sole, title=f"rtgait: {label} in MuJoCo", background=background,
+            terrain=terrain, obstacles=obstacles,
+        )  # fmt: skip
         files.append("replay.html")
     if result.model_error is not None:
         values = result.model_error.values()

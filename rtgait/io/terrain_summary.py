@@ -1,6 +1,7 @@
 """What ``rtgait plan``'s summary and report say of a walk off the flat floor.
 
-``summary.json`` of a scenario with a ``[terrain]`` table has a ``terrain`` entry: the terrain's ``type``, whether
+``summary.json`` of a scenario with a ``[terrain]`` table has a ``terrain`` entry: the terrain's ``type`` and
+``fields`` (:func:`~rtgait.core.geometry.terrain.terrain_fields`, what ``rtgait plot`` draws it from), whether
 the footholds were placed on it, the COG height's range (m) and the error the vertical motion adds to the
 horizontal dynamics, ``zmp_error_max`` and ``zmp_error_rms`` (m): the full point-mass ZMP equation on the planned
 COG against the planned ZMP (:mod:`rtgait.core.analysis.height_error`, ``docs/method.md``). Footprints off level
@@ -16,6 +17,7 @@ import numpy as np
 from rtgait.core.analysis.height_error import zmp_error
 from rtgait.core.analysis.rollout import Rollout
 from rtgait.core.geometry.footsteps import Footstep
+from rtgait.core.geometry.terrain import terrain_fields
 from rtgait.scenario.scenario import Scenario
 
 __all__ = ["footprint_entry", "terrain_line", "terrain_summary"]
@@ -39,6 +41,7 @@ def terrain_summary(rollout: Rollout, scenario: Scenario) -> dict[str, Any]:
     return {
         "terrain": {
             "type": spec.terrain.kind,
+            "fields": terrain_fields(spec.terrain),
             "place_footsteps": spec.place_footsteps,
             "cog_height_range": [float(cog_z.min()), float(cog_z.max())],
             "zmp_error_max": float(error.max()),

@@ -215,8 +215,8 @@ def _sole_dict(sole: SoleRect | None) -> dict[str, float] | None:
 def log_metadata(
     result: SimResult, events: list[dict[str, Any]], extra: dict[str, Any] | None = None
 ) -> dict[str, Any]:
-    """The file-level metadata of ``result``'s log (module docstring); ``extra`` adds ``scenario``, ``connection``
-    and ``title`` when it has them."""
+    """The file-level metadata of ``result``'s log (module docstring); ``extra`` adds ``scenario``, ``connection``,
+    ``title`` and, off the flat floor, ``terrain`` when it has them."""
     extra = extra or {}
     log = result.log
     return {
@@ -236,6 +236,7 @@ def log_metadata(
         "scenario": extra.get("scenario"),
         "connection": extra.get("connection"),
         "title": extra.get("title"),
+        **({"terrain": extra["terrain"]} if extra.get("terrain") else {}),  # a walk off the flat floor only
         "joint_names": list(result.joint_names),
         "run_start": result.run_start,
         "walk_end": result.walk_end,

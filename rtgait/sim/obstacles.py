@@ -1,4 +1,5 @@
-"""The scenario's obstacles in the MuJoCo model: one box geom each, standing on the floor.
+"""The scenario's obstacles in the MuJoCo model: one box geom each, standing on the floor
+(:func:`~rtgait.core.geometry.scene_boxes.obstacle_box`, the box the replay draws too).
 
 A box touches the soles as the floor does (the floor's contact bits, :data:`~rtgait.sim.contact_model.FLOOR_BITS`):
 a sole that steps on it lands on it, and a swing that sweeps through it is stopped by it. The leg shapes do not touch
@@ -8,41 +9,32 @@ swings' ankle paths clear of it (:mod:`rtgait.core.obstacle.detour`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import mujoco
 
+from rtgait.core.geometry.scene_boxes import OBSTACLE_RGBA, obstacle_box_name, obstacle_boxes
 from rtgait.core.obstacle.box import Obstacle
 from rtgait.sim.contact_model import FLOOR_BITS
 
 __all__ = ["OBSTACLE_RGBA", "add_obstacles", "obstacle_geom_name"]
 
-OBSTACLE_RGBA = (0.55, 0.35, 0.2, 1.0)
-"""The boxes' colour: wood, apart from the grey floor."""
-_FLAT = 1e-3  # m: half height given to a box of height 0 (a mark on the floor), so that MuJoCo has a solid to draw
-
-
-def obstacle_geom_name(index: int) -> str:
-    """The geom name of obstacle ``index``."""
-    return f"obstacle_{index}"
+obstacle_geom_name = obstacle_box_name
+"""The geom name of obstacle ``index`` (:func:`~rtgait.core.geometry.scene_boxes.obstacle_box_name`)."""
 
 
 def add_obstacles(spec: mujoco.MjSpec, obstacles: Sequence[Obstacle]) -> list[str]:
     """Add a box geom per obstacle to the world (its centre at half its height); returns their names."""
-    names = []
-    for index, box in enumerate(obstacles):
-        half_height = max(0.5 * box.height, _FLAT)
-        name = obstacle_geom_name(index)
+    boxes = obstacle_boxes(obstacles)
+    for box in boxes:
         spec.worldbody.add_geom(
-            name=name,
+            name=box.name,
             type=mujoco.mjtGeom.mjGEOM_BOX,
-            size=[0.5 * box.length, 0.5 * box.width, half_height],
-            pos=[box.x, box.y, half_height],
-            quat=[math.cos(0.5 * box.yaw), 0.0, 0.0, math.sin(0.5 * box.yaw)],
+            size=list(box.half_size),
+            pos=list(box.centre),
+            quat=list(box.quaternion),
             contype=FLOOR_BITS[0],
             conaffinity=FLOOR_BITS[1],
             rgba=list(OBSTACLE_RGBA),
         )
-        names.append(name)
-    return names
+    return [box.name for box in boxes]

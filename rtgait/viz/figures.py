@@ -22,6 +22,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
+from rtgait.core.geometry.terrain import Flat
 from rtgait.viz.deviation_figure import draw_zmp_deviation
 from rtgait.viz.figure_files import PLAN_FIGURES, figure_file, plan_figure_files
 from rtgait.viz.plan_marks import (
@@ -46,6 +47,7 @@ from rtgait.viz.style import (
     save,
     span_limits,
 )
+from rtgait.viz.terrain_profile import draw_terrain_profile
 
 __all__ = [
     "DRAW",
@@ -100,14 +102,25 @@ def _moved(footprints: Sequence[Footstep], nominal: Sequence[Footstep] | None) -
 
 def draw_zmp_cog(run: PlanRun, info: FigureInfo) -> Figure:
     """ZMP (planned and reference) and COG along x and y against time, with the support polygon's extent; off the
-    flat floor a third panel draws the COG height and the feet's heights.
+    flat floor a third panel draws the COG height and the feet's heights, and with the terrain known
+    (:attr:`FigureInfo.terrain`) a last one its side view (x-z) under the planned feet.
 
     The band is the support polygon's extent along each axis (m): a ZMP outside the band is outside the
     polygon; red dots mark every tick where the ZMP is outside the polygon in the plane.
     """
     lower, upper = support_extents(run)
-    figure = new_figure(11, 7.5 if run.heights is None else 10.0)
-    axes = figure.subplots(2 if run.heights is None else 3, 1, sharex=True)
+    side_view = info.terrain is not None and not isinstance(info.terrain, Flat) and run.feet_xz is not None
+    rows = 2 if run.heights is None else 3
+    if side_view:  # the terrain's side view under the time panels, on an x axis of its own
+        figure = new_figure(11, 2.5 * rows + 4.0)
+        grid = figure.add_gridspec(rows + 1, 1, height_ratios=[1.0] * rows + [1.4])
+        axes = [figure.add_subplot(grid[0])]
+        axes += [figure.add_subplot(grid[row], sharex=axes[0]) for row in range(1, rows)]
+        for ax in axes[:-1]:
+            ax.tick_params(labelbottom=False)
+    else:
+        figure = new_figure(11, 7.5 if run.heights is None else 10.0)
+        axes = figure.subplots(rows, 1, sharex=True)
     t = run.times
     for index, (ax, axis) in enumerate(zip(axes[:2], "xy", strict=True)):
         first = index == 0
@@ -126,6 +139,8 @@ def draw_zmp_cog(run: PlanRun, info: FigureInfo) -> Figure:
     if run.heights is not None:
         _heights_panel(axes[2], run)
     _finish_time_panels(figure, axes, t, f"{info.title}: ZMP and COG", legend_columns=3)
+    if side_view:  # after the figure's legend, which keeps to the time panels
+        draw_terrain_profile(figure.add_subplot(grid[rows]), info.terrain, run.feet_xz, "planned")  # type: ignore[arg-type]
     return figure
 
 

@@ -5,9 +5,12 @@ The main thread runs the closed loop, paced to the wall clock (:class:`~rtgait.s
 :data:`FRAME_RATE` times a second draws into the viewer's user scene and syncs it; the viewer renders on its own
 thread, and its key callback only queues the key (:meth:`LiveWalk.press`), so that the walk changes between ticks.
 
-Drawn in the scene (``mjvScene`` user geoms, on the floor): the plan's footprints around the step under way (sole
-rectangles, blue left, orange right), the planned ZMP (blue), the measured ZMP (red), the measured DCM (green) and
-the plan's DCM (pale green), and while a push acts an arrow onto the base along its force. The top-left text line
+Drawn in the scene (``mjvScene`` user geoms, on the ground): the plan's footprints around the step under way (sole
+rectangles, blue left, orange right, at their footholds' height and tilt), the planned ZMP (blue), the measured ZMP
+(red), the measured DCM (green) and the plan's DCM (pale green), on the terrain's surface
+(:func:`~rtgait.core.geometry.scene_boxes.ground_heights`), and while a push acts an arrow onto the base along its
+force. The terrain and the obstacles are the model's own geoms (:mod:`rtgait.sim.terrain`, :mod:`rtgait.sim.obstacles`),
+drawn by the viewer as any geom. The top-left text line
 is :meth:`LiveWalk.status` (command, phase, controller level, real-time factor); the bottom right lists the keys.
 
 Two things of MuJoCo's passive viewer matter here. Its ``sync`` clears ``data.xfrc_applied`` (it applies the mouse
@@ -34,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rtgait.core.geometry.scene_boxes import ground_heights
 from rtgait.sim.live import LiveWalk, Pacer
 
 if TYPE_CHECKING:
@@ -165,14 +169,18 @@ def software_renderer(name: str) -> bool:
 
 # ----- the scene ---------------------------------------------------------------------------------------------------
 def _add(scene: mujoco.MjvScene, kind: int, size: Sequence[float], pos: Sequence[float], rgba: Sequence[float],
-         yaw: float = 0.0) -> None:  # fmt: skip
-    """One geom at the end of ``scene`` (ignored when the scene is full)."""
+         yaw: float = 0.0, pitch: float = 0.0, roll: float = 0.0) -> None:  # fmt: skip
+    """One geom at the end of ``scene`` (ignored when the scene is full), turned ``Rz(yaw) Ry(pitch) Rx(roll)``."""
     import mujoco
 
     if scene.ngeom >= scene.maxgeom:
         return
     c, s = math.cos(yaw), math.sin(yaw)
     mat = np.array([c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0])
+    if pitch or roll:
+        cp, sp, cr, sr = math.cos(pitch), math.sin(pitch), math.cos(roll), math.sin(roll)
+        tilt = np.array([[cp, sp * sr, sp * cr], [0.0, cr, -sr], [-sp, cp * sr, cp * cr]])  # Ry(pitch) Rx(roll)
+        mat = (mat.reshape(3, 3) @ tilt).ravel()
     mujoco.mjv_initGeom(
         scene.geoms[scene.ngeom], kind, np.asarray(size, float), np.asarray(pos, float), mat,
         np.asarray(rgba, np.float32),
@@ -192,22 +200,26 @@ def draw_walk(scene: mujoco.MjvScene, walk: LiveWalk, sole: SoleRect) -> None:
     outward = 0.5 * (sole.outer - sole.inner)  # ... and outward of it
     step = max(0, (values.phase + 1) // 2)  # the step under way: its stance foot is F[step]
     base = loop.planner.walk.base if loop.planner.started else 0
-    for index, foot in enumerate(loop.footprints(), start=base):
+    prints = loop.footprints()
+    for index, foot in enumerate(prints, start=base):
         if not step - 2 <= index <= step + 4:
             continue
         c, s = math.cos(foot.yaw), math.sin(foot.yaw)
         side = 1.0 if foot.side == "left" else -1.0
         x = foot.x + c * ahead - s * side * outward
         y = foot.y + s * ahead + c * side * outward
-        _add(scene, box, half, (x, y, 0.001), _LEFT if foot.side == "left" else _RIGHT, foot.yaw)
-    for point, rgba, radius in (
-        (values.zmp_planned, _ZMP_PLANNED, 0.02),
-        (values.zmp_measured, _ZMP_MEASURED, 0.02),
-        (values.dcm, _DCM, 0.025),
-        (values.dcm_planned, _DCM_PLANNED, 0.015),
-    ):
+        # On a tilted foothold the sole's centre is off its frame's level: h = z - tan(pitch) u + tan(roll) v.
+        z = foot.z - math.tan(foot.pitch) * ahead + math.tan(foot.roll) * side * outward if not foot.level else 0.0
+        rgba = _LEFT if foot.side == "left" else _RIGHT
+        _add(scene, box, half, (x, y, z + 0.001), rgba, foot.yaw, foot.pitch, foot.roll)
+    points = [values.zmp_planned, values.zmp_measured, values.dcm, values.dcm_planned]
+    terrain = loop.sim.terrain
+    lowest = min((foot.z for foot in prints), default=None)
+    heights = ground_heights(terrain, np.array([p[:2] for p in points], dtype=float), lowest)
+    for point, height, rgba, radius in zip(points, heights, (_ZMP_PLANNED, _ZMP_MEASURED, _DCM, _DCM_PLANNED),
+                                           (0.02, 0.02, 0.025, 0.015), strict=True):  # fmt: skip
         if math.isfinite(point[0]) and math.isfinite(point[1]):
-            _add(scene, sphere, (radius, radius, radius), (point[0], point[1], 0.005), rgba)
+            _add(scene, sphere, (radius, radius, radius), (point[0], point[1], height + 0.005), rgba)
     force = loop.push_acting
     if force is not None and scene.ngeom < scene.maxgeom:
         x, y, z = loop.base_position

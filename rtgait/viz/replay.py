@@ -1,10 +1,11 @@
 """A self-contained HTML 3D replay of a whole-body walk, on meshcat's viewer.
 
 :func:`write_replay_html` draws a Pinocchio model's visual meshes moving along a joint trajectory, the footprints
-as flat rectangles on the ground, and the COG and ZMP paths as lines, into one HTML file that any browser opens
-from disk with no network access: meshcat's viewer (three.js included) and every mesh are inlined. A legend names
-the colours, a clock shows the replay's time (and the walking phase, when given), and the camera starts framing
-the whole walk.
+as flat rectangles on the ground, the COG and ZMP paths as lines, and the terrain and obstacles when the walk has
+them (the boxes MuJoCo's scene is built of: :mod:`rtgait.core.geometry.scene_boxes`), into one HTML file that any
+browser opens from disk with no network access: meshcat's viewer (three.js included) and every mesh are inlined. A
+legend names the colours, a clock shows the replay's time (and the walking phase, when given), and the camera starts
+framing the whole walk.
 
 The page stays light (its size: ``docs/design/figures_and_replay.md``): the robot's meshes are shared between the
 links that use the same or a mirrored mesh, simplified to a triangle budget, and packed as 16-bit integers
@@ -26,7 +27,11 @@ import numpy as np
 import pinocchio as pin
 
 from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.geometry.scene_boxes import obstacle_box
+from rtgait.core.geometry.terrain import TERRAIN_CLASSES, TerrainKind
+from rtgait.core.obstacle.box import Obstacle
 from rtgait.outputs import write_text_atomic
+from rtgait.viz.replay_ground import Ground
 from rtgait.viz.replay_meshes import MESH_TRIANGLES
 from rtgait.viz.replay_page import BACKGROUNDS, page_html
 from rtgait.viz.replay_scene import COG_COLOR, FOOT_COLORS, ROOT, ZMP_COLOR, Foot, Paths, build_scene
@@ -88,6 +93,8 @@ def write_replay_html(
     phases: Sequence[str] | np.ndarray | None = None,
     background: str = "sky",
     mesh_triangles: int | None = MESH_TRIANGLES,
+    terrain: TerrainKind | None = None,
+    obstacles: Sequence[Obstacle] = (),
 ) -> Path:
     """Write a self-contained HTML page that replays ``q`` on the robot in 3D; return its path.
 
@@ -100,7 +107,8 @@ def write_replay_html(
             ``times - times[0]``.
         q: configurations, shape ``(k, model.nq)`` (m and rad; free-flyer quaternion ``x, y, z, w``).
         footprints: objects with ``x``, ``y`` (m), ``yaw`` (rad) and ``side`` (``"left"``/``"right"``),
-            drawn as flat rectangles on the ground (z = 0), one colour per side.
+            drawn as flat rectangles on the ground, one colour per side; at their ``z`` (m), ``pitch`` and ``roll``
+            (rad) when they have them (footholds off the flat floor), else at z = 0.
         sole: object with ``front``, ``back``, ``inner``, ``outer`` (m from the foot frame, >= 0); the inner
             side is toward the other foot (-y of a left foot). Defaults to :data:`DEFAULT_SOLE`.
         cog: COG positions, shape ``(k, 3)`` (m), drawn as a line and a moving sphere.
@@ -118,6 +126,10 @@ def write_replay_html(
         background: ``"sky"`` (meshcat's blue gradient) or ``"white"`` (for figures and print).
         mesh_triangles: triangle budget per distinct mesh (STL meshes above it are simplified); ``None`` keeps
             every triangle (a page several times larger).
+        terrain: the terrain walked on (:mod:`rtgait.core.geometry.terrain`), drawn as MuJoCo builds it, with the
+            ZMP on its surface and the grid on the floor under it; ``None`` or flat: the flat floor, as without.
+        obstacles: boxes on the ground (:class:`~rtgait.core.obstacle.box.Obstacle`), each drawn faint from the
+            start and solid from its ``seen_at`` (s on the clock of ``times``).
 
     Returns:
         The path of the written file.
@@ -153,6 +165,7 @@ def write_replay_html(
         isinstance(mesh_triangles, bool) or not isinstance(mesh_triangles, numbers.Integral) or mesh_triangles < 4
     ):
         raise ValueError(f"mesh_triangles must be None (keep all) or an integer >= 4, got {mesh_triangles!r}")
+    ground = _ground(terrain, obstacles, float(t[0]))
     if not out.parent.is_dir():
         raise FileNotFoundError(f"replay folder does not exist: {out.parent}")
 
@@ -166,6 +179,7 @@ def write_replay_html(
         model, visual_model, frame_times - t[0], _interpolate_configurations(model, t, qs, frame_times),
         repetitions=None if repetitions is None else int(repetitions), footprints=feet, sole=rect, paths=paths,
         phases=labels, background=background, mesh_triangles=None if mesh_triangles is None else int(mesh_triangles),
+        ground=ground,
     )  # fmt: skip
     page = page_html(
         title=title, data=scene.data, legend=scene.legend, duration=float(t[-1] - t[0]), background=background,
@@ -242,9 +256,24 @@ def _phases(phases: Sequence[str] | np.ndarray | None, t: np.ndarray) -> list[tu
     return runs
 
 
+def _ground(terrain: Any, obstacles: Any, start: float) -> Ground:
+    """The terrain and obstacles checked, the obstacles' sight times on the replay's clock (s from ``start``)."""
+    if terrain is not None and not isinstance(terrain, tuple(TERRAIN_CLASSES.values())):
+        raise ValueError(f"terrain must be None or a terrain of rtgait.core.geometry.terrain, got {terrain!r}")
+    boxes = []
+    for index, box in enumerate(obstacles):
+        if not isinstance(box, Obstacle):
+            raise ValueError(f"obstacles[{index}] must be an rtgait.core.obstacle.box.Obstacle, got {box!r}")
+        boxes.append((obstacle_box(index, box), box.seen_at - start))
+    return Ground(terrain, tuple(boxes))
+
+
 def _footprint(foot: Any, index: int) -> Foot:
     values = {}
-    for name in ("x", "y", "yaw"):
+    for name in ("x", "y", "yaw", "z", "pitch", "roll"):
+        if name in ("z", "pitch", "roll") and not hasattr(foot, name):
+            values[name] = 0.0  # a footprint on the flat floor
+            continue
         value = getattr(foot, name, None)
         if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
             raise ValueError(f"footprints[{index}].{name} must be a number, got {value!r}")
@@ -254,7 +283,7 @@ def _footprint(foot: Any, index: int) -> Foot:
     side = getattr(foot, "side", None)
     if side not in FOOT_COLORS:
         raise ValueError(f"footprints[{index}].side must be 'left' or 'right', got {side!r}")
-    return Foot(values["x"], values["y"], values["yaw"], str(side))
+    return Foot(side=str(side), **values)
 
 
 def _sole(sole: Any) -> SoleRect:

@@ -4,13 +4,21 @@ Meshcat paths, under ``/rtgait``::
 
     robot/<joint>            one group per joint that carries geometry, animated with the joint's world pose
     robot/<joint>/<geometry> the geometry, fixed in the joint frame (its placement, mesh scale and mirror)
-    footprints/<i>_<side>    one flat box per footprint (left and right in their own colours)
+    footprints/<i>_<side>    one flat box per footprint (left and right in their own colours), at its height and
+                             tilt (z, pitch, roll) off the flat floor
+    terrain/<name>           the terrain's boxes (:func:`rtgait.core.geometry.scene_boxes.terrain_boxes`: the
+                             MuJoCo scene's), when the walk is not on the flat floor; terrain/<name>/edges, their
+                             edges as dark lines (:mod:`rtgait.viz.replay_ground` draws these and the obstacles)
+    obstacles/<name>/seen    an obstacle's box (:func:`~rtgait.core.geometry.scene_boxes.obstacle_box`, in
+                             .../seen/box), animated: below the scene until the walk sees it, in place from then on;
+                             obstacles/<name>/ghost, the same box faint from the start (in the physics all along)
     cog_path, zmp_path       lines; cog, zmp: markers that move with the robot
     planned_cog_path, planned_zmp_path   the planned lines, when a measured walk is drawn with its plan
 
-Below ``/rtgait`` everything is in the world frame of the inputs (z up, the ground at z = 0); ``/rtgait`` itself,
-meshcat's grid and axes carry one translation that puts the middle of the walk at the origin of the page's
-world, where the camera orbits.
+Below ``/rtgait`` everything is in the world frame of the inputs (z up, the flat ground at z = 0); ``/rtgait``
+itself, meshcat's grid and axes carry one translation that puts the middle of the walk at the origin of the page's
+world, where the camera orbits. On a terrain the grid is the floor under it, at its lowest level, and the ZMP is
+drawn on the terrain's surface (:func:`~rtgait.core.geometry.scene_boxes.ground_heights`).
 
 Footprints, paths, markers, primitive shapes and meshes other than STL are meshcat commands, recorded here with
 meshcat's own Python classes (no meshcat server is started). STL meshes go through
@@ -22,6 +30,7 @@ from __future__ import annotations
 
 import base64
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,6 +44,8 @@ from pinocchio.visualize import MeshcatVisualizer
 from scipy.spatial.transform import Rotation
 
 from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.geometry.scene_boxes import SceneBox, floor_level, ground_heights
+from rtgait.viz.replay_ground import FLAT_FLOOR, OBSTACLE_COLOR, TERRAIN_COLOR, Ground, draw_obstacles, draw_terrain
 from rtgait.viz.replay_meshes import MeshLibrary, encode_mesh
 from rtgait.viz.replay_page import LegendEntry
 
@@ -59,12 +70,15 @@ CAMERA_MARGIN = 1.12  # the walk's box fills at most 1/1.12 of the view, leaving
 
 @dataclass(frozen=True)
 class Foot:
-    """A validated footprint: position (m), yaw (rad) and side."""
+    """A validated footprint: position (m), yaw (rad), side, and its height (m) and tilt (rad) off the flat floor."""
 
     x: float
     y: float
     yaw: float
     side: str
+    z: float = 0.0
+    pitch: float = 0.0
+    roll: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -142,9 +156,10 @@ def build_scene(
     phases: list[tuple[float, str]],
     background: str,
     mesh_triangles: int | None,
+    ground: Ground = FLAT_FLOOR,
 ) -> Scene:
     """The replay's scene: robot at each keyframe (``frame_times`` from 0 s, ``frame_q`` on ``model``),
-    footprints, paths and markers, background, camera view and overlay."""
+    footprints, the terrain and obstacles of ``ground``, paths and markers, background, camera view and overlay."""
     recorder = _Recorder()
     vis = meshcat.Visualizer(window=recorder)
     data = model.createData()
@@ -159,18 +174,22 @@ def build_scene(
     library = MeshLibrary(mesh_triangles)
     robot, corners = _robot(model, visual_model, library, vis, joint_nodes, poses, joints)
     _draw_footprints(vis, footprints, sole)
-    markers = _draw_paths(vis, paths)
+    draw_terrain(vis, ground, ROOT)
+    lowest = min((foot.z for foot in footprints), default=None)
+    markers = _draw_paths(vis, paths, lambda xy: ground_heights(ground.terrain, xy, lowest))
+    markers += draw_obstacles(vis, ground, frame_times, ROOT)
     if background == "white":
         for key in ("top_color", "bottom_color"):
             vis["/Background"].set_property(key, [1.0, 1.0, 1.0])
 
-    box = _walk_box(corners, footprints, sole, paths)
+    box = _walk_box(corners, footprints, sole, paths, [box for box, _ in ground.obstacles])
     centre = 0.5 * (box[0] + box[1])
     # meshcat's orbit controls move the camera in the frame of its parent node but aim it with three.js' lookAt,
     # which reads the target in world coordinates: the two agree only for a target at the origin. So the world
     # moves instead: everything drawn here, meshcat's axes and its grid (by whole cells, so that its lines stay
     # on round coordinates) shift by -centre, and the camera orbits the middle of the walk.
-    cell = np.array([*(np.round(centre[:2] / GRID_CELL) * GRID_CELL), 0.0])
+    floor = 0.0 if ground.flat else floor_level(ground.terrain)  # type: ignore[arg-type]  # the grid: the floor
+    cell = np.array([*(np.round(centre[:2] / GRID_CELL) * GRID_CELL), floor])
     for node, offset in ((f"/{ROOT}", np.zeros(3)), ("/Axes", np.zeros(3)), ("/Grid", cell)):
         vis[node].set_transform(mtf.translation_matrix(offset - centre))
 
@@ -202,7 +221,7 @@ def build_scene(
         },
         "overlay": {"phases": [[t, label] for t, label in phases]},
     }
-    return Scene(scene_data, _legend(footprints, paths))
+    return Scene(scene_data, _legend(footprints, paths, ground))
 
 
 def _robot(
@@ -262,9 +281,11 @@ def _footprint_pose(foot: Foot, sole: SoleRect) -> np.ndarray:
     """Pose of the footprint's box centre (world): the inner edge is toward the other foot (-y for a left foot)."""
     cx = 0.5 * (sole.front - sole.back)
     cy = 0.5 * (sole.outer - sole.inner) if foot.side == "left" else 0.5 * (sole.inner - sole.outer)
-    pose = mtf.translation_matrix([foot.x, foot.y, 0.5 * FOOTPRINT_THICKNESS]) @ mtf.rotation_matrix(
+    pose = mtf.translation_matrix([foot.x, foot.y, foot.z + 0.5 * FOOTPRINT_THICKNESS]) @ mtf.rotation_matrix(
         foot.yaw, [0.0, 0.0, 1.0]
     )
+    if foot.pitch or foot.roll:  # the footprint's R = Rz(yaw) Ry(pitch) Rx(roll)
+        pose = pose @ mtf.rotation_matrix(foot.pitch, [0.0, 1.0, 0.0]) @ mtf.rotation_matrix(foot.roll, [1.0, 0.0, 0.0])
     return pose @ mtf.translation_matrix([cx, cy, 0.0])
 
 
@@ -274,34 +295,43 @@ def _line(vis: meshcat.Visualizer, node: str, points: np.ndarray, color: int) ->
     )
 
 
-def _on_ground(xy: np.ndarray, lift: float) -> np.ndarray:
-    return np.column_stack([xy, np.full(len(xy), lift)])
+def _on_ground(xy: np.ndarray, lift: float, heights: np.ndarray | None = None) -> np.ndarray:
+    """Points ``xy`` ``lift`` (m) above the ground (at ``heights``, m; the flat floor without)."""
+    z = np.full(len(xy), lift) if heights is None else heights + lift
+    return np.column_stack([xy, z])
 
 
-def _draw_paths(vis: meshcat.Visualizer, paths: Paths) -> list[tuple[str, np.ndarray]]:
-    """Draw the COG and ZMP lines and their markers; return the markers' paths and per-frame positions (m)."""
+def _draw_paths(
+    vis: meshcat.Visualizer, paths: Paths, ground: Callable[[np.ndarray], np.ndarray] | None = None
+) -> list[tuple[str, np.ndarray]]:
+    """Draw the COG and ZMP lines and their markers, the ZMP at the ``ground``'s heights under it (m; the flat
+    floor without); return the markers' paths and per-frame positions (m)."""
+
+    def lifted(xy: np.ndarray, lift: float) -> np.ndarray:
+        return _on_ground(xy, lift, None if ground is None else ground(xy))
+
     markers = []
     if paths.planned_cog is not None:
         _line(vis, "planned_cog_path", paths.planned_cog, PLANNED_COG_COLOR)
     if paths.planned_zmp is not None:
-        _line(vis, "planned_zmp_path", _on_ground(paths.planned_zmp, 0.75 * PATH_LIFT), PLANNED_ZMP_COLOR)
+        _line(vis, "planned_zmp_path", lifted(paths.planned_zmp, 0.75 * PATH_LIFT), PLANNED_ZMP_COLOR)
     if paths.cog is not None and paths.frame_cog is not None:
         _line(vis, "cog_path", paths.cog, COG_COLOR)
         vis[f"/{ROOT}/cog"].set_object(mg.Sphere(0.025), mg.MeshLambertMaterial(color=COG_COLOR))
         vis[f"/{ROOT}/cog"].set_transform(mtf.translation_matrix(paths.frame_cog[0]))
         markers.append((f"/{ROOT}/cog", paths.frame_cog))
     if paths.zmp is not None and paths.frame_zmp is not None:
-        _line(vis, "zmp_path", _on_ground(paths.zmp, PATH_LIFT), ZMP_COLOR)
+        _line(vis, "zmp_path", lifted(paths.zmp, PATH_LIFT), ZMP_COLOR)
         # meshcat cylinders stand along three.js y; the rotation lays the disc flat on the ground.
         vis[f"/{ROOT}/zmp/disc"].set_object(mg.Cylinder(0.002, radius=0.02), mg.MeshLambertMaterial(color=ZMP_COLOR))
         vis[f"/{ROOT}/zmp/disc"].set_transform(mtf.rotation_matrix(math.pi / 2, [1.0, 0.0, 0.0]))
-        positions = _on_ground(paths.frame_zmp, PATH_LIFT)
+        positions = lifted(paths.frame_zmp, PATH_LIFT)
         vis[f"/{ROOT}/zmp"].set_transform(mtf.translation_matrix(positions[0]))
         markers.append((f"/{ROOT}/zmp", positions))
     return markers
 
 
-def _legend(footprints: list[Foot], paths: Paths) -> list[LegendEntry]:
+def _legend(footprints: list[Foot], paths: Paths, ground: Ground = FLAT_FLOOR) -> list[LegendEntry]:
     entries = [
         LegendEntry(f"{side} footprints", FOOT_COLORS[side], "box")
         for side in ("left", "right") if any(f.side == side for f in footprints)
@@ -316,12 +346,22 @@ def _legend(footprints: list[Foot], paths: Paths) -> list[LegendEntry]:
         entries.append(LegendEntry(f"ZMP path{suffix} and current ZMP (disc)", ZMP_COLOR, "marker"))
     if paths.planned_zmp is not None:
         entries.append(LegendEntry("ZMP path (planned)", PLANNED_ZMP_COLOR, "line"))
+    if ground.terrain is not None and not ground.flat:
+        entries.append(LegendEntry(f"terrain ({ground.terrain.kind}, as in MuJoCo)", TERRAIN_COLOR, "box"))
+    for _, seen in ground.obstacles:
+        entries.append(LegendEntry(f"obstacle (faint until seen at {seen:.2f} s)", OBSTACLE_COLOR, "box"))
     return entries
 
 
-def _walk_box(corners: list[np.ndarray], footprints: list[Foot], sole: SoleRect, paths: Paths) -> np.ndarray:
-    """Lowest and highest corner (m, world, shape ``(2, 3)``) of everything drawn, over the whole replay."""
+def _walk_box(
+    corners: list[np.ndarray], footprints: list[Foot], sole: SoleRect, paths: Paths, boxes: Sequence[SceneBox] = ()
+) -> np.ndarray:
+    """Lowest and highest corner (m, world, shape ``(2, 3)``) of everything drawn but the terrain, over the whole
+    replay (the terrain reaches metres beyond the walk)."""
     points = list(corners)
+    for box in boxes:
+        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
+        points.append(box.centre + (signs * box.half_size) @ np.asarray(box.rotation).T)
     for foot in footprints:
         pose = _footprint_pose(foot, sole)
         half = np.array([0.5 * (sole.front + sole.back), 0.5 * (sole.inner + sole.outer)])

@@ -22,6 +22,7 @@ import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
 from rtgait.core.geometry.support import support_polygon
+from rtgait.core.geometry.terrain import TerrainKind
 from rtgait.viz.margin_marker import MarginMarker, margin_marker
 from rtgait.viz.run_files import (
     PLAN_CSV,
@@ -30,6 +31,7 @@ from rtgait.viz.run_files import (
     read_floats,
     read_summary,
     read_table,
+    read_terrain,
     require_keys,
 )
 
@@ -50,11 +52,14 @@ class FigureInfo:
         sole: sole rectangle around the foot frame (m), for footprint outlines.
         nominal_footprints: footprints ``F[0..]`` as planned before any change; footprints that differ from
             them are highlighted in the top view. ``None``: nothing highlighted.
+        terrain: the terrain walked on (``None``: the flat floor); off the flat floor ``zmp_cog`` draws its side
+            view under the planned feet.
     """
 
     title: str
     sole: SoleRect
     nominal_footprints: Sequence[Footstep] | None = None
+    terrain: TerrainKind | None = None
 
 
 # ----- a plan run ----------------------------------------------------------------------------------------------
@@ -76,6 +81,8 @@ class PlanRun:
         free_segments: ``(start, end)`` (s) of the free first segment of every plan, the initial plan's first.
         heights: COG, left and right foot heights (m), ``(k, 3)``, of a walk whose COG height changes (off the flat
             floor); ``None`` on level ground.
+        feet_xz: the planned feet's ``(x, z)`` (m), ``(k, 2, 2)`` (left, right); ``None`` read from an old run
+            without the heights.
     """
 
     times: np.ndarray
@@ -90,6 +97,7 @@ class PlanRun:
     changes: list[tuple[float, int]]
     free_segments: list[tuple[float, float]]
     heights: np.ndarray | None = None
+    feet_xz: np.ndarray | None = None
 
     @classmethod
     def from_rollout(cls, rollout: Rollout) -> PlanRun:
@@ -108,6 +116,7 @@ class PlanRun:
             changes=[(float(t), int(step)) for t, step in rollout.changes],
             free_segments=plan_free_segments(rollout),
             heights=_heights(column("cog_z"), column("lfoot_z"), column("rfoot_z")),
+            feet_xz=_feet_xz(*(column(f"{foot}_{axis}") for foot in ("lfoot", "rfoot") for axis in "xz")),
         )
 
     def column(self, name: str) -> np.ndarray:
@@ -135,6 +144,11 @@ class PlanRun:
             # CSV's 10 digits (the deviation is zero there, where the plan meets its reference, so nothing moves).
             mask |= (self.times >= start - _TIME_TOLERANCE) & (self.times <= end + _TIME_TOLERANCE)
         return mask
+
+
+def _feet_xz(*columns: np.ndarray) -> np.ndarray:
+    """The feet's ``(x, z)``, ``(k, 2, 2)``, from the columns left x, left z, right x, right z."""
+    return np.stack([np.column_stack(columns[:2]), np.column_stack(columns[2:])], axis=1)
 
 
 def _heights(cog_z: np.ndarray, left_z: np.ndarray, right_z: np.ndarray) -> np.ndarray | None:
@@ -203,10 +217,12 @@ def read_plan_run(folder: Path) -> tuple[PlanRun, FigureInfo, dict[str, Any]]:
     columns = read_table(path, (*numeric, *feet, "support"))
     values = read_floats(columns, (*numeric, *feet), path)
     height_names = ("cog_z", "lfoot_z", "rfoot_z")
-    heights = None
+    heights = feet_xz = None
     if all(name in columns for name in height_names):  # written by every rtgait plan; older runs may lack them
         z = read_floats(columns, height_names, path)
         heights = _heights(z[:, 0], z[:, 1], z[:, 2])
+        x = values[:, [len(numeric) + feet.index("lfoot_x"), len(numeric) + feet.index("rfoot_x")]]
+        feet_xz = _feet_xz(x[:, 0], z[:, 1], x[:, 1], z[:, 2])
     try:
         sole = SoleRect(**{key: float(summary["sole"][key]) for key in ("front", "back", "inner", "outer")})
         nominal = summary.get("nominal_footprints")
@@ -214,6 +230,7 @@ def read_plan_run(folder: Path) -> tuple[PlanRun, FigureInfo, dict[str, Any]]:
             title=f"{summary['scenario']} ({summary['connection']})",
             sole=sole,
             nominal_footprints=None if nominal is None else [_footstep(f, str(path)) for f in nominal],
+            terrain=read_terrain((summary.get("terrain") or {}).get("fields")),
         )
         changes = [(float(c["decided_at"]), int(c["step"])) for c in summary["changes"]]
         free = [(float(start), float(end)) for start, end in summary["free_segments"]]
@@ -237,5 +254,6 @@ def read_plan_run(folder: Path) -> tuple[PlanRun, FigureInfo, dict[str, Any]]:
         changes=changes,
         free_segments=free,
         heights=heights,
+        feet_xz=feet_xz,
     )
     return run, info, summary

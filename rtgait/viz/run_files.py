@@ -1,5 +1,5 @@
 """Reading back the files a finished run wrote (``trajectory.csv``, ``sim.csv``, ``summary.json``), and telling which
-kind of run a folder holds; every refusal a one-line :class:`RunFilesError` naming the file (numpy only)."""
+kind of run a folder holds; every refusal a one-line :class:`RunFilesError` naming the file (numpy and the core)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,9 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["RunFilesError", "read_floats", "read_summary", "read_table", "require_keys", "run_kind"]
+from rtgait.core.geometry.terrain import TerrainKind, terrain_from_fields
+
+__all__ = ["RunFilesError", "read_floats", "read_summary", "read_table", "read_terrain", "require_keys", "run_kind"]
 
 PLAN_CSV = "trajectory.csv"
 SIM_CSV = "sim.csv"
@@ -82,6 +84,17 @@ def require_keys(summary: dict[str, Any], keys: Sequence[str], folder: Path, kin
             f"{Path(folder) / SUMMARY} has no {missing[0]!r}: not the summary of {kind} run, or one written by an "
             "older rtgait (run it again)"
         )
+
+
+def read_terrain(fields: Any) -> TerrainKind | None:
+    """The terrain of a run's ``terrain`` entry (summary or log metadata: :func:`~rtgait.core.geometry.terrain.
+    terrain_fields`), ``None`` without one (the flat floor)."""
+    if fields is None:
+        return None
+    try:
+        return terrain_from_fields(fields)
+    except (ValueError, AttributeError) as error:
+        raise RunFilesError(f"the run's terrain entry is not a terrain: {error}") from None
 
 
 def _csv_header(path: Path) -> list[str]:

@@ -5,7 +5,9 @@ starts, as in the plan figures; the start transition from half-sitting at negati
 brackets, the planned double supports shaded, pushes and the tip-over and fall marked. Three panels: x and y against
 time with the **edges of the stance soles** (the extent along that axis of the sole the plan stands on, both in
 double support, from its measured pose and the sole rectangle: where the measured ZMP must be), and the **ZMP
-error** (measured minus planned, mm) in the planned single supports, where the title's RMS is taken.
+error** (measured minus planned, mm) in the planned single supports, where the title's RMS is taken. A walk off the
+flat floor has a fourth panel, a side view (x-z) of the terrain and the soles' heights over it
+(:mod:`rtgait.viz.terrain_profile`).
 
 The figure is drawn from a small record, :class:`ZmpSimRun`, made from the run in memory
 (:meth:`ZmpSimRun.from_result`) or read back from a finished run's files (:func:`read_zmp_sim_run`: ``sim.parquet``,
@@ -24,8 +26,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.geometry.terrain import Flat, TerrainKind
 from rtgait.sim.log_file import LOG_FILE, parquet_available, read_sim_log
-from rtgait.viz.run_files import SIM_CSV, RunFilesError, read_floats, read_summary, read_table, require_keys
+from rtgait.viz.run_files import (
+    SIM_CSV,
+    RunFilesError,
+    read_floats,
+    read_summary,
+    read_table,
+    read_terrain,
+    require_keys,
+)
 from rtgait.viz.walk_title import velocity_commands, walk_title
 
 if TYPE_CHECKING:
@@ -66,6 +77,9 @@ class ZmpSimRun:
         rms: RMS distance of the measured ZMP from the plan in single support (m), NaN without one.
         robot, controller, title: the robot's name, the controller level, the title's first line (what was walked).
         damping_time: when the stack's safety layer tripped and the joints began to damp (s), or ``None``.
+        terrain: the terrain walked on, or ``None`` (the flat floor).
+        sole_xz: the measured soles' ``(x, z)`` (m), ``(k, 2, 2)`` (left, right), for the terrain's side view, or
+            ``None``.
     """
 
     times: np.ndarray
@@ -90,10 +104,18 @@ class ZmpSimRun:
     controller: str
     title: str = ""
     damping_time: float | None = None
+    terrain: TerrainKind | None = None
+    sole_xz: np.ndarray | None = None
+
+    @property
+    def off_flat(self) -> bool:
+        """Whether the figure has the terrain's side view: a terrain other than flat and the soles' heights."""
+        return self.terrain is not None and not isinstance(self.terrain, Flat) and self.sole_xz is not None
 
     @classmethod
-    def from_result(cls, result: SimResult, title: str = "") -> ZmpSimRun:
-        """The record of a run in memory; the soles' size from its tick log (``None`` without one)."""
+    def from_result(cls, result: SimResult, title: str = "", terrain: TerrainKind | None = None) -> ZmpSimRun:
+        """The record of a run in memory on ``terrain`` (``None``: the flat floor); the soles' size and heights from
+        its tick log (``None`` without one)."""
         return cls(
             times=result.times,
             zmp=result.zmp,
@@ -117,6 +139,8 @@ class ZmpSimRun:
             controller=result.controller,
             title=title,
             damping_time=result.safety_events[0].t if result.safety_events else None,
+            terrain=terrain,
+            sole_xz=None if result.log is None else result.log.sole_pose[:, :, [0, 2]],
         )
 
 
@@ -168,9 +192,19 @@ def draw_zmp_sim(run: ZmpSimRun) -> Figure:
         runs,
         span_limits,
     )
+    from rtgait.viz.terrain_profile import draw_terrain_profile
 
-    figure = new_figure(10.0, 7.5)
-    axes = figure.subplots(3, 1, sharex=True, height_ratios=[3, 3, 2])
+    if run.off_flat:
+        figure = new_figure(10.0, 10.5)
+        grid = figure.add_gridspec(4, 1, height_ratios=[3, 3, 2, 3.5])
+        first = figure.add_subplot(grid[0])
+        axes = [first, figure.add_subplot(grid[1], sharex=first), figure.add_subplot(grid[2], sharex=first)]
+        for ax in axes[:2]:
+            ax.tick_params(labelbottom=False)
+        draw_terrain_profile(figure.add_subplot(grid[3]), run.terrain, run.sole_xz)  # type: ignore[arg-type]
+    else:
+        figure = new_figure(10.0, 7.5)
+        axes = figure.subplots(3, 1, sharex=True, height_ratios=[3, 3, 2])
     t = run.times
     closed = run.controller != "open-loop"
     extent = None
@@ -276,7 +310,7 @@ def plot_zmp_sim(run: ZmpSimRun, path: str | Path, fmt: str | None = None) -> Pa
 _PARQUET_COLUMNS = (
     "t", "zmp_x", "zmp_y", "zmp_planned_x", "zmp_planned_y", "zmp_command_x", "zmp_command_y", "cog_x", "cog_y",
     "support_planned", "left_sole_x", "left_sole_y", "left_sole_yaw",
-    "right_sole_x", "right_sole_y", "right_sole_yaw",
+    "right_sole_x", "right_sole_y", "right_sole_yaw", "left_sole_z", "right_sole_z",
 )  # fmt: skip
 _CSV_COLUMNS = (
     "t", "zmp_x", "zmp_y", "zmp_planned_x", "zmp_planned_y", "zmp_command_x", "zmp_command_y", "cog_x", "cog_y",
@@ -312,7 +346,13 @@ def _outcome(facts: dict[str, Any]) -> dict[str, Any]:
         "controller": str(facts["controller"]),
         "title": _title(facts),
         "damping_time": None if first_fault is None else float(first_fault["t"]),
+        "terrain": read_terrain(facts.get("terrain")),
     }
+
+
+def _per_side(columns: dict[str, np.ndarray], axes: tuple[str, ...]) -> np.ndarray:
+    """The soles' ``<side>_sole_<axis>`` columns, ``(k, 2, len(axes))`` (left, right)."""
+    return np.stack([np.column_stack([columns[f"{s}_sole_{a}"] for a in axes]) for s in ("left", "right")], axis=1)
 
 
 def _from_parquet(path: Path) -> ZmpSimRun:
@@ -322,10 +362,7 @@ def _from_parquet(path: Path) -> ZmpSimRun:
         raise RunFilesError(str(error)) from None
     c, meta = log.columns, log.metadata
     sole = meta.get("sole")
-    pose = np.stack(
-        [np.column_stack([c[f"{side}_sole_{axis}"] for axis in ("x", "y", "yaw")]) for side in ("left", "right")],
-        axis=1,
-    )
+    pose = _per_side(c, ("x", "y", "yaw"))
     times = c["t"]
     return ZmpSimRun(
         times=times,
@@ -339,6 +376,7 @@ def _from_parquet(path: Path) -> ZmpSimRun:
         stance=np.column_stack([c["support_planned"] != "right", c["support_planned"] != "left"]),
         sole_pose=pose,
         sole=None if sole is None else SoleRect(**sole),
+        sole_xz=_per_side(c, ("x", "z")),
         **_outcome(meta),
     )
 

@@ -22,9 +22,10 @@ terrain lies below (positive) or cuts into (negative) a sole placed there.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, replace
-from typing import Literal, Protocol
+from typing import Any, Literal, Protocol
 
 import numpy as np
 
@@ -169,6 +170,27 @@ class Step:
 
 TerrainKind = Flat | Stairs | Slope | SteppingStones | Step
 """Every terrain a scenario's ``[terrain]`` table describes."""
+TERRAIN_CLASSES: dict[str, type[TerrainKind]] = {
+    cls.kind: cls  # type: ignore[misc]
+    for cls in (Flat, Stairs, Slope, SteppingStones, Step)
+}
+"""Each terrain's class by its ``kind``."""
+
+
+def terrain_fields(terrain: TerrainKind) -> dict[str, Any]:
+    """``terrain`` as JSON-ready fields, ``kind`` among them (m, rad; :func:`terrain_from_fields` reads them back)."""
+    return dataclasses.asdict(terrain)
+
+
+def terrain_from_fields(fields: dict[str, Any]) -> TerrainKind:
+    """The terrain of :func:`terrain_fields`' output; a ``ValueError`` names a bad kind or field."""
+    kind = fields.get("kind")
+    if kind not in TERRAIN_CLASSES:
+        raise ValueError(f"terrain kind must be one of {', '.join(map(repr, TERRAIN_CLASSES))}, got {kind!r}")
+    try:
+        return TERRAIN_CLASSES[kind](**fields)  # type: ignore[arg-type]
+    except TypeError as error:
+        raise ValueError(f"terrain {kind}: {error}") from None
 
 
 def surface(terrain: Terrain, x: float, y: float, yaw: float) -> tuple[float, float, float]:
@@ -217,6 +239,6 @@ def sole_gap(terrain: Terrain, foot: Footstep, sole: SoleRect) -> tuple[float, f
 
 
 __all__ = [
-    "EDGE_TOLERANCE", "PIT_DEPTH", "Flat", "Slope", "Stairs", "Step", "SteppingStones", "Terrain", "TerrainKind",
-    "place_footstep", "sole_gap", "sole_points", "surface",
+    "EDGE_TOLERANCE", "PIT_DEPTH", "TERRAIN_CLASSES", "Flat", "Slope", "Stairs", "Step", "SteppingStones", "Terrain",
+    "TerrainKind", "place_footstep", "sole_gap", "sole_points", "surface", "terrain_fields", "terrain_from_fields",
 ]  # fmt: skip
