@@ -62,6 +62,8 @@ def test_the_example_scenarios_load_and_the_ramp_is_the_analytic_slope():
     for foot in ramp.nominal_footprints():
         if 0.61 <= foot.x <= 2.39:
             assert foot.pitch == pytest.approx(-math.radians(5.0), abs=1e-12)
+    swell = load_scenario(EXAMPLES / "heightfield-swell.toml").nominal_footprints()
+    assert max(f.z for f in swell) < 0.04 and min(f.roll for f in swell) >= 0.0 < max(f.roll for f in swell)
     bumps = load_scenario(EXAMPLES / "heightfield-bumps.toml").nominal_footprints()
     assert max(f.z for f in bumps) == pytest.approx(0.034, abs=0.002)  # the second bump's top under a left foot
     assert max(abs(f.roll) for f in bumps) > 0.03 and max(abs(f.pitch) for f in bumps) > 0.05
