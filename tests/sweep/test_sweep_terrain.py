@@ -18,7 +18,7 @@ from rtgait.core.geometry.footsteps import place_footsteps, standing_feet
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.scenario.loading import load_scenario
 from rtgait.sweep.pendulum import evaluate_group, groups, rolled_out
-from rtgait.sweep.spec import case_scenario, load_spec, parse_spec
+from rtgait.sweep.spec import case_scenario, load_spec, parse_spec, scenario_from_document
 from rtgait.sweep.store import PENDULUM_COLUMNS, TERRAIN_COLUMNS, read_results
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "heightfield"
@@ -83,7 +83,7 @@ def test_a_terrain_sweep_gives_the_per_walk_planner_s_results(base, axes):
             assert got["zmp_margin_min_time"] == want["zmp_margin_min_time"]
 
 
-def test_a_sweep_file_names_a_height_field_scenario_and_writes_its_columns(tmp_path):
+def test_a_sweep_file_names_a_height_field_scenario_and_writes_its_columns(tmp_path, monkeypatch):
     folder = tmp_path / "walks"
     folder.mkdir()
     for name in ("heightfield-bumps.toml", "bumps.npy"):
@@ -92,6 +92,8 @@ def test_a_sweep_file_names_a_height_field_scenario_and_writes_its_columns(tmp_p
     spec_path.write_text('base = "walks/heightfield-bumps.toml"\n[axes]\n"walk.step_length" = [0.18, 0.2]\n')
     spec = load_spec(spec_path)
     assert Path(spec.base_document["terrain"]["file"]) == folder / "bumps.npy"  # workers read it from anywhere
+    monkeypatch.chdir("/")
+    assert scenario_from_document(spec.base_document) == spec.base  # as a physics worker rebuilds it
     assert sweep([str(spec_path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
     rows = read_results(tmp_path / "out")
     assert len(rows) == 2 and all(0.84 < row["cog_z_max"] < 0.84 + 0.05 for row in rows)
