@@ -7,10 +7,10 @@ numbers are those ``rtgait plan`` reports for the same scenario. A base scenario
 a footstep plan) is rolled out case by case instead, with the same results, slowly.
 
 A base with a ``[terrain]`` table is batched as well: each case's footholds placed on the terrain as ``rtgait plan``
-places them (a ``walk.step_length`` moves them onto other heights), their heights handed to the batch with the
-parameters, and the results gain the range of the planned COG height,
-:data:`~rtgait.sweep.store.TERRAIN_COLUMNS` (m), as
-``summary.json``'s ``terrain.cog_height_range`` (the preview baseline plans flat and has none).
+places them (a ``walk.step_length`` moves them onto other heights), their heights and the terrain handed to the batch
+with the parameters, and the results gain :data:`~rtgait.sweep.store.TERRAIN_COLUMNS`: the range of the planned COG
+height and the error the vertical motion adds to the horizontal ZMP, as ``summary.json``'s ``terrain`` entry (the
+preview baseline plans flat and has none).
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ from rtgait.core.analysis.preview import PREVIEW_PERIOD, PreviewPlanner, evaluat
 from rtgait.core.geometry.footsteps import place_footsteps, standing_feet
 from rtgait.scenario.scenario import Scenario
 from rtgait.sweep.spec import SweepSpec, case_scenario
+from rtgait.sweep.store import TERRAIN_COLUMNS
 
 PARAMETER_AXES = ("walk.step_length", "change.length", "change.width")
 """Axes a group's cases may differ in: the walk is affine in them."""
@@ -52,9 +53,10 @@ def evaluate_group(spec: SweepSpec, group: list[tuple[str, dict[str, Any]]]) -> 
             margin, time, deviation = evaluate_preview(walk, theta)
             decisions = [""] * len(group)
         else:
-            if first.terrain is not None:
+            terrain = None if first.terrain is None else first.terrain.terrain
+            if terrain is not None:
                 heights = _case_heights(spec.base, [values for _, values in group])
-            result = evaluate_parameters(walk, theta, heights)
+            result = evaluate_parameters(walk, theta, heights, terrain)
             margin, time, deviation = result.zmp_margin_min, result.zmp_margin_min_time, result.zmp_deviation_max
             decisions = list(result.decisions)
     except ValueError as error:
@@ -65,7 +67,7 @@ def evaluate_group(spec: SweepSpec, group: list[tuple[str, dict[str, Any]]]) -> 
     for i, (key, _) in enumerate(group):
         out[key] = _fields(float(margin[i]), float(time[i]), deviation[i], decisions[i])
         if heights is not None:
-            out[key].update(cog_z_min=float(result.cog_z_min[i]), cog_z_max=float(result.cog_z_max[i]))
+            out[key].update({name: float(getattr(result, name)[i]) for name in TERRAIN_COLUMNS})
     return out
 
 
@@ -99,6 +101,7 @@ def evaluate_cases(
 
 def rolled_out(scenario: Scenario, method: str) -> dict[str, Any]:
     """One case by a rollout (what ``rtgait plan`` does), for what the batch does not take."""
+    from rtgait.core.analysis.height_error import zmp_error
     from rtgait.core.analysis.rollout import rollout
     from rtgait.core.planner.online import OnlinePlanner
     from rtgait.viz.margin_marker import margin_marker
@@ -117,7 +120,9 @@ def rolled_out(scenario: Scenario, method: str) -> dict[str, Any]:
     fields = _fields(run.zmp_margin_min, float(run.times[worst]), deviation, "")
     if scenario.terrain is not None and method != "preview":
         cog_z = run.column("cog_z")
-        fields.update(cog_z_min=float(cog_z.min()), cog_z_max=float(cog_z.max()))
+        error = zmp_error(run, scenario.terrain.terrain, scenario.gravity)
+        fields.update(cog_z_min=float(cog_z.min()), cog_z_max=float(cog_z.max()), zmp_error_max=float(error.max()),
+                      zmp_error_rms=float(np.sqrt(np.mean(error**2))))  # fmt: skip
     return fields
 
 

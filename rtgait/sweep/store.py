@@ -38,9 +38,11 @@ PENDULUM_COLUMNS = (
 )  # fmt: skip
 """Pendulum-level results: signed ZMP margin (m), its time (s), whether the ZMP leaves the polygon, the largest
 ``|ZMP - reference|`` (m, the larger axis, then x and y) and, for auto, the connection each change took."""
-TERRAIN_COLUMNS = ("cog_z_min", "cog_z_max")
+TERRAIN_COLUMNS = ("cog_z_min", "cog_z_max", "zmp_error_max", "zmp_error_rms")
 """Pendulum-level results of a base with a ``[terrain]`` (after :data:`PENDULUM_COLUMNS`): the planned COG height's
-lowest and highest value (m). Sweeps on the flat floor have no such columns."""
+lowest and highest value (m), and the largest and RMS error the vertical motion adds to the horizontal ZMP (m, the
+full point-mass ZMP equation, as ``summary.json``'s ``terrain`` entry). Sweeps on the flat floor have no such
+columns."""
 PHYSICS_COLUMNS = ("physics", "fell", "tipped", "fall_time", "steps_completed", "steps_planned", "physics_error")
 """Physics results (``--physics``): ``physics`` is ``ok``, ``failed`` or ``skipped``; a fall's time (s); touch-downs
 completed of those planned; why a case failed or was skipped."""

@@ -1,6 +1,7 @@
 """Batched evaluation and sweeps off the flat floor: the footholds' heights carried through the vertical column, the
-batch equal to the per-walk planner (its rollout, what ``rtgait plan`` reports) on stairs and slopes, and a sweep
-file naming a terrain scenario, a height field's among them."""
+batch equal to the per-walk planner (its rollout, what ``rtgait plan`` reports: the COG height's range and the ZMP
+error the vertical motion adds) on stairs, slopes and an unseen step, and a sweep file naming a terrain scenario, a
+height field's among them."""
 
 from __future__ import annotations
 
@@ -67,6 +68,8 @@ def test_walks_with_and_without_heights_in_one_batch():
     [
         ("stairs-up", {"timing.double_support": [0.3, 0.45], "connection": ["quasi-real-time", "real-time", "auto"]}),
         ("slope-down", {"walk.step_length": [0.2, 0.22], "connection": ["quasi-real-time"]}),
+        # A plan that does not know the terrain: flat heights, the ZMP error from the step it does not know.
+        ("unseen-step", {"timing.double_support": [0.2, 0.3], "connection": ["quasi-real-time"]}),
     ],
 )
 def test_a_terrain_sweep_gives_the_per_walk_planner_s_results(base, axes):
@@ -80,6 +83,7 @@ def test_a_terrain_sweep_gives_the_per_walk_planner_s_results(base, axes):
             assert set(got) == set(want) == {*PENDULUM_COLUMNS, *TERRAIN_COLUMNS}
             for field in ("zmp_margin_min", "zmp_deviation_max_x", "zmp_deviation_max_y", *TERRAIN_COLUMNS):
                 assert got[field] == pytest.approx(want[field], abs=1e-9), (values, field)
+            assert got["zmp_error_max"] > 1e-4  # a tenth of a millimetre at least: not a test passing on zeros
             assert got["zmp_margin_min_time"] == want["zmp_margin_min_time"]
 
 

@@ -25,7 +25,10 @@ Off the flat floor a walk's footholds carry heights ``z = (z_0 .. z_n+1)`` (m): 
 (the 3D-DCM/VRP form keeps the horizontal equation, ``docs/method.md``) and the planned COG height is linear in ``z``
 (:mod:`rtgait.core.analysis.family_height`), so a walk given its heights (:attr:`StraightWalk.heights`, or ``heights``
 rows next to ``theta``) also gets the range of its COG height, ``cog_z_min`` and ``cog_z_max`` (m), the numbers
-``rtgait plan`` reports as ``cog_height_range``.
+``rtgait plan`` reports as ``cog_height_range``; given the terrain too, the error the vertical motion adds to the
+horizontal ZMP, ``zmp_error_max`` and ``zmp_error_rms`` (m, the full point-mass ZMP against the planned one on the
+terrain's plane under the nearest contact foot, :mod:`rtgait.core.analysis.height_error`), as ``rtgait plan``
+reports them.
 
 When the smallest margin is reached at several ticks (a walk whose ZMP stays inside has its minimum, the ankle's
 distance to its sole's edge, in every single support), the time reported follows ``rtgait plan``'s rule: the first
@@ -45,6 +48,7 @@ import numpy as np
 from rtgait.core.analysis.family_key import ChangeShape, FamilyKey, family_key
 from rtgait.core.analysis.walk_family import WalkFamily
 from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.geometry.terrain import Terrain, surface
 from rtgait.core.planner.auto import auto_options
 
 if TYPE_CHECKING:
@@ -53,6 +57,7 @@ if TYPE_CHECKING:
 
 
 _HEIGHT_CHUNK = 256  # walks whose COG heights (one row of ticks each) are evaluated together
+_ERROR_CHUNK = 32  # walks whose ZMP errors (a few rows of ticks each) are evaluated together
 
 # ----- whole walks ----------------------------------------------------------------------------------------------
 
@@ -104,7 +109,7 @@ class BatchResult:
     ``zmp_deviation_max`` ``(B, 2)`` (m, x and y), and for auto walks the connection each change took
     (``decisions``: one string per case, the changes' kinds joined by ``,``; empty for other modes); for walks given
     their footholds' heights, the range of the planned COG height ``cog_z_min``, ``cog_z_max`` (m; ``None``
-    otherwise)."""
+    otherwise), and given the terrain too, the vertical motion's ZMP error ``zmp_error_max``, ``zmp_error_rms`` (m)."""
 
     zmp_margin_min: np.ndarray
     zmp_margin_min_time: np.ndarray
@@ -112,6 +117,8 @@ class BatchResult:
     decisions: np.ndarray
     cog_z_min: np.ndarray | None = None
     cog_z_max: np.ndarray | None = None
+    zmp_error_max: np.ndarray | None = None
+    zmp_error_rms: np.ndarray | None = None
 
     @property
     def zmp_outside(self) -> np.ndarray:
@@ -128,26 +135,55 @@ def walk_family(key: FamilyKey) -> WalkFamily:
     return WalkFamily(key)
 
 
-def evaluate_parameters(walk: StraightWalk, theta: np.ndarray, heights: np.ndarray | None = None) -> BatchResult:
+def evaluate_parameters(
+    walk: StraightWalk, theta: np.ndarray, heights: np.ndarray | None = None, terrain: Terrain | None = None
+) -> BatchResult:
     """Evaluate the walks that are ``walk`` with the parameters ``theta`` ``(B, P)`` (:meth:`StraightWalk.parameters`
     layout: ``[1, step_length, step_width, change values...]``, m): one family, the fastest path. ``heights``
-    ``(B, steps + 2)`` (m): each walk's footholds' heights (default: ``walk.heights`` for every row, if any)."""
+    ``(B, steps + 2)`` (m): each walk's footholds' heights (default: ``walk.heights`` for every row, if any);
+    ``terrain``: the ground they walk on, for the vertical motion's ZMP error (needs heights)."""
     theta = np.atleast_2d(np.asarray(theta, dtype=float))
     if not np.all(np.isfinite(theta)):
         raise ValueError("theta must be finite")
     if heights is None and walk.heights is not None:
         heights = np.repeat(np.asarray(walk.heights, dtype=float)[None], len(theta), axis=0)
+    if terrain is not None and heights is None:
+        raise ValueError("the vertical motion's ZMP error needs the footholds' heights")
     shapes = walk.shapes()
     if walk.config.connection != "auto":
-        result = walk_family(family_key(walk.config, walk.sole, walk.dt, walk.steps, shapes)).evaluate(theta)
+        family = walk_family(family_key(walk.config, walk.sole, walk.dt, walk.steps, shapes))
+        result = family.evaluate(theta)
         decisions = np.full(len(theta), "", dtype=object)
         batch = BatchResult(result.margin, result.time, result.deviation, decisions)
+        finals = [(family, np.arange(len(theta)), theta)]
     else:
-        batch = _evaluate_auto(walk, shapes, theta)
+        batch, finals = _evaluate_auto(walk, shapes, theta)
     if heights is None:
         return batch
+    heights = np.atleast_2d(np.asarray(heights, dtype=float))
     low, high = cog_height_range(walk, heights)
-    return replace(batch, cog_z_min=low, cog_z_max=high)
+    batch = replace(batch, cog_z_min=low, cog_z_max=high)
+    if terrain is None:
+        return batch
+    worst, rms = np.empty(len(theta)), np.empty(len(theta))
+    planes: dict[tuple[float, float], tuple[float, float, float]] = {}  # the terrain under a footprint, once
+    for family, rows, family_theta in finals:
+        for start in range(0, len(rows), _ERROR_CHUNK):
+            part = slice(start, start + _ERROR_CHUNK)
+            part_theta, part_rows = family_theta[part], rows[part]
+            prints = family.final_footprints(part_theta)
+            under = np.array([[_plane(planes, terrain, x, y) for x, y in row.tolist()] for row in prints])
+            error = family.vertical_zmp_errors(part_theta, heights[part_rows], under)
+            worst[part_rows], rms[part_rows] = error.max(axis=1), np.sqrt(np.mean(error**2, axis=1))
+    return replace(batch, zmp_error_max=worst, zmp_error_rms=rms)
+
+
+def _plane(known: dict, terrain: Terrain, x: float, y: float) -> tuple[float, float, float]:
+    """The terrain's ``(z, pitch, roll)`` under a footprint at ``(x, y)`` heading +x (cached in ``known``)."""
+    plane = known.get((x, y))
+    if plane is None:
+        plane = known[(x, y)] = surface(terrain, x, y, 0.0)
+    return plane
 
 
 def cog_height_range(walk: StraightWalk, heights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -200,10 +236,10 @@ def _group_key(walk: StraightWalk) -> tuple:
     return (family_key(config, walk.sole, walk.dt, walk.steps, walk.shapes()), *auto)
 
 
-def _evaluate_auto(walk: StraightWalk, shapes: tuple[ChangeShape, ...], theta: np.ndarray) -> BatchResult:
+def _evaluate_auto(walk: StraightWalk, shapes: tuple[ChangeShape, ...], theta: np.ndarray) -> tuple[BatchResult, list]:
     """Auto walks: each change decided in deadline order by :mod:`rtgait.core.planner.auto`'s rule, its options
     predicted on the families they make (cases that made the same earlier choices share them), then the walks
-    evaluated."""
+    evaluated; with the family each group of rows ended in, those rows and their parameters in its layout."""
 
     config, n = walk.config, walk.steps + 1
     B = len(theta)
@@ -244,13 +280,17 @@ def _evaluate_auto(walk: StraightWalk, shapes: tuple[ChangeShape, ...], theta: n
     finals: dict[tuple[ChangeShape, ...], list[int]] = {}
     for row in range(B):
         finals.setdefault(tuple(chosen[row]), []).append(row)
+    families = []
     for final, rows in finals.items():
         family = walk_family(family_key(config, walk.sole, walk.dt, walk.steps, final))
         # rtgait plan's time rule counts from the first change's hand-over: its arrival, whatever was chosen.
         arrival = family.phase_start(shapes[0].decided_phase) if shapes else None
-        result = family.evaluate(_columns(theta[rows], final, shapes), change_time=arrival)
+        columns = _columns(theta[rows], final, shapes)
+        result = family.evaluate(columns, change_time=arrival)
         margin[rows], time[rows], deviation[rows] = result.margin, result.time, result.deviation
-    return BatchResult(margin, time, deviation, np.array([",".join(k) for k in kinds], dtype=object))
+        families.append((family, np.array(rows), columns))
+    decisions = np.array([",".join(k) for k in kinds], dtype=object)
+    return BatchResult(margin, time, deviation, decisions), families
 
 
 def _columns(theta: np.ndarray, chosen: tuple[ChangeShape, ...], original: tuple[ChangeShape, ...]) -> np.ndarray:

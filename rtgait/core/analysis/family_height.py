@@ -16,13 +16,22 @@ not change with a change of a stride's length or width (a stride keeps its rise)
     c_z(t_k) = zc + R[k] . z,      R[k] = [V_j ch(w tau) + W_j sh(w tau) + sum_i A_ij tau^i]     (per unit height)
 
 with ``zc`` the scenario's COG height, ``j`` the segment of the plan being executed at tick ``k`` and ``tau`` the
-time into it, as :meth:`~rtgait.core.planner.online.OnlinePlanner.sample` evaluates it. :func:`height_rows` builds
-``R`` ``(ticks, n + 2)``.
+time into it, as :meth:`~rtgait.core.planner.online.OnlinePlanner.sample` evaluates it. :func:`vertical_rows` builds
+``R`` (and the support height and the COG's vertical acceleration alike); :func:`tick_rows` samples any chain so.
+
+With the horizontal plans sampled the same way (ZMP, COG and its acceleration affine in ``theta``),
+:func:`vertical_zmp_error` gives the error the vertical motion adds to the horizontal dynamics at every tick, the
+full point-mass ZMP against the planned one (:mod:`rtgait.core.analysis.height_error`, ``docs/method.md`` eq. (1)):
+
+    p_true = c - (c_z - p_z) c'' / (c_z'' + g)
+
+with ``p_z`` the terrain's plane under the contact foot nearest to the planned ZMP, at the ZMP.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
@@ -30,7 +39,7 @@ from rtgait.core.lipm.pattern import DEGREE
 from rtgait.core.planner.active_plan import PlanLayout
 from rtgait.core.planner.online import OnlinePlanner
 
-__all__ = ["height_rows", "plan_chain"]
+__all__ = ["TickRows", "contact_feet", "plan_chain", "tick_rows", "vertical_rows", "vertical_zmp_error"]
 
 PlanData = dict[int, tuple[np.ndarray, PlanLayout]]
 """Per replan phase ``q`` (even): the plan's coefficients ``G @ y`` ``(rows, axes, P)`` and its layout."""
@@ -59,24 +68,89 @@ def plan_chain(planner: OnlinePlanner, n: int, prints_at: Callable[[int], np.nda
     return plans
 
 
-def height_rows(
-    planner: OnlinePlanner, n: int, times: np.ndarray, starts: np.ndarray, tick_phase: np.ndarray
-) -> np.ndarray:
-    """``R`` ``(len(times), n + 2)``: the COG height above ``zc`` at each tick ``times`` (s) per unit height of each
-    foothold ``F[0..n+1]`` (module docstring); ``starts`` are the phases' start times (s), ``tick_phase`` each tick's
-    phase."""
-    unit = np.eye(n + 2)[:, None, :]  # F[i]'s height is parameter i
-    plans = plan_chain(planner, n, lambda q: unit)
-    w = planner.w
-    rows = np.empty((len(times), n + 2))
+class TickRows(NamedTuple):
+    """A chain of plans sampled at every tick, per axis and parameter (each ``(ticks, axes, P)``, m and m/s^2 per unit
+    parameter): the ZMP (or the support height), the COG above its constant part, and the COG's acceleration."""
+
+    zmp: np.ndarray
+    cog: np.ndarray
+    acc: np.ndarray
+
+
+def tick_rows(
+    plans: PlanData, n: int, times: np.ndarray, starts: np.ndarray, tick_phase: np.ndarray, w: float
+) -> TickRows:
+    """``plans`` (:func:`plan_chain`) sampled at ``times`` (s) as the planner samples them: at each tick the plan made
+    at the start of the even phase it is in (the last one after the walk), ``tau`` into its segment (held at the
+    segment's end after it); ``starts`` are the phases' start times (s), ``tick_phase`` each tick's phase."""
+    shape = (len(times), *next(iter(plans.values()))[0].shape[1:])
+    zmp, cog, acc = np.empty(shape), np.empty(shape), np.empty(shape)
+    exponents = np.arange(DEGREE + 1)
     for q in np.unique(tick_phase).tolist():
         ticks = np.flatnonzero(tick_phase == q)
         plan_q = min(q - (q & 1), 2 * n)
         j = q - plan_q
         coefficients, layout = plans[plan_q]
-        block = coefficients[12 * j : 12 * j + 12, 0]  # [a0..a4, A0..A4, V, W] by parameter
+        block = coefficients[12 * j : 12 * j + 12]  # [a0..a4, A0..A4, V, W] (12, axes, P)
         tau = np.minimum(times[ticks] - starts[plan_q] - layout.offsets[j], layout.durations[j])
-        powers = tau[:, None] ** np.arange(DEGREE + 1)
-        homogeneous = np.outer(np.cosh(w * tau), block[-2]) + np.outer(np.sinh(w * tau), block[-1])
-        rows[ticks] = homogeneous + powers @ block[DEGREE + 1 : 2 * DEGREE + 2]
-    return rows
+        powers = tau[:, None] ** exponents
+        # d^2/dtau^2 tau^i = i (i - 1) tau^(i - 2): the particular part's acceleration.
+        curvature = exponents * (exponents - 1) * tau[:, None] ** np.maximum(exponents - 2, 0)
+        homogeneous = np.cosh(w * tau)[:, None, None] * block[-2] + np.sinh(w * tau)[:, None, None] * block[-1]
+        particular = block[DEGREE + 1 : 2 * DEGREE + 2]
+        zmp[ticks] = np.tensordot(powers, block[: DEGREE + 1], axes=(1, 0))
+        cog[ticks] = homogeneous + np.tensordot(powers, particular, axes=(1, 0))
+        acc[ticks] = w * w * homogeneous + np.tensordot(curvature, particular, axes=(1, 0))
+    return TickRows(zmp, cog, acc)
+
+
+def vertical_rows(
+    planner: OnlinePlanner, n: int, times: np.ndarray, starts: np.ndarray, tick_phase: np.ndarray
+) -> TickRows:
+    """The vertical column per unit height of each foothold ``F[0..n+1]`` at each tick (module docstring): ``zmp`` is
+    the support height ``h``, ``cog`` the COG height above ``zc``, ``acc`` its acceleration (each
+    ``(ticks, 1, n + 2)``)."""
+    unit = np.eye(n + 2)[:, None, :]  # F[i]'s height is parameter i
+    return tick_rows(plan_chain(planner, n, lambda q: unit), n, times, starts, tick_phase, planner.w)
+
+
+def contact_feet(tick_phase: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per tick, the indices of the footprints on the ground ``(first, second)`` (``second == first`` in single
+    support) of a walk of ``n`` steps: ``F[i]`` and ``F[i + 1]`` in the double support ``q = 2i`` (and in the final
+    settling, ``q = 2n + 1``), ``F[i]`` alone in the single support ``q = 2i - 1``, as the rollout lists them."""
+    single = (tick_phase & 1).astype(bool) & (tick_phase < 2 * n + 1)
+    first = np.where(single, (tick_phase + 1) >> 1, np.minimum(tick_phase >> 1, n))
+    return first, np.where(single, first, first + 1)
+
+
+def vertical_zmp_error(
+    horizontal: TickRows,
+    vertical: TickRows,
+    feet: tuple[np.ndarray, np.ndarray],
+    theta: np.ndarray,
+    heights: np.ndarray,
+    footprints: np.ndarray,
+    planes: np.ndarray,
+    cog_height: float,
+    gravity: float,
+) -> np.ndarray:
+    """``|p_true - p|`` ``(B, ticks)`` (m): the error the vertical motion adds to the horizontal ZMP, as
+    :func:`~rtgait.core.analysis.height_error.zmp_error` measures it on a rollout, for walks ``theta`` ``(B, P)`` with
+    footholds at ``heights`` ``(B, n + 2)`` (m), their final footprints ``footprints`` ``(B, n + 2, 2)`` (m, heading
+    +x) and the terrain's plane under each, ``planes`` ``(B, n + 2, 3)`` (height m, pitch, roll rad). ``p_z`` is the
+    plane of the contact foot nearest to the planned ZMP (the first listed on a tie), at the ZMP."""
+    zmp = np.einsum("tap,bp->bta", horizontal.zmp, theta)
+    cog = np.einsum("tap,bp->bta", horizontal.cog, theta)
+    acc = np.einsum("tap,bp->bta", horizontal.acc, theta)
+    cog_z = cog_height + heights @ vertical.cog[:, 0, :].T
+    acc_z = heights @ vertical.acc[:, 0, :].T
+    first, second = feet
+    to_first = ((footprints[:, first] - zmp) ** 2).sum(axis=2)
+    to_second = ((footprints[:, second] - zmp) ** 2).sum(axis=2)
+    nearest = np.where(to_first <= to_second, first, second)  # (B, ticks)
+    rows = np.arange(len(theta))[:, None]
+    plane, foot = planes[rows, nearest], footprints[rows, nearest]
+    dx, dy = zmp[..., 0] - foot[..., 0], zmp[..., 1] - foot[..., 1]
+    surface_z = plane[..., 0] - np.tan(plane[..., 1]) * dx + np.tan(plane[..., 2]) * dy
+    scale = (cog_z - surface_z) / (acc_z + gravity)
+    return np.linalg.norm(cog - scale[..., None] * acc - zmp, axis=2)

@@ -35,7 +35,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rtgait.core.analysis.family_height import height_rows, plan_chain
+from rtgait.core.analysis.family_height import (
+    TickRows,
+    contact_feet,
+    plan_chain,
+    tick_rows,
+    vertical_rows,
+    vertical_zmp_error,
+)
 from rtgait.core.analysis.family_key import FamilyKey, affine_footprints
 from rtgait.core.geometry.footsteps import Stride
 from rtgait.core.geometry.hull import (
@@ -129,12 +136,14 @@ class WalkFamily:
         final, sides = versions[-1]
         self.replan_tick = replan_tick
         self._phases: list[_Phase] = []
-        self._planner, self._tick_phase, self._height_rows = planner, tick_phase, None
+        self._planner, self._tick_phase, self._final = planner, tick_phase, final
+        self._vertical: TickRows | None = None
+        self._horizontal: TickRows | None = None
 
         def prints_at(q: int) -> np.ndarray:  # the footprints with the changes handed over by the replan's tick
             return versions[sum(tick <= replan_tick[q] for tick in change_ticks)][0]
 
-        plan_data = plan_chain(planner, n, prints_at)
+        plan_data = self._plans = plan_chain(planner, n, prints_at)
         for q in range(2 * n + 2):
             ticks = np.flatnonzero(tick_phase == q)
             if len(ticks):
@@ -189,12 +198,39 @@ class WalkFamily:
         """The planned COG height (m) at every tick ``(B, ticks)`` of walks whose footholds ``F[0..n+1]`` stand at
         ``heights`` ``(B, n + 2)`` (m): the vertical column (:mod:`rtgait.core.analysis.family_height`), the same for
         every case of the family whatever its strides and changes (a stride keeps its rise)."""
+        heights = self._checked_heights(heights)
+        return self.key.cog_height + heights @ self._vertical_rows().cog[:, 0, :].T
+
+    def final_footprints(self, theta: np.ndarray) -> np.ndarray:
+        """The footprints ``F[0..n+1]`` ``(B, n + 2, 2)`` (m) the walks ``theta`` end with, every change made."""
+        return np.einsum("iap,bp->bia", self._final, np.atleast_2d(theta))
+
+    def vertical_zmp_errors(self, theta: np.ndarray, heights: np.ndarray, planes: np.ndarray) -> np.ndarray:
+        """The error ``(B, ticks)`` (m) the vertical motion adds to the horizontal ZMP
+        (:func:`~rtgait.core.analysis.family_height.vertical_zmp_error`) of walks ``theta`` ``(B, P)`` with footholds
+        at ``heights`` ``(B, n + 2)`` (m) on a terrain whose plane under each final footprint is ``planes``
+        ``(B, n + 2, 3)`` (height m, pitch, roll rad)."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        heights = self._checked_heights(heights)
+        if self._horizontal is None:
+            self._horizontal = tick_rows(
+                self._plans, self.n_steps, self.times, self._starts, self._tick_phase, self._planner.w
+            )
+        feet = contact_feet(self._tick_phase, self.n_steps)
+        return vertical_zmp_error(self._horizontal, self._vertical_rows(), feet, theta, heights,
+                                  self.final_footprints(theta), np.asarray(planes, dtype=float), self.key.cog_height,
+                                  self.key.gravity)  # fmt: skip
+
+    def _checked_heights(self, heights: np.ndarray) -> np.ndarray:
         heights = np.atleast_2d(np.asarray(heights, dtype=float))
         if heights.shape[1] != self.n_steps + 2 or not np.all(np.isfinite(heights)):
             raise ValueError(f"heights must be finite, {self.n_steps + 2} per walk (F[0..n+1]), got {heights.shape}")
-        if self._height_rows is None:
-            self._height_rows = height_rows(self._planner, self.n_steps, self.times, self._starts, self._tick_phase)
-        return self.key.cog_height + heights @ self._height_rows.T
+        return heights
+
+    def _vertical_rows(self) -> TickRows:
+        if self._vertical is None:
+            self._vertical = vertical_rows(self._planner, self.n_steps, self.times, self._starts, self._tick_phase)
+        return self._vertical
 
     def phase_start(self, q: int) -> float:
         """Start of phase ``q`` (s), as the planner computes it."""
