@@ -139,18 +139,26 @@ def vertical_zmp_error(
     footholds at ``heights`` ``(B, n + 2)`` (m), their final footprints ``footprints`` ``(B, n + 2, 2)`` (m, heading
     +x) and the terrain's plane under each, ``planes`` ``(B, n + 2, 3)`` (height m, pitch, roll rad). ``p_z`` is the
     plane of the contact foot nearest to the planned ZMP (the first listed on a tie), at the ZMP."""
-    zmp = np.einsum("tap,bp->bta", horizontal.zmp, theta)
-    cog = np.einsum("tap,bp->bta", horizontal.cog, theta)
-    acc = np.einsum("tap,bp->bta", horizontal.acc, theta)
+    B, ticks = len(theta), len(horizontal.zmp)
+
+    def per_axis(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # (ticks, 2, P) rows -> x, y (B, ticks)
+        values = theta @ rows.reshape(ticks * 2, -1).T
+        return values[:, 0::2], values[:, 1::2]
+
+    (zmp_x, zmp_y), (cog_x, cog_y), (acc_x, acc_y) = (per_axis(r) for r in horizontal)
     cog_z = cog_height + heights @ vertical.cog[:, 0, :].T
     acc_z = heights @ vertical.acc[:, 0, :].T
     first, second = feet
-    to_first = ((footprints[:, first] - zmp) ** 2).sum(axis=2)
-    to_second = ((footprints[:, second] - zmp) ** 2).sum(axis=2)
+    foot_x, foot_y = footprints[..., 0], footprints[..., 1]
+    to_first = (foot_x[:, first] - zmp_x) ** 2 + (foot_y[:, first] - zmp_y) ** 2
+    to_second = (foot_x[:, second] - zmp_x) ** 2 + (foot_y[:, second] - zmp_y) ** 2
     nearest = np.where(to_first <= to_second, first, second)  # (B, ticks)
-    rows = np.arange(len(theta))[:, None]
-    plane, foot = planes[rows, nearest], footprints[rows, nearest]
-    dx, dy = zmp[..., 0] - foot[..., 0], zmp[..., 1] - foot[..., 1]
-    surface_z = plane[..., 0] - np.tan(plane[..., 1]) * dx + np.tan(plane[..., 2]) * dy
+
+    def under(values: np.ndarray) -> np.ndarray:  # a value per footprint (B, n + 2) -> the nearest's per tick
+        return np.take_along_axis(values, nearest, axis=1)
+
+    dx, dy = zmp_x - under(foot_x), zmp_y - under(foot_y)
+    z, tan_pitch, tan_roll = planes[..., 0], np.tan(planes[..., 1]), np.tan(planes[..., 2])
+    surface_z = under(z) - under(tan_pitch) * dx + under(tan_roll) * dy
     scale = (cog_z - surface_z) / (acc_z + gravity)
-    return np.linalg.norm(cog - scale[..., None] * acc - zmp, axis=2)
+    return np.hypot(cog_x - scale * acc_x - zmp_x, cog_y - scale * acc_y - zmp_y).reshape(B, ticks)
