@@ -3,6 +3,7 @@ against the analytic slope the grid samples and against planes known in closed f
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -10,7 +11,7 @@ import pytest
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect, Stride, place_footsteps, standing_feet
 from rtgait.core.geometry.heightfield import Heightfield
-from rtgait.core.geometry.terrain import Slope
+from rtgait.core.geometry.terrain import Slope, terrain_fields, terrain_from_fields
 from rtgait.core.geometry.terrain_walk import TerrainWalkError, place_walk, sole_plane
 
 SOLE = SoleRect(0.105, 0.105, 0.065, 0.065)  # Talos
@@ -108,3 +109,11 @@ def test_grids_compare_by_their_heights_and_refuse_bad_input():
         Heightfield(np.array([[0.0, np.nan], [0.0, 0.0]]), (1.0, 1.0))
     with pytest.raises(ValueError, match="terrain size must be two numbers within \\(0, 200\\] m"):
         Heightfield(np.zeros((2, 2)), (0.0, 1.0))
+
+
+def test_a_grid_s_fields_read_back_as_the_same_grid():
+    # What summary.json and sim.parquet keep of a run's terrain, and rtgait plot draws again.
+    grid = _ramp_grid()
+    fields = json.loads(json.dumps(terrain_fields(grid)))
+    assert fields["kind"] == "heightfield" and len(fields["heights"]) == len(YS)
+    assert terrain_from_fields(fields) == grid
