@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from rtgait.core.geometry.heightfield import Heightfield
 from rtgait.core.limits import MAX_STRIDE
 from rtgait.core.planner.config import ALL_CONNECTION_MODES
 from rtgait.scenario.heightfield_file import resolve_terrain_file
@@ -86,8 +87,13 @@ class SweepSpec:
         return [dict(zip(names, values, strict=True)) for values in itertools.product(*(v for _, v in self.axes))]
 
     def fingerprint(self) -> str:
-        """A hash of the base scenario's document: cases of different bases never share an identity."""
-        return hashlib.sha256(json.dumps(self.base_document, sort_keys=True).encode()).hexdigest()[:16]
+        """A hash of the base scenario's document (and of a height field's grid, which the document names by its
+        file only): cases of different bases never share an identity."""
+        text = json.dumps(self.base_document, sort_keys=True)
+        terrain = None if self.base.terrain is None else self.base.terrain.terrain
+        if isinstance(terrain, Heightfield):
+            text += terrain.digest
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def case_id(fingerprint: str, values: dict[str, Any]) -> str:

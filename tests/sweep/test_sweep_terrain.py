@@ -103,6 +103,9 @@ def test_a_sweep_file_names_a_height_field_scenario_and_writes_its_columns(tmp_p
     assert len(rows) == 2 and all(0.84 < row["cog_z_max"] < 0.84 + 0.05 for row in rows)
     # Different step lengths put the feet on other heights of the bumps: different COG heights.
     assert rows[0]["cog_z_max"] != rows[1]["cog_z_max"]
+    # Another grid in the same file is another base: its cases are not the ones done (a resumed sweep redoes them).
+    np.save(folder / "bumps.npy", 0.5 * np.load(folder / "bumps.npy"))
+    assert load_spec(spec_path).fingerprint() != spec.fingerprint()
 
 
 def test_a_flat_sweep_has_no_terrain_columns(spec_file, tmp_path):
