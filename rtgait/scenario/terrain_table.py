@@ -3,7 +3,7 @@
 ::
 
     [terrain]
-    type = "stairs"          # "flat" | "stairs" | "slope" | "stones" | "step"
+    type = "stairs"          # "flat" | "stairs" | "slope" | "stones" | "step" | "heightfield"
     place_footsteps = true   # optional (default true): give the footholds the terrain's height, pitch and roll;
                              # false: the walk keeps its own (a plan that does not know the terrain)
     # stairs: riser (m), tread (m), count, direction ("up" | "down", default "up"), start (m, default 0.5)
@@ -11,10 +11,14 @@
     # stones: length, width (m: each stone), gap (m, along x), count (stones per row), start (m, default 0.3);
     #         one row under each foot, the walk's step_width apart
     # step:   height (m, negative: down), x (m)
+    # heightfield: file (.npy or .csv of heights in m, relative to the scenario file), size = [x, y] (m),
+    #         origin = [x, y] (m, default [0, -size_y / 2]): anything else (:mod:`rtgait.scenario.heightfield_file`)
 
 Every terrain runs along x from the standing feet at the origin (:mod:`rtgait.core.geometry.terrain`). Placing the
 walk checks each step (:mod:`rtgait.core.geometry.terrain_walk`): a sole across an edge, a foothold off the surface,
-a step longer or higher than the robot's reach, and a swing that cuts into the terrain or passes closer than
+a step longer or higher than the robot's reach, on a height field a sole across a discontinuity or on ground too
+rough for it (the least-squares plane under it missing the terrain by more than
+:data:`~rtgait.core.geometry.terrain.EDGE_TOLERANCE`), and a swing that cuts into the terrain or passes closer than
 :data:`~rtgait.core.geometry.swing_terrain.MIN_SWING_CLEARANCE` mid-swing
 (:mod:`rtgait.core.geometry.swing_terrain`) are refused with one line naming the step.
 """
@@ -30,6 +34,7 @@ from rtgait.core.geometry.swing_terrain import check_swing
 from rtgait.core.geometry.terrain import Flat, Slope, Stairs, Step, SteppingStones, TerrainKind
 from rtgait.core.geometry.terrain_walk import DEFAULT_MAX_RISE, place_walk
 from rtgait.scenario.checks import ScenarioError
+from rtgait.scenario.heightfield_file import parse_heightfield
 from rtgait.scenario.tomlfile import TomlFiles
 
 __all__ = ["TERRAIN_TYPES", "TerrainSpec", "parse_terrain"]
@@ -42,6 +47,7 @@ _KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "slope": (("angle", "length"), ("start",)),
     "stones": (("length", "width", "gap", "count"), ("start",)),
     "step": (("height", "x"), ()),
+    "heightfield": (("file", "size"), ("origin",)),
 }
 TERRAIN_TYPES = tuple(_KEYS)
 """The ``[terrain]`` table's ``type`` values."""
@@ -94,6 +100,8 @@ def parse_terrain(raw: Any, step_width: float) -> TerrainSpec:
     place = table.get("place_footsteps", True)
     if not isinstance(place, bool):
         raise ScenarioError(f"terrain.place_footsteps must be true or false, got {place!r}")
+    if kind == "heightfield":  # its file is read relative to the working folder unless the loader made it absolute
+        return TerrainSpec(parse_heightfield(table, None), place)
     start = {"start": _number(table, "start")} if "start" in table else {}
     try:
         terrain: TerrainKind

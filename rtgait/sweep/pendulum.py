@@ -5,6 +5,12 @@ Cases that differ only in the numbers a walk is affine in (``change.length``, ``
 one vectorised pass (:mod:`rtgait.core.analysis.batch`, :func:`rtgait.core.analysis.preview.evaluate_preview`). The
 numbers are those ``rtgait plan`` reports for the same scenario. A base scenario the batch cannot take (a turning walk,
 a footstep plan) is rolled out case by case instead, with the same results, slowly.
+
+A base with a ``[terrain]`` table is batched as well: each case's footholds placed on the terrain as ``rtgait plan``
+places them (a ``walk.step_length`` moves them onto other heights), their heights and the terrain handed to the batch
+with the parameters, and the results gain :data:`~rtgait.sweep.store.TERRAIN_COLUMNS`: the range of the planned COG
+height and the error the vertical motion adds to the horizontal ZMP, as ``summary.json``'s ``terrain`` entry (the
+preview baseline plans flat and has none).
 """
 
 from __future__ import annotations
@@ -17,8 +23,10 @@ import numpy as np
 
 from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters
 from rtgait.core.analysis.preview import PREVIEW_PERIOD, PreviewPlanner, evaluate_preview
+from rtgait.core.geometry.footsteps import place_footsteps, standing_feet
 from rtgait.scenario.scenario import Scenario
 from rtgait.sweep.spec import SweepSpec, case_scenario
+from rtgait.sweep.store import TERRAIN_COLUMNS
 
 PARAMETER_AXES = ("walk.step_length", "change.length", "change.width")
 """Axes a group's cases may differ in: the walk is affine in them."""
@@ -37,6 +45,7 @@ def evaluate_group(spec: SweepSpec, group: list[tuple[str, dict[str, Any]]]) -> 
     """Results (case id -> fields of :data:`~rtgait.sweep.store.PENDULUM_COLUMNS`) of one group of cases."""
     first = case_scenario(spec.base, group[0][1])
     method = group[0][1].get("connection", first.connection)
+    heights = None
     try:
         walk = _walk(first, method)
         theta = np.stack([_parameters(walk, spec.base, values) for _, values in group])
@@ -44,16 +53,42 @@ def evaluate_group(spec: SweepSpec, group: list[tuple[str, dict[str, Any]]]) -> 
             margin, time, deviation = evaluate_preview(walk, theta)
             decisions = [""] * len(group)
         else:
-            result = evaluate_parameters(walk, theta)
+            terrain = None if first.terrain is None else first.terrain.terrain
+            if terrain is not None:
+                heights = _case_heights(spec.base, [values for _, values in group])
+            result = evaluate_parameters(walk, theta, heights, terrain)
             margin, time, deviation = result.zmp_margin_min, result.zmp_margin_min_time, result.zmp_deviation_max
             decisions = list(result.decisions)
     except ValueError as error:
         if "straight walks" not in str(error):
             raise
         return {key: rolled_out(case_scenario(spec.base, values), method) for key, values in group}
-    return {
-        key: _fields(float(margin[i]), float(time[i]), deviation[i], decisions[i]) for i, (key, _) in enumerate(group)
-    }
+    out = {}
+    for i, (key, _) in enumerate(group):
+        out[key] = _fields(float(margin[i]), float(time[i]), deviation[i], decisions[i])
+        if heights is not None:
+            out[key].update({name: float(getattr(result, name)[i]) for name in TERRAIN_COLUMNS})
+    return out
+
+
+def _case_heights(base: Scenario, cases: list[dict[str, Any]]) -> np.ndarray:
+    """The footholds' heights ``(cases, steps + 2)`` (m) each case walks on: its footprints placed on the terrain
+    (checked), as the planner takes them, from its strides. Cases of the same step length share them."""
+    known: dict[Any, np.ndarray] = {}
+    rows = []
+    for values in cases:
+        length = values.get("walk.step_length", base.step_length)
+        if length not in known:
+            scenario = case_scenario(base, {"walk.step_length": length}) if "walk.step_length" in values else base
+            known[length] = _planned_heights(scenario)
+        rows.append(known[length])
+    return np.stack(rows)
+
+
+def _planned_heights(scenario: Scenario) -> np.ndarray:
+    """The heights (m) of the footprints ``F[0..n+1]`` the planner walks, from ``scenario``'s strides."""
+    prints = place_footsteps(standing_feet(scenario.step_width, scenario.first_foot), scenario.strides())
+    return np.array([foot.z for foot in prints])
 
 
 def evaluate_cases(
@@ -66,6 +101,7 @@ def evaluate_cases(
 
 def rolled_out(scenario: Scenario, method: str) -> dict[str, Any]:
     """One case by a rollout (what ``rtgait plan`` does), for what the batch does not take."""
+    from rtgait.core.analysis.height_error import zmp_error
     from rtgait.core.analysis.rollout import rollout
     from rtgait.core.planner.online import OnlinePlanner
     from rtgait.viz.margin_marker import margin_marker
@@ -81,7 +117,13 @@ def rolled_out(scenario: Scenario, method: str) -> dict[str, Any]:
     ref = np.stack([run.column("zmp_ref_x"), run.column("zmp_ref_y")], axis=1)
     deviation = np.abs(zmp - ref)[mask].max(axis=0) if mask.any() else np.zeros(2)
     worst = margin_marker(run.times, run.margin, [t for t, _ in run.changes]).index
-    return _fields(run.zmp_margin_min, float(run.times[worst]), deviation, "")
+    fields = _fields(run.zmp_margin_min, float(run.times[worst]), deviation, "")
+    if scenario.terrain is not None and method != "preview":
+        cog_z = run.column("cog_z")
+        error = zmp_error(run, scenario.terrain.terrain, scenario.gravity)
+        fields.update(cog_z_min=float(cog_z.min()), cog_z_max=float(cog_z.max()), zmp_error_max=float(error.max()),
+                      zmp_error_rms=float(np.sqrt(np.mean(error**2))))  # fmt: skip
+    return fields
 
 
 def _walk(scenario: Scenario, method: str) -> StraightWalk:

@@ -26,8 +26,10 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from rtgait.core.geometry.heightfield import Heightfield
 from rtgait.core.limits import MAX_STRIDE
 from rtgait.core.planner.config import ALL_CONNECTION_MODES
+from rtgait.scenario.heightfield_file import resolve_terrain_file
 from rtgait.scenario.loading import parse_document
 from rtgait.scenario.scenario import Scenario, ScenarioError
 from rtgait.scenario.tomlfile import TomlFiles, is_finite_number
@@ -85,8 +87,13 @@ class SweepSpec:
         return [dict(zip(names, values, strict=True)) for values in itertools.product(*(v for _, v in self.axes))]
 
     def fingerprint(self) -> str:
-        """A hash of the base scenario's document: cases of different bases never share an identity."""
-        return hashlib.sha256(json.dumps(self.base_document, sort_keys=True).encode()).hexdigest()[:16]
+        """A hash of the base scenario's document (and of a height field's grid, which the document names by its
+        file only): cases of different bases never share an identity."""
+        text = json.dumps(self.base_document, sort_keys=True)
+        terrain = None if self.base.terrain is None else self.base.terrain.terrain
+        if isinstance(terrain, Heightfield):
+            text += terrain.digest
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def case_id(fingerprint: str, values: dict[str, Any]) -> str:
@@ -110,7 +117,9 @@ def parse_spec(data: dict[str, Any], folder: Path | None = None, source: str = "
         target = Path(base_name) if folder is None or Path(base_name).is_absolute() else folder / base_name
     try:
         document = _SCENARIOS.load(target)
-        base = parse_document(document.data, document.source)
+        # A height field's file made absolute: the document alone rebuilds the base (workers, other folders).
+        base_document = resolve_terrain_file(document.data, document.folder)
+        base = parse_document(base_document, document.source)
     except ScenarioError as error:
         raise SweepError(f"base: {error}") from None
     table = _FILES.table(data["axes"], "axes")
@@ -123,7 +132,7 @@ def parse_spec(data: dict[str, Any], folder: Path | None = None, source: str = "
         if base.footholds is not None:
             _check_footstep_axis(name, base)
         axes.append((name, _values(name, raw)))
-    spec = SweepSpec(base, document.data, tuple(axes), source)
+    spec = SweepSpec(base, base_document, tuple(axes), source)
     if any(name.startswith("change.") for name in spec.axis_names) and not base.changes:
         raise SweepError("axes change.* set the base scenario's first [[walk.change]], and it has none")
     if spec.n_cases > MAX_CASES:

@@ -38,6 +38,11 @@ PENDULUM_COLUMNS = (
 )  # fmt: skip
 """Pendulum-level results: signed ZMP margin (m), its time (s), whether the ZMP leaves the polygon, the largest
 ``|ZMP - reference|`` (m, the larger axis, then x and y) and, for auto, the connection each change took."""
+TERRAIN_COLUMNS = ("cog_z_min", "cog_z_max", "zmp_error_max", "zmp_error_rms")
+"""Pendulum-level results of a base with a ``[terrain]`` (after :data:`PENDULUM_COLUMNS`): the planned COG height's
+lowest and highest value (m), and the largest and RMS error the vertical motion adds to the horizontal ZMP (m, the
+full point-mass ZMP equation, as ``summary.json``'s ``terrain`` entry). Sweeps on the flat floor have no such
+columns."""
 PHYSICS_COLUMNS = ("physics", "fell", "tipped", "fall_time", "steps_completed", "steps_planned", "physics_error")
 """Physics results (``--physics``): ``physics`` is ``ok``, ``failed`` or ``skipped``; a fall's time (s); touch-downs
 completed of those planned; why a case failed or was skipped."""
@@ -106,8 +111,9 @@ class ResultStore:
 
     def write_tables(self, axes: Sequence[str], cases: Iterable[tuple[str, dict[str, Any]]], physics: bool) -> int:
         """Write ``results.csv`` and ``results.parquet`` for the ``(id, axis values)`` cases done; returns the rows."""
-        columns = ["case", *axes, *PENDULUM_COLUMNS, *(PHYSICS_COLUMNS if physics else ())]
         pendulum, walked = self.done("pendulum"), self.done("physics")
+        terrain = TERRAIN_COLUMNS if any(TERRAIN_COLUMNS[0] in result for result in pendulum.values()) else ()
+        columns = ["case", *axes, *PENDULUM_COLUMNS, *terrain, *(PHYSICS_COLUMNS if physics else ())]
         rows = []
         for key, values in cases:
             if key not in pendulum or (physics and key not in walked):
@@ -185,4 +191,7 @@ def _write_parquet(path: Path, columns: Sequence[str], rows: list[dict[str, Any]
     write_atomic(path, lambda temporary: pq.write_table(table, temporary))
 
 
-__all__ = ["CSV_FILE", "JOURNAL", "PARQUET_FILE", "PENDULUM_COLUMNS", "PHYSICS_COLUMNS", "ResultStore", "read_results"]
+__all__ = [
+    "CSV_FILE", "JOURNAL", "PARQUET_FILE", "PENDULUM_COLUMNS", "PHYSICS_COLUMNS", "TERRAIN_COLUMNS", "ResultStore",
+    "read_results",
+]  # fmt: skip

@@ -2,7 +2,9 @@
 ``/rtgait/terrain`` and ``/rtgait/obstacles``, :mod:`rtgait.viz.replay_scene`).
 
 The boxes are those MuJoCo's scene is built of (:mod:`rtgait.core.geometry.scene_boxes`), in the same colours: a
-terrain box with its edges as dark lines (a stair's nose shows from any side, the faces being one colour); an
+terrain box with its edges as dark lines (a stair's nose shows from any side, the faces being one colour); a height
+field's grid as the triangles MuJoCo collides (two per cell, cut along the diagonal of increasing x and y,
+:mod:`rtgait.core.geometry.heightfield`), one mesh; an
 obstacle faint from the start (it stands in the physics all along) and solid from the time the walk sees it, its
 solid box on a node whose position is animated: :data:`HIDDEN_DEPTH` under the scene before that, in place after.
 """
@@ -16,10 +18,11 @@ import meshcat.geometry as mg
 import meshcat.transformations as mtf
 import numpy as np
 
+from rtgait.core.geometry.heightfield import Heightfield
 from rtgait.core.geometry.scene_boxes import OBSTACLE_RGBA, TERRAIN_RGBA, SceneBox, terrain_boxes
 from rtgait.core.geometry.terrain import Flat, TerrainKind
 
-__all__ = ["FLAT_FLOOR", "OBSTACLE_COLOR", "TERRAIN_COLOR", "Ground", "draw_obstacles", "draw_terrain"]
+__all__ = ["FLAT_FLOOR", "OBSTACLE_COLOR", "TERRAIN_COLOR", "Ground", "draw_obstacles", "draw_terrain", "grid_mesh"]
 
 GHOST_OPACITY = 0.3  # an obstacle not seen yet: in the physics, not yet in the walk's plan
 GHOST_SHRINK = 0.001  # m: the faint box sits just inside the solid one, which hides it once the obstacle is seen
@@ -72,11 +75,28 @@ def draw_terrain(vis: meshcat.Visualizer, ground: Ground, root: str) -> None:
     _, boxes = terrain_boxes(ground.terrain)  # type: ignore[arg-type]
     material = mg.MeshLambertMaterial(color=TERRAIN_COLOR)
     edges = mg.LineBasicMaterial(color=TERRAIN_EDGE_COLOR)
+    if isinstance(ground.terrain, Heightfield):
+        vertices, faces = grid_mesh(ground.terrain)
+        vis[f"/{root}/terrain/terrain_grid"].set_object(mg.TriangularMeshGeometry(vertices, faces), material)
     for box in boxes:
         node = vis[f"/{root}/terrain/{box.name}"]
         node.set_object(_solid(box), material)
         node.set_transform(_box_pose(box))
         node["edges"].set_object(mg.LineSegments(mg.PointsGeometry(_box_edges(box).T), edges))
+
+
+def grid_mesh(terrain: Heightfield) -> tuple[np.ndarray, np.ndarray]:
+    """``(vertices, faces)``: the grid's samples ``(ny nx, 3)`` (m, world; row ``i`` of the grid first) and its
+    triangles ``(2 (ny - 1) (nx - 1), 3)`` (vertex indices, counter-clockwise seen from above), two per cell."""
+    ny, nx = terrain.heights.shape
+    x = terrain.origin[0] + terrain.size[0] * np.arange(nx) / (nx - 1)
+    y = terrain.origin[1] + terrain.size[1] * np.arange(ny) / (ny - 1)
+    vertices = np.column_stack((np.tile(x, ny), np.repeat(y, nx), terrain.heights.ravel()))
+    corner = (np.arange(ny - 1)[:, None] * nx + np.arange(nx - 1)[None, :]).ravel()  # (i, j) of each cell
+    after, above = corner + 1, corner + nx  # (i, j + 1) and (i + 1, j)
+    lower = np.column_stack((corner, after, above + 1))  # u >= v: (0, 0), (1, 0), (1, 1)
+    upper = np.column_stack((corner, above + 1, above))  # u < v: (0, 0), (1, 1), (0, 1)
+    return vertices, np.concatenate((lower, upper)).astype(np.uint32)
 
 
 def _box_edges(box: SceneBox) -> np.ndarray:

@@ -1,5 +1,6 @@
 """The scenario's terrain in MuJoCo: rays cast down onto the built scene meet it at the height the terrain description
-gives (stairs up and down, slopes up and down, stepping stones and their pit, a step), with the floor's friction."""
+gives (stairs up and down, slopes up and down, stepping stones and their pit, a step, a height field's grid), with the
+floor's friction."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from rtgait.core.geometry.terrain import Flat, Slope, Stairs, Step, SteppingStones, surface  # noqa: E402
+from rtgait.core.geometry.terrain import Flat, Heightfield, Slope, Stairs, Step, SteppingStones, surface  # noqa: E402
 from rtgait.sim.config import SimConfig  # noqa: E402
 from rtgait.sim.contact_model import add_floor  # noqa: E402
 from rtgait.sim.terrain import add_terrain  # noqa: E402
@@ -96,3 +97,25 @@ def test_the_robot_stands_on_the_top_landing_of_stairs_down(talos) -> None:
     data = sim.new_data()  # settled on the landing before the first stair, 0.9 m above the floor
     for site in (sim.left_sole_site, sim.right_sole_site):
         assert abs(data.site_xpos[site][2]) < 0.005
+
+
+@pytest.mark.parametrize("dip", [0.0, -0.04])
+def test_a_height_field_is_built_from_the_same_grid_its_footholds_are_fitted_to(dip: float) -> None:
+    # A rough grid, off-centre, uneven sample spacing along x and y; with ``dip`` it goes below the level ground
+    # around it (the floor then goes down and boxes frame the grid at 0).
+    rng = np.random.default_rng(7)
+    heights = rng.uniform(dip, 0.06, (9, 23))
+    terrain = Heightfield(heights, (2.2, 0.8), (0.3, -0.35))
+    model, data = _scene(terrain, SimConfig(friction=0.6))
+    grid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "terrain_grid")
+    assert model.geom_type[grid] == mujoco.mjtGeom.mjGEOM_HFIELD and model.geom_friction[grid][0] == pytest.approx(0.6)
+    floor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+    assert model.geom_pos[floor][2] == pytest.approx(min(0.0, heights.min()))
+    x = rng.uniform(0.3 + 1e-6, 2.5 - 1e-6, 400)
+    y = rng.uniform(-0.35 + 1e-6, 0.45 - 1e-6, 400)
+    # The hfield stores its normalised data as float32: heights to a few 1e-9 m.
+    rays = np.array([_ray_height(model, data, a, b) for a, b in zip(x, y, strict=True)])
+    np.testing.assert_allclose(rays, terrain.height(x, y), atol=1e-7)
+    # Around the grid the ground is level at 0.
+    for a, b in ((0.1, 0.0), (2.7, 0.0), (1.0, 0.6), (1.0, -0.6)):
+        assert _ray_height(model, data, a, b) == pytest.approx(0.0, abs=1e-12)

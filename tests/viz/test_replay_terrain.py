@@ -19,7 +19,7 @@ pytest.importorskip("umsgpack")
 from pages import Decoded, decode  # noqa: E402
 
 from rtgait.core.geometry.footsteps import Footstep  # noqa: E402
-from rtgait.core.geometry.terrain import Flat, Slope, Stairs, Step, SteppingStones, TerrainKind  # noqa: E402
+from rtgait.core.geometry.terrain import Flat, Heightfield, Slope, Stairs, Step, SteppingStones, TerrainKind  # noqa: E402
 from rtgait.core.obstacle.box import Obstacle  # noqa: E402
 from rtgait.scenario.loading import load_scenario  # noqa: E402
 from rtgait.sim.config import SimConfig  # noqa: E402
@@ -174,3 +174,31 @@ def test_bad_terrain_or_obstacles_are_refused(options: dict, message: str, tmp_p
     with pytest.raises(ValueError, match=re.escape(message)):
         _scene_page(tmp_path, **{"terrain": None, **options})
     assert not (tmp_path / "replay.html").exists()
+
+
+def test_a_height_field_is_drawn_as_the_triangles_mujoco_collides(tmp_path: Path) -> None:
+    # A rough grid that dips below the level ground: its mesh, and the MuJoCo boxes framing it.
+    rng = np.random.default_rng(5)
+    terrain = Heightfield(rng.uniform(-0.03, 0.05, (6, 9)), (1.6, 0.5), (0.4, -0.25))
+    decoded = _scene_page(tmp_path, terrain)
+    (mesh,) = [c for c in decoded.commands if c["type"] == "set_object" and c["path"] == "/rtgait/terrain/terrain_grid"]
+    geometry = mesh["object"]["geometries"][0]
+    # meshcat sends typed arrays as msgpack extensions: their bytes in .data.
+    vertices = np.frombuffer(geometry["data"]["attributes"]["position"]["array"].data, "<f4").reshape(-1, 3)
+    faces = np.frombuffer(geometry["data"]["index"]["array"].data, "<u4").reshape(-1, 3)
+    assert len(vertices) == 6 * 9 and len(faces) == 2 * 5 * 8
+    np.testing.assert_allclose(vertices[:, 2], terrain.height(vertices[:, 0], vertices[:, 1]), atol=1e-7)
+    # Each triangle lies in the surface MuJoCo builds: its centroid at the terrain's height there.
+    corners = vertices[faces.astype(int)]
+    centroid = corners.mean(axis=1)
+    np.testing.assert_allclose(centroid[:, 2], terrain.height(centroid[:, 0], centroid[:, 1]), atol=1e-6)
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert np.all(normals[:, 2] > 0.0)  # counter-clockwise from above: lit from above
+    model, data = _mujoco_scene(terrain)
+    frame = [g for g in range(model.ngeom) if model.geom(g).name.startswith("terrain_") and model.geom_type[g] == 6]
+    assert len(frame) == 4  # before, after, left and right of the grid, at the level ground
+    for geom in frame:
+        path = f"/rtgait/terrain/{model.geom(geom).name}"
+        size, pose = _boxes(decoded, path)[path]
+        np.testing.assert_allclose(size, 2.0 * model.geom_size[geom], atol=1e-12)
+        np.testing.assert_allclose(pose, _geom_pose(model, data, geom), atol=1e-12)

@@ -21,6 +21,15 @@ by everything but those numbers (one :class:`~rtgait.core.analysis.walk_family.W
 group evaluated in one vectorised pass. The ``"auto"`` connection is evaluated by the rule of
 :mod:`rtgait.core.planner.auto`, its predictions made the same way.
 
+Off the flat floor a walk's footholds carry heights ``z = (z_0 .. z_n+1)`` (m): the horizontal numbers do not change
+(the 3D-DCM/VRP form keeps the horizontal equation, ``docs/method.md``) and the planned COG height is linear in ``z``
+(:mod:`rtgait.core.analysis.family_height`), so a walk given its heights (:attr:`StraightWalk.heights`, or ``heights``
+rows next to ``theta``) also gets the range of its COG height, ``cog_z_min`` and ``cog_z_max`` (m), the numbers
+``rtgait plan`` reports as ``cog_height_range``; given the terrain too, the error the vertical motion adds to the
+horizontal ZMP, ``zmp_error_max`` and ``zmp_error_rms`` (m, the full point-mass ZMP against the planned one on the
+terrain's plane under the nearest contact foot, :mod:`rtgait.core.analysis.height_error`), as ``rtgait plan``
+reports them.
+
 When the smallest margin is reached at several ticks (a walk whose ZMP stays inside has its minimum, the ankle's
 distance to its sole's edge, in every single support), the time reported follows ``rtgait plan``'s rule: the first
 tick within :data:`~rtgait.core.analysis.walk_family.TIE` of the minimum at or after the first change is handed over,
@@ -30,7 +39,7 @@ else the first such tick.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import TYPE_CHECKING
 
@@ -39,12 +48,16 @@ import numpy as np
 from rtgait.core.analysis.family_key import ChangeShape, FamilyKey, family_key
 from rtgait.core.analysis.walk_family import WalkFamily
 from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.geometry.terrain import Terrain, surface
 from rtgait.core.planner.auto import auto_options
 
 if TYPE_CHECKING:
     from rtgait.core.analysis.rollout import ScheduledChange
     from rtgait.core.planner.config import PlannerConfig
 
+
+_HEIGHT_CHUNK = 256  # walks whose COG heights (one row of ticks each) are evaluated together
+_ERROR_CHUNK = 32  # walks whose ZMP errors (a few rows of ticks each) are evaluated together
 
 # ----- whole walks ----------------------------------------------------------------------------------------------
 
@@ -55,7 +68,8 @@ class StraightWalk:
     step width, one closing step, no turning, and ``changes`` of lengths and widths handed over at their deadline.
 
     ``config.connection`` may be ``"real-time"``, ``"quasi-real-time"`` or ``"auto"``; ``dt`` is the sampling
-    period (s) and ``sole`` the sole rectangle of the support polygons (m).
+    period (s) and ``sole`` the sole rectangle of the support polygons (m). ``heights``: the footholds' heights
+    ``F[0..steps+1]`` (m) on a terrain, ``None`` on the flat floor.
     """
 
     config: PlannerConfig
@@ -64,6 +78,7 @@ class StraightWalk:
     steps: int
     step_length: float
     changes: tuple[ScheduledChange, ...] = ()
+    heights: tuple[float, ...] | None = None
 
     def shapes(self) -> tuple[ChangeShape, ...]:
         """The changes as :class:`~rtgait.core.analysis.family_key.ChangeShape` s, each handed over at its mode's
@@ -92,12 +107,18 @@ class StraightWalk:
 class BatchResult:
     """Per case (arrays of length ``B``): ``zmp_margin_min`` (m, signed, > 0 inside), ``zmp_margin_min_time`` (s),
     ``zmp_deviation_max`` ``(B, 2)`` (m, x and y), and for auto walks the connection each change took
-    (``decisions``: one string per case, the changes' kinds joined by ``,``; empty for other modes)."""
+    (``decisions``: one string per case, the changes' kinds joined by ``,``; empty for other modes); for walks given
+    their footholds' heights, the range of the planned COG height ``cog_z_min``, ``cog_z_max`` (m; ``None``
+    otherwise), and given the terrain too, the vertical motion's ZMP error ``zmp_error_max``, ``zmp_error_rms`` (m)."""
 
     zmp_margin_min: np.ndarray
     zmp_margin_min_time: np.ndarray
     zmp_deviation_max: np.ndarray
     decisions: np.ndarray
+    cog_z_min: np.ndarray | None = None
+    cog_z_max: np.ndarray | None = None
+    zmp_error_max: np.ndarray | None = None
+    zmp_error_rms: np.ndarray | None = None
 
     @property
     def zmp_outside(self) -> np.ndarray:
@@ -114,18 +135,69 @@ def walk_family(key: FamilyKey) -> WalkFamily:
     return WalkFamily(key)
 
 
-def evaluate_parameters(walk: StraightWalk, theta: np.ndarray) -> BatchResult:
+def evaluate_parameters(
+    walk: StraightWalk, theta: np.ndarray, heights: np.ndarray | None = None, terrain: Terrain | None = None
+) -> BatchResult:
     """Evaluate the walks that are ``walk`` with the parameters ``theta`` ``(B, P)`` (:meth:`StraightWalk.parameters`
-    layout: ``[1, step_length, step_width, change values...]``, m): one family, the fastest path."""
+    layout: ``[1, step_length, step_width, change values...]``, m): one family, the fastest path. ``heights``
+    ``(B, steps + 2)`` (m): each walk's footholds' heights (default: ``walk.heights`` for every row, if any);
+    ``terrain``: the ground they walk on, for the vertical motion's ZMP error (needs heights)."""
     theta = np.atleast_2d(np.asarray(theta, dtype=float))
     if not np.all(np.isfinite(theta)):
         raise ValueError("theta must be finite")
+    if heights is None and walk.heights is not None:
+        heights = np.repeat(np.asarray(walk.heights, dtype=float)[None], len(theta), axis=0)
+    if terrain is not None and heights is None:
+        raise ValueError("the vertical motion's ZMP error needs the footholds' heights")
     shapes = walk.shapes()
     if walk.config.connection != "auto":
-        result = walk_family(family_key(walk.config, walk.sole, walk.dt, walk.steps, shapes)).evaluate(theta)
+        family = walk_family(family_key(walk.config, walk.sole, walk.dt, walk.steps, shapes))
+        result = family.evaluate(theta)
         decisions = np.full(len(theta), "", dtype=object)
-        return BatchResult(result.margin, result.time, result.deviation, decisions)
-    return _evaluate_auto(walk, shapes, theta)
+        batch = BatchResult(result.margin, result.time, result.deviation, decisions)
+        finals = [(family, np.arange(len(theta)), theta)]
+    else:
+        batch, finals = _evaluate_auto(walk, shapes, theta)
+    if heights is None:
+        return batch
+    heights = np.atleast_2d(np.asarray(heights, dtype=float))
+    low, high = cog_height_range(walk, heights)
+    batch = replace(batch, cog_z_min=low, cog_z_max=high)
+    if terrain is None:
+        return batch
+    worst, rms = np.empty(len(theta)), np.empty(len(theta))
+    planes: dict[tuple[float, float], tuple[float, float, float]] = {}  # the terrain under a footprint, once
+    for family, rows, family_theta in finals:
+        for start in range(0, len(rows), _ERROR_CHUNK):
+            part = slice(start, start + _ERROR_CHUNK)
+            part_theta, part_rows = family_theta[part], rows[part]
+            prints = family.final_footprints(part_theta)
+            under = np.array([[_plane(planes, terrain, x, y) for x, y in row.tolist()] for row in prints])
+            error = family.vertical_zmp_errors(part_theta, heights[part_rows], under)
+            worst[part_rows], rms[part_rows] = error.max(axis=1), np.sqrt(np.mean(error**2, axis=1))
+    return replace(batch, zmp_error_max=worst, zmp_error_rms=rms)
+
+
+def _plane(known: dict, terrain: Terrain, x: float, y: float) -> tuple[float, float, float]:
+    """The terrain's ``(z, pitch, roll)`` under a footprint at ``(x, y)`` heading +x (cached in ``known``)."""
+    plane = known.get((x, y))
+    if plane is None:
+        plane = known[(x, y)] = surface(terrain, x, y, 0.0)
+    return plane
+
+
+def cog_height_range(walk: StraightWalk, heights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(cog_z_min, cog_z_max)`` (m, each ``(B,)``) of ``walk`` with its footholds at ``heights`` ``(B, steps + 2)``
+    (m): the planned COG height over every tick (:meth:`~rtgait.core.analysis.walk_family.WalkFamily.cog_heights`;
+    the vertical column does not depend on the walk's changes, so the family without them gives it)."""
+    heights = np.atleast_2d(np.asarray(heights, dtype=float))
+    family = walk_family(family_key(walk.config, walk.sole, walk.dt, walk.steps, ()))
+    low, high = np.empty(len(heights)), np.empty(len(heights))
+    for start in range(0, len(heights), _HEIGHT_CHUNK):
+        part = slice(start, start + _HEIGHT_CHUNK)
+        cog_z = family.cog_heights(heights[part])
+        low[part], high[part] = cog_z.min(axis=1), cog_z.max(axis=1)
+    return low, high
 
 
 def evaluate_walks(walks: Sequence[StraightWalk]) -> BatchResult:
@@ -143,7 +215,19 @@ def evaluate_walks(walks: Sequence[StraightWalk]) -> BatchResult:
         result = evaluate_parameters(first, np.stack([thetas[i] for i in members]))
         margin[members], time[members] = result.zmp_margin_min, result.zmp_margin_min_time
         deviation[members], decisions[members] = result.zmp_deviation_max, result.decisions
-    return BatchResult(margin, time, deviation, decisions)
+    result = BatchResult(margin, time, deviation, decisions)
+    placed = [i for i, walk in enumerate(walks) if walk.heights is not None]
+    if not placed:
+        return result
+    # The COG height of the walks given their heights (NaN for the others), grouped by length of walk.
+    low, high = np.full(n, np.nan), np.full(n, np.nan)
+    by_family: dict[tuple, list[int]] = {}
+    for i in placed:
+        by_family.setdefault(_group_key(walks[i]), []).append(i)
+    for members in by_family.values():
+        heights = np.array([walks[i].heights for i in members], dtype=float)
+        low[members], high[members] = cog_height_range(walks[members[0]], heights)
+    return replace(result, cog_z_min=low, cog_z_max=high)
 
 
 def _group_key(walk: StraightWalk) -> tuple:
@@ -152,10 +236,10 @@ def _group_key(walk: StraightWalk) -> tuple:
     return (family_key(config, walk.sole, walk.dt, walk.steps, walk.shapes()), *auto)
 
 
-def _evaluate_auto(walk: StraightWalk, shapes: tuple[ChangeShape, ...], theta: np.ndarray) -> BatchResult:
+def _evaluate_auto(walk: StraightWalk, shapes: tuple[ChangeShape, ...], theta: np.ndarray) -> tuple[BatchResult, list]:
     """Auto walks: each change decided in deadline order by :mod:`rtgait.core.planner.auto`'s rule, its options
     predicted on the families they make (cases that made the same earlier choices share them), then the walks
-    evaluated."""
+    evaluated; with the family each group of rows ended in, those rows and their parameters in its layout."""
 
     config, n = walk.config, walk.steps + 1
     B = len(theta)
@@ -196,13 +280,17 @@ def _evaluate_auto(walk: StraightWalk, shapes: tuple[ChangeShape, ...], theta: n
     finals: dict[tuple[ChangeShape, ...], list[int]] = {}
     for row in range(B):
         finals.setdefault(tuple(chosen[row]), []).append(row)
+    families = []
     for final, rows in finals.items():
         family = walk_family(family_key(config, walk.sole, walk.dt, walk.steps, final))
         # rtgait plan's time rule counts from the first change's hand-over: its arrival, whatever was chosen.
         arrival = family.phase_start(shapes[0].decided_phase) if shapes else None
-        result = family.evaluate(_columns(theta[rows], final, shapes), change_time=arrival)
+        columns = _columns(theta[rows], final, shapes)
+        result = family.evaluate(columns, change_time=arrival)
         margin[rows], time[rows], deviation[rows] = result.margin, result.time, result.deviation
-    return BatchResult(margin, time, deviation, np.array([",".join(k) for k in kinds], dtype=object))
+        families.append((family, np.array(rows), columns))
+    decisions = np.array([",".join(k) for k in kinds], dtype=object)
+    return BatchResult(margin, time, deviation, decisions), families
 
 
 def _columns(theta: np.ndarray, chosen: tuple[ChangeShape, ...], original: tuple[ChangeShape, ...]) -> np.ndarray:
@@ -214,6 +302,7 @@ def _columns(theta: np.ndarray, chosen: tuple[ChangeShape, ...], original: tuple
 __all__ = [
     "BatchResult",
     "StraightWalk",
+    "cog_height_range",
     "evaluate_parameters",
     "evaluate_walks",
     "walk_family",

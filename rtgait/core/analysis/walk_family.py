@@ -23,7 +23,9 @@ linear function over the fixed points ``(s_t, b_t)``: a binary search on their h
 tick. Where a phase's minimum is negative (the ZMP leaves the polygon) the exact outside distance is computed at every
 tick of that phase for those cases.
 
-A family's key and the affine footprints of its parameters are in :mod:`rtgait.core.analysis.family_key`.
+A family's key and the affine footprints of its parameters are in :mod:`rtgait.core.analysis.family_key`; its chain of
+plans and, over height changes, the COG height of every tick as a linear map of the footholds' heights
+(:meth:`WalkFamily.cog_heights`) in :mod:`rtgait.core.analysis.family_height`.
 """
 
 from __future__ import annotations
@@ -33,6 +35,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from rtgait.core.analysis.family_height import (
+    TickRows,
+    contact_feet,
+    plan_chain,
+    tick_rows,
+    vertical_rows,
+    vertical_zmp_error,
+)
 from rtgait.core.analysis.family_key import FamilyKey, affine_footprints
 from rtgait.core.geometry.footsteps import Stride
 from rtgait.core.geometry.hull import (
@@ -126,23 +136,14 @@ class WalkFamily:
         final, sides = versions[-1]
         self.replan_tick = replan_tick
         self._phases: list[_Phase] = []
-        w = planner.w
-        plan_data: dict[int, tuple[np.ndarray, object]] = {}
-        state = None
-        for q in range(0, 2 * n + 1, 2):
-            layout = planner.layout_for_replan(q)
-            version = sum(tick <= replan_tick[q] for tick in change_ticks)
-            prints = versions[version][0]
-            if state is None:
-                c0 = 0.5 * (prints[0] + prints[1])
-                state = np.stack([c0, np.zeros_like(c0), c0, np.zeros_like(c0)])
-            sources = planner.walk.relative_anchor_sources(q, layout.anchor_phases)
-            i0 = q >> 1
-            anchors = np.stack([0.5 * (prints[i0 + a] + prints[i0 + b]) for a, b in sources])
-            y = np.concatenate([state, anchors])  # (n_inputs, 2, P)
-            plan_data[q] = (np.tensordot(layout.G, y, axes=(1, 0)), layout)
-            if q + 2 <= 2 * n:
-                state = np.tensordot(layout.end_state_rows(1, w), y, axes=(1, 0))
+        self._planner, self._tick_phase, self._final = planner, tick_phase, final
+        self._vertical: TickRows | None = None
+        self._horizontal: TickRows | None = None
+
+        def prints_at(q: int) -> np.ndarray:  # the footprints with the changes handed over by the replan's tick
+            return versions[sum(tick <= replan_tick[q] for tick in change_ticks)][0]
+
+        plan_data = self._plans = plan_chain(planner, n, prints_at)
         for q in range(2 * n + 2):
             ticks = np.flatnonzero(tick_phase == q)
             if len(ticks):
@@ -192,6 +193,44 @@ class WalkFamily:
         points = np.stack([s, b], axis=1)
         return _Phase(q, "free" if kind != "settle" else "settle", ticks, point_chain(points), points, predictor,
                       deviation, features, boxes)  # fmt: skip
+
+    def cog_heights(self, heights: np.ndarray) -> np.ndarray:
+        """The planned COG height (m) at every tick ``(B, ticks)`` of walks whose footholds ``F[0..n+1]`` stand at
+        ``heights`` ``(B, n + 2)`` (m): the vertical column (:mod:`rtgait.core.analysis.family_height`), the same for
+        every case of the family whatever its strides and changes (a stride keeps its rise)."""
+        heights = self._checked_heights(heights)
+        return self.key.cog_height + heights @ self._vertical_rows().cog[:, 0, :].T
+
+    def final_footprints(self, theta: np.ndarray) -> np.ndarray:
+        """The footprints ``F[0..n+1]`` ``(B, n + 2, 2)`` (m) the walks ``theta`` end with, every change made."""
+        return np.einsum("iap,bp->bia", self._final, np.atleast_2d(theta))
+
+    def vertical_zmp_errors(self, theta: np.ndarray, heights: np.ndarray, planes: np.ndarray) -> np.ndarray:
+        """The error ``(B, ticks)`` (m) the vertical motion adds to the horizontal ZMP
+        (:func:`~rtgait.core.analysis.family_height.vertical_zmp_error`) of walks ``theta`` ``(B, P)`` with footholds
+        at ``heights`` ``(B, n + 2)`` (m) on a terrain whose plane under each final footprint is ``planes``
+        ``(B, n + 2, 3)`` (height m, pitch, roll rad)."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        heights = self._checked_heights(heights)
+        if self._horizontal is None:
+            self._horizontal = tick_rows(
+                self._plans, self.n_steps, self.times, self._starts, self._tick_phase, self._planner.w
+            )
+        feet = contact_feet(self._tick_phase, self.n_steps)
+        return vertical_zmp_error(self._horizontal, self._vertical_rows(), feet, theta, heights,
+                                  self.final_footprints(theta), np.asarray(planes, dtype=float), self.key.cog_height,
+                                  self.key.gravity)  # fmt: skip
+
+    def _checked_heights(self, heights: np.ndarray) -> np.ndarray:
+        heights = np.atleast_2d(np.asarray(heights, dtype=float))
+        if heights.shape[1] != self.n_steps + 2 or not np.all(np.isfinite(heights)):
+            raise ValueError(f"heights must be finite, {self.n_steps + 2} per walk (F[0..n+1]), got {heights.shape}")
+        return heights
+
+    def _vertical_rows(self) -> TickRows:
+        if self._vertical is None:
+            self._vertical = vertical_rows(self._planner, self.n_steps, self.times, self._starts, self._tick_phase)
+        return self._vertical
 
     def phase_start(self, q: int) -> float:
         """Start of phase ``q`` (s), as the planner computes it."""

@@ -10,6 +10,8 @@ than it is a box standing on it (:mod:`rtgait.core.geometry.terrain` gives the h
 * a slope of angle ``a`` over ``[start, start + length]``: a box :data:`SLOPE_THICKNESS` thick turned by ``-a``
   about the y axis (a right-hand pitch of ``-a`` raises its far end), its top face through ``(start, 0)`` and
   ``(start + length, tan(a) length)``;
+* a height field (:class:`~rtgait.core.geometry.heightfield.Heightfield`): not boxes (MuJoCo builds its grid as an
+  ``hfield``, :mod:`rtgait.sim.terrain`); where it dips below the level ground at 0, four level boxes frame it;
 * an obstacle: its box, centre at half its height on the level ground, turned ``yaw`` about z.
 
 The scene is finite where the height field is not: the level ground before and after the terrain reaches
@@ -31,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rtgait.core.geometry.terrain import PIT_DEPTH, Flat, Slope, Stairs, Step, SteppingStones, TerrainKind
+from rtgait.core.geometry.terrain import PIT_DEPTH, Flat, Heightfield, Slope, Stairs, Step, SteppingStones, TerrainKind
 from rtgait.core.obstacle.box import Obstacle
 
 __all__ = [
@@ -97,6 +99,8 @@ def floor_level(terrain: TerrainKind) -> float:
         return min(0.0, terrain.height_change)
     if isinstance(terrain, SteppingStones):
         return -PIT_DEPTH
+    if isinstance(terrain, Heightfield):
+        return min(0.0, float(terrain.heights.min()))
     return 0.0
 
 
@@ -147,11 +151,28 @@ def _stones(terrain: SteppingStones, z_min: float) -> list[SceneBox]:
     return boxes
 
 
+def _around_grid(terrain: Heightfield, z_min: float) -> list[SceneBox]:
+    """Level ground at 0 around a grid that dips below it: four boxes framing the grid's rectangle."""
+    if z_min >= 0.0:
+        return []
+    (x0, y0), (lx, ly) = terrain.origin, terrain.size
+    x1, y1 = x0 + lx, y0 + ly
+    side = 0.5 * HALF_WIDTH  # half the width of the strips beside the grid
+    return [
+        _level("terrain_before", x0 - REACH, x0, 0.0, z_min),
+        _level("terrain_after", x1, x1 + REACH, 0.0, z_min),
+        _level("terrain_left", x0, x1, 0.0, z_min, y1 + side, side),
+        _level("terrain_right", x0, x1, 0.0, z_min, y0 - side, side),
+    ]
+
+
 def terrain_boxes(terrain: TerrainKind) -> tuple[float, list[SceneBox]]:
     """``(z_min, boxes)``: the floor's level (m) and the boxes that build ``terrain`` on it (module docstring)."""
     z_min = floor_level(terrain)
     if isinstance(terrain, Flat):
         return z_min, []
+    if isinstance(terrain, Heightfield):
+        return z_min, _around_grid(terrain, z_min)
     if isinstance(terrain, Stairs):
         return z_min, _stairs(terrain, z_min)
     if isinstance(terrain, Slope):

@@ -13,6 +13,7 @@ before its ``start`` (x, m):
   under each foot (``y = +-row_spacing / 2``), their tops at ``h = 0``; off the stones, from ``start`` to the last
   stone, a pit :data:`PIT_DEPTH` deep.
 * :class:`Step`: ``h = height`` for ``x >= x_step`` (negative: a step down).
+* :class:`~rtgait.core.geometry.heightfield.Heightfield`: anything else, a grid of heights read from a file.
 
 :func:`surface` gives the support surface under a point: its height and the foot's pitch and roll on it (pitch is a
 right-hand rotation about the foot's lateral axis, so a floor rising along the foot's heading ``psi`` has pitch
@@ -30,6 +31,7 @@ from typing import Any, Literal, Protocol
 import numpy as np
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
+from rtgait.core.geometry.heightfield import Heightfield
 
 PIT_DEPTH = 1.0
 """Depth of the pit between stepping stones (m): deep enough that no sole touches its floor."""
@@ -168,18 +170,22 @@ class Step:
         return h if np.ndim(h) else float(h)
 
 
-TerrainKind = Flat | Stairs | Slope | SteppingStones | Step
+TerrainKind = Flat | Stairs | Slope | SteppingStones | Step | Heightfield
 """Every terrain a scenario's ``[terrain]`` table describes."""
 TERRAIN_CLASSES: dict[str, type[TerrainKind]] = {
     cls.kind: cls  # type: ignore[misc]
-    for cls in (Flat, Stairs, Slope, SteppingStones, Step)
+    for cls in (Flat, Stairs, Slope, SteppingStones, Step, Heightfield)
 }
 """Each terrain's class by its ``kind``."""
 
 
 def terrain_fields(terrain: TerrainKind) -> dict[str, Any]:
-    """``terrain`` as JSON-ready fields, ``kind`` among them (m, rad; :func:`terrain_from_fields` reads them back)."""
-    return dataclasses.asdict(terrain)
+    """``terrain`` as JSON-ready fields, ``kind`` among them (m, rad; :func:`terrain_from_fields` reads them back); a
+    height field's grid as nested lists (rows along y)."""
+    fields = dataclasses.asdict(terrain)
+    if isinstance(terrain, Heightfield):
+        fields.update(heights=terrain.heights.tolist(), size=list(terrain.size), origin=list(terrain.origin))
+    return fields
 
 
 def terrain_from_fields(fields: dict[str, Any]) -> TerrainKind:
@@ -239,6 +245,7 @@ def sole_gap(terrain: Terrain, foot: Footstep, sole: SoleRect) -> tuple[float, f
 
 
 __all__ = [
-    "EDGE_TOLERANCE", "PIT_DEPTH", "TERRAIN_CLASSES", "Flat", "Slope", "Stairs", "Step", "SteppingStones", "Terrain",
-    "TerrainKind", "place_footstep", "sole_gap", "sole_points", "surface", "terrain_fields", "terrain_from_fields",
+    "EDGE_TOLERANCE", "PIT_DEPTH", "TERRAIN_CLASSES", "Flat", "Heightfield", "Slope", "Stairs", "Step",
+    "SteppingStones", "Terrain", "TerrainKind", "place_footstep", "sole_gap", "sole_points", "surface",
+    "terrain_fields", "terrain_from_fields",
 ]  # fmt: skip
