@@ -29,10 +29,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rtgait.estimation.joint_friction import JointFriction
+
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
 
-__all__ = ["IDENTIFIED_FRACTION", "STICTION_SPEED", "FrictionCompensation"]
+__all__ = ["IDENTIFIED_FRACTION", "STICTION_SPEED", "FrictionCompensation", "identified_friction"]
 
 IDENTIFIED_FRACTION = 0.7
 """``alpha``: the share of the identified friction compensated (module docstring)."""
@@ -79,12 +81,8 @@ class FrictionCompensation:
     def of(cls, robot: RobotModel, fraction: float = IDENTIFIED_FRACTION) -> FrictionCompensation:
         """The compensation of ``robot``'s joints (``robot.joint_names`` order) from its description's motor types;
         a joint without a motor type gets none."""
-        coulomb, viscous = [], []
-        for name in robot.joint_names:
-            motor = robot.description.joint_actuation(name).motor
-            coulomb.append(0.0 if motor is None else motor.coulomb_friction)
-            viscous.append(0.0 if motor is None else motor.viscous_friction)
-        return cls(np.array(coulomb), np.array(viscous), fraction)
+        friction = identified_friction(robot)
+        return cls(friction.coulomb, friction.viscous, fraction)
 
     def torques(self, velocity: np.ndarray) -> np.ndarray:
         """``tau_f`` (N m, a new array) at the joints' reference velocities ``velocity`` (rad/s)."""
@@ -92,3 +90,14 @@ class FrictionCompensation:
         torque *= self.coulomb
         torque += self.viscous * velocity
         return torque
+
+
+def identified_friction(robot: RobotModel) -> JointFriction:
+    """The friction of ``robot``'s joints (``robot.joint_names`` order) as its description's motor types identify
+    it (:mod:`rtgait.estimation.joint_friction`); a joint without a motor type has none."""
+    coulomb, viscous = [], []
+    for name in robot.joint_names:
+        motor = robot.description.joint_actuation(name).motor
+        coulomb.append(0.0 if motor is None else motor.coulomb_friction)
+        viscous.append(0.0 if motor is None else motor.viscous_friction)
+    return JointFriction(np.array(coulomb), np.array(viscous))
