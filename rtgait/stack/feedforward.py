@@ -13,7 +13,7 @@ Per tick, from the IK's configuration ``q``:
 4. the feet's wrenches nearest that split that sum to ``W`` within the soles' contact wrench cones
    (:mod:`rtgait.robot.contact_wrenches`: closed form, a QP when a cone binds);
 5. ``tau = RNEA_joints - sum J^T w`` (N m), plus, on drives with friction, the part of it the drive compensates at
-   the IK motion's joint velocities (:mod:`rtgait.stack.friction_compensation`), which the stack's safety layer
+   the command's joint velocities (:mod:`rtgait.stack.friction_compensation`), which the stack's safety layer
    clips to the joints' torque limits and counts (:mod:`rtgait.stack.command_limits`).
 
 **The wrench the DCM law commands.** The IK's motion follows the plan's COM (with the COM correction), so the
@@ -79,8 +79,8 @@ class FeedForward:
         rate_filter: the time constant of the velocity's and acceleration's low-pass (s).
         tracking: the sensed state and tracking acceleration to compute the torques at (module docstring); ``None``:
             the IK's configuration and motion.
-        friction_compensation: the joints' friction to compensate at the IK motion's joint velocities
-            (:mod:`rtgait.stack.friction_compensation`); ``None``: none (ideal drives).
+        friction_compensation: the joints' friction to compensate at the command's joint velocities (the IK
+            motion's without them; :mod:`rtgait.stack.friction_compensation`); ``None``: none (ideal drives).
 
     Attributes:
         dynamics: the inverse dynamics (its distributor's ``qp_count`` counts the ticks the QP ran).
