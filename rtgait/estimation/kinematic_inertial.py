@@ -184,8 +184,9 @@ class KinematicInertialEstimator:
         self.attitude = AttitudeFilter(attitude_cutoff)
         self.anchors = FootAnchors()
         self._mounts = kinematics.foot_sensors if wrenches == "sensors" else None
-        torques = TorqueWrenches(kinematics, wrench_cutoff, friction=joint_friction) if wrenches == "torques" else None
-        self._torques = torques
+        self._torques = (
+            TorqueWrenches(kinematics, wrench_cutoff, friction=joint_friction) if wrenches == "torques" else None
+        )
         self._kinematics_update = kinematics.update
         self.reset()
 

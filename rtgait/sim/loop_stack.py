@@ -65,7 +65,7 @@ def build_stack(
     robot = sim.robot
     left, right = start_feet
     # With the motor model the joints have their gears' friction: the estimate of the feet's wrenches from the joint
-    # torques takes its identified value out of them, and the feed-forward partly compensates it.
+    # torques takes its identified value out of them, and the feed-forward compensates it.
     friction = identified_friction(robot) if sim.config.motor_model else None
     estimator = make_estimator(
         options.state, robot, controller.planner.w, gravity=gravity, start_feet=(tuple(left), tuple(right)),
