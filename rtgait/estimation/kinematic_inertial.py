@@ -49,6 +49,7 @@ from rtgait.estimation.anchors import FootAnchors, Pose
 from rtgait.estimation.attitude_filter import DEFAULT_ATTITUDE_CUTOFF, AttitudeFilter
 from rtgait.estimation.contact_point import rocking_correction
 from rtgait.estimation.feet import FeetFromWrenches
+from rtgait.estimation.joint_friction import JointFriction
 from rtgait.estimation.kinematics import RobotKinematics
 from rtgait.estimation.landing_gate import (
     DEFAULT_LANDING_CLEARANCE,
@@ -110,6 +111,8 @@ class KinematicInertialEstimator:
         landing_clearance: highest an unloaded foot's sole may be above a loaded one's to become loaded (m);
             ``inf``: no gate (:mod:`rtgait.estimation.landing_gate`).
         sustain_time: how long an unloaded foot's load must last to count (s).
+        joint_friction: with ``"torques"``, the joints' identified friction, which the measured torques carry and
+            the links do not get (:mod:`rtgait.estimation.torque_wrenches`, "Friction"); ``None``: none.
     """
 
     reads_truth = False
@@ -135,6 +138,7 @@ class KinematicInertialEstimator:
         sole: SoleRect | None = None,
         landing_clearance: float = DEFAULT_LANDING_CLEARANCE,
         sustain_time: float = DEFAULT_SUSTAIN_TIME,
+        joint_friction: JointFriction | None = None,
     ) -> None:
         if not (math.isfinite(omega) and omega > 0.0):
             raise ValueError(f"omega must be > 0 (1/s), got {omega}")
@@ -180,7 +184,9 @@ class KinematicInertialEstimator:
         self.attitude = AttitudeFilter(attitude_cutoff)
         self.anchors = FootAnchors()
         self._mounts = kinematics.foot_sensors if wrenches == "sensors" else None
-        self._torques = TorqueWrenches(kinematics, wrench_cutoff) if wrenches == "torques" else None
+        self._torques = (
+            TorqueWrenches(kinematics, wrench_cutoff, friction=joint_friction) if wrenches == "torques" else None
+        )
         self._kinematics_update = kinematics.update
         self.reset()
 

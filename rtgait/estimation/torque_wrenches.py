@@ -44,6 +44,13 @@ smoother (on a backward walk of G1 in the shadow of a walk on the truth, the ZMP
 with the faster one). The wrench's filter is the response of the generalized-momentum observer (``r = K (p -
 integral(tau + C^T q' - g + r))``, ``r`` tending to ``J^T F`` as ``K / (s + K)``) with ``K = 2 pi f_c``, without its
 ``C^T q'`` pass.
+
+**Friction.** A drive that measures its torque at the motor (G1's ``tau_est``, from the current) reads the torque
+before its gears' friction: the links get ``tau_l = tau_m - tau_f(q')``. Left in, the friction of a swinging leg's
+joints (1.2 to 2.4 N m each on G1) reads as a contact force of tens of newtons (39 N at a fig8 swing's end, beyond
+the landing threshold: a touch-down detected while the foot is still 30 mm up). With ``friction`` the residual takes
+``tau_m - tau_f(q')``, ``tau_f`` the identified friction at the encoders' velocities
+(:class:`~rtgait.estimation.joint_friction.JointFriction`); a joint at rest keeps an unknown share within ``+-F_c``.
 """
 
 from __future__ import annotations
@@ -52,6 +59,7 @@ import math
 
 import numpy as np
 
+from rtgait.estimation.joint_friction import JointFriction
 from rtgait.estimation.kinematics import RobotKinematics
 from rtgait.estimation.sole_wrenches import SoleWrench, torque_wrenches
 
@@ -75,6 +83,8 @@ class TorqueWrenches:
         cutoff: the reported wrench's low-pass's cut-off (Hz), > 0; ``inf``: no filter.
         acceleration_cutoff: the accelerations' low-pass's cut-off (Hz), > 0; ``inf``: no filter.
         contact_cutoff: the contact forces' low-pass's cut-off (Hz), > 0; ``inf``: no filter.
+        friction: the joints' friction the measured (motor) torques carry and the links do not get (module
+            docstring, "Friction"); ``None``: none, the measured torques act on the links.
 
     Raises:
         ValueError: a cut-off that is not > 0, or legs that are not two of as many joints.
@@ -83,6 +93,7 @@ class TorqueWrenches:
     def __init__(
         self, kinematics: RobotKinematics, cutoff: float = DEFAULT_WRENCH_CUTOFF,
         acceleration_cutoff: float = DEFAULT_ACCELERATION_CUTOFF, contact_cutoff: float = DEFAULT_CONTACT_CUTOFF,
+        friction: JointFriction | None = None,
     ) -> None:  # fmt: skip
         if not cutoff > 0.0:
             raise ValueError(f"the wrench filter's cut-off must be > 0 Hz, got {cutoff}")
@@ -95,6 +106,10 @@ class TorqueWrenches:
         if len(legs) != 2 or len(legs[0]) != len(legs[1]) or not legs[0]:
             raise ValueError(f"leg_joints must be two legs of as many joints, got {kinematics.leg_joints!r}")
         self.kinematics, self.cutoff = kinematics, float(cutoff)
+        if friction is not None and friction.coulomb.shape != (kinematics.joint_count,):
+            raise ValueError(f"the joint friction must have one value per joint ({kinematics.joint_count}), got "
+                             f"{friction.coulomb.shape[0]}")  # fmt: skip
+        self.friction = friction
         # One slice of the joint torques for both legs when the right leg's joints follow the left's, else indices.
         both = legs[0] + legs[1]
         consecutive = both == list(range(both[0], both[0] + len(both)))
@@ -179,6 +194,8 @@ class TorqueWrenches:
         self._angular = angular_velocity
         base = self._base_acceleration((ax, ay, az), angular_velocity, specific_force, imu_position, imu_velocity)
         jacobians, needed = self._leg_dynamics(angular_velocity, base, accelerations)
+        if self.friction is not None:  # the torque that reaches the links: the motors' less their gears' friction
+            torques = torques - self.friction.torques(joint_velocities)
         left, right = torque_wrenches(jacobians, needed, torques[self._legs].reshape(self._leg_shape))
         contact = (left, right)
         if state is None:

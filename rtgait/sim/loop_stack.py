@@ -16,7 +16,7 @@ from rtgait.robot.controller_info import robot_info
 from rtgait.sim.drive_mode import torque_gains
 from rtgait.stack.estimators import make_estimator
 from rtgait.stack.feedforward import FeedForward
-from rtgait.stack.friction_compensation import FrictionCompensation
+from rtgait.stack.friction_compensation import FrictionCompensation, identified_friction
 from rtgait.stack.measured_motion import MeasuredMotion
 from rtgait.stack.walking_stack import WalkingStack
 
@@ -64,16 +64,19 @@ def build_stack(
     walk's standing feet ``start_feet`` (left, right: ``(x, y, z, yaw)``, m, rad)."""
     robot = sim.robot
     left, right = start_feet
+    # With the motor model the joints have their gears' friction: the estimate of the feet's wrenches from the joint
+    # torques takes its identified value out of them, and the feed-forward compensates it.
+    friction = identified_friction(robot) if sim.config.motor_model else None
     estimator = make_estimator(
-        options.state, robot, controller.planner.w, gravity=gravity, start_feet=(tuple(left), tuple(right))
-    )
+        options.state, robot, controller.planner.w, gravity=gravity, start_feet=(tuple(left), tuple(right)),
+        joint_friction=friction,
+    )  # fmt: skip
     # Feed-forward torques are computed at the sensed state; torque drive adds the tracking of the IK's motion
     # (measured_motion.py).
     feed = None
     if options.feeds_forward(sim.config.gains):
         tracking = MeasuredMotion(robot, track=options.drive == "torque")
-        # With the motor model the joints have their gears' friction, which the drives partly compensate.
-        compensation = FrictionCompensation.of(robot) if sim.config.motor_model else None
+        compensation = FrictionCompensation.of(robot) if friction is not None else None
         feed = FeedForward(robot, controller.sole, sim.control_dt, friction=sim.config.friction,
                            tracking=tracking, friction_compensation=compensation)  # fmt: skip
     stack = WalkingStack(estimator, controller, ik, q, feedforward=feed)

@@ -20,7 +20,7 @@ What the importer gets from the URDF and what is changed (:mod:`rtgait.sim.urdf_
 * The sensors of the description's ``[sensors]``: sites at their frames and MuJoCo's sensors on them
   (:mod:`rtgait.sim.sensor_sites`); massless, they change nothing in the physics.
 * With ``config.model_error``, the robot differs from the model the controller has of it: masses, centres of mass
-  and joint zeros drawn from that seed (:mod:`rtgait.sim.model_error`).
+  and joint zeros drawn from that seed, and with the motor model its joints' friction (:mod:`rtgait.sim.model_error`).
 * The ``implicitfast`` integrator: the servo damping is integrated implicitly, which keeps stiff, heavily damped
   servos on light links stable at a millisecond step.
 
@@ -44,7 +44,7 @@ from rtgait.robot.model import RobotModel
 from rtgait.sim.actuation import Actuation, add_actuators, own_gains, resolve_actuation
 from rtgait.sim.config import SimConfig
 from rtgait.sim.contact_model import add_floor, add_leg_shapes, add_sole, exclude_pairs, touching_pairs
-from rtgait.sim.model_error import ModelError, apply_model_error, draw
+from rtgait.sim.model_error import ModelError, apply_friction_error, apply_model_error, draw
 from rtgait.sim.motors import MotorModel, add_friction, resolve_motors
 from rtgait.sim.obstacles import add_obstacles
 from rtgait.sim.sensor_sites import SensorLayout, add_sensors
@@ -332,6 +332,8 @@ def build_sim_model(
     joint_ids = [ident(mujoco.mjtObj.mjOBJ_JOINT, name) for name in robot.joint_names]
     qpos_index = np.array([model.jnt_qposadr[j] for j in joint_ids])
     dof_index = np.array([model.jnt_dofadr[j] for j in joint_ids])
+    if error is not None and motors is not None:  # the joints' friction differs from the identified one too
+        error = apply_friction_error(model, error, dof_index)
     base_body = int(model.jnt_bodyid[ident(mujoco.mjtObj.mjOBJ_JOINT, "root")])
     sim = SimModel(
         robot=robot,

@@ -21,6 +21,7 @@ if TYPE_CHECKING:
 
     from rtgait.estimation.anchors import Pose
     from rtgait.estimation.estimator import Estimator
+    from rtgait.estimation.joint_friction import JointFriction
     from rtgait.interface.body_kinematics import BodyKinematics
     from rtgait.interface.sensor_spec import SensorSpec
     from rtgait.robot.model import RobotModel
@@ -97,7 +98,7 @@ def kinematic_inertial_estimator(
 
 def make_estimator(
     state: StateSource, robot: RobotModel, omega: float, *, gravity: float = 9.81,
-    start_feet: tuple[Pose, Pose] | None = None,
+    start_feet: tuple[Pose, Pose] | None = None, joint_friction: JointFriction | None = None,
 ) -> Estimator:  # fmt: skip
     """The estimator of ``state`` for ``robot``: ``"truth"``, the ground-truth estimator (the thresholds scaled to
     the robot's weight); ``"estimated"``, :func:`kinematic_inertial_estimator` from the standing feet
@@ -105,4 +106,6 @@ def make_estimator(
     check_state(state)
     if state == "truth":
         return GroundTruthEstimator(omega, robot.mass * gravity)
-    return kinematic_inertial_estimator(robot, omega, gravity=gravity, start_feet=start_feet)
+    return kinematic_inertial_estimator(
+        robot, omega, gravity=gravity, start_feet=start_feet, joint_friction=joint_friction
+    )

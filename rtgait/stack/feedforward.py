@@ -13,7 +13,7 @@ Per tick, from the IK's configuration ``q``:
 4. the feet's wrenches nearest that split that sum to ``W`` within the soles' contact wrench cones
    (:mod:`rtgait.robot.contact_wrenches`: closed form, a QP when a cone binds);
 5. ``tau = RNEA_joints - sum J^T w`` (N m), plus, on drives with friction, the part of it the drive compensates at
-   the IK motion's joint velocities (:mod:`rtgait.stack.friction_compensation`), which the stack's safety layer
+   the command's joint velocities (:mod:`rtgait.stack.friction_compensation`), which the stack's safety layer
    clips to the joints' torque limits and counts (:mod:`rtgait.stack.command_limits`).
 
 **The wrench the DCM law commands.** The IK's motion follows the plan's COM (with the COM correction), so the
@@ -79,8 +79,8 @@ class FeedForward:
         rate_filter: the time constant of the velocity's and acceleration's low-pass (s).
         tracking: the sensed state and tracking acceleration to compute the torques at (module docstring); ``None``:
             the IK's configuration and motion.
-        friction_compensation: the joints' friction to compensate at the IK motion's joint velocities
-            (:mod:`rtgait.stack.friction_compensation`); ``None``: none (ideal drives).
+        friction_compensation: the joints' friction to compensate at the command's joint velocities (the IK
+            motion's without them; :mod:`rtgait.stack.friction_compensation`); ``None``: none (ideal drives).
 
     Attributes:
         dynamics: the inverse dynamics (its distributor's ``qp_count`` counts the ticks the QP ran).
@@ -120,6 +120,7 @@ class FeedForward:
         out: ControlTargets | None,
         shift: tuple[float, float] | None = None,
         sensed: tuple[np.ndarray, np.ndarray, np.ndarray, Measurement, BodyKinematics | None] | None = None,
+        velocities: np.ndarray | None = None,
     ) -> np.ndarray:
         """The joints' feed-forward torques (N m, in joint order) for the IK's configuration ``q``, the IK's
         ``targets`` (their feet are the split's) and the controller's output (``None``: no controller; then
@@ -127,9 +128,13 @@ class FeedForward:
         transition's law, :mod:`rtgait.sim.start_balance`). ``sensed``: the commanded joints (rad), the encoders'
         positions (rad) and velocities (rad/s) and the tick's estimate, with which a ``tracking`` feed-forward
         computes the torques at the sensed state (module docstring), and the estimator's kinematics of those encoder
-        readings (``None``: computed again, :mod:`rtgait.stack.measured_motion`)."""
+        readings (``None``: computed again, :mod:`rtgait.stack.measured_motion`). ``velocities``: the command's joint
+        velocity references (rad/s, the joints' order), at which the friction is compensated (``None``: the IK
+        motion's)."""
         v, a = self.rates.update(q)
-        joint_velocities = v[6:]  # the IK motion's, for the friction's compensation (before the sensed state's)
+        # The friction is compensated at the velocity the drives are told to follow: the command's, which holds the
+        # feet's tilts at the ankles that the IK's motion leaves out (else the IK motion's, before the sensed state's).
+        joint_velocities = v[6:] if velocities is None else velocities
         dynamics = self.dynamics
         if self.tracking is not None and sensed is not None:
             q, v, a = self.tracking.update(q, v, a, *sensed)

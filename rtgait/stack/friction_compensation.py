@@ -7,15 +7,17 @@ Per joint, at the reference's joint velocity ``dq_ref`` (rad/s)::
 
 with ``F_c`` and ``b`` the description's Coulomb (N m) and viscous (N m s/rad) friction of the joint's motor type.
 
-**Why a fraction** ``alpha`` (:data:`IDENTIFIED_FRACTION`): a gear's friction is identified on a bench at one
-temperature and load, and the robot's differs from it (friction in planetary and harmonic gears falls as they warm
-up and grows with the load they carry, by some tens of per cent). Compensating more than the friction there is makes
-the drive push the joint along its motion (negative damping: the joint creeps and limit-cycles), compensating less
-leaves a friction that still opposes the motion. ``alpha = 0.7`` never compensates more than there is while the
-robot's friction is at least 70 % of the identified value (30 % below it, the spread assumed), and still removes
-most of the dead band a stiction of ``F_c`` makes on low-gain drives (``F_c / k_p``: 24-30 mrad on G1's legs).
+**Why all of it** (``alpha`` = :data:`IDENTIFIED_FRACTION` = 1): the robot's friction differs from the bench's
+(friction in planetary and harmonic gears falls as they warm up and grows with the load they carry, by some tens of
+per cent), so the compensation is sometimes more than there is. On the reference's velocity that surplus is a torque
+along the reference's motion, which the drive's own PD takes up (a joint ahead of its reference by ``(alpha F_c -
+F) / k_p``); it does not feed the joint's own velocity back, so it cannot act as negative damping, as a compensation on
+the measured velocity would. Compensating less leaves a dead band: on G1 with the motor model, the true friction drawn
+within +-30 % of the identified one (``--model-error 0``), fig8 falls at 6.5 s with ``alpha = 0.7`` and walks with
+``alpha = 1`` (``docs/robots.md``, "G1 at its own gains with the motor model").
 
-**Why the reference's velocity**, not the measured one: it is smooth (the IK's motion, low-passed) and known ahead,
+**Why the reference's velocity**, not the measured one: the command's (:mod:`rtgait.stack.feedforward`: the IK's
+motion with the feet's tilts at the ankles, which the drives are told to follow) is smooth and known ahead,
 so the compensation neither amplifies the encoders' noise nor switches sign at every small vibration; at
 standstill it is zero, and the stiction that then holds the joint only helps. The sign is smoothed over
 :data:`STICTION_SPEED` (``v_s``): ten to a hundred times below the joints' speeds in a gait (0.5 to 5 rad/s), so a
@@ -29,12 +31,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rtgait.estimation.joint_friction import JointFriction
+
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
 
-__all__ = ["IDENTIFIED_FRACTION", "STICTION_SPEED", "FrictionCompensation"]
+__all__ = ["IDENTIFIED_FRACTION", "STICTION_SPEED", "FrictionCompensation", "identified_friction"]
 
-IDENTIFIED_FRACTION = 0.7
+IDENTIFIED_FRACTION = 1.0
 """``alpha``: the share of the identified friction compensated (module docstring)."""
 
 STICTION_SPEED = 0.05
@@ -79,12 +83,8 @@ class FrictionCompensation:
     def of(cls, robot: RobotModel, fraction: float = IDENTIFIED_FRACTION) -> FrictionCompensation:
         """The compensation of ``robot``'s joints (``robot.joint_names`` order) from its description's motor types;
         a joint without a motor type gets none."""
-        coulomb, viscous = [], []
-        for name in robot.joint_names:
-            motor = robot.description.joint_actuation(name).motor
-            coulomb.append(0.0 if motor is None else motor.coulomb_friction)
-            viscous.append(0.0 if motor is None else motor.viscous_friction)
-        return cls(np.array(coulomb), np.array(viscous), fraction)
+        friction = identified_friction(robot)
+        return cls(friction.coulomb, friction.viscous, fraction)
 
     def torques(self, velocity: np.ndarray) -> np.ndarray:
         """``tau_f`` (N m, a new array) at the joints' reference velocities ``velocity`` (rad/s)."""
@@ -92,3 +92,14 @@ class FrictionCompensation:
         torque *= self.coulomb
         torque += self.viscous * velocity
         return torque
+
+
+def identified_friction(robot: RobotModel) -> JointFriction:
+    """The friction of ``robot``'s joints (``robot.joint_names`` order) as its description's motor types identify
+    it (:mod:`rtgait.estimation.joint_friction`); a joint without a motor type has none."""
+    coulomb, viscous = [], []
+    for name in robot.joint_names:
+        motor = robot.description.joint_actuation(name).motor
+        coulomb.append(0.0 if motor is None else motor.coulomb_friction)
+        viscous.append(0.0 if motor is None else motor.viscous_friction)
+    return JointFriction(np.array(coulomb), np.array(viscous))

@@ -275,7 +275,7 @@ class WalkingStack:
             if feedforward.tracking is not None and state is not None and readings is not None:
                 body = None if self._kinematics is None else self._kinematics.last  # of this tick's encoder readings
                 sensed = (joints, readings.joint_positions, readings.joint_velocities, state, body)
-            torques = feedforward.torques(q, targets, out, zmp_shift, sensed)
+            torques = feedforward.torques(q, targets, out, zmp_shift, sensed, velocities)
             if not math.isfinite(sum(torques.tolist())):
                 return self._damp(t, ("bad-command", "the feed-forward torques are NaN or infinite"))
             torques = clip.torques(torques)

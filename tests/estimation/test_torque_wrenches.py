@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from rtgait.estimation.joint_friction import MEASURED_STICTION_SPEED, JointFriction
 from rtgait.estimation.torque_wrenches import DEFAULT_WRENCH_CUTOFF, TorqueWrenches
 
 DT = 0.002
@@ -159,3 +160,32 @@ def test_bad_settings_are_refused():
     legs.leg_joints = (tuple(range(6)), tuple(range(7, 12)))
     with pytest.raises(ValueError, match="leg_joints"):
         TorqueWrenches(legs)
+
+
+def test_the_joints_friction_is_taken_out_of_the_motor_torques():
+    """Motor torques that carry the gears' friction on top of the links' torques: with the friction given, the
+    wrench is the ground's; without it, the friction reads as a wrench of J^-T tau_f."""
+    legs = Legs()
+    rng = np.random.default_rng(7)
+    coulomb, viscous = rng.uniform(1.0, 2.5, legs.joint_count), rng.uniform(0.1, 0.3, legs.joint_count)
+    friction = JointFriction(coulomb, viscous)
+    velocities = rng.uniform(-3.0, 3.0, legs.joint_count)
+    velocities[0] = 0.3 * MEASURED_STICTION_SPEED  # a slow joint: a part of F_c
+    # The friction opposing each joint's velocity, written out here (tanh-smoothed Coulomb, viscous).
+    tau_f = np.array([c * math.tanh(v / MEASURED_STICTION_SPEED) + b * v
+                      for c, b, v in zip(coulomb, viscous, velocities, strict=True)])  # fmt: skip
+    specific = np.array([0.0, 0.0, G])
+    ground = np.array([[2.0, -1.0, 160.0, 0.5, -1.0, 0.1], [-3.0, 4.0, 120.0, 1.0, 2.0, -0.2]])
+    motor = _torques_for(legs, ground, specific) + tau_f
+
+    def estimate(with_friction: JointFriction | None) -> np.ndarray:
+        wrenches = TorqueWrenches(legs, cutoff=math.inf, acceleration_cutoff=math.inf, friction=with_friction)
+        return np.array(wrenches.update(DT, velocities, motor, (0.0, 0.0, 0.0), tuple(specific), (0.0, 0.0, 0.0),
+                                        (0.0, 0.0, 0.0)))  # fmt: skip
+
+    np.testing.assert_allclose(estimate(friction), ground, atol=1e-9)
+    phantom = np.array([np.linalg.solve(legs.jacobians[i].T, tau_f[list(joints)])
+                        for i, joints in enumerate(legs.leg_joints)])  # fmt: skip
+    np.testing.assert_allclose(estimate(None), ground - phantom, atol=1e-9)
+    with pytest.raises(ValueError, match="one value per joint"):
+        TorqueWrenches(legs, friction=JointFriction(coulomb[:3], viscous[:3]))

@@ -20,7 +20,7 @@ from rtgait.sim.robot import SimRobot  # noqa: E402
 
 @pytest.fixture(scope="module")
 def talos_motors(talos):
-    """Talos with its motors and a model error (encoder offsets)."""
+    """Talos with its motors and a model error (encoder offsets, the joints' friction)."""
     return build_sim_model(talos, SimConfig(meshes=False, motor_model=True, model_error=3))
 
 
@@ -175,7 +175,10 @@ def test_friction_decelerates_a_free_joint_as_coulomb_and_viscous_predict(talos_
     mujoco.mj_fullM(sim.model, data, mass)
     rigid = [*range(6), dof]  # the base and the joint: the other joints held
     inertia = 1.0 / np.linalg.inv(mass[np.ix_(rigid, rigid)])[-1, -1]
-    coulomb, viscous = sim.motors.coulomb_friction[j], sim.motors.viscous_friction[j]
+    # The motor type's friction times the model error's factor for the joint (the simulated robot's, not identified).
+    factor = sim.model_error.friction_factors[j]
+    assert sim.model_error.friction_applied and factor != 1.0
+    coulomb, viscous = factor * sim.motors.coulomb_friction[j], factor * sim.motors.viscous_friction[j]
     assert coulomb > 0.0 and viscous > 0.0
     v0 = 1.0
     stop = inertia / viscous * math.log(1.0 + viscous * v0 / coulomb)

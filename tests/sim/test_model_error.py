@@ -185,3 +185,25 @@ def test_model_error_files_hold_the_drawn_values_in_their_units(perturbed: Any) 
 def test_sim_config_refuses_a_seed_that_is_not_a_whole_number(seed: Any) -> None:
     with pytest.raises(ValueError, match=r"SimConfig\.model_error"):
         SimConfig(model_error=seed)
+
+
+def test_with_the_motor_model_the_joints_friction_is_drawn_too(talos: Any, perturbed: Any) -> None:
+    """With the motor model each joint's Coulomb and viscous friction is the motor type's times its drawn factor
+    (within +-30 %, one factor for both), the other draws unchanged; without it the friction is not drawn into the
+    model nor reported."""
+    motors = build_sim_model(talos, SimConfig(meshes=False, model_error=SEED, motor_model=True))
+    error, nominal = motors.model_error, motors.motors
+    assert error.friction_applied and not perturbed.model_error.friction_applied
+    for name in ("mass_factors", "com_shifts", "joint_offsets", "friction_factors"):
+        np.testing.assert_array_equal(getattr(error, name), getattr(perturbed.model_error, name))
+    factors = error.friction_factors
+    assert np.all(np.abs(factors - 1.0) <= MODEL_ERROR_RANGES.friction) and np.ptp(factors) > 0.2
+    dofs = motors.dof_index
+    np.testing.assert_allclose(motors.model.dof_frictionloss[dofs], nominal.coulomb_friction * factors, rtol=1e-12)
+    np.testing.assert_allclose(motors.model.dof_damping[dofs], nominal.viscous_friction * factors, rtol=1e-12)
+    values, summary = error.values(), error.summary()
+    assert values["friction_factors"] == dict(zip(talos.joint_names, factors.tolist(), strict=True))
+    assert summary["ranges"]["friction_percent"] == 30.0
+    assert summary["largest"]["friction_percent"] == pytest.approx(100.0 * np.max(np.abs(factors - 1.0)))
+    assert "friction_factors" not in perturbed.model_error.values()
+    assert "friction_percent" not in perturbed.model_error.summary()["largest"]
