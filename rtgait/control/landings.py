@@ -271,9 +271,12 @@ class FootLandings(FootTargets):
             # the measured sole height is the ground's, and keeping the target's own depth instead would extend
             # the stance leg, lift the body and make the next landing later still. The target returns to it over
             # the single support this foot carries next (moved at the descent's speed, a loaded foot's target makes
-            # the ankle damping chatter).
+            # the ankle damping chatter). The target is an offset over the plan, so the ground is taken relative
+            # to the foothold's planned height: the measured height itself is that only on a floor at 0 (on a ramp
+            # down it would sink every stance target by the foothold's depth, late_descent_limit at most, and the
+            # stance leg, pushed into the ramp, would lift the body and make the next landing late too).
             limit = self.options.late_descent_limit
-            ground = min(0.0, max(-limit, landing.z))
+            ground = min(0.0, max(-limit, landing.z - self._foothold_z(i)))
             stance = q + 1 if support == "double" else q
             until = planner.phase_start(stance) + planner.timeline.duration(stance)
             self._ground[i] = (self._z[i], ground, t, max(until, t + self.dt))
