@@ -166,7 +166,7 @@ class FootLandings(FootTargets):
         if m.landings:
             before = self.targets(values)
             for landing in m.landings:
-                if self._landing(t, landing, values, support, q, events) and self.adaptive:
+                if self._landing(t, landing, m, values, support, q, events) and self.adaptive:
                     values, support, q = self.planner.sample_values(t)  # the touch-down replanned
             moved, self._moved = self._moved, [None, None]
             if moved[0] is not None or moved[1] is not None:
@@ -228,9 +228,17 @@ class FootLandings(FootTargets):
             self._blend[i] = (self._z[i], planner.phase_start(q), planner.timeline.duration(q))
 
     def _landing(
-        self, t: float, landing: Landing, values: SampleValues, support: str, q: int, events: list[ControlEvent]
+        self,
+        t: float,
+        landing: Landing,
+        m: Measurement,
+        values: SampleValues,
+        support: str,
+        q: int,
+        events: list[ControlEvent],
     ) -> bool:
-        """Classify a landing and, in ``"adaptive"``, act on it; returns whether the planner replanned."""
+        """Classify a landing (measured in ``m``) and, in ``"adaptive"``, act on it; returns whether the planner
+        replanned."""
         i = 0 if landing.side == "left" else 1
         planner = self.planner
         swinging = support in _SIDES and _SIDES[i] != support  # the plan has this foot swinging
@@ -271,12 +279,9 @@ class FootLandings(FootTargets):
             # the measured sole height is the ground's, and keeping the target's own depth instead would extend
             # the stance leg, lift the body and make the next landing later still. The target returns to it over
             # the single support this foot carries next (moved at the descent's speed, a loaded foot's target makes
-            # the ankle damping chatter). The target is an offset over the plan, so the ground is taken relative
-            # to the foothold's planned height: the measured height itself is that only on a floor at 0 (on a ramp
-            # down it would sink every stance target by the foothold's depth, late_descent_limit at most, and the
-            # stance leg, pushed into the ramp, would lift the body and make the next landing late too).
+            # the ankle damping chatter).
             limit = self.options.late_descent_limit
-            ground = min(0.0, max(-limit, landing.z - self._foothold_z(i)))
+            ground = min(0.0, max(-limit, self._depth(i, landing, m, values)))
             stance = q + 1 if support == "double" else q
             until = planner.phase_start(stance) + planner.timeline.duration(stance)
             self._ground[i] = (self._z[i], ground, t, max(until, t + self.dt))
@@ -325,6 +330,14 @@ class FootLandings(FootTargets):
         if abs(landing.pitch) > SKIM_TILT or abs(landing.roll) > SKIM_TILT:
             return None  # on an edge or a heel (a sole landing tilted under a push): its sole point is off the ground
         return landing.z, foothold.z, foothold.x, foothold.y
+
+    def _depth(self, i: int, landing: Landing, m: Measurement, values: SampleValues) -> float:
+        """How far (m) below its foothold foot ``i`` met the ground at ``landing``, measured against the other foot
+        in the estimator's frame (module docstring, "Heights"); negative: lower than planned."""
+        other = 1 - i
+        planned = values.rfoot_z if other else values.lfoot_z
+        drift = (m.right if other else m.left).pose[2] - (planned + self._z[other])
+        return landing.z - drift - self._foothold_z(i)
 
     def _foothold_z(self, i: int) -> float:
         """Height (m) of the foothold foot ``i``'s last swing went to (the plan's height for it at the swing's end);
