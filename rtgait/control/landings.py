@@ -40,10 +40,18 @@ from where the foot was last anchored. A refused touch-down is logged (``"touchd
   the landing while it skims (:attr:`FootLandings.skimming`);
 * a *late* foot's target descends, ``z <- max(z - late_descent_speed dt, -late_descent_limit)`` per tick, while the
   other foot carries the robot (auto_stabilizer ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset``
-  -0.02 m; the plan is not delayed). Once landed it stands at the ground's measured height ``z_g = min(0,
-  max(-late_descent_limit, z_l))``, reached linearly over the single support it carries next, ``z = z_land + (z_g -
-  z_land) s``, ``s = (t - t_l) / (t_end - t_l)``: kept as deep as the target went, it would extend the stance leg,
-  lift the body and make the next landing later still.
+  -0.02 m; the plan is not delayed). Once landed it stands at the ground's measured depth under its foothold,
+  ``z_g = min(0, max(-late_descent_limit, d))``, reached linearly over the single support it carries next, ``z =
+  z_land + (z_g - z_land) s``, ``s = (t - t_l) / (t_end - t_l)``: kept as deep as the target went, it would extend
+  the stance leg, lift the body and make the next landing later still. The depth is measured against the other
+  foot, both soles in the estimator's frame, ``d = (z_l - z_o) - (z_f - (z_o,plan + z_o,offset))``: ``z_l`` and
+  ``z_o`` the measured heights of the landing sole and the other one, ``z_f`` the landing's foothold height, the
+  other foot standing at its target. On the flat floor (footholds at 0, the frame on the floor) that is the
+  measured height ``z_l``; on terrain the measured height is not the depth: down a ramp it is the foothold's own
+  height (every stance target sank by up to ``late_descent_limit`` and the stance leg, pushed into the ramp,
+  lifted the body: Talos fell down ``slope-down``), and the estimated frame's height drifts where the robot climbs
+  (69 mm down over the 0.9 m of ``stairs-up``, about 11 mm a tread) while the difference of the two soles stays
+  within 0.1 mm of the truth.
 
 **Blends.** A re-anchoring moves a landed foot's target by the servo lag, and an early landing's hold starts and
 ends with a jump; with ``anchor_blend`` > 0 the IK's target goes there from its old pose and rate along the planner's
