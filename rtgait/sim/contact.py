@@ -41,8 +41,8 @@ class FallLimits:
     Attributes:
         base_height_fraction: fallen: the base below this fraction of its height at the start, both heights above
             the terrain under the base (on a ramp down the base goes down with the ground it walks on: G1's, 0.74 m
-            up at the start, went under 0.6 of that above the floor's plane 0.25 m down ``slope-down-g1``'s ramp,
-            still 0.69 m above the ramp).
+            up at the start, went under 0.6 of that above the floor's plane 0.27 m down ``slope-down-g1``'s ramp,
+            still 0.72 m above the ramp).
         tilt: fallen: the base tilted from upright beyond this angle (rad).
         airborne: fallen: no foot on the floor for longer than this (s).
         tip_angle: tipped over: a foot carrying more than half the load tilted from level beyond this angle (rad).
