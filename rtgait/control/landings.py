@@ -40,10 +40,18 @@ from where the foot was last anchored. A refused touch-down is logged (``"touchd
   the landing while it skims (:attr:`FootLandings.skimming`);
 * a *late* foot's target descends, ``z <- max(z - late_descent_speed dt, -late_descent_limit)`` per tick, while the
   other foot carries the robot (auto_stabilizer ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset``
-  -0.02 m; the plan is not delayed). Once landed it stands at the ground's measured height ``z_g = min(0,
-  max(-late_descent_limit, z_l))``, reached linearly over the single support it carries next, ``z = z_land + (z_g -
-  z_land) s``, ``s = (t - t_l) / (t_end - t_l)``: kept as deep as the target went, it would extend the stance leg,
-  lift the body and make the next landing later still.
+  -0.02 m; the plan is not delayed). Once landed it stands at the ground's measured depth under its foothold,
+  ``z_g = min(0, max(-late_descent_limit, d))``, reached linearly over the single support it carries next, ``z =
+  z_land + (z_g - z_land) s``, ``s = (t - t_l) / (t_end - t_l)``: kept as deep as the target went, it would extend
+  the stance leg, lift the body and make the next landing later still. The depth is measured against the other
+  foot, both soles in the estimator's frame, ``d = (z_l - z_o) - (z_f - (z_o,plan + z_o,offset))``: ``z_l`` and
+  ``z_o`` the measured heights of the landing sole and the other one, ``z_f`` the landing's foothold height, the
+  other foot standing at its target. On the flat floor (footholds at 0, the frame on the floor) that is the
+  measured height ``z_l``; on terrain the measured height is not the depth: down a ramp it is the foothold's own
+  height (every stance target sank by up to ``late_descent_limit`` and the stance leg, pushed into the ramp,
+  lifted the body: Talos fell down ``slope-down``), and the estimated frame's height drifts where the robot climbs
+  (69 mm down over the 0.9 m of ``stairs-up``, about 11 mm a tread) while the difference of the two soles stays
+  within 0.1 mm of the truth.
 
 **Blends.** A re-anchoring moves a landed foot's target by the servo lag, and an early landing's hold starts and
 ends with a jump; with ``anchor_blend`` > 0 the IK's target goes there from its old pose and rate along the planner's
@@ -166,7 +174,7 @@ class FootLandings(FootTargets):
         if m.landings:
             before = self.targets(values)
             for landing in m.landings:
-                if self._landing(t, landing, values, support, q, events) and self.adaptive:
+                if self._landing(t, landing, m, values, support, q, events) and self.adaptive:
                     values, support, q = self.planner.sample_values(t)  # the touch-down replanned
             moved, self._moved = self._moved, [None, None]
             if moved[0] is not None or moved[1] is not None:
@@ -228,9 +236,17 @@ class FootLandings(FootTargets):
             self._blend[i] = (self._z[i], planner.phase_start(q), planner.timeline.duration(q))
 
     def _landing(
-        self, t: float, landing: Landing, values: SampleValues, support: str, q: int, events: list[ControlEvent]
+        self,
+        t: float,
+        landing: Landing,
+        m: Measurement,
+        values: SampleValues,
+        support: str,
+        q: int,
+        events: list[ControlEvent],
     ) -> bool:
-        """Classify a landing and, in ``"adaptive"``, act on it; returns whether the planner replanned."""
+        """Classify a landing (measured in ``m``) and, in ``"adaptive"``, act on it; returns whether the planner
+        replanned."""
         i = 0 if landing.side == "left" else 1
         planner = self.planner
         swinging = support in _SIDES and _SIDES[i] != support  # the plan has this foot swinging
@@ -273,7 +289,7 @@ class FootLandings(FootTargets):
             # the single support this foot carries next (moved at the descent's speed, a loaded foot's target makes
             # the ankle damping chatter).
             limit = self.options.late_descent_limit
-            ground = min(0.0, max(-limit, landing.z))
+            ground = min(0.0, max(-limit, self._depth(i, landing, m, values)))
             stance = q + 1 if support == "double" else q
             until = planner.phase_start(stance) + planner.timeline.duration(stance)
             self._ground[i] = (self._z[i], ground, t, max(until, t + self.dt))
@@ -322,6 +338,14 @@ class FootLandings(FootTargets):
         if abs(landing.pitch) > SKIM_TILT or abs(landing.roll) > SKIM_TILT:
             return None  # on an edge or a heel (a sole landing tilted under a push): its sole point is off the ground
         return landing.z, foothold.z, foothold.x, foothold.y
+
+    def _depth(self, i: int, landing: Landing, m: Measurement, values: SampleValues) -> float:
+        """How far (m) below its foothold foot ``i`` met the ground at ``landing``, measured against the other foot
+        in the estimator's frame (module docstring, "Heights"); negative: lower than planned."""
+        other = 1 - i
+        planned = values.rfoot_z if other else values.lfoot_z
+        drift = (m.right if other else m.left).pose[2] - (planned + self._z[other])
+        return landing.z - drift - self._foothold_z(i)
 
     def _foothold_z(self, i: int) -> float:
         """Height (m) of the foothold foot ``i``'s last swing went to (the plan's height for it at the swing's end);

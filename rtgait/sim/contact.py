@@ -39,7 +39,10 @@ class FallLimits:
     """When the robot has fallen (any of the first three ends the run) or tipped over (recorded only).
 
     Attributes:
-        base_height_fraction: fallen: the base below this fraction of its height at the start.
+        base_height_fraction: fallen: the base below this fraction of its height at the start, both heights above
+            the terrain under the base (on a ramp down the base goes down with the ground it walks on: G1's, 0.74 m
+            up at the start, went under 0.6 of that above the floor's plane 0.27 m down ``slope-down-g1``'s ramp,
+            still 0.72 m above the ramp).
         tilt: fallen: the base tilted from upright beyond this angle (rad).
         airborne: fallen: no foot on the floor for longer than this (s).
         tip_angle: tipped over: a foot carrying more than half the load tilted from level beyond this angle (rad).
@@ -98,7 +101,7 @@ class ContactMonitor:
         self.tip_time: float | None = None
         self._cos_tip = math.cos(falls.tip_angle)
         self._cos_fall = math.cos(falls.tilt)
-        self._z_low = falls.base_height_fraction * float(data.qpos[2])
+        self._z_low = falls.base_height_fraction * (float(data.qpos[2]) - self._ground(data.qpos[0], data.qpos[1]))
         self._airborne_ticks = max(1, round(falls.airborne / dt))
         self._airborne = 0
 
@@ -150,15 +153,19 @@ class ContactMonitor:
     def fall(self, base: np.ndarray) -> str | None:
         """Why the robot has fallen, from the base pose ``(x, y, z, qw, qx, qy, qz)`` at the tick last measured,
         or ``None``."""
-        _, _, z, _, bx, by, _ = base.tolist()  # Python floats: cheaper than numpy scalars
+        x, y, z, _, bx, by, _ = base.tolist()  # Python floats: cheaper than numpy scalars
         upright = 1.0 - 2.0 * (bx * bx + by * by)  # z component of the base's z axis
-        if z < self._z_low:
+        if (z if self._terrain is None else z - self._ground(x, y)) < self._z_low:
             return "base too low"
         if upright < self._cos_fall:
             return "base tilted"
         if self._airborne >= self._airborne_ticks:
             return "no foot on the floor"
         return None
+
+    def _ground(self, x: float, y: float) -> float:
+        """Height (m) of the terrain under ``(x, y)`` (m): 0 on the flat floor."""
+        return 0.0 if self._terrain is None else float(self._terrain.height(float(x), float(y)))
 
     def zmp(self, ticks: int) -> np.ndarray:
         """The measured ZMP (m) over the first ``ticks`` ticks, shape ``(ticks, 2)``; NaN while no foot touched."""

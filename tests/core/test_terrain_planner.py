@@ -104,6 +104,41 @@ def test_a_touchdown_keeps_the_planned_height_of_the_foothold():
     assert planner.footprints()[3].x == pytest.approx(planned.x + 0.01)
 
 
+def _short_touchdown(name: str, index: int, short: float):
+    """The footprints of ``name`` before and after ``F[index]`` lands ``short`` (m) behind its foothold."""
+    scenario = load_scenario(name)
+    planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
+    planner.start(0.0)
+    t = planner.timeline.start_time(2 * index - 3) + 0.5  # the single support that swings F[index]
+    planner.sample(t)
+    before = planner.footprints()
+    planned = before[index]
+    planner.touchdown(t + 0.1, planned.side, planned.x - short, planned.y, planned.yaw)
+    return before, planner.footprints()
+
+
+def test_a_touchdown_short_on_a_slope_leaves_the_later_footholds_where_they_were_placed():
+    # F[13] is the last foothold on the ramp of slope-down-g1 (pitched), F[14] the first level one after it, 6 cm past
+    # the ramp's end under G1's heel: a landing 3 cm short must not carry it back over the ramp.
+    before, after = _short_touchdown("slope-down-g1", 13, 0.03)
+    assert before[13].pitch > 0.1 and before[14].pitch == 0.0
+    assert after[13].x == pytest.approx(before[13].x - 0.03)
+    assert (after[13].z, after[13].pitch) == (before[13].z, before[13].pitch)  # the planned surface stays
+    for later, placed in zip(after[14:], before[14:], strict=True):
+        assert (later.x, later.y, later.z, later.yaw, later.pitch) == pytest.approx(
+            (placed.x, placed.y, placed.z, placed.yaw, placed.pitch), abs=1e-12
+        )
+
+
+@pytest.mark.parametrize("name", ["stairs-up", "fig8"])
+def test_a_touchdown_short_on_level_ground_carries_the_later_footholds_with_it(name):
+    # A foothold on a level tread (or the floor) keeps its height where it moves: the footprints after it follow it.
+    before, after = _short_touchdown(name, 3, 0.01)
+    assert before[3].pitch == 0.0
+    for later, placed in zip(after[4:], before[4:], strict=True):
+        assert (later.x - placed.x, later.y - placed.y, later.z - placed.z) == pytest.approx((-0.01, 0.0, 0.0))
+
+
 @pytest.mark.parametrize("phase_share", [0.3, 0.7])
 def test_a_replan_mid_phase_continues_the_height(phase_share):
     scenario = load_scenario("stairs-up")

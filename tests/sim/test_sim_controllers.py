@@ -18,7 +18,7 @@ from rtgait.control.controller import (
     step_limits,
 )
 from rtgait.control.foot_control import split_zmp
-from rtgait.core.geometry.footsteps import SoleRect, Timing
+from rtgait.core.geometry.footsteps import SoleRect, Stride, Timing
 from rtgait.core.laws.stepping import SteppingLimits
 from rtgait.core.planner.levels import CONTROLLER_LEVELS, level_config
 from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
@@ -347,6 +347,48 @@ def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_gro
     assert blended == pytest.approx(0.5 * ground, abs=1e-9)
     out, t = walk_to(ctl, planner.phase_start(6) + DT, t)
     assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(0.0, abs=1e-9)
+
+
+RAMP = 0.2  # rad: a ramp down, its footholds 2 cm lower at every 0.1 m step
+RAMP_DROP = 0.02
+
+
+def sunk(m: Measurement, drift: float) -> Measurement:
+    """``m`` with both soles measured ``drift`` (m) lower: the estimator's frame sunk under the robot."""
+    feet = [foot._replace(pose=(*foot.pose[:2], foot.pose[2] + drift, foot.pose[3])) for foot in (m.left, m.right)]
+    return m._replace(left=feet[0], right=feet[1])
+
+
+@pytest.mark.parametrize(("drift", "depth"), [(0.0, 0.0), (-0.03, 0.0), (0.0, -0.008), (-0.03, -0.008)])
+def test_adaptive_late_touchdown_down_a_ramp_stands_at_the_ground_it_met_relative_to_its_foothold(drift, depth):
+    # The footholds are 2, 4, 6 cm down a ramp; the late foot meets the ground `depth` below its foothold, measured in
+    # an estimated frame `drift` below the world (both soles). Its target stands `depth` below the plan: the offset
+    # over the plan is the ground's depth under the foothold, measured against the other foot (the measured height
+    # itself, -2 cm and lower, would sink every stance target by the foothold's depth down to late_descent_limit).
+    strides = [Stride(0.1, CONFIG.step_width, 0.0, -RAMP_DROP, RAMP)] * 3 + [
+        Stride(0.0, CONFIG.step_width, 0.0, 0.0, RAMP)
+    ]
+    options = ControllerOptions(measurement_filter=0.0, foot=None, late_grace=0.0)
+    ctl = make_controller("adaptive", CONFIG, strides, SOLE, INFO, dt=DT, options=options)
+    ctl.start(0.0)
+    start, duration, swing = first_swing(ctl)
+    side = ("left", "right")[swing]
+    not_down = (True, False) if swing == 1 else (False, True)
+    _, t = walk_to(ctl, start + duration)
+    _, t = walk_to(ctl, t + 0.02, t, loaded=not_down)  # the swing ended in the air: late, its target descending
+    planner = ctl.planner
+    target = planner.footprints()[2]
+    assert target.z == pytest.approx(-RAMP_DROP)
+    landing = Landing(t, side, target.x, target.y, target.z + depth + drift, target.yaw, 0.0, RAMP, 40.0)
+    values, support, _ = planner.sample_values(t)
+    out = ctl.tick(t, sunk(on_plan(t, values, support, landings=[landing], loaded=(True, True)), drift))
+    assert [e.detail for e in out.events if e.kind == "landing"] == ["late"]
+    # Over the single support it carries next (phase 3) its target goes to `depth` below the plan, and stays.
+    end = planner.phase_start(3) + planner.timeline.duration(3)
+    out, t = walk_to(ctl, end + DT, t + DT)
+    values, _, _ = planner.sample_values(t - DT)
+    foot = out.left_foot if swing == 0 else out.right_foot
+    assert foot[2] - planned_height(values, swing) == pytest.approx(depth, abs=1e-9)
 
 
 def test_stabilized_logs_landings_without_touching_the_plan():

@@ -119,3 +119,25 @@ def test_a_height_field_is_built_from_the_same_grid_its_footholds_are_fitted_to(
     # Around the grid the ground is level at 0.
     for a, b in ((0.1, 0.0), (2.7, 0.0), (1.0, 0.6), (1.0, -0.6)):
         assert _ray_height(model, data, a, b) == pytest.approx(0.0, abs=1e-12)
+
+
+_BASE = """<mujoco><worldbody><body name="base" pos="0 0 {z}"><freejoint/><geom size="0.1" mass="1"/>
+<site name="left" pos="0 0.1 -0.7"/><site name="right" pos="0 -0.1 -0.7"/></body></worldbody></mujoco>"""
+
+
+@pytest.mark.parametrize("terrain", [None, Slope(-math.radians(10.0), 2.0, start=0.5)])
+def test_the_base_is_too_low_by_its_height_above_the_terrain_under_it(terrain) -> None:
+    # A base 0.74 m up at the start falls under 0.6 of that above the ground under it: down a ramp the ground under
+    # it goes down too, and a base 0.7 m above the ramp 0.3 m down is standing (0.4 m above the floor's plane).
+    from rtgait.sim.contact import ContactMonitor, FallLimits
+
+    model = mujoco.MjModel.from_xml_string(_BASE.format(z=0.74))
+    data = mujoco.MjData(model)
+    sites = (model.site("left").id, model.site("right").id)
+    monitor = ContactMonitor(data, *sites, 10, 1.0, FallLimits(), 0.001, terrain)
+    x = 0.5 + 0.3 / math.tan(math.radians(10.0))  # 0.3 m down the ramp
+    ground = 0.0 if terrain is None else -0.3
+    upright = (1.0, 0.0, 0.0, 0.0)  # (qw, qx, qy, qz)
+    assert monitor.fall(np.array([x, 0.0, ground + 0.7, *upright])) is None
+    assert monitor.fall(np.array([x, 0.0, ground + 0.6 * 0.74 - 0.01, *upright])) == "base too low"
+    assert monitor.fall(np.array([x, 0.0, ground + 0.6 * 0.74 + 0.01, *upright])) is None

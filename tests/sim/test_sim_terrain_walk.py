@@ -1,5 +1,6 @@
-"""A walk onto terrain in physics (CI-fast): Talos walks six steps up the 10 degree ramp of ``slope-up`` on the
-estimated state, its soles turned to the ramp, and ends at rest on it, its COG risen with the footholds."""
+"""A walk onto terrain in physics (CI-fast): Talos walks six steps up the 10 degree ramp of ``slope-up`` (and down
+``slope-down``'s) on the estimated state, its soles turned to the ramp, and ends at rest on it, its COG risen (gone
+down) with the footholds."""
 
 from __future__ import annotations
 
@@ -58,3 +59,19 @@ def test_talos_climbs_stairs_and_ends_at_rest_on_a_tread(talos, shorten) -> None
     assert last.z >= 0.3 - 1e-9, "at least two treads up"
     start = int(np.searchsorted(result.times, 0.0))
     assert result.cog[-1, 2] - result.cog[start, 2] == pytest.approx(last.z, abs=0.01)
+
+
+def test_talos_walks_down_the_ramp_and_stands_on_it(talos, shorten) -> None:
+    # Steps 3 to 6 land down the ramp from x = 0.5 m, the closing step too. A late landing's ground taken as its
+    # measured height over the plan (the foothold's own depth) sank every stance target into the ramp, and the
+    # estimator took the whipped late foot for a landing 16 mm above the ramp: the foot tipped at 5.4 s.
+    scenario = shorten("slope-down", 6)
+    result = simulate(scenario, talos)
+    assert result.state == "estimated"
+    assert not result.fell and result.steps_completed == 7
+    assert result.ended_at_rest and result.tip_time is None
+    last = result.footprints[-1]
+    assert last.z == pytest.approx(-math.tan(math.radians(10.0)) * 0.7)  # x = 1.2 m, 0.7 m down the ramp
+    start = int(np.searchsorted(result.times, 0.0))
+    assert result.cog[-1, 2] - result.cog[start, 2] == pytest.approx(last.z, abs=0.01)
+    np.testing.assert_allclose(result.sole_tilt[-1], math.radians(10.0), atol=0.02)

@@ -102,7 +102,8 @@ class MeasuredPlanning:
     def touchdown(self, t: float, side: Side, x: float, y: float, yaw: float) -> int:
         """A foot is on the ground at ``(x, y)`` (m) with heading ``yaw`` (rad): where a swing foot really landed,
         or where a stance foot slipped to. Its footprint is replaced and every later footprint follows it (strides
-        stay relative), so errors never accumulate. Returns the footprint index replaced.
+        stay relative), so errors never accumulate; after a foothold on sloped ground the later ones stay where they
+        were placed (:meth:`~rtgait.core.walk.changes.WalkChanges.retarget`). Returns the footprint index replaced.
 
         The plan under way is remade at once from its own state at ``t`` (:meth:`replan_now`, reason
         ``"touchdown"``), so the ZMP rests on the new footprint from the end of the phase under way on (unless the

@@ -254,7 +254,16 @@ class WalkChanges:
 
     def retarget(self, index: int, footprint: Footstep) -> None:
         """Replace ``F[index]`` by ``footprint`` (where a foot really is); later footprints follow it, their
-        strides unchanged."""
+        strides unchanged, except after a foothold on sloped ground (``footprint`` pitched or rolled): there
+        ``F[index + 1]`` and the rest stay where they were placed, the next stride taking up the difference.
+
+        On a slope a foothold's height and tilt are those of the ground where it was placed: carried along the
+        slope by the landings' errors it keeps them where the ground has others (``d tan(a)`` higher or lower for
+        ``d`` along a ramp of angle ``a``), and at the slope's end a foothold planned level ends up with its heel or
+        toe on the ramp. G1 landing 4 to 8 mm short at every step down ``slope-down-g1``'s ramp carried the level
+        foothold after it 57 mm back, its heel on the ramp's last 6 cm: the sole stood on its heel edge and rolled
+        back. A foothold on level ground (the floor, a stair tread) keeps its height where it moves, and the
+        footprints after it follow it, as on the flat floor."""
         if footprint.side != self.footprint(index).side:
             raise InputOutOfBoundsError(
                 f"footprint {index} is a {self.footprint(index).side} foot, got a {footprint.side} one"
@@ -269,6 +278,12 @@ class WalkChanges:
             with contextlib.suppress(ValueError):
                 self._strides[index - 2 - self.base] = stride_between(self._prints[index - 1 - self.base], footprint)
         self._prints[index - self.base] = footprint
+        following = index + 1 - self.base
+        if (footprint.pitch or footprint.roll) and index - 1 - self.base >= 0 and following < len(self._prints):
+            # The next stride from where the foot is to the next foothold, kept in place (the walk's own feet
+            # cannot cross there unless the landing crossed them: then the stride stays and it follows).
+            with contextlib.suppress(ValueError):
+                self._strides[index - 1 - self.base] = stride_between(footprint, self._prints[following])
         self._rebuild(max(index, 1))  # F[1] does not follow F[0]: both stand where they were measured
 
     def restart(self, feet: tuple[Footstep, Footstep] | None = None) -> None:
