@@ -41,9 +41,11 @@ from where the foot was last anchored. A refused touch-down is logged (``"touchd
 * a *late* foot's target descends, ``z <- max(z - late_descent_speed dt, -late_descent_limit)`` per tick, while the
   other foot carries the robot (auto_stabilizer ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset``
   -0.02 m; the plan is not delayed). Once landed it stands at the ground's measured height ``z_g = min(0,
-  max(-late_descent_limit, z_l))``, reached linearly over the single support it carries next, ``z = z_land + (z_g -
-  z_land) s``, ``s = (t - t_l) / (t_end - t_l)``: kept as deep as the target went, it would extend the stance leg,
-  lift the body and make the next landing later still.
+  max(-late_descent_limit, z_l))`` on the starting floor (on a foothold at another height, a stair tread, the
+  measured height carries the estimate's vertical drift: ``z_g = 0``, the foothold's planned height), reached
+  linearly over the single support it carries next, ``z = z_land + (z_g - z_land) s``, ``s = (t - t_l) / (t_end -
+  t_l)``: kept as deep as the target went, it would extend the stance leg, lift the body and make the next landing
+  later still.
 
 **Blends.** A re-anchoring moves a landed foot's target by the servo lag, and an early landing's hold starts and
 ends with a jump; with ``anchor_blend`` > 0 the IK's target goes there from its old pose and rate along the planner's
@@ -273,7 +275,10 @@ class FootLandings(FootTargets):
             # the single support this foot carries next (moved at the descent's speed, a loaded foot's target makes
             # the ankle damping chatter).
             limit = self.options.late_descent_limit
-            ground = min(0.0, max(-limit, landing.z))
+            # Off the starting floor (a stair tread) the sole's measured height carries the estimate's vertical
+            # drift, which grows with every tread, and the floor's 0 is no reference: the foothold's planned height
+            # is kept there (on a tread below the floor the clamp would sink the target by the whole limit).
+            ground = min(0.0, max(-limit, landing.z)) if self._foothold_z(i) == 0.0 else 0.0
             stance = q + 1 if support == "double" else q
             until = planner.phase_start(stance) + planner.timeline.duration(stance)
             self._ground[i] = (self._z[i], ground, t, max(until, t + self.dt))

@@ -150,8 +150,10 @@ class ContactMonitor:
     def fall(self, base: np.ndarray) -> str | None:
         """Why the robot has fallen, from the base pose ``(x, y, z, qw, qx, qy, qz)`` at the tick last measured,
         or ``None``."""
-        _, _, z, _, bx, by, _ = base.tolist()  # Python floats: cheaper than numpy scalars
+        x, y, z, _, bx, by, _ = base.tolist()  # Python floats: cheaper than numpy scalars
         upright = 1.0 - 2.0 * (bx * bx + by * by)  # z component of the base's z axis
+        if self._terrain is not None:  # the height above the terrain under the base: down a stair it goes down too
+            z -= float(self._terrain.height(x, y))
         if z < self._z_low:
             return "base too low"
         if upright < self._cos_fall:
