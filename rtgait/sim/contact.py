@@ -39,7 +39,8 @@ class FallLimits:
     """When the robot has fallen (any of the first three ends the run) or tipped over (recorded only).
 
     Attributes:
-        base_height_fraction: fallen: the base below this fraction of its height at the start.
+        base_height_fraction: fallen: the base below this fraction of its height at the start (above the terrain under
+            it off the flat floor).
         tilt: fallen: the base tilted from upright beyond this angle (rad).
         airborne: fallen: no foot on the floor for longer than this (s).
         tip_angle: tipped over: a foot carrying more than half the load tilted from level beyond this angle (rad).
