@@ -1,5 +1,5 @@
-"""Toe-off: the rear heel lifting about the toe before a step that changes height, the foot levelling again in its
-swing up a stair and keeping its toe down to the landing down one.
+"""Toe-off: the rear heel lifting about the toe before a step that changes height, the foot levelling again early in
+its swing up a stair and late in its swing down one.
 
 Climbing (or descending) a stair, the rear foot stays a tread below (above) the COG's new height; with its sole level
 the leg runs out of length or its ankle out of dorsiflexion at the end of the double support. Walking robots on
@@ -17,12 +17,15 @@ over the first :data:`RELEASE` of its swing's horizontal progress ``u`` (as in :
 
     theta = THETA (1 - smooth(u / RELEASE)).
 
-Down a stair the foot keeps its toe-off pitch, ``theta = THETA``, through
-the whole swing and comes down toe first (the swing leg, straight, reaches the lower tread sooner; the ankle,
-folded under the hip as the foot passes the stance foot, is spared its dorsiflexion limit); in the double support
-that follows the sole flattens, ``theta = THETA (1 - smooth(z_x / t))``
-with ``z_x`` the ZMP ahead of the rear foot: flat before the ZMP leaves the rear foot's sole, so that the ZMP is in
-the hull of the rear sole and the front toe line meanwhile, and the rear heel only rises after.
+Down a stair the foot keeps its toe-off pitch through the swing (the ankle, folded under the hip as the foot passes
+the stance foot, is spared its dorsiflexion limit) and levels over the last :data:`RELEASE` of it,
+
+    theta = THETA (1 - smooth((u - 1 + RELEASE) / RELEASE)),
+
+to land flat: with the stance lowered before the step down (:mod:`rtgait.core.geometry.support_height`) the leg
+reaches the lower tread flat, and a flat sole carries load from its touch-down, where a toe-first landing stayed
+unloaded until it had flattened, a tenth of a second into the double support, while the ZMP could not move onto
+it (``docs/results.md``).
 
 Pitching by ``theta`` about the toe moves the sole point (the target, under the ankle) from ``p`` to
 
@@ -51,7 +54,8 @@ MIN_RISE = 0.01
 """Height change of a step (m) from which the rear foot rolls onto its toe; smaller steps walk as on the flat."""
 
 RELEASE = 0.3
-"""Fraction of a swing's horizontal progress over which the sole levels again after a toe-off up a stair."""
+"""Fraction of a swing's horizontal progress over which the sole levels after a toe-off: the first up a stair, the
+last down one."""
 
 NEAR = 0.02
 """Distance (m) within which a foot target counts as standing on a foothold of its side: the closed loop's targets
@@ -87,11 +91,6 @@ def _next_own(prints: Sequence[Footstep], i: int) -> Footstep | None:
     return next((step for step in prints[i + 1 :] if step.side == side), None)
 
 
-def _previous_own(prints: Sequence[Footstep], i: int) -> Footstep | None:
-    side = prints[i].side
-    return next((prints[j] for j in range(i - 1, -1, -1) if prints[j].side == side), None)
-
-
 def toe_pitch(
     prints: Sequence[Footstep],
     front: float,
@@ -112,11 +111,8 @@ def toe_pitch(
         reach = (ahead_foot[0] - rear[0]) * c + (ahead_foot[1] - rear[1]) * s
         if reach <= front:
             return 0.0
-        if own > there:  # the front foot, landed on its toe after a step down, flattens before the ZMP leaves the rear
-            previous = _previous_own(prints, own)
-            if previous is None or stair_rise(previous, prints[own]) >= 0.0:
-                return 0.0
-            return THETA * (1.0 - _smooth(min(1.0, max(0.0, ahead / front))))
+        if own > there:  # the front foot stands flat (it landed flat, also after a step down)
+            return 0.0
         landing = _next_own(prints, own)
         if landing is None or stair_rise(prints[own], landing) == 0.0:
             return 0.0
@@ -133,11 +129,11 @@ def toe_pitch(
     rise = 0.0 if b is None else stair_rise(a, b)
     if rise == 0.0:
         return 0.0
-    if rise < 0.0:  # a step down: the toe stays down from the lift-off to the toe-first landing
-        return THETA
     dx, dy = b.x - a.x, b.y - a.y
     length2 = dx * dx + dy * dy
     u = 1.0 if length2 == 0.0 else min(1.0, max(0.0, ((foot[0] - a.x) * dx + (foot[1] - a.y) * dy) / length2))
+    if rise < 0.0:  # a step down: the toe stays down until the last RELEASE of the swing, which lands flat
+        return THETA * (1.0 - _smooth(min(1.0, max(0.0, (u - 1.0 + RELEASE) / RELEASE))))
     return THETA * (1.0 - _smooth(min(1.0, u / RELEASE)))
 
 
