@@ -20,10 +20,13 @@ from rtgait.scenario.loading import load_scenario
 TEN_DEGREES = math.radians(10.0)
 # name: (height of the last foothold (m), largest full-ZMP error allowed (m)): stairs 6 x 15 cm, slopes 10 deg x 2 m.
 # Down the stairs each stance before a step down holds its support height half a riser lower (support_height.py): the
-# full ZMP then errs by (r/2) |c''| / g in those single supports, 0.075 m x 0.13 = 10 mm at most.
+# full ZMP then errs by (r/2) |c''| / g in those single supports, 0.075 m x 0.13 = 10 mm at most (0.0925 m x 0.13 =
+# 12 mm down BaselineWalkingController's 18.5 cm staircase).
 OUTCOMES = {
     "stairs-up": (0.9, 0.005),
     "stairs-down": (-0.9, 0.012),
+    "stairs-up-185": (6 * 0.185, 0.005),
+    "stairs-down-185": (-6 * 0.185, 0.0145),
     "slope-up": (2.0 * math.tan(TEN_DEGREES), 0.001),
     "slope-down": (-2.0 * math.tan(TEN_DEGREES), 0.001),
     "stepping-stones": (0.0, 1e-9),
