@@ -59,7 +59,7 @@ def test_the_full_zmp_error_of_a_lowered_stance_is_the_method_s_term() -> None:
     scenario, _, result = _walk("stairs-down")
     error = zmp_error(result, scenario.terrain.terrain, scenario.gravity)
     acc = np.hypot(result.column("cog_ax"), result.column("cog_ay"))
-    predicted = 0.5 * 0.15 * acc / (scenario.gravity + result.column("cog_az"))  # (h - p_z) |c''_xy| / (c_z'' + g)
+    predicted = 0.5 * 0.15 * acc / (scenario.gravity + result.column("cog_az"))  # |p_z - h| |c''_xy| / (c_z'' + g)
     prints = result.footprints
     for k in np.flatnonzero(result.support != "double"):
         q = int(result.phase[k])

@@ -12,7 +12,7 @@ swing lands on a lower stair-like foothold ``F[i + 1]`` (both level, at least ``
 so that at the touch-down the COG is ``zc - r/2`` above the stance sole and ``zc + r/2`` above the landing one: the
 riser split evenly between the two legs, the stance knee bending by what the landing leg is spared. Every other
 stance (level ground, a step up, a slope, whose footholds turn the soles instead) holds ``h_i = z_i``: those walks
-are unchanged. The price is the term ``(h - p_z) c''_xy / (c_z'' + g)`` of the horizontal ZMP (``docs/method.md``
+are unchanged. The price is the term ``(p_z - h) c''_xy / (c_z'' + g)`` of the horizontal ZMP (``docs/method.md``
 eq. 4) in those single supports, ``r/2`` times the COG's horizontal acceleration over ``g``: millimetres, measured by
 :func:`rtgait.core.analysis.height_error.zmp_error`.
 """
