@@ -18,7 +18,10 @@ from rtgait.core.analysis.rollout import rollout
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.scenario.loading import load_scenario
 
-SCENARIOS = ("stairs-up", "stairs-down", "slope-up", "slope-down", "stepping-stones", "unseen-step")
+SCENARIOS = (
+    "stairs-up", "stairs-down", "stairs-up-185", "stairs-down-185", "slope-up", "slope-down", "stepping-stones",
+    "unseen-step",
+)  # fmt: skip
 
 
 def _rms_mm(values: np.ndarray) -> float:

@@ -285,8 +285,8 @@ def test_scenarios_lists_every_builtin_with_its_description(capsys: pytest.Captu
     names = [line.split()[0] for line in lines]
     assert names == [
         "fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "obstacle", "sidestep", "slope-down",
-        "slope-down-g1", "slope-up", "slope-up-g1", "stairs-down", "stairs-down-g1", "stairs-up", "stairs-up-g1",
-        "stepping-stones", "turn", "unseen-step", "unseen-step-g1",
+        "slope-down-g1", "slope-up", "slope-up-g1", "stairs-down", "stairs-down-185", "stairs-down-g1", "stairs-up",
+        "stairs-up-185", "stairs-up-g1", "stepping-stones", "turn", "unseen-step", "unseen-step-g1",
     ]  # fmt: skip
     assert all(len(line.split(maxsplit=1)) == 2 for line in lines)
 

@@ -24,7 +24,10 @@ from rtgait.scenario.loading import builtin_scenarios, load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
 
 BUILTINS = ("fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "obstacle", "sidestep", "turn")
-TERRAIN_BUILTINS = ("slope-down", "slope-up", "stairs-down", "stairs-up", "stepping-stones", "unseen-step")
+TERRAIN_BUILTINS = (
+    "slope-down", "slope-up", "stairs-down", "stairs-down-185", "stairs-up", "stairs-up-185", "stepping-stones",
+    "unseen-step",
+)  # fmt: skip
 """Talos's walks off the flat floor, tested in tests/test_terrain_scenarios.py."""
 G1_TERRAIN_BUILTINS = ("slope-down-g1", "slope-up-g1", "stairs-down-g1", "stairs-up-g1", "unseen-step-g1")
 """G1's variants, the terrain placed for its sole (tests/sim/test_sim_terrain_walk.py)."""
@@ -98,8 +101,8 @@ def test_builtin_listing_names_every_file_with_a_one_line_description() -> None:
     # Natural order: fig4 before fig11.
     assert tuple(listing) == (
         "fig4", "fig6", "fig7", "fig8", "fig8-real-time", "fig11", "guided", "obstacle", "sidestep", "slope-down",
-        "slope-down-g1", "slope-up", "slope-up-g1", "stairs-down", "stairs-down-g1", "stairs-up", "stairs-up-g1",
-        "stepping-stones", "turn", "unseen-step", "unseen-step-g1",
+        "slope-down-g1", "slope-up", "slope-up-g1", "stairs-down", "stairs-down-185", "stairs-down-g1", "stairs-up",
+        "stairs-up-185", "stairs-up-g1", "stepping-stones", "turn", "unseen-step", "unseen-step-g1",
     )  # fmt: skip
     assert set(listing) == {*BUILTINS, *TERRAIN_BUILTINS, *G1_TERRAIN_BUILTINS}
     for description in listing.values():

@@ -64,10 +64,11 @@ def near_ground(
     """Whether each foot (left, right) may become loaded: the lowest sole heights ``heights`` (m, one frame), the
     feet's load states ``loaded`` at the last tick. A loaded foot may; an unloaded one if its sole is at most
     ``clearance`` above the other's (loaded or not: the lower foot is on or above the ground), plus the planned
-    ``rise`` of the ground under it: ``rise`` is the left foot's planned ground height less the right's (m), so a
-    foot landing on a planned stair tread higher than the other foot's is let down onto it."""
+    ``rise`` of the ground under it over the other's: ``rise`` is the left foot's planned ground height less the
+    right's (m). A foot landing on a planned stair tread higher than the other foot's is let down onto it; one
+    swinging down to a lower tread is taken as landed only within ``clearance`` of that tread's height (over the
+    stair it leaves, its toe pointed down, the ankle sensor reads the swing's own load: docs/results.md)."""
     if math.isinf(clearance):
         return True, True
     left, right = heights
-    up_left, up_right = (rise, 0.0) if rise > 0.0 else (0.0, -rise)
-    return loaded[0] or left - right <= clearance + up_left, loaded[1] or right - left <= clearance + up_right
+    return loaded[0] or left - right <= clearance + rise, loaded[1] or right - left <= clearance - rise

@@ -1,6 +1,7 @@
-"""Toe-off and toe-first landing on stairs (rtgait.core.geometry.toe_off): the toe stays on its foothold while the
-heel is up, the pitch is continuous, and the planner's ZMP lies in the reduced support (the toe line of the rolled
-foot with the other foot) whenever a foot is on its toe; a flat walk is unchanged."""
+"""Toe-off on stairs (rtgait.core.geometry.toe_off): the toe stays on its foothold while the heel is up, the pitch is
+continuous, and the planner's ZMP lies in the reduced support (the toe line of the rolled foot with the other foot)
+whenever a foot is on its toe; down a stair the swing keeps its toe down past the stance foot and lands flat; a flat
+walk is unchanged."""
 
 from __future__ import annotations
 
@@ -115,3 +116,28 @@ def test_the_pitch_is_continuous_and_bounded() -> None:
     # Never a jump between ticks: the sole turns slower than Talos's ankle pitch joint may (its URDF's limit).
     dt = walk.times[1] - walk.times[0]
     assert np.abs(np.diff(pitch, axis=0)).max() / dt < TALOS_ANKLE_PITCH_SPEED
+
+
+def test_down_a_stair_the_swing_keeps_its_toe_down_and_lands_flat() -> None:
+    walk = _walk("stairs-down")
+    feet = _feet(walk)
+    prints = walk.footprints
+    phase = walk.phase.astype(int)
+    descents = 0
+    for q in range(3, int(phase.max()), 2):  # single supports 2i - 1: step i swings F[i - 1] to F[i + 1]
+        i = (q + 1) // 2
+        if i + 1 >= len(prints) or prints[i + 1].z > prints[i - 1].z - 0.01:
+            continue
+        descents += 1
+        ticks = np.flatnonzero(phase == q)
+        side = 0 if prints[i + 1].side == "left" else 1
+        start, end = prints[i - 1], prints[i + 1]
+        for k in ticks:
+            foot = feet[k][side]
+            u = (foot[0] - FRONT + FRONT * math.cos(foot[4]) - start.x) / (end.x - start.x)  # the level sole point
+            if 0.3 <= u <= 0.7:
+                assert foot[4] == pytest.approx(THETA)  # toe down as it passes the stance foot
+        assert feet[ticks[-1]][side][4] == pytest.approx(0.0, abs=1e-9)  # flat at the touch-down
+        landed = np.flatnonzero(phase == q + 1)
+        assert max(feet[k][side][4] for k in landed) == 0.0  # and flat through the double support that follows
+    assert descents >= 5

@@ -82,3 +82,13 @@ def test_a_planned_rise_lets_a_foot_down_onto_a_higher_tread_and_no_higher() -> 
     assert near_ground(clearance, unloaded, (0.15 + clearance + 0.005, 0.0), rise=0.15) == (False, True)
     assert near_ground(clearance, unloaded, (0.0, 0.15), rise=0.15) == (True, False)
     assert near_ground(clearance, unloaded, (0.0, 0.15), rise=-0.15) == (True, True)
+
+
+def test_a_planned_drop_keeps_a_foot_swinging_down_a_stair_from_landing_above_the_lower_tread() -> None:
+    # The right foot stands on the upper tread; the left swings to a tread 0.15 m lower. Its toe 2 cm above the upper
+    # tread is no landing (without the planned drop it would be one), near the lower tread it is.
+    clearance, stance = DEFAULT_LANDING_CLEARANCE, (False, True)
+    assert near_ground(clearance, stance, (0.02, 0.0)) == (True, True)
+    assert near_ground(clearance, stance, (0.02, 0.0), rise=-0.15) == (False, True)
+    assert near_ground(clearance, stance, (-0.15 + clearance - 0.005, 0.0), rise=-0.15) == (True, True)
+    assert near_ground(clearance, stance, (-0.15 + clearance + 0.005, 0.0), rise=-0.15) == (False, True)

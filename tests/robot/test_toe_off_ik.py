@@ -1,6 +1,7 @@
 """Talos climbs the built-in 15 cm stairs kinematically only with its rear heel rolled onto the toe: the IK reaches
 every tick of ``stairs-up`` with the toe-off, and refuses the walk at step 2 without it (the reach check of
-rtgait.robot.motion); at the lift-off the solved sole is pitched by the toe-off's angle."""
+rtgait.robot.motion); at the lift-off the solved sole is pitched by the toe-off's angle. Down the same stairs it
+reaches every tick only with the stance's support height lowered before each step down (support_height.py)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import pytest
 
 pin = pytest.importorskip("pinocchio")
 
-from rtgait.core.geometry import toe_off  # noqa: E402
+from rtgait.core.geometry import support_height, toe_off  # noqa: E402
 from rtgait.robot.motion import UnreachableError, whole_body_motion  # noqa: E402
 from tests.robot.conftest import planned_walk  # noqa: E402  (the robot's own COG height, stance and sole)
 
@@ -30,3 +31,13 @@ def test_talos_reaches_the_stairs_with_the_toe_off_and_not_without(talos, monkey
     monkeypatch.setattr(toe_off, "THETA", 0.0)
     with pytest.raises(UnreachableError, match=r"step 2 .* out of reach for talos"):
         whole_body_motion(talos, walk)
+
+
+def test_talos_reaches_down_the_stairs_with_the_stance_lowered_and_not_without(talos, monkeypatch) -> None:
+    walk = planned_walk(talos, "stairs-down")
+    motion = whole_body_motion(talos, walk)
+    assert motion.errors[:, 0].max() < 1e-3  # the COG tracked (m)
+    # The landing leg does not reach the lower tread with the COG held over the upper one.
+    monkeypatch.setattr(support_height, "DESCENT_SHARE", 0.0)
+    with pytest.raises(UnreachableError, match=r"step 2 .* out of reach for talos"):
+        whole_body_motion(talos, planned_walk(talos, "stairs-down"))

@@ -124,7 +124,7 @@ def place_walk(
                 f"{name} must stand on level ground at height 0: start the terrain farther ahead (got z = "
                 f"{foot.z:.3g} m, pitch {foot.pitch:.3g} rad)"
             )
-        if foot.z <= -PIT_DEPTH + EDGE_TOLERANCE:
+        if getattr(terrain, "kind", None) == "stones" and foot.z <= -PIT_DEPTH + EDGE_TOLERANCE:  # in a stone's pit
             raise TerrainWalkError(f"{name} lands off the surface at x = {foot.x:.3g} m, y = {foot.y:.3g} m")
         lowest, _ = sole_gap(terrain, foot, sole)
         if lowest < -EDGE_TOLERANCE:

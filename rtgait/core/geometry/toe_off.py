@@ -1,5 +1,5 @@
-"""Toe-off: the rear heel lifting about the toe before a step that changes height, and the foot levelling again early
-in its swing.
+"""Toe-off: the rear heel lifting about the toe before a step that changes height, the foot levelling again early in
+its swing up a stair and late in its swing down one.
 
 Climbing (or descending) a stair, the rear foot stays a tread below (above) the COG's new height; with its sole level
 the leg runs out of length or its ankle out of dorsiflexion at the end of the double support. Walking robots on
@@ -12,16 +12,20 @@ in the double support before its swing, where ``z_x`` is the ZMP's distance ahea
 along its heading, ``t`` the sole's toe (its ``front``) and ``d`` the front foot's distance. The heel starts to rise
 only once the ZMP is ahead of the toe line: from then on the support is the hull of the rear toe line and the front
 foot, and the planner's ZMP, a straight line from the rear foot to the front foot in double support and on the
-front foot at the lift-off (``s = 1``), lies in it. In the swing that follows the foot, on its toe at the lift-off,
-levels again over the first :data:`RELEASE` of its horizontal progress ``u`` (as in :mod:`foot_tilt`):
+front foot at the lift-off (``s = 1``), lies in it. Up a stair the foot, on its toe at the lift-off, levels again
+over the first :data:`RELEASE` of its swing's horizontal progress ``u`` (as in :mod:`foot_tilt`):
 
     theta = THETA (1 - smooth(u / RELEASE)).
 
-After a step down the landing foot comes down toe first (the swing leg, straight, reaches the lower tread sooner):
-its toe turns down over the last :data:`RELEASE` of the swing's progress, ``theta = THETA smooth((u - 1 + RELEASE)
-/ RELEASE)``, and in the double support that follows the sole flattens, ``theta = THETA (1 - smooth(z_x / t))``
-with ``z_x`` the ZMP ahead of the rear foot: flat before the ZMP leaves the rear foot's sole, so that the ZMP is in
-the hull of the rear sole and the front toe line meanwhile, and the rear heel only rises after.
+Down a stair the foot keeps its toe-off pitch through the swing (the ankle, folded under the hip as the foot passes
+the stance foot, is spared its dorsiflexion limit) and levels over the last :data:`RELEASE` of it,
+
+    theta = THETA (1 - smooth((u - 1 + RELEASE) / RELEASE)),
+
+to land flat: with the stance lowered before the step down (:mod:`rtgait.core.geometry.support_height`) the leg
+reaches the lower tread flat, and a flat sole carries load from its touch-down, where a toe-first landing stayed
+unloaded until it had flattened, a tenth of a second into the double support, while the ZMP could not move onto
+it (``docs/results.md``).
 
 Pitching by ``theta`` about the toe moves the sole point (the target, under the ankle) from ``p`` to
 
@@ -38,7 +42,7 @@ from collections.abc import Sequence
 
 from rtgait.core.geometry.footsteps import Footstep
 
-__all__ = ["MIN_RISE", "NEAR", "RELEASE", "THETA", "changes_height", "toe_off_feet", "toe_pitch"]
+__all__ = ["MIN_RISE", "NEAR", "RELEASE", "THETA", "changes_height", "stair_rise", "toe_off_feet", "toe_pitch"]
 
 THETA = 0.4
 """Largest toe-off pitch (rad, 23 degrees): the heel up by ``front sin(THETA)`` (4 cm for Talos, 5 cm for G1) at the
@@ -50,7 +54,8 @@ MIN_RISE = 0.01
 """Height change of a step (m) from which the rear foot rolls onto its toe; smaller steps walk as on the flat."""
 
 RELEASE = 0.3
-"""Fraction of a swing's horizontal progress over which the sole levels again after a toe-off."""
+"""Fraction of a swing's horizontal progress over which the sole levels after a toe-off: the first up a stair, the
+last down one."""
 
 NEAR = 0.02
 """Distance (m) within which a foot target counts as standing on a foothold of its side: the closed loop's targets
@@ -73,7 +78,7 @@ def _index(prints: Sequence[Footstep], foot: Sequence[float], side: str) -> int 
     return index
 
 
-def _rise(a: Footstep, b: Footstep) -> float:
+def stair_rise(a: Footstep, b: Footstep) -> float:
     """The height change (m) of a stair-like step from foothold ``a`` to ``b``: both level, heights :data:`MIN_RISE`
     or more apart; 0 for any other step (a slope's footholds turn the soles to the surface instead: foot_tilt.py)."""
     if a.pitch or a.roll or b.pitch or b.roll or abs(b.z - a.z) < MIN_RISE:
@@ -84,11 +89,6 @@ def _rise(a: Footstep, b: Footstep) -> float:
 def _next_own(prints: Sequence[Footstep], i: int) -> Footstep | None:
     side = prints[i].side
     return next((step for step in prints[i + 1 :] if step.side == side), None)
-
-
-def _previous_own(prints: Sequence[Footstep], i: int) -> Footstep | None:
-    side = prints[i].side
-    return next((prints[j] for j in range(i - 1, -1, -1) if prints[j].side == side), None)
 
 
 def toe_pitch(
@@ -111,13 +111,10 @@ def toe_pitch(
         reach = (ahead_foot[0] - rear[0]) * c + (ahead_foot[1] - rear[1]) * s
         if reach <= front:
             return 0.0
-        if own > there:  # the front foot, landed on its toe after a step down, flattens before the ZMP leaves the rear
-            previous = _previous_own(prints, own)
-            if previous is None or _rise(previous, prints[own]) >= 0.0:
-                return 0.0
-            return THETA * (1.0 - _smooth(min(1.0, max(0.0, ahead / front))))
+        if own > there:  # the front foot stands flat (it landed flat, also after a step down)
+            return 0.0
         landing = _next_own(prints, own)
-        if landing is None or _rise(prints[own], landing) == 0.0:
+        if landing is None or stair_rise(prints[own], landing) == 0.0:
             return 0.0
         return THETA * _smooth(min(1.0, max(0.0, (ahead - front) / (reach - front))))
     if own is not None or there is None:
@@ -129,15 +126,15 @@ def toe_pitch(
         return 0.0
     a = prints[lift]
     b = _next_own(prints, lift)
-    if b is None or _rise(a, b) == 0.0:
+    rise = 0.0 if b is None else stair_rise(a, b)
+    if rise == 0.0:
         return 0.0
     dx, dy = b.x - a.x, b.y - a.y
     length2 = dx * dx + dy * dy
     u = 1.0 if length2 == 0.0 else min(1.0, max(0.0, ((foot[0] - a.x) * dx + (foot[1] - a.y) * dy) / length2))
-    theta = THETA * (1.0 - _smooth(min(1.0, u / RELEASE)))
-    if _rise(a, b) < 0.0:  # a step down lands toe first: the toe turns down over the swing's last RELEASE
-        theta += THETA * _smooth(min(1.0, max(0.0, (u - 1.0 + RELEASE) / RELEASE)))
-    return theta
+    if rise < 0.0:  # a step down: the toe stays down until the last RELEASE of the swing, which lands flat
+        return THETA * (1.0 - _smooth(min(1.0, max(0.0, (u - 1.0 + RELEASE) / RELEASE))))
+    return THETA * (1.0 - _smooth(min(1.0, u / RELEASE)))
 
 
 def _rolled(foot: Sequence[float], front: float, theta: float) -> tuple[float, ...]:
@@ -169,6 +166,6 @@ def changes_height(prints: Sequence[Footstep]) -> bool:
     somewhere)."""
     for i in range(len(prints)):
         landing = _next_own(prints, i)
-        if landing is not None and _rise(prints[i], landing) != 0.0:
+        if landing is not None and stair_rise(prints[i], landing) != 0.0:
             return True
     return False

@@ -25,6 +25,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from rtgait.core.geometry.footsteps import Footstep, Side, Stride, Timeline, Timing, place_step, standing_feet
+from rtgait.core.geometry.support_height import stance_support_height
 from rtgait.core.walk.changes import (
     StepChangeTooLateError,
     StopCancelledWarning,
@@ -197,14 +198,20 @@ class Walk(WalkChanges):
         return anchors
 
     def heights_from(self, i0: int, relative: Sequence[tuple[int, int]]) -> list[float] | None:
-        """The footholds' heights (m) under the anchors of :meth:`anchors_from`, ``None`` when all are 0 (level
-        ground: the plan needs no vertical column)."""
+        """The support heights (m) under the anchors of :meth:`anchors_from`, ``None`` when all are 0 (level
+        ground: the plan needs no vertical column): a stance foothold's height, lowered before a step down
+        (:func:`~rtgait.core.geometry.support_height.stance_support_height`), or the mean of the final feet's."""
         prints = self._prints
         start = i0 - self.base
+        last = len(prints) - 1
         heights = []
         for a, b in relative:
-            za = prints[start + a].z
-            heights.append(za if a == b else 0.5 * (za + prints[start + b].z))
+            fa = prints[start + a]
+            if a == b:
+                landing = prints[start + a + 1] if start + a < last else None  # where the swing from F[a] lands
+                heights.append(stance_support_height(fa, landing))
+            else:
+                heights.append(0.5 * (fa.z + prints[start + b].z))
         return heights if any(heights) else None
 
     # ----- deadlines ---------------------------------------------------------------------------------------
