@@ -7,10 +7,10 @@ numbers are those ``rtgait plan`` reports for the same scenario. A base scenario
 a footstep plan) is rolled out case by case instead, with the same results, slowly.
 
 A base with a ``[terrain]`` table is batched as well: each case's footholds placed on the terrain as ``rtgait plan``
-places them (a ``walk.step_length`` moves them onto other heights), their heights and the terrain handed to the batch
-with the parameters, and the results gain :data:`~rtgait.sweep.store.TERRAIN_COLUMNS`: the range of the planned COG
-height and the error the vertical motion adds to the horizontal ZMP, as ``summary.json``'s ``terrain`` entry (the
-preview baseline plans flat and has none).
+places them (a ``walk.step_length`` moves them onto other heights), their heights, the support heights their stances
+hold (lowered before a step down) and the terrain handed to the batch with the parameters, and the results gain
+:data:`~rtgait.sweep.store.TERRAIN_COLUMNS`: the range of the planned COG height and the error the vertical motion
+adds to the horizontal ZMP, as ``summary.json``'s ``terrain`` entry (the preview baseline plans flat and has none).
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ import numpy as np
 from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters
 from rtgait.core.analysis.preview import PREVIEW_PERIOD, PreviewPlanner, evaluate_preview
 from rtgait.core.geometry.footsteps import place_footsteps, standing_feet
+from rtgait.core.geometry.support_height import support_heights
 from rtgait.scenario.scenario import Scenario
 from rtgait.sweep.spec import SweepSpec, case_scenario
 from rtgait.sweep.store import TERRAIN_COLUMNS
@@ -45,7 +46,7 @@ def evaluate_group(spec: SweepSpec, group: list[tuple[str, dict[str, Any]]]) -> 
     """Results (case id -> fields of :data:`~rtgait.sweep.store.PENDULUM_COLUMNS`) of one group of cases."""
     first = case_scenario(spec.base, group[0][1])
     method = group[0][1].get("connection", first.connection)
-    heights = None
+    heights = support = None
     try:
         walk = _walk(first, method)
         theta = np.stack([_parameters(walk, spec.base, values) for _, values in group])
@@ -55,8 +56,8 @@ def evaluate_group(spec: SweepSpec, group: list[tuple[str, dict[str, Any]]]) -> 
         else:
             terrain = None if first.terrain is None else first.terrain.terrain
             if terrain is not None:
-                heights = _case_heights(spec.base, [values for _, values in group])
-            result = evaluate_parameters(walk, theta, heights, terrain)
+                heights, support = _case_heights(spec.base, [values for _, values in group])
+            result = evaluate_parameters(walk, theta, heights, terrain, support)
             margin, time, deviation = result.zmp_margin_min, result.zmp_margin_min_time, result.zmp_deviation_max
             decisions = list(result.decisions)
     except ValueError as error:
@@ -71,9 +72,10 @@ def evaluate_group(spec: SweepSpec, group: list[tuple[str, dict[str, Any]]]) -> 
     return out
 
 
-def _case_heights(base: Scenario, cases: list[dict[str, Any]]) -> np.ndarray:
-    """The footholds' heights ``(cases, steps + 2)`` (m) each case walks on: its footprints placed on the terrain
-    (checked), as the planner takes them, from its strides. Cases of the same step length share them."""
+def _case_heights(base: Scenario, cases: list[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
+    """The footholds' heights and the support heights their stances hold, each ``(cases, steps + 3)`` (m), of the
+    footprints each case walks on: placed on the terrain (checked), as the planner takes them, from its strides.
+    Cases of the same step length share them."""
     known: dict[Any, np.ndarray] = {}
     rows = []
     for values in cases:
@@ -82,13 +84,15 @@ def _case_heights(base: Scenario, cases: list[dict[str, Any]]) -> np.ndarray:
             scenario = case_scenario(base, {"walk.step_length": length}) if "walk.step_length" in values else base
             known[length] = _planned_heights(scenario)
         rows.append(known[length])
-    return np.stack(rows)
+    both = np.stack(rows)
+    return both[:, 0], both[:, 1]
 
 
 def _planned_heights(scenario: Scenario) -> np.ndarray:
-    """The heights (m) of the footprints ``F[0..n+1]`` the planner walks, from ``scenario``'s strides."""
+    """The heights and the stances' support heights ``(2, n + 2)`` (m) of the footprints ``F[0..n+1]`` the planner
+    walks, from ``scenario``'s strides."""
     prints = place_footsteps(standing_feet(scenario.step_width, scenario.first_foot), scenario.strides())
-    return np.array([foot.z for foot in prints])
+    return np.array([[foot.z for foot in prints], support_heights(prints)])
 
 
 def evaluate_cases(

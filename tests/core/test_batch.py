@@ -9,11 +9,13 @@ import numpy as np
 import pytest
 
 from rtgait.core import OnlinePlanner, PlannerConfig, ScheduledChange, SoleRect, Stride, Timing, rollout
-from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, evaluate_walks
+from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, evaluate_walks, walk_family
+from rtgait.core.analysis.family_key import family_key
 from rtgait.core.analysis.walk_family import TIE
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.geometry.hull import PointChain, outside_margin, sole_extents, two_box_hull, two_box_vertices
 from rtgait.core.geometry.support import signed_margin, support_polygon
+from rtgait.core.geometry.support_height import support_heights
 from rtgait.io.plan_summary import summarize
 from rtgait.scenario.loading import load_scenario
 from rtgait.viz.margin_marker import MARGIN_TIE_TOLERANCE, margin_marker
@@ -101,6 +103,38 @@ def test_one_family_many_rows_equals_one_by_one():
         want = reference(one.planner_config(), one.sole, one.dt, one.steps, one.step_length, one.changes)
         assert_same(many, i, want)
     assert many.zmp_outside.any() and not many.zmp_outside.all()
+
+
+def test_random_rises_give_the_planner_s_cog_height_at_every_tick():
+    """Seeded random walks whose steps go up, down a stair (the stance before it holds a lower support height) or by
+    less than a stair's rise: the batch's COG height at every tick is the rollout's, from the footholds' heights and
+    the stances' support heights alone."""
+    rng = np.random.default_rng(20261205)
+    lowered = 0
+    for _ in range(8):
+        config, sole, dt, steps, length, changes = random_case(rng)
+        rises = rng.choice([-0.15, -0.06, -0.004, 0.0, 0.004, 0.1], size=steps).tolist()
+        strides = [Stride(length, config.step_width, rise=r) for r in rises] + [Stride(0.0, config.step_width)]
+        run = rollout(OnlinePlanner(config, strides), dt, sole, changes)
+        heights = np.array([foot.z for foot in run.footprints])
+        support = np.array(support_heights(run.footprints))
+        lowered += int(np.sum(support < heights - 1e-9))
+        walk = StraightWalk(config, sole, dt, steps, length, changes, tuple(heights), tuple(support))
+        family = walk_family(family_key(config, sole, dt, steps, walk.shapes()))
+        np.testing.assert_allclose(family.cog_heights(heights, support)[0], run.column("cog_z"), rtol=0, atol=1e-9)
+        got = evaluate_walks([walk])
+        assert got.cog_z_min[0] == pytest.approx(run.column("cog_z").min(), abs=1e-9)
+        assert got.cog_z_max[0] == pytest.approx(run.column("cog_z").max(), abs=1e-9)
+    assert lowered >= 5  # the stances' own support heights were exercised, not only the footholds'
+
+
+def test_support_heights_need_the_footholds_heights_and_their_shape():
+    scenario = load_scenario("stairs-down")
+    walk = as_walk(scenario)
+    with pytest.raises(ValueError, match="footholds' heights"):
+        evaluate_parameters(walk, walk.parameters(), support=np.zeros((1, scenario.steps + 3)))
+    with pytest.raises(ValueError, match="support heights must be finite"):
+        evaluate_parameters(walk, walk.parameters(), np.zeros((1, scenario.steps + 3)), support=np.zeros((1, 3)))
 
 
 def test_ties_are_broken_as_rtgait_plan_does():

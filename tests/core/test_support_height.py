@@ -78,3 +78,16 @@ def test_stairs_up_are_unchanged() -> None:
     stance_z = np.array([result.contacts[int(q)][0].z for q in result.phase[single]])
     cz, az = result.column("cog_z"), result.column("cog_az")
     np.testing.assert_allclose((cz - az / planner.w**2)[single], stance_z + scenario.cog_height, atol=1e-9)
+
+
+def test_a_stance_at_the_horizon_s_end_is_lowered_whatever_the_walk_has_made_so_far() -> None:
+    # The footprints are made lazily; the last stance of a plan must still see where its swing lands. A run whose
+    # footprints were all made first (as the walking stack does) plans the same COG height to the last bit.
+    scenario = load_scenario("stairs-down")
+    runs = []
+    for made_first in (False, True):
+        planner = OnlinePlanner(scenario.planner_config(), scenario.strides())
+        if made_first:
+            planner.walk.footprints()
+        runs.append(rollout(planner, scenario.dt, scenario.sole, scenario.changes).column("cog_z"))
+    np.testing.assert_array_equal(runs[0], runs[1])

@@ -1,7 +1,7 @@
-"""Batched evaluation and sweeps off the flat floor: the footholds' heights carried through the vertical column, the
-batch equal to the per-walk planner (its rollout, what ``rtgait plan`` reports: the COG height's range and the ZMP
-error the vertical motion adds) on stairs, slopes and an unseen step, and a sweep file naming a terrain scenario, a
-height field's among them."""
+"""Batched evaluation and sweeps off the flat floor: the footholds' heights (and the stances' support heights, lowered
+before a step down) carried through the vertical column, the batch equal to the per-walk planner (its rollout, what
+``rtgait plan`` reports: the COG height's range and the ZMP error the vertical motion adds) on stairs up and down,
+slopes and an unseen step, and a sweep file naming a terrain scenario, a height field's among them."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from rtgait.core.analysis.batch import StraightWalk, evaluate_parameters, evalua
 from rtgait.core.analysis.family_key import family_key
 from rtgait.core.analysis.rollout import ScheduledChange, rollout
 from rtgait.core.geometry.footsteps import place_footsteps, standing_feet
+from rtgait.core.geometry.support_height import support_heights
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.scenario.loading import load_scenario
 from rtgait.sweep.pendulum import evaluate_group, groups, rolled_out
@@ -25,27 +26,36 @@ from rtgait.sweep.store import PENDULUM_COLUMNS, TERRAIN_COLUMNS, read_results
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "heightfield"
 
 
+def _prints(scenario):
+    return place_footsteps(standing_feet(scenario.step_width, scenario.first_foot), scenario.strides())
+
+
 def _heights(scenario) -> np.ndarray:
-    prints = place_footsteps(standing_feet(scenario.step_width, scenario.first_foot), scenario.strides())
-    return np.array([foot.z for foot in prints])
+    return np.array([foot.z for foot in _prints(scenario)])
 
 
 def _walk(scenario, changes=()) -> StraightWalk:
+    support = tuple(support_heights(_prints(scenario)))  # the stances' support heights, as the walk takes them
     return StraightWalk(scenario.planner_config(), scenario.sole, scenario.dt, scenario.steps, scenario.step_length,
-                        tuple(changes), tuple(_heights(scenario)))  # fmt: skip
+                        tuple(changes), tuple(_heights(scenario)), support)  # fmt: skip
 
 
+@pytest.mark.parametrize(("base", "drop"), [("stairs-up", -0.9), ("stairs-down", 0.9), ("stairs-down-185", 6 * 0.185)])
 @pytest.mark.parametrize("connection", ["quasi-real-time", "real-time"])
-def test_the_batched_cog_height_of_stairs_up_is_the_planner_s_at_every_tick(connection):
-    scenario = case_scenario(load_scenario("stairs-up"), {"connection": connection})
-    change = ScheduledChange(step=3, length=0.22)  # handed over while climbing: the rise of each stride stays
+def test_the_batched_cog_height_on_stairs_is_the_planner_s_at_every_tick(base, drop, connection):
+    scenario = case_scenario(load_scenario(base), {"connection": connection})
+    change = ScheduledChange(step=3, length=0.22)  # handed over on the stairs: the rise of each stride stays
     run = rollout(OnlinePlanner(scenario.planner_config(), scenario.strides()), scenario.dt, scenario.sole, [change])
     walk = _walk(scenario, [change])
     family = walk_family(family_key(walk.config, walk.sole, walk.dt, walk.steps, walk.shapes()))
-    cog_z = family.cog_heights(_heights(scenario))[0]
+    cog_z = family.cog_heights(_heights(scenario), walk.support)[0]
     np.testing.assert_allclose(family.times, run.times, rtol=0, atol=1e-12)
     np.testing.assert_allclose(cog_z, run.column("cog_z"), rtol=0, atol=1e-9)
-    assert cog_z.max() - cog_z.min() > 0.8  # six 15 cm risers climbed
+    assert cog_z[0] - cog_z[-1] == pytest.approx(drop, abs=1e-6)  # six risers climbed or come down, at rest
+    lowered = np.subtract(walk.support, walk.heights) < -1e-9
+    assert lowered.any() == (drop > 0)  # down the stairs the stances before a step down hold a lower support height
+    if drop > 0:  # and without them the batch would not be the planner: the test sees them
+        assert np.abs(family.cog_heights(_heights(scenario))[0] - run.column("cog_z")).max() > 1e-3
     # The whole batch: the horizontal numbers as before, the COG height's range as `rtgait plan` reports it.
     result = evaluate_parameters(walk, walk.parameters())
     assert result.zmp_margin_min[0] == pytest.approx(run.zmp_margin_min, abs=1e-9)
@@ -70,6 +80,9 @@ def test_walks_with_and_without_heights_in_one_batch():
         ("slope-down", {"walk.step_length": [0.2, 0.22], "connection": ["quasi-real-time"]}),
         # A plan that does not know the terrain: flat heights, the ZMP error from the step it does not know.
         ("unseen-step", {"timing.double_support": [0.2, 0.3], "connection": ["quasi-real-time"]}),
+        # Down: the stance before each step down holds its support height half a riser lower.
+        ("stairs-down", {"timing.double_support": [0.3], "connection": ["quasi-real-time", "real-time"]}),
+        ("stairs-down-185", {"timing.double_support": [0.3, 0.45], "connection": ["quasi-real-time", "auto"]}),
     ],
 )
 def test_a_terrain_sweep_gives_the_per_walk_planner_s_results(base, axes):

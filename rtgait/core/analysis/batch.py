@@ -21,10 +21,12 @@ by everything but those numbers (one :class:`~rtgait.core.analysis.walk_family.W
 group evaluated in one vectorised pass. The ``"auto"`` connection is evaluated by the rule of
 :mod:`rtgait.core.planner.auto`, its predictions made the same way.
 
-Off the flat floor a walk's footholds carry heights ``z = (z_0 .. z_n+1)`` (m): the horizontal numbers do not change
-(the 3D-DCM/VRP form keeps the horizontal equation, ``docs/method.md``) and the planned COG height is linear in ``z``
-(:mod:`rtgait.core.analysis.family_height`), so a walk given its heights (:attr:`StraightWalk.heights`, or ``heights``
-rows next to ``theta``) also gets the range of its COG height, ``cog_z_min`` and ``cog_z_max`` (m), the numbers
+Off the flat floor a walk's footholds carry heights ``z = (z_0 .. z_n+1)`` (m) and its stances support heights ``h``
+(``z`` but before a step down, :mod:`rtgait.core.geometry.support_height`): the horizontal numbers do not change (the
+3D-DCM/VRP form keeps the horizontal equation, ``docs/method.md``) and the planned COG height is linear in ``z`` and
+``h`` (:mod:`rtgait.core.analysis.family_height`), so a walk given them (:attr:`StraightWalk.heights` and
+:attr:`StraightWalk.support`, or ``heights`` and ``support`` rows next to ``theta``) also gets the range of its COG
+height, ``cog_z_min`` and ``cog_z_max`` (m), the numbers
 ``rtgait plan`` reports as ``cog_height_range``; given the terrain too, the error the vertical motion adds to the
 horizontal ZMP, ``zmp_error_max`` and ``zmp_error_rms`` (m, the full point-mass ZMP against the planned one on the
 terrain's plane under the nearest contact foot, :mod:`rtgait.core.analysis.height_error`), as ``rtgait plan``
@@ -69,7 +71,9 @@ class StraightWalk:
 
     ``config.connection`` may be ``"real-time"``, ``"quasi-real-time"`` or ``"auto"``; ``dt`` is the sampling
     period (s) and ``sole`` the sole rectangle of the support polygons (m). ``heights``: the footholds' heights
-    ``F[0..steps+1]`` (m) on a terrain, ``None`` on the flat floor.
+    ``F[0..steps+2]`` (m, the closing step's too) on a terrain, ``None`` on the flat floor; ``support``: the support
+    height each of them holds as a stance (m, :func:`~rtgait.core.geometry.support_height.support_heights`),
+    ``None``: its own height.
     """
 
     config: PlannerConfig
@@ -79,6 +83,7 @@ class StraightWalk:
     step_length: float
     changes: tuple[ScheduledChange, ...] = ()
     heights: tuple[float, ...] | None = None
+    support: tuple[float, ...] | None = None
 
     def shapes(self) -> tuple[ChangeShape, ...]:
         """The changes as :class:`~rtgait.core.analysis.family_key.ChangeShape` s, each handed over at its mode's
@@ -136,19 +141,27 @@ def walk_family(key: FamilyKey) -> WalkFamily:
 
 
 def evaluate_parameters(
-    walk: StraightWalk, theta: np.ndarray, heights: np.ndarray | None = None, terrain: Terrain | None = None
+    walk: StraightWalk,
+    theta: np.ndarray,
+    heights: np.ndarray | None = None,
+    terrain: Terrain | None = None,
+    support: np.ndarray | None = None,
 ) -> BatchResult:
     """Evaluate the walks that are ``walk`` with the parameters ``theta`` ``(B, P)`` (:meth:`StraightWalk.parameters`
     layout: ``[1, step_length, step_width, change values...]``, m): one family, the fastest path. ``heights``
-    ``(B, steps + 2)`` (m): each walk's footholds' heights (default: ``walk.heights`` for every row, if any);
-    ``terrain``: the ground they walk on, for the vertical motion's ZMP error (needs heights)."""
+    ``(B, steps + 3)`` (m): each walk's footholds' heights (default: ``walk.heights`` for every row, if any);
+    ``terrain``: the ground they walk on, for the vertical motion's ZMP error (needs heights); ``support``
+    ``(B, steps + 3)`` (m): the support height each foothold holds as a stance (default: ``walk.support`` given
+    ``walk.heights``, else ``heights``)."""
     theta = np.atleast_2d(np.asarray(theta, dtype=float))
     if not np.all(np.isfinite(theta)):
         raise ValueError("theta must be finite")
     if heights is None and walk.heights is not None:
         heights = np.repeat(np.asarray(walk.heights, dtype=float)[None], len(theta), axis=0)
-    if terrain is not None and heights is None:
-        raise ValueError("the vertical motion's ZMP error needs the footholds' heights")
+        if support is None and walk.support is not None:
+            support = np.repeat(np.asarray(walk.support, dtype=float)[None], len(theta), axis=0)
+    if (terrain is not None or support is not None) and heights is None:
+        raise ValueError("the vertical motion (ZMP error, support heights) needs the footholds' heights")
     shapes = walk.shapes()
     if walk.config.connection != "auto":
         family = walk_family(family_key(walk.config, walk.sole, walk.dt, walk.steps, shapes))
@@ -161,7 +174,8 @@ def evaluate_parameters(
     if heights is None:
         return batch
     heights = np.atleast_2d(np.asarray(heights, dtype=float))
-    low, high = cog_height_range(walk, heights)
+    support = heights if support is None else np.atleast_2d(np.asarray(support, dtype=float))
+    low, high = cog_height_range(walk, heights, support)
     batch = replace(batch, cog_z_min=low, cog_z_max=high)
     if terrain is None:
         return batch
@@ -173,7 +187,7 @@ def evaluate_parameters(
             part_theta, part_rows = family_theta[part], rows[part]
             prints = family.final_footprints(part_theta)
             under = np.array([[_plane(planes, terrain, x, y) for x, y in row.tolist()] for row in prints])
-            error = family.vertical_zmp_errors(part_theta, heights[part_rows], under)
+            error = family.vertical_zmp_errors(part_theta, heights[part_rows], under, support[part_rows])
             worst[part_rows], rms[part_rows] = error.max(axis=1), np.sqrt(np.mean(error**2, axis=1))
     return replace(batch, zmp_error_max=worst, zmp_error_rms=rms)
 
@@ -186,16 +200,20 @@ def _plane(known: dict, terrain: Terrain, x: float, y: float) -> tuple[float, fl
     return plane
 
 
-def cog_height_range(walk: StraightWalk, heights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(cog_z_min, cog_z_max)`` (m, each ``(B,)``) of ``walk`` with its footholds at ``heights`` ``(B, steps + 2)``
-    (m): the planned COG height over every tick (:meth:`~rtgait.core.analysis.walk_family.WalkFamily.cog_heights`;
-    the vertical column does not depend on the walk's changes, so the family without them gives it)."""
+def cog_height_range(
+    walk: StraightWalk, heights: np.ndarray, support: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(cog_z_min, cog_z_max)`` (m, each ``(B,)``) of ``walk`` with its footholds at ``heights`` ``(B, steps + 3)``
+    (m) and its stances' support heights ``support`` (same shape, m; default ``heights``): the planned COG height
+    over every tick (:meth:`~rtgait.core.analysis.walk_family.WalkFamily.cog_heights`; the vertical column does not
+    depend on the walk's changes, so the family without them gives it)."""
     heights = np.atleast_2d(np.asarray(heights, dtype=float))
+    support = heights if support is None else np.atleast_2d(np.asarray(support, dtype=float))
     family = walk_family(family_key(walk.config, walk.sole, walk.dt, walk.steps, ()))
     low, high = np.empty(len(heights)), np.empty(len(heights))
     for start in range(0, len(heights), _HEIGHT_CHUNK):
         part = slice(start, start + _HEIGHT_CHUNK)
-        cog_z = family.cog_heights(heights[part])
+        cog_z = family.cog_heights(heights[part], support[part])
         low[part], high[part] = cog_z.min(axis=1), cog_z.max(axis=1)
     return low, high
 
@@ -226,7 +244,8 @@ def evaluate_walks(walks: Sequence[StraightWalk]) -> BatchResult:
         by_family.setdefault(_group_key(walks[i]), []).append(i)
     for members in by_family.values():
         heights = np.array([walks[i].heights for i in members], dtype=float)
-        low[members], high[members] = cog_height_range(walks[members[0]], heights)
+        support = np.array([walks[i].support or walks[i].heights for i in members], dtype=float)
+        low[members], high[members] = cog_height_range(walks[members[0]], heights, support)
     return replace(result, cog_z_min=low, cog_z_max=high)
 
 

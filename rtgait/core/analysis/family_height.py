@@ -1,5 +1,5 @@
 """A family's chain of plans, and its vertical column: the COG height of every tick as a linear map of the footholds'
-heights.
+heights and the stances' support heights.
 
 Every plan of a walk is ``G @ y``, ``y = [state, anchors]`` (:class:`~rtgait.core.planner.active_plan.PlanLayout`),
 the state being the end state of the plan before (``S @ y_prev``) and, before the first, at rest over the standing
@@ -8,16 +8,20 @@ feet. :func:`plan_chain` makes that chain once for inputs given as coefficient a
 the footholds' heights themselves.
 
 Over height changes a plan has a vertical column (the 3D-DCM/VRP form, ``docs/method.md``): the same operator ``G``
-applied to the vertical state ``[h, dh, c_z, dc_z]`` and the heights under the anchors (a foothold's ``z``, or the
-mean of two), where :func:`~rtgait.core.planner.active_plan.height_column` starts the first plan at
-``h = c_z = (z_0 + z_1) / 2`` at rest. It is linear in the footholds' heights ``z = (z_0 .. z_n+1)`` (m), and they do
-not change with a change of a stride's length or width (a stride keeps its rise), so the sampled COG height is
+applied to the vertical state ``[h, dh, c_z, dc_z]`` and the support heights under the anchors: a stance's ``h_i``
+(:func:`~rtgait.core.geometry.support_height.stance_support_height`: its foothold's ``z_i``, lowered before a step
+down) or the mean of two footholds' ``z`` between the final feet, where
+:func:`~rtgait.core.planner.active_plan.height_column` starts the first plan at ``h = c_z = (z_0 + z_1) / 2`` at
+rest. It is linear in the footholds' heights ``z = (z_0 .. z_n+1)`` and the stances' lowerings ``h - z`` (m), and
+neither changes with a change of a stride's length or width (a stride keeps its rise), so the sampled COG height is
 
-    c_z(t_k) = zc + R[k] . z,      R[k] = [V_j ch(w tau) + W_j sh(w tau) + sum_i A_ij tau^i]     (per unit height)
+    c_z(t_k) = zc + R[k] . z + L[k] . (h - z),     R[k], L[k] = [V_j ch(w tau) + W_j sh(w tau) + sum_i A_ij tau^i]
 
-with ``zc`` the scenario's COG height, ``j`` the segment of the plan being executed at tick ``k`` and ``tau`` the
-time into it, as :meth:`~rtgait.core.planner.online.OnlinePlanner.sample` evaluates it. :func:`vertical_rows` builds
-``R`` (and the support height and the COG's vertical acceleration alike); :func:`tick_rows` samples any chain so.
+per unit height with every stance at its foothold's height (``R``) and per unit lowering of one stance (``L``), with
+``zc`` the scenario's COG height, ``j`` the segment of the plan being executed at tick ``k`` and ``tau`` the time into
+it, as :meth:`~rtgait.core.planner.online.OnlinePlanner.sample` evaluates it. Where no step down follows a stance
+``h = z`` and the ``L`` term is exactly zero. :class:`VerticalColumn` builds ``R`` and ``L`` (and the COG's vertical
+acceleration alike) once per family; :func:`tick_rows` samples any chain so.
 
 With the horizontal plans sampled the same way (ZMP, COG and its acceleration affine in ``theta``),
 :func:`vertical_zmp_error` gives the error the vertical motion adds to the horizontal dynamics at every tick, the
@@ -39,16 +43,20 @@ from rtgait.core.lipm.pattern import DEGREE
 from rtgait.core.planner.active_plan import PlanLayout
 from rtgait.core.planner.online import OnlinePlanner
 
-__all__ = ["TickRows", "contact_feet", "plan_chain", "tick_rows", "vertical_rows", "vertical_zmp_error"]
+__all__ = ["TickRows", "VerticalColumn", "contact_feet", "plan_chain", "tick_rows", "vertical_zmp_error"]
 
 PlanData = dict[int, tuple[np.ndarray, PlanLayout]]
 """Per replan phase ``q`` (even): the plan's coefficients ``G @ y`` ``(rows, axes, P)`` and its layout."""
 
 
-def plan_chain(planner: OnlinePlanner, n: int, prints_at: Callable[[int], np.ndarray]) -> PlanData:
+def plan_chain(
+    planner: OnlinePlanner, n: int, prints_at: Callable[[int], np.ndarray], stances: np.ndarray | None = None
+) -> PlanData:
     """The plans of a walk of ``n`` steps replanned at the start of every even phase, each from the end state of the
     one before: ``prints_at(q)`` gives the footprints the plan made at phase ``q`` sees, ``(n + 2, axes, P)``
-    coefficient arrays (module docstring). ``planner`` (started) gives the layouts and the anchors' sources."""
+    coefficient arrays (module docstring). ``planner`` (started) gives the layouts and the anchors' sources.
+    ``stances`` ``(n + 2, axes, P)``: what a stance anchor on ``F[i]`` rests on instead of ``F[i]`` itself (its
+    support height's part, :class:`VerticalColumn`)."""
     w = planner.w
     plans: PlanData = {}
     state = None
@@ -60,7 +68,12 @@ def plan_chain(planner: OnlinePlanner, n: int, prints_at: Callable[[int], np.nda
             state = np.stack([c0, np.zeros_like(c0), c0, np.zeros_like(c0)])
         sources = planner.walk.relative_anchor_sources(q, layout.anchor_phases)
         i0 = q >> 1
-        anchors = np.stack([0.5 * (prints[i0 + a] + prints[i0 + b]) for a, b in sources])
+        anchors = np.stack(
+            [
+                stances[i0 + a] if stances is not None and a == b else 0.5 * (prints[i0 + a] + prints[i0 + b])
+                for a, b in sources
+            ]
+        )
         y = np.concatenate([state, anchors])  # (n_inputs, axes, P)
         plans[q] = (np.tensordot(layout.G, y, axes=(1, 0)), layout)
         if q + 2 <= 2 * n:
@@ -104,14 +117,43 @@ def tick_rows(
     return TickRows(zmp, cog, acc)
 
 
-def vertical_rows(
-    planner: OnlinePlanner, n: int, times: np.ndarray, starts: np.ndarray, tick_phase: np.ndarray
-) -> TickRows:
-    """The vertical column per unit height of each foothold ``F[0..n+1]`` at each tick (module docstring): ``zmp`` is
-    the support height ``h``, ``cog`` the COG height above ``zc``, ``acc`` its acceleration (each
-    ``(ticks, 1, n + 2)``)."""
-    unit = np.eye(n + 2)[:, None, :]  # F[i]'s height is parameter i
-    return tick_rows(plan_chain(planner, n, lambda q: unit), n, times, starts, tick_phase, planner.w)
+class VerticalColumn:
+    """The vertical column of a family's walks at every tick (module docstring), built once and kept: ``R`` per unit
+    height of each foothold ``F[0..n+1]``, and ``L`` per unit lowering of each stance, made when a walk first needs it
+    (each a :class:`TickRows`, ``(ticks, 1, n + 2)``: the support height, the COG height above ``zc`` and its
+    acceleration). ``planner`` (started), ``times``, ``starts`` and ``tick_phase`` as for :func:`tick_rows`."""
+
+    def __init__(
+        self, planner: OnlinePlanner, n: int, times: np.ndarray, starts: np.ndarray, tick_phase: np.ndarray
+    ) -> None:
+        self._sample = (planner, n, times, starts, tick_phase)
+        self._heights: TickRows | None = None
+        self._lowering: TickRows | None = None
+
+    def _rows(self, stances: bool) -> TickRows:
+        planner, n, times, starts, tick_phase = self._sample
+        unit = np.eye(n + 2)[:, None, :]  # F[i]'s height (or stance F[i]'s lowering) is parameter i
+        if not stances:
+            return tick_rows(plan_chain(planner, n, lambda q: unit), n, times, starts, tick_phase, planner.w)
+        zero = np.zeros_like(unit)  # only the stance anchors move: the footholds and the first state stay at 0
+        return tick_rows(plan_chain(planner, n, lambda q: zero, unit), n, times, starts, tick_phase, planner.w)
+
+    def motion(self, heights: np.ndarray, support: np.ndarray, cog_height: float) -> tuple[np.ndarray, np.ndarray]:
+        """The planned COG height ``c_z`` (m) and its acceleration ``c_z''`` (m/s^2), each ``(B, ticks)``, of walks
+        whose footholds ``F[0..n+1]`` stand at ``heights`` and whose stances hold the support heights ``support``
+        (each ``(B, n + 2)``, m; ``support == heights`` where no step down follows), with ``cog_height`` ``zc`` (m)."""
+        if self._heights is None:
+            self._heights = self._rows(stances=False)
+        rows = self._heights
+        cog_z = cog_height + heights @ rows.cog[:, 0, :].T
+        acc_z = heights @ rows.acc[:, 0, :].T
+        lowering = support - heights
+        if np.any(lowering):  # otherwise the L term is exactly zero: leave R's numbers as they are
+            if self._lowering is None:
+                self._lowering = self._rows(stances=True)
+            cog_z += lowering @ self._lowering.cog[:, 0, :].T
+            acc_z += lowering @ self._lowering.acc[:, 0, :].T
+        return cog_z, acc_z
 
 
 def contact_feet(tick_phase: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -125,20 +167,19 @@ def contact_feet(tick_phase: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray
 
 def vertical_zmp_error(
     horizontal: TickRows,
-    vertical: TickRows,
+    vertical: tuple[np.ndarray, np.ndarray],
     feet: tuple[np.ndarray, np.ndarray],
     theta: np.ndarray,
-    heights: np.ndarray,
     footprints: np.ndarray,
     planes: np.ndarray,
-    cog_height: float,
     gravity: float,
 ) -> np.ndarray:
     """``|p_true - p|`` ``(B, ticks)`` (m): the error the vertical motion adds to the horizontal ZMP, as
     :func:`~rtgait.core.analysis.height_error.zmp_error` measures it on a rollout, for walks ``theta`` ``(B, P)`` with
-    footholds at ``heights`` ``(B, n + 2)`` (m), their final footprints ``footprints`` ``(B, n + 2, 2)`` (m, heading
-    +x) and the terrain's plane under each, ``planes`` ``(B, n + 2, 3)`` (height m, pitch, roll rad). ``p_z`` is the
-    plane of the contact foot nearest to the planned ZMP (the first listed on a tie), at the ZMP."""
+    the COG height and its acceleration ``vertical`` (:meth:`VerticalColumn.motion`), their final footprints
+    ``footprints`` ``(B, n + 2, 2)`` (m, heading +x) and the terrain's plane under each, ``planes``
+    ``(B, n + 2, 3)`` (height m, pitch, roll rad). ``p_z`` is the plane of the contact foot nearest to the planned
+    ZMP (the first listed on a tie), at the ZMP."""
     B, ticks = len(theta), len(horizontal.zmp)
 
     def per_axis(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # (ticks, 2, P) rows -> x, y (B, ticks)
@@ -146,8 +187,7 @@ def vertical_zmp_error(
         return values[:, 0::2], values[:, 1::2]
 
     (zmp_x, zmp_y), (cog_x, cog_y), (acc_x, acc_y) = (per_axis(r) for r in horizontal)
-    cog_z = cog_height + heights @ vertical.cog[:, 0, :].T
-    acc_z = heights @ vertical.acc[:, 0, :].T
+    cog_z, acc_z = vertical
     first, second = feet
     foot_x, foot_y = footprints[..., 0], footprints[..., 1]
     to_first = (foot_x[:, first] - zmp_x) ** 2 + (foot_y[:, first] - zmp_y) ** 2

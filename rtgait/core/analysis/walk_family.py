@@ -24,8 +24,8 @@ tick. Where a phase's minimum is negative (the ZMP leaves the polygon) the exact
 tick of that phase for those cases.
 
 A family's key and the affine footprints of its parameters are in :mod:`rtgait.core.analysis.family_key`; its chain of
-plans and, over height changes, the COG height of every tick as a linear map of the footholds' heights
-(:meth:`WalkFamily.cog_heights`) in :mod:`rtgait.core.analysis.family_height`.
+plans and, over height changes, the COG height of every tick as a linear map of the footholds' heights and the
+stances' support heights (:meth:`WalkFamily.cog_heights`) in :mod:`rtgait.core.analysis.family_height`.
 """
 
 from __future__ import annotations
@@ -37,10 +37,10 @@ import numpy as np
 
 from rtgait.core.analysis.family_height import (
     TickRows,
+    VerticalColumn,
     contact_feet,
     plan_chain,
     tick_rows,
-    vertical_rows,
     vertical_zmp_error,
 )
 from rtgait.core.analysis.family_key import FamilyKey, affine_footprints
@@ -137,7 +137,7 @@ class WalkFamily:
         self.replan_tick = replan_tick
         self._phases: list[_Phase] = []
         self._planner, self._tick_phase, self._final = planner, tick_phase, final
-        self._vertical: TickRows | None = None
+        self._vertical = VerticalColumn(planner, n, self.times, starts, tick_phase)
         self._horizontal: TickRows | None = None
 
         def prints_at(q: int) -> np.ndarray:  # the footprints with the changes handed over by the replan's tick
@@ -194,43 +194,42 @@ class WalkFamily:
         return _Phase(q, "free" if kind != "settle" else "settle", ticks, point_chain(points), points, predictor,
                       deviation, features, boxes)  # fmt: skip
 
-    def cog_heights(self, heights: np.ndarray) -> np.ndarray:
+    def cog_heights(self, heights: np.ndarray, support: np.ndarray | None = None) -> np.ndarray:
         """The planned COG height (m) at every tick ``(B, ticks)`` of walks whose footholds ``F[0..n+1]`` stand at
-        ``heights`` ``(B, n + 2)`` (m): the vertical column (:mod:`rtgait.core.analysis.family_height`), the same for
-        every case of the family whatever its strides and changes (a stride keeps its rise)."""
-        heights = self._checked_heights(heights)
-        return self.key.cog_height + heights @ self._vertical_rows().cog[:, 0, :].T
+        ``heights`` ``(B, n + 2)`` (m) and whose stances hold the support heights ``support`` (same shape, m;
+        default ``heights``: no step down): the vertical column (:mod:`rtgait.core.analysis.family_height`), the
+        same for every case of the family whatever its strides and changes (a stride keeps its rise)."""
+        return self._vertical.motion(*self._checked_heights(heights, support), self.key.cog_height)[0]
 
     def final_footprints(self, theta: np.ndarray) -> np.ndarray:
         """The footprints ``F[0..n+1]`` ``(B, n + 2, 2)`` (m) the walks ``theta`` end with, every change made."""
         return np.einsum("iap,bp->bia", self._final, np.atleast_2d(theta))
 
-    def vertical_zmp_errors(self, theta: np.ndarray, heights: np.ndarray, planes: np.ndarray) -> np.ndarray:
+    def vertical_zmp_errors(
+        self, theta: np.ndarray, heights: np.ndarray, planes: np.ndarray, support: np.ndarray | None = None
+    ) -> np.ndarray:
         """The error ``(B, ticks)`` (m) the vertical motion adds to the horizontal ZMP
         (:func:`~rtgait.core.analysis.family_height.vertical_zmp_error`) of walks ``theta`` ``(B, P)`` with footholds
-        at ``heights`` ``(B, n + 2)`` (m) on a terrain whose plane under each final footprint is ``planes``
-        ``(B, n + 2, 3)`` (height m, pitch, roll rad)."""
+        at ``heights`` and stances' support heights ``support`` (:meth:`cog_heights`) on a terrain whose plane under
+        each final footprint is ``planes`` ``(B, n + 2, 3)`` (height m, pitch, roll rad)."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
-        heights = self._checked_heights(heights)
+        vertical = self._vertical.motion(*self._checked_heights(heights, support), self.key.cog_height)
         if self._horizontal is None:
             self._horizontal = tick_rows(
                 self._plans, self.n_steps, self.times, self._starts, self._tick_phase, self._planner.w
             )
         feet = contact_feet(self._tick_phase, self.n_steps)
-        return vertical_zmp_error(self._horizontal, self._vertical_rows(), feet, theta, heights,
-                                  self.final_footprints(theta), np.asarray(planes, dtype=float), self.key.cog_height,
-                                  self.key.gravity)  # fmt: skip
+        return vertical_zmp_error(self._horizontal, vertical, feet, theta, self.final_footprints(theta),
+                                  np.asarray(planes, dtype=float), self.key.gravity)  # fmt: skip
 
-    def _checked_heights(self, heights: np.ndarray) -> np.ndarray:
+    def _checked_heights(self, heights: np.ndarray, support: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         heights = np.atleast_2d(np.asarray(heights, dtype=float))
-        if heights.shape[1] != self.n_steps + 2 or not np.all(np.isfinite(heights)):
-            raise ValueError(f"heights must be finite, {self.n_steps + 2} per walk (F[0..n+1]), got {heights.shape}")
-        return heights
-
-    def _vertical_rows(self) -> TickRows:
-        if self._vertical is None:
-            self._vertical = vertical_rows(self._planner, self.n_steps, self.times, self._starts, self._tick_phase)
-        return self._vertical
+        support = heights if support is None else np.atleast_2d(np.asarray(support, dtype=float))
+        want = self.n_steps + 2
+        for name, values in (("heights", heights), ("support heights", support)):
+            if values.shape != (len(heights), want) or not np.all(np.isfinite(values)):
+                raise ValueError(f"{name} must be finite, {want} per walk (F[0..n+1]), got {values.shape}")
+        return heights, support
 
     def phase_start(self, q: int) -> float:
         """Start of phase ``q`` (s), as the planner computes it."""

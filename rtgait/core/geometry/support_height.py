@@ -19,10 +19,12 @@ eq. 4) in those single supports, ``r/2`` times the COG's horizontal acceleration
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from rtgait.core.geometry.footsteps import Footstep
 from rtgait.core.geometry.toe_off import stair_rise
 
-__all__ = ["DESCENT_SHARE", "stance_support_height"]
+__all__ = ["DESCENT_SHARE", "stance_support_height", "support_heights"]
 
 DESCENT_SHARE = 0.5
 """Share of a step down's drop (the riser) the support height of the stance before it takes (module docstring):
@@ -36,3 +38,11 @@ def stance_support_height(stance: Footstep, landing: Footstep | None) -> float:
         return stance.z
     drop = stair_rise(stance, landing)
     return stance.z + DESCENT_SHARE * drop if drop < 0.0 else stance.z
+
+
+def support_heights(prints: Sequence[Footstep]) -> list[float]:
+    """The support height (m) each footprint of a walk ``F[0..]`` holds as a stance, its swing landing on the next
+    (:func:`stance_support_height`; the last one, with no landing, its own height): what the batched evaluation takes
+    for the walk's stance anchors (:mod:`rtgait.core.analysis.family_height`)."""
+    landings = [*prints[1:], None]
+    return [stance_support_height(stance, landing) for stance, landing in zip(prints, landings, strict=True)]

@@ -200,7 +200,10 @@ class Walk(WalkChanges):
     def heights_from(self, i0: int, relative: Sequence[tuple[int, int]]) -> list[float] | None:
         """The support heights (m) under the anchors of :meth:`anchors_from`, ``None`` when all are 0 (level
         ground: the plan needs no vertical column): a stance foothold's height, lowered before a step down
-        (:func:`~rtgait.core.geometry.support_height.stance_support_height`), or the mean of the final feet's."""
+        (:func:`~rtgait.core.geometry.support_height.stance_support_height`; a finite walk knows every landing, a
+        walk by command the ones made so far), or the mean of the final feet's."""
+        if self.finite:  # every stance's landing is known: make it, so the rule does not hang on what was made
+            self.ensure(i0 + max(a for a, _ in relative) + 1)
         prints = self._prints
         start = i0 - self.base
         last = len(prints) - 1
