@@ -46,12 +46,12 @@ from where the foot was last anchored. A refused touch-down is logged (``"touchd
   the stance leg, lift the body and make the next landing later still. The depth is measured against the other
   foot, both soles in the estimator's frame, ``d = (z_l - z_o) - (z_f - (z_o,plan + z_o,offset))``: ``z_l`` and
   ``z_o`` the measured heights of the landing sole and the other one, ``z_f`` the landing's foothold height, the
-  other foot standing at its target. On the flat floor (footholds at 0, the frame on the floor) that is the
-  measured height ``z_l``; on terrain the measured height is not the depth: down a ramp it is the foothold's own
-  height (every stance target sank by up to ``late_descent_limit`` and the stance leg, pushed into the ramp,
-  lifted the body: Talos fell down ``slope-down``), and the estimated frame's height drifts where the robot climbs
-  (69 mm down over the 0.9 m of ``stairs-up``, about 11 mm a tread) while the difference of the two soles stays
-  within 0.1 mm of the truth.
+  other foot standing at its target. On the flat floor (both footholds at 0) the estimator's frame is the floor's
+  and ``d = z_l``, the measured height itself (the other foot's servo lag left out); on terrain the measured
+  height is not the depth: down a ramp it is the foothold's own height (every stance target sank by up to
+  ``late_descent_limit`` and the stance leg, pushed into the ramp, lifted the body: Talos fell down ``slope-down``),
+  and the estimated frame's height drifts where the robot climbs (69 mm down over the 0.9 m of ``stairs-up``, about
+  11 mm a tread) while the difference of the two soles stays within 0.1 mm of the truth.
 
 **Blends.** A re-anchoring moves a landed foot's target by the servo lag, and an early landing's hold starts and
 ends with a jump; with ``anchor_blend`` > 0 the IK's target goes there from its old pose and rate along the planner's
@@ -344,8 +344,11 @@ class FootLandings(FootTargets):
         in the estimator's frame (module docstring, "Heights"); negative: lower than planned."""
         other = 1 - i
         planned = values.rfoot_z if other else values.lfoot_z
+        foothold = self._foothold_z(i)
+        if foothold == 0.0 and planned == 0.0:
+            return landing.z  # on the flat floor the estimator's frame is the floor's: the measured height
         drift = (m.right if other else m.left).pose[2] - (planned + self._z[other])
-        return landing.z - drift - self._foothold_z(i)
+        return landing.z - drift - foothold
 
     def _foothold_z(self, i: int) -> float:
         """Height (m) of the foothold foot ``i``'s last swing went to (the plan's height for it at the swing's end);
