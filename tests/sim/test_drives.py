@@ -230,7 +230,7 @@ def test_the_command_shows_in_the_torque_one_period_later(talos):
 
 def test_the_robot_gains_are_the_published_ones(talos):
     """gains "robot": G1's are Unitree's low-level example's (unitree_sdk2 g1_ankle_swing_example.cpp), Talos's
-    MuJoCo Menagerie's pal_talos position actuators'; the default stays the stiff derived gains."""
+    PAL's simulated drives' (talos_simulation's pids.yaml); the default stays the stiff derived gains."""
     g1 = build_sim_model("g1", SimConfig(meshes=False, gains="robot"))
     assert g1.actuation.gains == "robot"
     leg_kp, leg_kd = [60, 60, 60, 100, 40, 40], [1, 1, 1, 2, 1, 1]
@@ -238,9 +238,8 @@ def test_the_robot_gains_are_the_published_ones(talos):
     np.testing.assert_array_equal(g1.kd, [*leg_kd, *leg_kd, 1, 1, 1])
     np.testing.assert_array_equal(g1.model.actuator_gainprm[:, 0], g1.kp)
     robot = build_sim_model(talos, SimConfig(meshes=False, gains="robot"))
-    leg = [1000, 1000, 1000, 1000, 10000, 10000]
-    np.testing.assert_array_equal(robot.kp, [*leg, *leg, 2000, 500])
-    assert not robot.kd.any()
+    np.testing.assert_array_equal(robot.kp, [*[5000] * 12, 10000, 10000])
+    np.testing.assert_array_equal(robot.kd, [*[20] * 12, 10, 10])
     stiff = build_sim_model(talos, SimConfig(meshes=False))
     assert stiff.actuation.gains == "stiff" and np.all(stiff.kp > 8000.0)
 
