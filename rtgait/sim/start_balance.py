@@ -15,8 +15,9 @@ controller's gains) around the ramp:
 ``p_cmd - p_ref`` (:func:`~rtgait.stack.feedforward.commanded_wrench`). Only with feed-forward torques (the stiff
 position-only runs are unchanged), and only where the servos cannot hold the robot (:func:`needs_balance`): the two
 ankles' pitch stiffness below gravity's toppling stiffness ``m g h`` (``h`` the COM's height at the walk's start).
-Where they can (TALOS's ankles at 10,000 N m/rad against some 850 N m/rad), the law is left out: on those undamped
-servos (no ``kd``) its ankle torques excite the feet's rocking instead.
+Where they can (TALOS's two ankles at 5,000 N m/rad each against some 850 N m/rad), the law is left out: the servos
+hold the robot, and on TALOS's former undamped gains (Menagerie's, no ``kd``) its ankle torques excited the feet's
+rocking.
 """
 
 from __future__ import annotations

@@ -230,7 +230,7 @@ def test_the_command_shows_in_the_torque_one_period_later(talos):
 
 def test_the_robot_gains_are_the_published_ones(talos):
     """gains "robot": G1's are Unitree's low-level example's (unitree_sdk2 g1_ankle_swing_example.cpp), Talos's
-    MuJoCo Menagerie's pal_talos position actuators'; the default stays the stiff derived gains."""
+    PAL's simulated drives' (talos_simulation's pids.yaml); the default stays the stiff derived gains."""
     g1 = build_sim_model("g1", SimConfig(meshes=False, gains="robot"))
     assert g1.actuation.gains == "robot"
     leg_kp, leg_kd = [60, 60, 60, 100, 40, 40], [1, 1, 1, 2, 1, 1]
@@ -238,9 +238,8 @@ def test_the_robot_gains_are_the_published_ones(talos):
     np.testing.assert_array_equal(g1.kd, [*leg_kd, *leg_kd, 1, 1, 1])
     np.testing.assert_array_equal(g1.model.actuator_gainprm[:, 0], g1.kp)
     robot = build_sim_model(talos, SimConfig(meshes=False, gains="robot"))
-    leg = [1000, 1000, 1000, 1000, 10000, 10000]
-    np.testing.assert_array_equal(robot.kp, [*leg, *leg, 2000, 500])
-    assert not robot.kd.any()
+    np.testing.assert_array_equal(robot.kp, [*[5000] * 12, 10000, 10000])
+    np.testing.assert_array_equal(robot.kd, [*[20] * 12, 10, 10])
     stiff = build_sim_model(talos, SimConfig(meshes=False))
     assert stiff.actuation.gains == "stiff" and np.all(stiff.kp > 8000.0)
 
@@ -315,3 +314,53 @@ def test_the_default_drives_compute_the_position_servos_controls_bit_for_bit(sho
                 np.testing.assert_array_equal(period[i], previous + (i + 1) * increment)
         np.testing.assert_array_equal(period[-1], control)
         previous = control
+
+
+@pytest.mark.parametrize(("kp", "kd"), [(5000.0, 20.0), (10000.0, 0.0)])
+def test_a_swinging_ankle_rings_down_as_its_gains_predict(talos, kp, kd):
+    """Talos in free fall (no contact, no gravity torque on its joints), the left ankle roll 20 mrad off its reference
+    and the other joints held by their drives: the joint rings as the damped oscillator ``I x'' + kd x' + kp x = 0`` on
+    the inertia it turns (armature + foot, the rest held rigid), its extremes on the envelope ``x0 exp(-kd t / 2 I)``
+    at multiples of ``pi / w_d``. At PAL's gains (kp 5000, kd 20, the description's robot gains) it is under 1 % of
+    its offset within 0.2 s; at Menagerie's undamped kp 10000 it keeps its amplitude: the ringing that tipped the swing
+    foot at Talos's former robot gains (docs/robots.md, "The robots' gains")."""
+    sim = build_sim_model(talos, SimConfig(meshes=False, gains="robot"))
+    data = sim.new_data(settle=0.0)
+    data.qpos[2] += 1.0  # a metre above the floor: 0.2 s of free fall without contact
+    mujoco.mj_forward(sim.model, data)
+    j = list(sim.joint_names).index("leg_left_6_joint")
+    dof = sim.dof_index[j]
+    q0 = data.qpos[sim.qpos_index].copy()
+    body = SimRobot(sim, data, q0)
+    n = len(q0)
+    gains_p, gains_d = sim.kp.copy(), sim.kd.copy()
+    assert (gains_p[j], gains_d[j]) == (5000.0, 20.0)  # the description's
+    gains_p[j], gains_d[j] = kp, kd
+    mass = np.zeros((sim.model.nv, sim.model.nv))
+    mujoco.mj_fullM(sim.model, data, mass)
+    rigid = [*range(6), dof]
+    inertia = 1.0 / np.linalg.inv(mass[np.ix_(rigid, rigid)])[-1, -1]
+    x0 = 0.02
+    data.qpos[sim.qpos_index[j]] += x0
+    mujoco.mj_forward(sim.model, data)
+    dt = sim.control_dt
+    errors = []
+    for _ in range(round(0.2 / dt)):
+        body.write(JointCommand(q0.copy(), np.zeros(n), np.zeros(n), gains_p.copy(), gains_d.copy()))
+        body.first_substep()
+        assert data.ncon == 0
+        errors.append(data.qpos[sim.qpos_index[j]] - q0[j])
+    # The oscillator's extremes (its velocity zero, at multiples of pi / w_d) lie on its envelope x0 exp(-rate t).
+    rate = kd / (2.0 * inertia)  # 1/s
+    e = np.array(errors)
+    turns = [k for k in range(1, len(e) - 1) if abs(e[k]) >= abs(e[k - 1]) and abs(e[k]) > abs(e[k + 1])]
+    for k in turns[:2]:
+        assert abs(e[k]) == pytest.approx(x0 * math.exp(-rate * (k + 1) * dt), rel=0.2)
+    if kd > 0.0:
+        damped = math.sqrt(kp / inertia - rate**2)  # rad/s
+        assert (turns[0] + 1) * dt == pytest.approx(math.pi / damped, abs=1.5 * dt)
+        assert np.abs(e[-40:]).max() < 0.01 * x0  # rung down within 0.2 s
+    else:
+        # Undamped, the 10000 N m/rad ankle rings at 38 Hz, below the 48 Hz of the leg held rigid (the hip and knee
+        # at their 5000 give), and still has its amplitude after 0.2 s: nothing damps it.
+        assert np.abs(e[-40:]).max() > 0.9 * x0
