@@ -11,12 +11,12 @@ with ``top = max(z0, z1) + h`` and ``sigma`` = :data:`RISE_SHARE`,
 horizontal blend starts :data:`HORIZONTAL_DELAY` later and ends as much earlier: the toe is above the upper tread
 before it passes the stair nose (going up), the heel leaves the nose before the foot comes down (going down).
 
-Up a ramp (the landing higher and tilted to its surface) there is no nose to clear: the foot moves along the
-line between the footholds and lifts off it as on level ground, ``z(s) = z0 + (z1 - z0) b(s) + h * 64 s^3 (1 - s)^3``
-with the horizontal blend ``b(s)`` undelayed. The stair profile there lifted the foot up to the landing's height
-behind the body before moving it forward, its sole pitched toes up with the ramp: beyond G1's ankle dorsiflexion
-(``docs/results.md``). Down a ramp, and from the ramp onto the level ground at its top (a convex edge the line
-between the footholds passes under), the stair profile is kept.
+Up a ramp (a foothold tilted to its surface, the landing higher: onto the ramp, along it and off its top) there is
+no nose to clear: the foot moves along the line between the footholds and lifts off it as on level ground,
+``z(s) = z0 + (z1 - z0) b(s) + h * 64 s^3 (1 - s)^3`` with the horizontal blend ``b(s)`` undelayed (over the ramp's
+top edge the lift keeps the sole clear: the terrain check below). The stair profile there lifted the foot up to the
+landing's height behind the body before moving it forward, its sole pitched toes up with the ramp: beyond G1's ankle
+dorsiflexion (``docs/results.md``). Down a ramp the stair profile is kept.
 :mod:`rtgait.core.geometry.swing_terrain` checks the swept sole against the terrain.
 """
 
@@ -48,8 +48,8 @@ def _clip01(s: float) -> float:
 
 
 def up_ramp(start: Footstep, end: Footstep) -> bool:
-    """Whether a swing from ``start`` to ``end`` goes up a ramp: the landing higher and tilted to its surface
-    (module docstring)."""
+    """Whether a swing from ``start`` to ``end`` goes up a ramp: a foothold tilted to its surface and the landing
+    higher (module docstring)."""
     tilted = start.pitch or start.roll or end.pitch or end.roll
     return bool(tilted) and end.z > start.z
 
