@@ -11,7 +11,8 @@ loaded by path. Its tables, in SI units (m, rad, s, kg m^2, N m/rad):
   mirror image, y negated), and ``[feet.sole]``: the sole rectangle ``front``, ``back``, ``inner`` (toward the other
   foot), ``outer``;
 * ``[walking]``: ``cog_height`` (the planner's constant COG height), ``moving_joints`` (all others stay locked at
-  the posture), ``torso_frame`` (kept upright, heading along the mean yaw of the feet);
+  the posture), ``torso_frame`` (kept upright, heading along the mean yaw of the feet), optional ``toe_release``
+  (the share of a swing up a stair over which the sole levels after its toe-off: :mod:`rtgait.core.geometry.toe_off`);
 * ``[posture]``: the half-sitting start posture, joint name -> angle (joints not listed are at 0);
 * optional, for the physics layer: ``[gains]`` (``kp``, ``kd``: a number or a table per joint) and ``[actuation]``
   (periods, the command's delay, natural frequency, damping ratio, motor types ``[actuation.motors.<name>]`` and
@@ -41,6 +42,7 @@ from types import MappingProxyType
 from typing import Any
 
 from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.geometry.toe_off import RELEASE
 from rtgait.core.laws.stepping import SteppingLimits
 from rtgait.core.planner.config import VelocityLimits
 from rtgait.interface.sensor_spec import SensorSpec
@@ -104,6 +106,9 @@ class RobotDescription:
             offset is its mirror image. ``(0, 0, 0)`` when the frames are on the soles already.
         sole: sole rectangle around the sole point (m).
         cog_height: nominal COG height above the ground while walking (m).
+        toe_release: share of a swing up a stair over which the sole levels after its toe-off
+            (``walking.toe_release``, default :data:`~rtgait.core.geometry.toe_off.RELEASE`;
+            :mod:`rtgait.core.geometry.toe_off`).
         moving_joints: joints the walking motion may move, in the order given.
         torso_frame: frame kept upright while walking.
         posture: half-sitting posture, joint name -> angle (rad; m for prismatic joints); other joints at 0.
@@ -144,6 +149,7 @@ class RobotDescription:
     velocity: VelocityLimits | None = None
     control: SettingsPairs = ()
     sensors: SensorSpec = field(default_factory=SensorSpec)
+    toe_release: float = RELEASE
     source: str = field(default="", compare=False)
 
     def posture_angle(self, joint: str) -> float:
@@ -237,8 +243,13 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
     sole = SoleRect(**sole_values)
 
     walking = FILES.table(data["walking"], "walking")
-    FILES.check_keys(walking, "walking", ("cog_height", "moving_joints", "torso_frame"), ())
+    FILES.check_keys(walking, "walking", ("cog_height", "moving_joints", "torso_frame"), ("toe_release",))
     cog_height = FILES.number(walking["cog_height"], "walking.cog_height", rule="> 0", unit="m")
+    toe_release = RELEASE
+    if "toe_release" in walking:
+        toe_release = FILES.number(walking["toe_release"], "walking.toe_release", rule="> 0", unit="")
+        if toe_release > 1.0:
+            raise RobotError(f"walking.toe_release must be a share of the swing in (0, 1], got {toe_release:g}")
     raw_joints = walking["moving_joints"]
     if not isinstance(raw_joints, list) or not raw_joints or not all(isinstance(j, str) for j in raw_joints):
         raise RobotError(f"walking.moving_joints must be a non-empty list of joint names, got {raw_joints!r}")
@@ -288,6 +299,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         sole_offset=sole_offset,
         sole=sole,
         cog_height=cog_height,
+        toe_release=toe_release,
         moving_joints=tuple(raw_joints),
         torso_frame=torso_frame,
         posture=MappingProxyType(posture),

@@ -226,7 +226,10 @@ def whole_body_motion(
         if not is_tilted(rollout.footprints):
             left = [(*a[:4], 0.0, 0.0) for a in left]
             right = [(*b[:4], 0.0, 0.0) for b in right]
-        rolled = [toe_off_feet(rollout.footprints, front, a, b, z) for a, b, z in zip(left, right, zmp, strict=True)]
+        release = robot.description.toe_release
+        rolled = [
+            toe_off_feet(rollout.footprints, front, a, b, z, release) for a, b, z in zip(left, right, zmp, strict=True)
+        ]
         left, right = [a for a, _ in rolled], [b for _, b in rolled]
     cog_rows = cog.tolist()
     limit = dict(ERROR_LIMITS)

@@ -200,8 +200,10 @@ class WalkingStack:
                 if self._toe_off:
                     if not self._tilted:
                         left, right = (*left[:4], 0.0, 0.0), (*right[:4], 0.0, 0.0)
-                    front = self.ik.robot.description.sole.front
-                    left, right = toe_off_feet(prints, front, left, right, out.zmp_planned)
+                    description = self.ik.robot.description
+                    left, right = toe_off_feet(
+                        prints, description.sole.front, left, right, out.zmp_planned, description.toe_release
+                    )
                 if self._heights:
                     self.estimator.ground_rise = ground_rise(prints, left, right)  # type: ignore[attr-defined]
             targets = _new_tuple(IKTargets, (out.com, left, right, out.lean))

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
-from rtgait.core.geometry.swing import RISE_SHARE, swing_pose, swing_velocity, swing_vertical
+from rtgait.core.geometry.swing import RISE_SHARE, swing_pose, swing_velocity, swing_vertical, up_ramp
 from rtgait.core.geometry.terrain import PIT_DEPTH, Slope, Stairs, Step, SteppingStones, sole_gap, surface
 from rtgait.core.geometry.terrain_walk import TerrainWalkError, check_reach
 
@@ -88,3 +88,27 @@ def test_swing_height_ends_on_the_footholds_and_its_rate_is_its_derivative(z0, z
     if z0 != z1:  # the sole holds the top over the middle of the swing
         for s in np.linspace(RISE_SHARE, 1.0 - RISE_SHARE, 5):
             assert swing_pose(start, end, s, h)[2] == pytest.approx(max(z0, z1) + h)
+
+
+def test_up_a_ramp_the_swing_lifts_off_the_line_between_the_footholds():
+    # Up a 10 degree ramp: the sole point moves along the chord between the footholds and lifts h 64 s^3 (1 - s)^3
+    # off it, the horizontal motion undelayed: at mid-swing it is halfway along and h above the chord's middle,
+    # where the stair profile would still be rising toward z1 + h behind the body.
+    pitch, h = -math.radians(10.0), 0.05
+    start = Footstep(0.6, 0.1, 0.0, "left", z=0.2 * math.tan(-pitch), pitch=pitch)
+    end = Footstep(1.0, 0.1, 0.0, "left", z=0.6 * math.tan(-pitch), pitch=pitch)
+    assert up_ramp(start, end) and not up_ramp(end, start)  # down a ramp keeps the stair profile
+    x, _, z, _ = swing_pose(start, end, 0.5, h)
+    assert x == pytest.approx(0.8) and z == pytest.approx(0.5 * (start.z + end.z) + h)
+    for s in np.linspace(0.01, 0.99, 23):
+        d = 1e-6
+        k = (s * s * s) * (10.0 - 15.0 * s + 6.0 * s * s)  # the quintic blend, the horizontal progress
+        expected = start.z + k * (end.z - start.z) + h * 64.0 * s**3 * (1.0 - s) ** 3
+        assert swing_pose(start, end, s, h)[2] == pytest.approx(expected, abs=1e-12)
+        dz = (swing_pose(start, end, s + d, h)[2] - swing_pose(start, end, s - d, h)[2]) / (2 * d)
+        assert swing_velocity(start, end, s, h, 1.0)[2] == pytest.approx(dz, abs=1e-5)
+    for s in (0.0, 1.0):
+        assert swing_velocity(start, end, s, h, 1.0) == pytest.approx((0.0, 0.0, 0.0, 0.0), abs=1e-12)
+    # Onto level ground higher up (the ramp's top) from a ramp foothold: the same; between level footholds: not.
+    assert up_ramp(start, Footstep(1.2, 0.1, 0.0, "left", z=0.3))
+    assert not up_ramp(Footstep(0.0, 0.1, 0.0, "left"), Footstep(0.4, 0.1, 0.0, "left", z=0.15))

@@ -1,9 +1,13 @@
 """Talos climbs the built-in 15 cm stairs kinematically only with its rear heel rolled onto the toe: the IK reaches
 every tick of ``stairs-up`` with the toe-off, and refuses the walk at step 2 without it (the reach check of
 rtgait.robot.motion); at the lift-off the solved sole is pitched by the toe-off's angle. Down the same stairs it
-reaches every tick only with the stance's support height lowered before each step down (support_height.py)."""
+reaches every tick only with the stance's support height lowered before each step down (support_height.py). G1 climbs
+its 10 cm stairs kinematically only with its swing keeping the toe down until it passes the stance foot (its
+description's ``walking.toe_release``): with the default share its swing ankle runs out of dorsiflexion at step 2."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pytest
@@ -41,3 +45,16 @@ def test_talos_reaches_down_the_stairs_with_the_stance_lowered_and_not_without(t
     monkeypatch.setattr(support_height, "DESCENT_SHARE", 0.0)
     with pytest.raises(UnreachableError, match=r"step 2 .* out of reach for talos"):
         whole_body_motion(talos, planned_walk(talos, "stairs-down"))
+
+
+def test_g1_reaches_its_stairs_with_the_toe_kept_down_past_the_stance_foot(g1) -> None:
+    from rtgait.robot.model import RobotModel
+
+    walk = planned_walk(g1, "stairs-up-g1")
+    assert g1.description.toe_release > toe_off.RELEASE
+    motion = whole_body_motion(g1, walk)
+    assert motion.errors[:, 0].max() < 0.01  # the COG tracked within the reach check's limit (m)
+    # The sole levelled over the default share, right behind the stance foot: the ankle at its limit, out of reach.
+    levelled_early = RobotModel.load(dataclasses.replace(g1.description, toe_release=toe_off.RELEASE))
+    with pytest.raises(UnreachableError, match=r"step 2 .* out of reach for g1"):
+        whole_body_motion(levelled_early, walk)

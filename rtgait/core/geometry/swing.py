@@ -10,6 +10,13 @@ with ``top = max(z0, z1) + h`` and ``sigma`` = :data:`RISE_SHARE`,
 [0, 1]), so the sole is ``h`` above the higher foothold over the middle ``1 - 2 sigma`` of the swing, and the
 horizontal blend starts :data:`HORIZONTAL_DELAY` later and ends as much earlier: the toe is above the upper tread
 before it passes the stair nose (going up), the heel leaves the nose before the foot comes down (going down).
+
+Up a ramp (a foothold tilted to its surface, the landing higher: onto the ramp, along it and off its top) there is
+no nose to clear: the foot moves along the line between the footholds and lifts off it as on level ground,
+``z(s) = z0 + (z1 - z0) b(s) + h * 64 s^3 (1 - s)^3`` with the horizontal blend ``b(s)`` undelayed (over the ramp's
+top edge the lift keeps the sole clear: the terrain check below). The stair profile there lifted the foot up to the
+landing's height behind the body before moving it forward, its sole pitched toes up with the ramp: beyond G1's ankle
+dorsiflexion (``docs/results.md``). Down a ramp the stair profile is kept.
 :mod:`rtgait.core.geometry.swing_terrain` checks the swept sole against the terrain.
 """
 
@@ -40,17 +47,28 @@ def _clip01(s: float) -> float:
     return min(max(s, 0.0), 1.0)
 
 
-def swing_height(z0: float, z1: float, s: float, height: float) -> float:
+def up_ramp(start: Footstep, end: Footstep) -> bool:
+    """Whether a swing from ``start`` to ``end`` goes up a ramp: a foothold tilted to its surface and the landing
+    higher (module docstring)."""
+    tilted = start.pitch or start.roll or end.pitch or end.roll
+    return bool(tilted) and end.z > start.z
+
+
+def swing_height(z0: float, z1: float, s: float, height: float, ramp: bool = False) -> float:
     """Swing foot height (m) at progress ``s`` in [0, 1] from a foothold at ``z0`` to one at ``z1`` (module
-    docstring), ``height`` the clearance above the higher one."""
-    return swing_vertical(z0, z1, s, height)[0]
+    docstring), ``height`` the clearance above the higher one (``ramp``: up a ramp, above the line between them)."""
+    return swing_vertical(z0, z1, s, height, ramp)[0]
 
 
-def swing_vertical(z0: float, z1: float, s: float, height: float) -> tuple[float, float]:
-    """Swing foot height (m) and its derivative d/ds at progress ``s`` (module docstring)."""
-    if z0 == z1:  # level: the lift profile (a flat walk's swings unchanged)
+def swing_vertical(z0: float, z1: float, s: float, height: float, ramp: bool = False) -> tuple[float, float]:
+    """Swing foot height (m) and its derivative d/ds at progress ``s`` (module docstring); ``ramp``: a swing up a
+    ramp (:func:`up_ramp`)."""
+    if z0 == z1 or ramp:  # level (a flat walk's swings unchanged) or up a ramp: the lift profile over the footholds
         z, dz = lift(s)
-        return z0 + height * z, height * dz
+        if not ramp:
+            return z0 + height * z, height * dz
+        k, dk = blend(s)
+        return z0 + (z1 - z0) * k + height * z, (z1 - z0) * dk + height * dz
     top = max(z0, z1) + height
     up, dup = blend(_clip01(s / RISE_SHARE))
     down, ddown = blend(_clip01((s - 1.0 + RISE_SHARE) / RISE_SHARE))
@@ -58,8 +76,8 @@ def swing_vertical(z0: float, z1: float, s: float, height: float) -> tuple[float
 
 
 def _horizontal(start: Footstep, end: Footstep, s: float) -> tuple[float, float]:
-    """Horizontal blend and its derivative d/ds: delayed at both ends over a height change."""
-    if start.z == end.z:
+    """Horizontal blend and its derivative d/ds: delayed at both ends over a height change but up a ramp."""
+    if start.z == end.z or up_ramp(start, end):
         return blend(s)
     span = 1.0 - 2.0 * HORIZONTAL_DELAY
     k, dk = blend(_clip01((s - HORIZONTAL_DELAY) / span))
@@ -73,7 +91,7 @@ def swing_pose(start: Footstep, end: Footstep, s: float, height: float) -> tuple
     return (
         start.x + k * (end.x - start.x),
         start.y + k * (end.y - start.y),
-        swing_vertical(start.z, end.z, s, height)[0],
+        swing_vertical(start.z, end.z, s, height, up_ramp(start, end))[0],
         wrap_angle(start.yaw + k * wrap_angle(end.yaw - start.yaw)),
     )
 
@@ -82,7 +100,7 @@ def swing_velocity(start: Footstep, end: Footstep, s: float, height: float, dura
     """Foot velocity ``(vx, vy, vz, yaw_rate)`` (m/s, rad/s) at swing progress ``s`` over ``duration`` (s)."""
     s = _clip01(s)
     _, dk = _horizontal(start, end, s)
-    _, dz = swing_vertical(start.z, end.z, s, height)
+    _, dz = swing_vertical(start.z, end.z, s, height, up_ramp(start, end))
     scale = 1.0 / duration
     return (
         dk * (end.x - start.x) * scale,

@@ -13,9 +13,13 @@ along its heading, ``t`` the sole's toe (its ``front``) and ``d`` the front foot
 only once the ZMP is ahead of the toe line: from then on the support is the hull of the rear toe line and the front
 foot, and the planner's ZMP, a straight line from the rear foot to the front foot in double support and on the
 front foot at the lift-off (``s = 1``), lies in it. Up a stair the foot, on its toe at the lift-off, levels again
-over the first :data:`RELEASE` of its swing's horizontal progress ``u`` (as in :mod:`foot_tilt`):
+over the first share ``w`` of its swing's horizontal progress ``u`` (as in :mod:`foot_tilt`):
 
-    theta = THETA (1 - smooth(u / RELEASE)).
+    theta = THETA (1 - smooth(u / w)),        w = :data:`RELEASE` unless the robot gives its own.
+
+Rising behind the stance foot to clear the nose, the swing's shank leans back and a level sole needs the ankle's
+dorsiflexion; a robot whose ankle has less of it than the lean needs (G1: 0.873 rad) keeps the toe down until the foot
+passes the stance foot, ``w = 1/2`` with one foot per tread (its description's ``walking.toe_release``).
 
 Down a stair the foot keeps its toe-off pitch through the swing (the ankle, folded under the hip as the foot passes
 the stance foot, is spared its dorsiflexion limit) and levels over the last :data:`RELEASE` of it,
@@ -54,8 +58,8 @@ MIN_RISE = 0.01
 """Height change of a step (m) from which the rear foot rolls onto its toe; smaller steps walk as on the flat."""
 
 RELEASE = 0.3
-"""Fraction of a swing's horizontal progress over which the sole levels after a toe-off: the first up a stair, the
-last down one."""
+"""Fraction of a swing's horizontal progress over which the sole levels after a toe-off: the first up a stair (unless
+the robot gives its own share), the last down one."""
 
 NEAR = 0.02
 """Distance (m) within which a foot target counts as standing on a foothold of its side: the closed loop's targets
@@ -98,10 +102,12 @@ def toe_pitch(
     other: Sequence[float],
     zmp: Sequence[float],
     side: str,
+    release: float = RELEASE,
 ) -> float:
     """Toe-off pitch (rad, heel up) of the ``side`` foot target ``foot`` (``(x, y, z, yaw, ...)``) while ``other`` is
     the other foot's target and ``zmp`` the ZMP ``(x, y)`` (m); ``front`` is the sole's toe ahead of its sole point (m)
-    (module docstring). 0 when no step of the walk changes height by :data:`MIN_RISE`."""
+    (module docstring); ``release`` is the share of a swing up a stair over which its sole levels. 0 when no step of the
+    walk changes height by :data:`MIN_RISE`."""
     own = _index(prints, foot, side)
     there = _index(prints, other, "right" if side == "left" else "left")
     if own is not None and there is not None:  # double support: only the rear foot (the earlier foothold) rolls
@@ -134,7 +140,7 @@ def toe_pitch(
     u = 1.0 if length2 == 0.0 else min(1.0, max(0.0, ((foot[0] - a.x) * dx + (foot[1] - a.y) * dy) / length2))
     if rise < 0.0:  # a step down: the toe stays down until the last RELEASE of the swing, which lands flat
         return THETA * (1.0 - _smooth(min(1.0, max(0.0, (u - 1.0 + RELEASE) / RELEASE))))
-    return THETA * (1.0 - _smooth(min(1.0, u / RELEASE)))
+    return THETA * (1.0 - _smooth(min(1.0, u / release)))
 
 
 def _rolled(foot: Sequence[float], front: float, theta: float) -> tuple[float, ...]:
@@ -151,10 +157,12 @@ def toe_off_feet(
     left: Sequence[float],
     right: Sequence[float],
     zmp: Sequence[float],
+    release: float = RELEASE,
 ) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """The feet targets ``(x, y, z, yaw, pitch, roll)`` with each foot's toe-off (:func:`toe_pitch`) applied."""
-    theta_left = toe_pitch(prints, front, left, right, zmp, "left")
-    theta_right = toe_pitch(prints, front, right, left, zmp, "right")
+    """The feet targets ``(x, y, z, yaw, pitch, roll)`` with each foot's toe-off (:func:`toe_pitch`, ``release`` the
+    share of a swing up a stair over which its sole levels) applied."""
+    theta_left = toe_pitch(prints, front, left, right, zmp, "left", release)
+    theta_right = toe_pitch(prints, front, right, left, zmp, "right", release)
     return (
         _rolled(left, front, theta_left) if theta_left else tuple(left),
         _rolled(right, front, theta_right) if theta_right else tuple(right),

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from rtgait.core.geometry.footsteps import Footstep, Timeline
-from rtgait.core.geometry.swing import retargeted_swing, swing_height, swing_pose, swing_velocity
+from rtgait.core.geometry.swing import retargeted_swing, swing_height, swing_pose, swing_velocity, up_ramp
 from rtgait.core.walk.walk import Walk
 
 SwingRetarget = tuple[float, tuple[float, float, float], tuple[float, float, float], float]
@@ -50,7 +50,8 @@ class PhaseInfo:
         since, pose0, vel0, _ = self.retarget
         span = self.end - since
         x, y, yaw = retargeted_swing(pose0, vel0, self.swing_to, (rel - since) / span, span)
-        z = swing_height(self.swing_from.z, self.swing_to.z, min(max(self.lift_progress(rel), 0.0), 1.0), height)
+        progress = min(max(self.lift_progress(rel), 0.0), 1.0)
+        z = swing_height(self.swing_from.z, self.swing_to.z, progress, height, up_ramp(self.swing_from, self.swing_to))
         return (x, y, z, yaw)
 
     def lift_progress(self, rel: float) -> float:
