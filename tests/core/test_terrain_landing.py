@@ -91,6 +91,10 @@ def test_on_the_flat_floor_the_move_is_taken_whole_and_level() -> None:
     nominal = Footstep(0.3, 0.1, 0.2, "left")
     landed = land_on_terrain(Flat(), nominal, 0.5, 0.25, SOLE)
     assert not landed.clamped and landed.footprint == Footstep(0.5, 0.25, 0.2, "left")
+    # A move within round-off is taken to the coordinates asked, as the flat floor's step adjustment takes them.
+    tread = place_footstep(STAIRS_UP, Footstep(0.75, 0.085, 0.0, "left"))
+    y = float(np.nextafter(tread.y, 1.0))
+    assert land_on_terrain(STAIRS_UP, tread, tread.x, y, SOLE).footprint.y == y != tread.y
 
 
 def _pushed(name: str, push: tuple[float, float], with_terrain: bool) -> tuple[OnlinePlanner, object]:

@@ -33,6 +33,7 @@ by the landings' errors; the terrain's change keeps that offset instead of undoi
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
@@ -107,8 +108,8 @@ def _reach(
     """The largest fraction ``s`` in [0, 1] of ``move`` (m) from ``origin`` (m) such that every place sampled from
     ``origin`` to ``origin + s move`` supports at least ``need`` points of the sole."""
     length = float(np.hypot(*move))
-    if length < 1e-9:
-        return 0.0
+    if length < 1e-9:  # nothing to shrink: the move is taken as it is (a candidate's exact coordinates kept)
+        return 1.0
     fractions = np.append(np.arange(1, math.ceil(length / SCAN_STEP)) * (SCAN_STEP / length), 1.0)
     reached = 0.0
     for start in range(0, len(fractions), _BATCH):
@@ -127,8 +128,8 @@ def land_on_terrain(terrain: Terrain, nominal: Footstep, x: float, y: float, sol
     start = np.array([nominal.x, nominal.y])
     delta = np.array([x, y], float) - start
     asked = float(np.hypot(*delta))
-    if asked < 1e-9:
-        return TerrainLanding(nominal, 0.0, 0.0)
+    if asked < 1e-9:  # a move within round-off: taken as asked (as on the flat floor), its surface the nominal's
+        return TerrainLanding(replace(nominal, x=float(x), y=float(y)), asked, asked)
     c, s = math.cos(nominal.yaw), math.sin(nominal.yaw)
     along, lateral = np.array([c, s]), np.array([-s, c])
     supported, planes = sole_support(terrain, nominal, sole, start[None])
