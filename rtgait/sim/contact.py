@@ -194,11 +194,13 @@ class ContactMonitor:
         )  # fmt: skip
         # Tipping over: the loaded foot turned onto an edge of its sole, beyond the tilt it was commanded (a planned
         # toe-off or a sloped foothold's surface is no tip).
-        if self.tip_time is None:
-            if fl > 0.5 * total:
-                if tip_cosine(ml, self._normals[0], self._starts[0]) < self._cos_tip:
-                    self.tip_time = t
-            elif fr > 0.5 * total and tip_cosine(mr, self._normals[1], self._starts[1]) < self._cos_tip:
+        if self.tip_time is None and (fl > 0.5 * total or fr > 0.5 * total):
+            side, m, cos_level = (0, ml, cos_left) if fl > 0.5 * total else (1, mr, cos_right)
+            normal = self._normals[side]
+            # A level command (the flat floor's every tick) is the tilt from level, already read.
+            start = self._starts[side]
+            cos_tilt = cos_level if normal is _LEVEL and start is None else tip_cosine(m, normal, start)
+            if cos_tilt < self._cos_tip:
                 self.tip_time = t
         return x, y, fl, fr
 
