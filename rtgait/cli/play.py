@@ -168,6 +168,7 @@ def _live_walk(
         robot_info(robot),
         dt=sim.control_dt,
         options=settings,
+        terrain=None if by_command else walk.placed_on,
     )
     options = LoopOptions(
         changes=() if by_command else walk.changes, reactions=obstacle_reactions(walk) if obstacles else (),

@@ -59,6 +59,7 @@ from rtgait.control.settings import (
 from rtgait.control.sole_level import SoleLevel, SoleLevelSettings
 from rtgait.core.geometry.footsteps import Footstep, Side, SoleRect, Stride, mean_heading
 from rtgait.core.geometry.support import support_polygon
+from rtgait.core.geometry.terrain import Terrain
 from rtgait.core.laws.feedback import DcmFeedback
 from rtgait.core.laws.hip_strategy import HipStrategy
 from rtgait.core.lipm.closed_form import GRAVITY
@@ -100,12 +101,20 @@ class WalkingController:
     """One controller level around an online planner (module docstring). Build with :func:`make_controller`."""
 
     def __init__(
-        self, level: ControllerLevel, planner: OnlinePlanner, info: RobotInfo, dt: float, options: ControllerOptions
+        self,
+        level: ControllerLevel,
+        planner: OnlinePlanner,
+        info: RobotInfo,
+        dt: float,
+        options: ControllerOptions,
+        terrain: Terrain | None = None,
     ) -> None:
         check_level(level, "level")
         if not (math.isfinite(dt) and dt > 0.0):
             raise ValueError(f"dt must be a control period > 0 s, got {dt}")
         self.level, self.planner, self.info, self.dt, self.options = level, planner, info, float(dt), options
+        self.terrain = terrain
+        """The terrain the walk's footholds were placed on, for step adjustment's landings; ``None``: none known."""
         self.sole = info.sole
         closed = level != "open-loop"
         self.feedback = DcmFeedback(planner.w, options.dcm, dt) if closed else None
@@ -404,7 +413,7 @@ class WalkingController:
         from rtgait.control.level_fade import LEVEL_FADE, FeedbackFade, FootFade
 
         options, planner = self.options, self.planner
-        adjust = controller_step_adjustment(options, self.info) if level == "adaptive" else None
+        adjust = controller_step_adjustment(options, self.info, self.terrain) if level == "adaptive" else None
         config = level_config(
             planner.config, level, self.sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
         )
@@ -463,6 +472,7 @@ def make_controller(
     *,
     dt: float = 0.001,
     options: ControllerOptions | None = None,
+    terrain: Terrain | None = None,
 ) -> WalkingController:
     """A controller of level ``level`` (``"open-loop"``, ``"stabilized"``, ``"adaptive"``) with its own planner.
 
@@ -476,6 +486,10 @@ def make_controller(
             from a loaded robot model).
         dt: control period (s).
         options: feedback gains and landing handling (:class:`ControllerOptions`).
+        terrain: the terrain the walk's footholds were placed on (a scenario's ``[terrain]`` with
+            ``place_footsteps``): step adjustment keeps the landings it moves on their own treads or stones, at the
+            terrain's height and tilt there (:mod:`rtgait.core.geometry.terrain_landing`). ``None`` (default): the
+            moved landings keep their height and tilt, as on the flat floor.
     """
     options = options or ControllerOptions()
     if not isinstance(robot, RobotInfo):
@@ -483,7 +497,9 @@ def make_controller(
     info = robot
     if info.sole != sole:
         info = dataclasses.replace(info, sole=sole)
-    adjust = controller_step_adjustment(options, info) if level == "adaptive" else None
+    if terrain is not None and getattr(terrain, "kind", None) == "flat":
+        terrain = None  # nothing to keep a landing on: a flat walk stays as it is
+    adjust = controller_step_adjustment(options, info, terrain) if level == "adaptive" else None
     config = level_config(
         planner_config, level, sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
     )
@@ -491,4 +507,4 @@ def make_controller(
         # The controller takes the measured state in, and steps elsewhere, only on a DCM error (_dcm_error_replan).
         options = dataclasses.replace(options, step_adjustment=adjust)
         config = dataclasses.replace(config, feedback="planned", step_adjustment=None)
-    return WalkingController(level, OnlinePlanner(config, strides), info, dt, options)
+    return WalkingController(level, OnlinePlanner(config, strides), info, dt, options, terrain)

@@ -9,6 +9,7 @@ from typing import NamedTuple
 
 from rtgait.control.foot_control import FootControlGains, FootOffsets
 from rtgait.control.sole_level import SoleLevelSettings
+from rtgait.core.geometry.terrain import Terrain
 from rtgait.core.laws.feedback import DcmFeedbackGains
 from rtgait.core.laws.stepping import StepAdjustment, SteppingLimits
 from rtgait.core.planner.levels import DEFAULT_REPLAN_DCM_ERROR
@@ -62,12 +63,18 @@ def step_limits(info: RobotInfo, stepping: SteppingLimits | None = None) -> Step
     return StepAdjustment(info.sole, SteppingLimits(max_length=0.35 * scale, min_width=min_width, max_width=max_width))
 
 
-def controller_step_adjustment(options: ControllerOptions, info: RobotInfo) -> StepAdjustment:
+def controller_step_adjustment(
+    options: ControllerOptions, info: RobotInfo, terrain: Terrain | None = None
+) -> StepAdjustment:
     """The step adjustment of the ``"adaptive"`` level: ``options.step_adjustment``, else the robot's
-    :func:`step_limits`; with ``options.adapt_timing``, its step timing adaptation on."""
+    :func:`step_limits`; with ``options.adapt_timing``, its step timing adaptation on; with ``terrain`` (the one the
+    walk's footholds were placed on), its moved landings kept on their treads or stones at the terrain's height
+    and tilt (:func:`~rtgait.core.geometry.terrain_landing.land_on_terrain`)."""
     adjust = options.step_adjustment or step_limits(info)
     if options.adapt_timing and not adjust.adapt_timing:
         adjust = replace(adjust, adapt_timing=True)
+    if terrain is not None and adjust.terrain is not terrain:
+        adjust = replace(adjust, terrain=terrain)
     return adjust
 
 

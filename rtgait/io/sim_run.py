@@ -257,8 +257,9 @@ def _controller(
     hand its planner and, for a walk by command, the steps after which it stops."""
     strides = walk.strides() if velocity is None else None
     controller = make_controller(
-        level, walk.planner_config(), strides, walk.sole, robot_info(sim.robot), dt=sim.control_dt, options=options
-    )
+        level, walk.planner_config(), strides, walk.sole, robot_info(sim.robot), dt=sim.control_dt, options=options,
+        terrain=walk.placed_on if velocity is None else None,  # a walk by command has no footholds on it
+    )  # fmt: skip
     if velocity is None:
         return controller, walk.changes, None
     command = velocity if isinstance(velocity, VelocityCommand) else VelocityCommand(*velocity)

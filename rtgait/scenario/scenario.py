@@ -52,6 +52,7 @@ from rtgait.core.geometry.footsteps import (
     standing_feet,
     stride_between,
 )
+from rtgait.core.geometry.terrain import TerrainKind
 from rtgait.core.limits import (
     MAX_COG_HEIGHT,
     MAX_GRAVITY,
@@ -230,6 +231,16 @@ class Scenario:
         if self.dt > shortest:
             # A period longer than a phase would skip whole phases (and their replans) between two samples.
             raise ScenarioError(f"dt must not exceed the shortest phase ({shortest} s), got {self.dt}")
+
+    @property
+    def placed_on(self) -> TerrainKind | None:
+        """The terrain the walk's footholds are placed on, for what the controller does to them (step adjustment's
+        moved landings); ``None`` on the flat floor, or when the plan walks its own footholds and the terrain is the
+        truth it does not know (``place_footsteps = false``)."""
+        spec = self.terrain
+        if spec is None or not spec.place_footsteps or spec.terrain.kind == "flat":
+            return None
+        return spec.terrain
 
     def planner_config(self) -> PlannerConfig:
         """The online planner's parameters for this scenario (with its ``[robot.velocity]`` limits, if any)."""

@@ -4,7 +4,8 @@ robot has fallen, tipped over or landed a step, and the external contact forces 
 :class:`ContactMonitor` keeps the per-tick record of a run: the ZMP (the centre of pressure of the soles' normal forces,
 decoded by :mod:`rtgait.sim.contact_reading`), the force on each foot, how many corners of each sole box touch, how far
 each sole is tilted, whether the legs touch each other, and it decides when the robot has fallen (:class:`FallLimits`)
-or tipped over (a loaded foot rolled onto an edge of its sole). :class:`Landings` counts the steps whose foot touched
+or tipped over (a loaded foot rolled onto an edge of its sole: tilted beyond :attr:`FallLimits.tip_angle` from the
+tilt it was commanded, :func:`tip_cosine`). :class:`Landings` counts the steps whose foot touched
 down in time. :class:`~rtgait.core.push.Push` is a force from outside (a hand on the pelvis), applied by
 :class:`Pushes`.
 """
@@ -12,6 +13,7 @@ down in time. :class:`~rtgait.core.push.Push` is a force from outside (a hand on
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -23,7 +25,6 @@ from rtgait.core.push import Push
 from rtgait.sim.contact_reading import ContactSums
 from rtgait.sim.row_packing import row_packer
 from rtgait.sim.step_snapshot import StepSnapshot
-from rtgait.sim.terrain import surface_normal
 
 if TYPE_CHECKING:
     from rtgait.sim.model import SimModel
@@ -31,7 +32,57 @@ if TYPE_CHECKING:
 _TIME_TOLERANCE = 1e-9  # s
 _COLUMNS = 15  # ContactMonitor's row (its __init__ says what)
 
-__all__ = ["ContactMonitor", "FallLimits", "Landings", "Pushes"]
+__all__ = ["ContactMonitor", "FallLimits", "Landings", "Pushes", "commanded_normal", "tip_cosine"]
+
+_LEVEL = (0.0, 0.0, 1.0)  # the normal of a level sole
+
+
+def commanded_normal(target: Sequence[float]) -> tuple[float, float, float]:
+    """The unit normal of a sole at the IK's foot target ``target``: ``(x, y, z, yaw)``, level, or ``(x, y, z, yaw,
+    pitch, roll)``, turned by ``Rz(yaw) Ry(pitch) Rx(roll)`` (:mod:`rtgait.core.geometry.foot_tilt`):
+
+        n = (cos(yaw) sin(pitch) cos(roll) + sin(yaw) sin(roll),
+             sin(yaw) sin(pitch) cos(roll) - cos(yaw) sin(roll),
+             cos(pitch) cos(roll)).
+    """
+    if len(target) < 6 or not (target[4] or target[5]):
+        return _LEVEL
+    yaw, pitch, roll = target[3], target[4], target[5]
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cr, sr = math.cos(roll), math.sin(roll)
+    return cy * sp * cr + sy * sr, sy * sp * cr - cy * sr, cp * cr
+
+
+def tip_cosine(rotation: Sequence[float], normal: Sequence[float], start: Sequence[float] | None = None) -> float:
+    """The cosine of a sole's tilt from the tilt it was commanded: the angle between its normal ``m``, the third
+    column of its orientation ``rotation`` (a 3 x 3 matrix, row-major, 9 numbers: MuJoCo's ``site_xmat``), and the
+    commanded ``normal`` ``b`` (:func:`commanded_normal`); a level command gives the sole's tilt from level,
+    ``rotation[8]``.
+
+    With ``start`` ``a``, the normal the sole rolls from toward ``b`` (its foothold's, before a toe-off lifts the
+    heel), the angle from ``m`` to the nearest normal on the arc from ``a`` to ``b``: a sole behind its commanded
+    toe-off (its servo lagging the heel's rise) is on that arc, no tip. With ``k = a x b / |a x b|`` and ``s = m.k``,
+    ``m``'s projection ``p = m - s k`` on the arc's plane lies within the arc when ``(a x p).k >= 0`` and
+    ``(p x b).k >= 0``; the cosine is then ``sqrt(1 - s^2)``, else the larger of ``m.a`` and ``m.b``.
+    """
+    m = (rotation[2], rotation[5], rotation[8])
+    bx, by, bz = normal
+    to_b = float(m[0] * bx + m[1] * by + m[2] * bz) if (bx or by or bz != 1.0) else float(m[2])
+    if start is None:
+        return to_b
+    a, b = np.asarray(start, float), np.asarray(normal, float)
+    axis = np.cross(a, b)
+    length = float(np.linalg.norm(axis))
+    if length < 1e-12:  # no roll between them
+        return to_b
+    axis /= length
+    mv = np.asarray(m, float)
+    s = float(mv @ axis)
+    p = mv - s * axis
+    if np.cross(a, p) @ axis >= 0.0 and np.cross(p, b) @ axis >= 0.0:
+        return math.sqrt(max(0.0, 1.0 - s * s))
+    return max(float(mv @ a), to_b)
 
 
 @dataclass(frozen=True)
@@ -45,9 +96,12 @@ class FallLimits:
             still 0.72 m above the ramp).
         tilt: fallen: the base tilted from upright beyond this angle (rad).
         airborne: fallen: no foot on the floor for longer than this (s).
-        tip_angle: tipped over: a foot carrying more than half the load tilted from level beyond this angle (rad).
-            The default, 0.02 rad, lifts the far edge of a 0.13 m wide sole by 2.6 mm; on flat ground the soles of a
-            walk that keeps its ZMP inside tilt a few milliradians at most (the contact's softness).
+        tip_angle: tipped over: a foot carrying more than half the load tilted beyond this angle (rad) from the
+            tilt it was commanded (the IK's sole target: level on the flat floor, a sloped foothold's surface, the
+            heel lifted in a planned toe-off), so that a planned roll onto the toe is no tip and a roll beyond it or
+            off the surface is. The default, 0.02 rad, lifts the far edge of a 0.13 m wide sole by 2.6 mm; on flat
+            ground the soles of a walk that keeps its ZMP inside tilt a few milliradians at most (the contact's
+            softness).
     """
 
     base_height_fraction: float = 0.6
@@ -88,8 +142,12 @@ class ContactMonitor:
         terrain: Terrain | None = None,
     ) -> None:
         self._sites = (left_site, right_site)
-        # On a sloped terrain a sole lying flat on it is tilted from level: the tilt is measured from the surface.
+        # The base's height is measured above the terrain under it (the fall limit).
         self._terrain = terrain if terrain is not None and getattr(terrain, "kind", "flat") != "flat" else None
+        # The soles' commanded normals (left, right), of the feet targets the robot was last given, and the normals
+        # each rolls from in a toe-off (None: no toe-off) (command()).
+        self._normals: tuple[tuple[float, float, float], tuple[float, float, float]] = (_LEVEL, _LEVEL)
+        self._starts: tuple[tuple[float, float, float] | None, tuple[float, float, float] | None] = (None, None)
         self.threshold = threshold
         # One row per tick, written at once (one assignment costs less than one per quantity): ZMP x, y (NaN while
         # no foot touches), vertical force left, right, sole corners touching left, right, cosine of the sole tilt
@@ -134,21 +192,34 @@ class ContactMonitor:
             x, y, fl, fr, cl, cr, cos_left, cos_right, other,
             pl[0], pl[1], math.atan2(ml[3], ml[0]), pr[0], pr[1], math.atan2(mr[3], mr[0]),
         )  # fmt: skip
-        # Tipping over: the loaded foot turned onto an edge of its sole.
-        if self.tip_time is None and (
-            (fl > 0.5 * total and cos_left < self._cos_tip) or (fr > 0.5 * total and cos_right < self._cos_tip)
-        ):
-            terrain = self._terrain
-            if terrain is None:
+        # Tipping over: the loaded foot turned onto an edge of its sole, beyond the tilt it was commanded (a planned
+        # toe-off or a sloped foothold's surface is no tip).
+        if self.tip_time is None and (fl > 0.5 * total or fr > 0.5 * total):
+            side, m, cos_level = (0, ml, cos_left) if fl > 0.5 * total else (1, mr, cos_right)
+            normal = self._normals[side]
+            # A level command (the flat floor's every tick) is the tilt from level, already read.
+            start = self._starts[side]
+            cos_tilt = cos_level if normal is _LEVEL and start is None else tip_cosine(m, normal, start)
+            if cos_tilt < self._cos_tip:
                 self.tip_time = t
-            else:  # the tilt from the surface under the loaded sole
-                site, m = (left, ml) if fl > 0.5 * total else (right, mr)
-                nx, ny, nz = surface_normal(
-                    terrain, float(positions_of_sites[site][0]), float(positions_of_sites[site][1])
-                )
-                if m[2] * nx + m[5] * ny + m[8] * nz < self._cos_tip:
-                    self.tip_time = t
         return x, y, fl, fr
+
+    def command(self, left: Sequence[float], right: Sequence[float], toe_off: tuple[float, float] = (0.0, 0.0)) -> None:
+        """The feet targets the robot is given now (``(x, y, z, yaw[, pitch, roll])``, m, rad: the IK's) and the
+        toe-off pitch in each (rad, heel up), whose tilts the soles are compared with from the next :meth:`record`
+        on (:func:`tip_cosine`: a sole anywhere from its foothold's tilt to its commanded toe-off is no tip); a
+        target that is not finite (none while the stack damps) keeps the last one's."""
+        normals, starts = [], []
+        for target, theta, last, last_start in zip((left, right), toe_off, self._normals, self._starts, strict=True):
+            normal = commanded_normal(target)
+            if not math.isfinite(normal[0] + normal[1] + normal[2]):
+                normals.append(last)
+                starts.append(last_start)
+                continue
+            normals.append(normal)
+            starts.append(commanded_normal((*target[:4], target[4] - theta, target[5])) if theta else None)
+        self._normals = (normals[0], normals[1])
+        self._starts = (starts[0], starts[1])
 
     def fall(self, base: np.ndarray) -> str | None:
         """Why the robot has fallen, from the base pose ``(x, y, z, qw, qx, qy, qz)`` at the tick last measured,

@@ -33,8 +33,9 @@ sole-floor contact forces), the base pose, the COG, which feet touch the floor, 
 boxes, how far each sole is tilted, where each sole is, whether the legs touch each other
 (:mod:`rtgait.sim.contact`), the joint torques (their mean over the period's substeps), and the commanded
 configuration. The run ends early when the robot falls (:class:`FallLimits`). A foot that carries most of the load
-and tilts beyond :attr:`FallLimits.tip_angle` has *tipped over*: recorded (:attr:`SimResult.tipped`), not an end,
-since a robot may recover from it.
+and tilts beyond :attr:`FallLimits.tip_angle` from the tilt it was commanded (the IK's sole target of the tick
+before: level, a sloped foothold's surface, or anywhere from its foothold's tilt to a planned toe-off's while the
+heel rises) has *tipped over*: recorded (:attr:`SimResult.tipped`), not an end, since a robot may recover from it.
 
 The walk starts from half-sitting, whose COG is higher than the planner's constant COG height: a short transition
 (:mod:`rtgait.sim.loop_start`) moves the IK's COG target to the walk's start before the planner's clock begins. The
@@ -378,6 +379,9 @@ class ClosedLoop(LoopReadout):
             replay_soles[replay_row, 1] = site_xpos[right_site]
         cog[i] = base_com
         zx, zy, fl, fr = contacts.record(i, t, sums, snapshot)
+        stack = self.stack
+        if stack.ik_feet is not None:  # this tick's command: the soles' tilts the next record compares with
+            contacts.command(*stack.ik_feet, stack.toe_off)
         if self.log is not None:
             self.log.record(i, left_foot, right_foot, out, measurement, self.controller.level, truth)
         for j in range(1, n_sub):

@@ -107,7 +107,8 @@ class SimResult:
         fell: whether the robot fell.
         fall_time: when (s), or ``None``.
         fall_cause: ``"base too low"``, ``"base tilted"`` or ``"no foot on the floor"``, or ``None``.
-        tipped: whether a foot carrying most of the load tilted beyond the fall limits' ``tip_angle``.
+        tipped: whether a foot carrying most of the load tilted beyond the fall limits' ``tip_angle`` from the tilt it
+            was commanded (a planned toe-off is no tip).
         tip_time: when that first happened (s), or ``None``.
         wall_time: wall-clock time of the loop (s), the planner, controller, IK and physics.
         robot: the robot's name.

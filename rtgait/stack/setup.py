@@ -69,8 +69,9 @@ def walking_stack(
     """
     check_state(state)
     controller = make_controller(
-        level, walk.planner_config(), walk.strides(), walk.sole, robot_info(robot), dt=dt, options=options
-    )
+        level, walk.planner_config(), walk.strides(), walk.sole, robot_info(robot), dt=dt, options=options,
+        terrain=walk.placed_on,
+    )  # fmt: skip
     ik = WholeBodyIK(robot)
     cog, left, right = start_pose(controller.planner)
     q, _ = ik.solve(IKTargets(cog, left, right), robot.q_half_sitting, 200, 1e-9)

@@ -44,6 +44,8 @@ from rtgait.stack.estimators import shared_kinematics
 from rtgait.stack.safety import Fault, SafetyLayer
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from rtgait.control.controller import WalkingController
     from rtgait.control.settings import ControlTargets
     from rtgait.estimation.estimator import Estimator
@@ -130,6 +132,13 @@ class WalkingStack:
         self._toe_off = False  # whether a step changes height: toe-offs (set at the start)
         self._heights = False  # footholds at different heights, an estimator with a landing gate (at the start)
         self._readings: SensorReadings | None = None  # the last estimate's, for a feed-forward at the sensed state
+        self.ik_feet: tuple[Sequence[float], Sequence[float]] | None = None
+        """The feet targets last given to the IK (left, right): ``(x, y, z, yaw)``, or ``(x, y, z, yaw, pitch,
+        roll)`` with the soles' tilts to sloped footholds and toe-offs (m, rad); ``None`` before the first command.
+        A simulator compares the soles with them (the tilt they were commanded)."""
+        self.toe_off: tuple[float, float] = (0.0, 0.0)
+        """The toe-off pitch in those targets (left, right; rad, heel up: :mod:`rtgait.core.geometry.toe_off`), the
+        part of their pitch the sole rolls through from its foothold's tilt."""
 
     @property
     def q(self) -> np.ndarray:
@@ -201,9 +210,11 @@ class WalkingStack:
                     if not self._tilted:
                         left, right = (*left[:4], 0.0, 0.0), (*right[:4], 0.0, 0.0)
                     description = self.ik.robot.description
+                    flat_left, flat_right = left[4], right[4]
                     left, right = toe_off_feet(
                         prints, description.sole.front, left, right, out.zmp_planned, description.toe_release
                     )
+                    self.toe_off = (left[4] - flat_left, right[4] - flat_right)
                 if self._heights:
                     self.estimator.ground_rise = ground_rise(prints, left, right)  # type: ignore[attr-defined]
             targets = _new_tuple(IKTargets, (out.com, left, right, out.lean))
@@ -255,6 +266,7 @@ class WalkingStack:
         sensed_state: Measurement | None = None,
     ) -> StackOutput:
         q, _ = self.ik.solve(targets, self._q, max_iterations=1, tolerance=0.0, errors=False)
+        self.ik_feet = (targets.left_foot, targets.right_foot)
         joints = q[7:]
         if offsets is not None and any(offsets):
             joints = joints.copy()

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, NamedTuple
 
 from rtgait.core.geometry.footsteps import SoleRect
+from rtgait.core.geometry.terrain import Terrain
 
 if TYPE_CHECKING:
     pass
@@ -120,6 +121,10 @@ class StepAdjustment:
         time_cost: how many metres of landing departure one second of timing change weighs (m/s): the departure
             is ``|delta|^2 + (time_cost * dT)^2``. 0.5 m/s, about a walking speed: shortening a step by ``dT``
             moves the body about as much as landing ``0.5 dT`` elsewhere.
+        terrain: the terrain the walk's footholds were placed on (:mod:`rtgait.core.geometry.terrain`), or
+            ``None`` (the flat floor, or footholds that do not know the ground): a moved landing is then kept on its
+            foothold's own tread or stone and takes the terrain's height and tilt at its new place
+            (:func:`~rtgait.core.geometry.terrain_landing.land_on_terrain`).
     """
 
     sole: SoleRect
@@ -131,8 +136,11 @@ class StepAdjustment:
     adapt_timing: bool = False
     durations: int = 4
     time_cost: float = 0.5
+    terrain: Terrain | None = None
 
     def __post_init__(self) -> None:
+        if self.terrain is not None and not callable(getattr(self.terrain, "height", None)):
+            raise ValueError(f"step_adjustment.terrain must be a terrain or None, got {type(self.terrain).__name__}")
         if not isinstance(self.sole, SoleRect):
             raise ValueError("step_adjustment.sole must be a SoleRect")
         if not isinstance(self.limits, SteppingLimits):

@@ -17,6 +17,7 @@ import numpy as np
 from rtgait.core.geometry.footsteps import Stride
 from rtgait.core.geometry.halfplanes import halfplane_margin, polygon_halfplanes
 from rtgait.core.geometry.support import support_polygon
+from rtgait.core.geometry.terrain_landing import land_on_terrain
 from rtgait.core.laws.landing_choice import propose_landing
 from rtgait.core.laws.step_timing import TimingOptions, remainder_options, single_support_options
 from rtgait.core.laws.stepping import StepAdjustment, StepDecision
@@ -72,9 +73,17 @@ class StepAdjusting:
         k, nominal, landing = proposal.step, proposal.nominal, proposal.landing
         if not proposal.enough and adjust.on_failure == "keep":
             return self._keep_walk(t, planned, proposal, before, halfplanes, adjust)
-        walk.move_landing(k, *landing)
+        surface = kept = None
+        if adjust.terrain is not None:  # on its foothold's own tread or stone, at the terrain's height and tilt there
+            placed = land_on_terrain(adjust.terrain, nominal, *landing, adjust.sole)
+            foot = placed.footprint
+            landing, surface = (foot.x, foot.y), (foot.z, foot.pitch, foot.roll)
+            kept = placed.asked if placed.clamped else None
+        walk.move_landing(k, *landing, surface=surface)
         moved = math.hypot(landing[0] - nominal.x, landing[1] - nominal.y)
         reason = f"ZMP margin {before * 1e3:+.1f} mm: step {k} lands {moved:.3f} m away"
+        if kept is not None:
+            reason += f" (kept on its foothold's surface: {kept:.3f} m asked)"
         layout = None
         if proposal.timing >= 0:
             layout = self._timing_layouts(k, proposal.swinging, adjust)[proposal.timing]

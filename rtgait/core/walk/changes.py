@@ -224,18 +224,19 @@ class WalkChanges:
         self.stopping = True
         return start
 
-    def move_landing(self, step: int, x: float, y: float) -> None:
+    def move_landing(self, step: int, x: float, y: float, surface: tuple[float, float, float] | None = None) -> None:
         """Land ``step`` at ``(x, y)`` (m), keeping its heading: later footprints follow (strides unchanged).
 
         For step adjustment, which the controller decides past the connection mode's deadline (the robot must
-        step there to keep its balance), so no deadline applies; the landing must not have happened yet.
+        step there to keep its balance), so no deadline applies; the landing must not have happened yet. The
+        landing keeps its height, pitch and roll, or takes ``surface`` ``(z, pitch, roll)`` (m, rad): the terrain's
+        under its new place (:func:`~rtgait.core.geometry.terrain_landing.land_on_terrain`).
         """
         if self.latest_phase is not None and 2 * step <= self.latest_phase:
             raise StepChangeTooLateError(f"step {step} has already landed")
         stance, old = self.footprint(step), self.footprint(step + 1)
-        self._strides[step - 1 - self.base] = stride_between(
-            stance, Footstep(x, y, old.yaw, old.side, old.z, old.pitch, old.roll)
-        )
+        z, pitch, roll = (old.z, old.pitch, old.roll) if surface is None else surface
+        self._strides[step - 1 - self.base] = stride_between(stance, Footstep(x, y, old.yaw, old.side, z, pitch, roll))
         self._rebuild(step)
 
     def set_single_support(self, step: int, duration: float) -> None:
