@@ -13,7 +13,7 @@ deflection is in it. Each foot in the air gets an offset ``u`` (world frame, m) 
 ``p_target`` the foot's target before the offset, ``p_measured`` the estimate's sole position, ``T_w`` the
 ``time_constant`` (s). It is an integral action on the placement error: at rest ``p_measured = p_target``, whatever
 static deflection the stance leg has. While the foot carries load (a support foot, or a swing foot that touched
-down) ``u`` decays to zero over ``T_r`` (``return_time``):
+down) ``u`` decays to zero over ``T_r`` (``return_time``); a foot in the air without an estimate (NaN) holds its offset:
 
     u' = -u / T_r                                                                                 (2)
 
@@ -101,10 +101,11 @@ class SwingFeedback:
         for offset, target, foot, side in zip(self._offsets, (left, right), measured, ("left", "right"), strict=True):
             x, y, z, _ = foot.pose
             in_air = support not in ("double", side) and not foot.loaded
-            if in_air and math.isfinite(x + y + z):
-                for k, value in enumerate((x, y, z)):
-                    u = offset[k] + self._gain * (target[k] - value)
-                    offset[k] = -limit if u < -limit else (limit if u > limit else u)
+            if in_air:
+                if math.isfinite(x + y + z):  # else (no estimate of the foot) the offset holds
+                    for k, value in enumerate((x, y, z)):
+                        u = offset[k] + self._gain * (target[k] - value)
+                        offset[k] = -limit if u < -limit else (limit if u > limit else u)
             else:
                 for k in range(3):
                     offset[k] *= self._decay
