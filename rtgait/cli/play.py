@@ -146,7 +146,6 @@ def _live_walk(
     from rtgait.control.controller import make_controller
     from rtgait.io.sim_run import obstacle_reactions, planned_walk
     from rtgait.robot.motion import whole_body_motion
-    from rtgait.sim.drive_mode import drive_options
     from rtgait.sim.live import LiveWalk
     from rtgait.sim.loop import ClosedLoop, LoopOptions
     from rtgait.sim.model import SimConfig, build_sim_model
@@ -160,7 +159,6 @@ def _live_walk(
     terrain = None if by_command or walk.terrain is None else walk.terrain.terrain
     config = SimConfig(gains=gains, sensors=sensors, model_error=model_error)
     sim = build_sim_model(robot, config, obstacles, terrain)
-    settings = drive_options(settings, gains)  # as simulate: the swing-foot feedback on soft drives
     strides = None if by_command else walk.strides()
     controller = make_controller(
         level,

@@ -119,7 +119,7 @@ class WalkingController:
         self.dcm_bias = DcmBiasEstimator(planner.w, dt) if options.dcm_bias else None
         # The swing foot's measured position steered onto its target (the stance leg's deflection on soft drives).
         tau_swing = options.swing_feedback
-        swing = SwingFeedbackSettings(time_constant=tau_swing) if tau_swing else None
+        swing = SwingFeedbackSettings(time_constant=tau_swing) if tau_swing > 0.0 else None
         self.swing = SwingFeedback(dt, swing) if swing is not None and closed else None
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         self._last_error_replan = -math.inf

@@ -136,9 +136,7 @@ class ControllerOptions:
             at mid single support with it on, ``tests/sim/test_sim_ci.py``).
         swing_feedback: the closed levels steer each swing foot's estimated position onto its target by an offset
             of its IK target (:mod:`rtgait.control.swing_feedback`): the time constant (s) of that integral action;
-            0 turns it off. ``None`` (default): the simulation decides by the drives
-            (:func:`rtgait.sim.drive_mode.drive_options`: on at the robot's own gains, off at the stiff ones); a
-            controller given ``None`` has it off.
+            0 (default) turns it off.
     """
 
     dcm: DcmFeedbackGains = field(default_factory=lambda: DcmFeedbackGains(com_admittance=SIM_COM_ADMITTANCE))
@@ -160,7 +158,7 @@ class ControllerOptions:
     max_lean: float = 0.25
     sole_level: float = SoleLevelSettings().time_constant
     dcm_bias: bool = False
-    swing_feedback: float | None = None
+    swing_feedback: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.dcm, DcmFeedbackGains):
@@ -172,8 +170,6 @@ class ControllerOptions:
                              f"{type(self.step_adjustment).__name__}")  # fmt: skip
         for name, (low, high, unit) in _RANGES.items():
             value = getattr(self, name)
-            if value is None and name in _UNSET:
-                continue
             number = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
             low_ok = number and (value > low if name in _OPEN_BELOW else value >= low)
             if not (low_ok and value <= high):
@@ -204,7 +200,6 @@ _RANGES = {
     "sole_level": (0.0, 1e4, "s"),
     "swing_feedback": (0.0, 1e4, "s"),
 }
-_UNSET = ("swing_feedback",)  # may be None: the simulation decides by the drives' gains
 _OPEN_BELOW = ("max_lean",)
 _CHOICES = {"measured_replanning": ("on-error", "always"), "com_reference": ("measured", "planned")}
 

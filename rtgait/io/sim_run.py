@@ -40,7 +40,6 @@ from rtgait.robot.controller_info import robot_info
 from rtgait.robot.model import RobotModel
 from rtgait.robot.motion import robot_scenario
 from rtgait.scenario.scenario import Scenario
-from rtgait.sim.drive_mode import drive_options
 from rtgait.sim.loop import LoopOptions, SimResult
 from rtgait.sim.model import SimConfig, SimModel, build_sim_model
 from rtgait.sim.run_loop import run_sim_loop
@@ -149,8 +148,6 @@ def simulate(
         raise ValueError(f"the simulation model was built for another model of {sim.robot.name!r}")
     else:
         _check_periods(sim, control_dt, physics_dt)
-    # What the drives decide of the controller's settings (the swing-foot feedback on soft drives).
-    controller_options = drive_options(controller_options, sim.config.gains)
     if walk.guide is not None and velocity is None:
         # Led by the hand: the pull sets the steps (rtgait.sim.guided); the scenario's footsteps do not apply.
         from rtgait.sim.guided import simulate_guided

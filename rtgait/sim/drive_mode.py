@@ -16,17 +16,10 @@ The feed-forward of torque drive is computed at the sensed state and carries the
 (:mod:`rtgait.stack.measured_motion`); its damping, ``2 I_j w`` (the inertia beyond each joint times twice the
 tracking's frequency), is added to the commands' ``kd``: the drives damp on the joint's velocity at every physics
 step, as the velocity loop of a real drive does, where the controller's damping would act a control period late.
-
-**What the controller adds on soft drives** (:func:`drive_options`): at gains other than the stiff ones the joints
-do not reach the IK's references (G1's stance hip at kp 60 N m/rad gives degrees under the trunk's weight when the
-model's masses are off, its swinging leg lags its references by centimetres), so the controller's swing-foot
-placement feedback (:mod:`rtgait.control.swing_feedback`) is on, with :data:`SOFT_SWING_FEEDBACK`, unless the
-options set it. At the stiff gains it stays off: the joints reach their references there.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -34,21 +27,11 @@ import numpy as np
 from rtgait.sim.actuation import resolve_actuation
 
 if TYPE_CHECKING:
-    from rtgait.control.settings import ControllerOptions
     from rtgait.interface.command import JointCommand
     from rtgait.sim.model import SimModel
     from rtgait.stack.measured_motion import MeasuredMotion
 
-__all__ = [
-    "DRIVE_MODES",
-    "SOFT_SWING_FEEDBACK",
-    "TORQUE_GAIN_FRACTION",
-    "DriveMode",
-    "check_drive",
-    "drive_options",
-    "torque_gains",
-    "with_gains",
-]
+__all__ = ["DRIVE_MODES", "TORQUE_GAIN_FRACTION", "DriveMode", "check_drive", "torque_gains", "with_gains"]
 
 DriveMode = Literal["position", "torque"]
 DRIVE_MODES: tuple[str, ...] = ("position", "torque")
@@ -84,17 +67,3 @@ def with_gains(command: JointCommand, gains: tuple[np.ndarray, np.ndarray] | Non
     if gains is None or command.kp is not None:
         return command
     return command._replace(kp=gains[0], kd=gains[1])
-
-
-SOFT_SWING_FEEDBACK = 0.05
-"""Time constant (s) of the swing-foot placement feedback at soft drives (module docstring): that of the sole
-levelling's swing steering (:class:`~rtgait.control.sole_level.SoleLevelSettings`), its rotation counterpart."""
-
-
-def drive_options(options: ControllerOptions, gains: str) -> ControllerOptions:
-    """``options`` with what the drives' ``gains`` (``SimConfig.gains``) decide (module docstring): the swing-foot
-    feedback, when ``options`` leave it ``None``, :data:`SOFT_SWING_FEEDBACK` at gains other than ``"stiff"``, else
-    off."""
-    if options.swing_feedback is not None:
-        return options
-    return dataclasses.replace(options, swing_feedback=0.0 if gains == "stiff" else SOFT_SWING_FEEDBACK)

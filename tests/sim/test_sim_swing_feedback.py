@@ -98,14 +98,11 @@ def test_a_bad_measurement_holds_the_offset_and_settings_are_checked():
         SwingFeedback(0.0)
 
 
-def test_the_drives_decide_the_feedback_unless_the_options_do():
-    """On at the robots' own (soft) gains, off at the stiff ones; a value the options set is kept."""
+def test_the_option_is_off_by_default_and_checked():
+    """Off unless asked for (``[control] swing_feedback = T``); a negative time constant is refused."""
     from rtgait.control.settings import ControllerOptions
-    from rtgait.sim.drive_mode import SOFT_SWING_FEEDBACK, drive_options
 
-    assert drive_options(ControllerOptions(), "robot").swing_feedback == SOFT_SWING_FEEDBACK > 0.0
-    assert drive_options(ControllerOptions(), "stiff").swing_feedback == 0.0
-    assert drive_options(ControllerOptions(swing_feedback=0.0), "robot").swing_feedback == 0.0
-    assert drive_options(ControllerOptions(swing_feedback=0.1), "stiff").swing_feedback == 0.1
+    assert ControllerOptions().swing_feedback == 0.0
+    assert ControllerOptions(swing_feedback=0.05).swing_feedback == 0.05
     with pytest.raises(ValueError, match="swing_feedback"):
         ControllerOptions(swing_feedback=-1.0)
