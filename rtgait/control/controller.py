@@ -57,6 +57,7 @@ from rtgait.control.settings import (
     step_limits,
 )
 from rtgait.control.sole_level import SoleLevel, SoleLevelSettings
+from rtgait.control.swing_feedback import SwingFeedback, SwingFeedbackSettings
 from rtgait.core.geometry.footsteps import Footstep, Side, SoleRect, Stride, mean_heading
 from rtgait.core.geometry.support import support_polygon
 from rtgait.core.geometry.terrain import Terrain
@@ -125,6 +126,10 @@ class WalkingController:
         settings = SoleLevelSettings(time_constant=options.sole_level) if options.sole_level > 0.0 else None
         self.sole_level = SoleLevel(info.sole, info.mass * GRAVITY, dt, settings) if settings is not None else None
         self.dcm_bias = DcmBiasEstimator(planner.w, dt) if options.dcm_bias else None
+        # The swing foot's measured position steered onto its target (the stance leg's deflection on soft drives).
+        tau_swing = options.swing_feedback
+        swing = SwingFeedbackSettings(time_constant=tau_swing) if tau_swing > 0.0 else None
+        self.swing = SwingFeedback(dt, swing) if swing is not None and closed else None
         self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
         self._last_error_replan = -math.inf
         tau = options.measurement_filter
@@ -160,6 +165,8 @@ class WalkingController:
             self.sole_level.reset()
         if self.dcm_bias is not None:
             self.dcm_bias.reset()
+        if self.swing is not None:
+            self.swing.reset()
         self._filtered: list[float] | None = None  # zmp x, y; per foot: normal force, cop x, cop y
         self._replans = self._adjustments = 0
         self.foot_landings.reset()
@@ -246,6 +253,8 @@ class WalkingController:
                 lean = leaned.lean
         # The blends act on the IK's targets only: the polygon and split have the feet where they are.
         left, right = self._landings_ik(t, left, right)
+        if self.swing is not None:
+            left, right = self.swing.update(left, right, (m.left, m.right), support)
         return _new_tuple(ControlTargets, (
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
             planned_support, (values.dcm_x, values.dcm_y), lean,

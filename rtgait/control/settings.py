@@ -141,6 +141,9 @@ class ControllerOptions:
             (:mod:`rtgait.estimation.dcm_bias`: the model's COM is off the true one) and feed back and replan on
             the unbiased COM state. Off by default: it takes part of a push for a bias (G1 falls from a 6 N s push
             at mid single support with it on, ``tests/sim/test_sim_ci.py``).
+        swing_feedback: the closed levels steer each swing foot's estimated position onto its target by an offset
+            of its IK target (:mod:`rtgait.control.swing_feedback`): the time constant (s) of that integral action;
+            0 (default) turns it off.
     """
 
     dcm: DcmFeedbackGains = field(default_factory=lambda: DcmFeedbackGains(com_admittance=SIM_COM_ADMITTANCE))
@@ -162,6 +165,7 @@ class ControllerOptions:
     max_lean: float = 0.25
     sole_level: float = SoleLevelSettings().time_constant
     dcm_bias: bool = False
+    swing_feedback: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.dcm, DcmFeedbackGains):
@@ -201,6 +205,7 @@ _RANGES = {
     "anchor_blend": (0.0, 10.0, "s"),
     "max_lean": (0.0, 0.6, "rad"),
     "sole_level": (0.0, 1e4, "s"),
+    "swing_feedback": (0.0, 1e4, "s"),
 }
 _OPEN_BELOW = ("max_lean",)
 _CHOICES = {"measured_replanning": ("on-error", "always"), "com_reference": ("measured", "planned")}
