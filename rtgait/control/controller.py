@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING
 from rtgait.control.external_force import ExternalForce, shifted_measurement
 from rtgait.control.foot_control import FootForceControl, FootOffsets, split_zmp
 from rtgait.control.landings import FootLandings
+from rtgait.control.level_switch import switch_level
 from rtgait.control.settings import (
     ERROR_REPLAN_INTERVAL,
     ERROR_REPLAN_MIN_REMAINDER,
@@ -391,78 +392,13 @@ class WalkingController:
 
     def set_level(self, level: ControllerLevel) -> None:
         """Switch to controller level ``level`` (``"open-loop"``, ``"stabilized"``, ``"adaptive"``) mid-walk or
-        before the start, without a jump in the IK's targets.
-
-        The planner and its plan go on as they are (no replan at the switch); its settings become the new level's,
-        made from its current ones as :func:`make_controller` makes them (:func:`~rtgait.core.planner.levels.
-        level_config`: measured-state replanning, the DCM-error threshold and step adjustment for
-        ``"adaptive"`` only). What each switch starts, stops or resets:
-
-        * to a closed level from ``"open-loop"``: a new DCM feedback law and foot force control, from zero state
-          (no COM or foot offset, an empty integral), so the targets start from the plan's; the commanded ZMP steps
-          to the law's (it is no IK target: the foot force control it drives integrates from zero);
-        * to ``"open-loop"``: the COM and foot offsets held at the switch fade out over
-          :data:`rtgait.control.level_fade.LEVEL_FADE` (0.2 s, smooth) instead of vanishing
-          (:mod:`rtgait.control.level_fade`), then the feedback and foot force control are dropped;
-        * between ``"stabilized"`` and ``"adaptive"``: the feedback and foot force control go on unchanged;
-        * into ``"adaptive"``: the planner is observed from the next tick on (a DCM error beyond
-          ``replan_dcm_error`` replans at once from the measured state, the next landings re-anchor the plan) and
-          the DCM-error replan's rate limit is cleared; out of it, a late foot's descent stops (the height it reached
-          is shed over its next swing, as after any landing) and landings are only logged again.
-
-        The feet's landing states (early and late touch-downs under way, their heights) are kept, and so is the
-        stride box of step adjustment in the options (it acts in ``"adaptive"`` only; a return to it reuses it).
+        before the start, without a jump in the IK's targets (:func:`rtgait.control.level_switch.switch_level` says
+        what each switch starts, stops or resets).
 
         Raises:
             ValueError: an unknown level.
         """
-        check_level(level, "level")
-        if level == self.level:
-            return
-        from rtgait.control.level_fade import LEVEL_FADE, FeedbackFade, FootFade
-
-        options, planner = self.options, self.planner
-        adjust = controller_step_adjustment(options, self.info, self.terrain) if level == "adaptive" else None
-        config = level_config(
-            planner.config, level, self.sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
-        )
-        if level == "adaptive" and options.measured_replanning == "on-error":
-            self.options = options = dataclasses.replace(options, step_adjustment=adjust)
-            config = dataclasses.replace(config, feedback="planned", step_adjustment=None)
-            self.foot_landings.options = options
-        planner.config = config
-        if self.level == "open-loop":  # up: new laws from zero state (a fade under way goes on around them)
-            feedback = DcmFeedback(planner.w, options.dcm, self.dt)
-            foot = FootForceControl(options.foot, self.dt) if options.foot is not None else None
-            if isinstance(self.feedback, FeedbackFade):
-                self.feedback.inner = feedback
-            else:
-                self.feedback = feedback
-            if isinstance(self.foot, FootFade):
-                self.foot.inner = foot
-            else:
-                self.foot = foot
-            if self.sole_level is not None:  # the learnt tilts kept, the soles' command from the plan's again
-                self.sole_level.restart_command()
-            if self.dcm_bias is not None:  # not updated in open-loop: it starts again from the measured DCM
-                self.dcm_bias.reset()
-        elif level == "open-loop":  # down: fade the offsets out (nothing to fade before the start)
-            ticks = max(1, round(LEVEL_FADE / self.dt))
-            offset = self.feedback.com_offset if self.feedback is not None else (0.0, 0.0)
-            offsets = self.foot.offsets if self.foot is not None else FootOffsets()
-            if self.sole_level is not None:  # the soles' levelling fades with the foot force control's tilts
-                lr, lp, rr, rp = self.sole_level.command
-                o = offsets
-                offsets = FootOffsets(o.left_roll + lr, o.left_pitch + lp, o.left_height,
-                                      o.right_roll + rr, o.right_pitch + rp, o.right_height)  # fmt: skip
-            moved = any(offset) or any(offsets)
-            self.feedback = FeedbackFade(self, None, offset, ticks) if moved else None
-            self.foot = FootFade(self, None, offsets, ticks) if moved else None
-        self._on_error = level == "adaptive" and options.measured_replanning == "on-error"
-        if level == "adaptive":
-            self._last_error_replan = -math.inf
-        self.foot_landings.set_adaptive(level == "adaptive")
-        self.level = level
+        switch_level(self, level)
 
 
 def _lengthens(adjust: StepAdjustment | None) -> bool:
