@@ -192,3 +192,35 @@ def test_the_estimators_kinematics_give_the_same_sensed_state(talos, heavier):
     np.testing.assert_allclose(shared[0], own[0], atol=1e-12)
     np.testing.assert_allclose(shared[1], own[1], atol=1e-10)
     np.testing.assert_allclose(shared[2], own[2], atol=1e-9)
+
+
+def test_after_a_jump_the_rates_follow_the_new_references_velocity(talos):
+    """A replan from a pushed state moves the reference at once and changes its velocity: the base runs at 0.05 m/s,
+    jumps by 5 mm and runs on at 0.3 m/s (0.25 m/s more than the old velocity, 125 m/s^2 over a 2 ms tick, beyond
+    JUMP_ACCELERATION). The rates must take the new velocity from the ticks after the jump, with no acceleration
+    burst, not stay at the old one (every later tick read as a jump against it)."""
+    model, dt, tau = talos.model, 0.002, 0.005
+    limits = np.full(model.nv - 6, 10.0)
+    rates = MotionRates(model, dt, tau, limits)
+    v0, v1 = np.zeros(model.nv), np.zeros(model.nv)
+    v0[0], v1[0] = 0.05, 0.3
+    v0[6 + 3] = v1[6 + 3] = 0.5  # a joint moving through it all
+    assert (v1[0] - v0[0]) / dt > JUMP_ACCELERATION
+    q = talos.q_half_sitting.copy()
+    for _ in range(100):  # the old reference, long enough for the low-pass to settle on v0
+        rates.update(q)
+        q = pin.integrate(model, q, v0 * dt)
+    np.testing.assert_allclose(rates.velocity, v0, atol=1e-9)
+    jump = np.zeros(model.nv)
+    jump[0] = 0.005
+    q = pin.integrate(model, q, jump)
+    peak = 0.0
+    for _ in range(50):  # 0.1 s of the new reference: 20 time constants
+        q = pin.integrate(model, q, v1 * dt)
+        _, a = rates.update(q)
+        peak = max(peak, float(np.abs(a).max()))
+    # The jump's tick, and the next (its difference compared with the jump's own); the motion after it is a motion.
+    assert rates.jumps == 2
+    np.testing.assert_allclose(rates.velocity, v1, atol=1e-9)
+    np.testing.assert_allclose(rates.acceleration, 0.0, atol=1e-6)
+    assert peak < 1e-6, "the new velocity is taken at once, not filtered in as an acceleration"
