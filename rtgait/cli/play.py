@@ -165,7 +165,7 @@ def _live_walk(
         walk.planner_config(),
         strides,
         walk.sole,
-        robot_info(robot),
+        robot_info(robot, gains=gains),  # the lean bounded by the hips' servos at the robot's gains, as simulate
         dt=sim.control_dt,
         options=settings,
         terrain=None if by_command else walk.placed_on,

@@ -256,8 +256,9 @@ def _controller(
     """The controller of ``level`` for ``walk`` (by its footsteps, or by the ``velocity`` command), the changes to
     hand its planner and, for a walk by command, the steps after which it stops."""
     strides = walk.strides() if velocity is None else None
+    info = robot_info(sim.robot, gains=sim.config.gains)  # the lean bounded by the hips' servos at the robot's gains
     controller = make_controller(
-        level, walk.planner_config(), strides, walk.sole, robot_info(sim.robot), dt=sim.control_dt, options=options,
+        level, walk.planner_config(), strides, walk.sole, info, dt=sim.control_dt, options=options,
         terrain=walk.placed_on if velocity is None else None,  # a walk by command has no footholds on it
     )  # fmt: skip
     if velocity is None:

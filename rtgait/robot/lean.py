@@ -15,6 +15,11 @@ strategy uses (the built-in robots' values: ``docs/robots.md``, "The hip strateg
 The lean's acceleration is bounded by the hip joints that make it: a share of the rated torque (URDF effort
 limit) of the hip joint whose axis is the lean's (the leg joint closest to the pelvis whose axis lies within 40
 degrees of it), over ``I_a``. The rest of the hip's torque carries the body and walks.
+
+On the robot's own drives (``gains="robot"``: soft position servos), the lean is also bounded by what that hip's servo
+can follow: its closed-loop natural frequency ``w_s = sqrt(kp / (I_a + armature))`` (1/s) with ``kp`` the joint's
+``robot_kp`` (the softer of the two legs: in single support one hip makes the lean), which shapes the lean's reference
+(:mod:`rtgait.core.laws.servo_reference`: acceleration at most ``w_s^2 max_lean``, rate ``w_s max_lean``).
 """
 
 from __future__ import annotations
@@ -25,10 +30,11 @@ import numpy as np
 import pinocchio as pin
 
 from rtgait.core.laws.hip_strategy import HipStrategyLimits
+from rtgait.robot.drives import joint_drives
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
 
-__all__ = ["HIP_TORQUE_SHARE", "hip_strategy_limits", "lean_inertia"]
+__all__ = ["HIP_TORQUE_SHARE", "hip_strategy_limits", "lean_inertia", "servo_bandwidth"]
 
 HIP_TORQUE_SHARE = 0.5
 """Share of a hip joint's rated torque the lean may take (the rest carries the body)."""
@@ -62,29 +68,68 @@ def lean_inertia(robot: RobotModel) -> tuple[float, float]:
     return values[0], values[1]
 
 
-def _hip_torque(robot: RobotModel, axis: tuple[float, float, float]) -> float:
-    """The smallest, over the two legs, rated torque (N m) of the leg joint closest to the pelvis whose axis is
-    within 40 degrees of ``axis`` at half-sitting."""
+def _hip_joints(robot: RobotModel, axis: tuple[float, float, float]) -> list[int]:
+    """Per leg, the velocity index of the leg joint closest to the pelvis whose axis is within 40 degrees of
+    ``axis`` at half-sitting."""
     model, data = robot.model, robot.model.createData()
     pin.computeJointJacobians(model, data, robot.q_half_sitting)
-    torques = []
+    found = []
     for sole in (robot.left_sole_id, robot.right_sole_id):
         chain = model.supports[model.frames[sole].parentJoint]  # joints from the root to the sole, in order
         for joint in list(chain)[2:]:  # past the universe and the free flyer
             column = pin.getJointJacobian(model, data, joint, pin.ReferenceFrame.WORLD)[3:6, model.joints[joint].idx_v]
             if abs(float(np.dot(column, axis))) >= _ALIGNED * float(np.linalg.norm(column)):
-                torques.append(float(model.effortLimit[model.joints[joint].idx_v]))
+                found.append(model.joints[joint].idx_v)
                 break
+    return found
+
+
+def _hip_torque(robot: RobotModel, axis: tuple[float, float, float]) -> float:
+    """The smallest, over the two legs, rated torque (N m) of :func:`_hip_joints`."""
+    torques = [float(robot.model.effortLimit[v]) for v in _hip_joints(robot, axis)]
     if len(torques) != 2 or not all(math.isfinite(t) and 0.0 < t < 1e6 for t in torques):
         raise ValueError(f"{robot.name}: no rated hip joint about {axis} in each leg; no hip strategy")
     return min(torques)
 
 
-def hip_strategy_limits(robot: RobotModel, max_lean: float = 0.25) -> HipStrategyLimits:
+def servo_bandwidth(robot: RobotModel, inertia: tuple[float, float] | None = None) -> tuple[float, float]:
+    """The closed-loop natural frequency ``sqrt(robot_kp / (I_a + armature))`` (1/s) of the hip joint that makes
+    each lean ``(forward, sideways)`` at the robot's own gains, the softer leg's (module docstring); ``inertia``:
+    :func:`lean_inertia`'s, computed when not given.
+
+    Raises:
+        ValueError: a hip joint without ``robot_kp`` in the description.
+    """
+    inertia = inertia or lean_inertia(robot)
+    _, armature = joint_drives(robot)
+    names = robot.joint_names
+    bandwidths = []
+    for axis, moved in zip(_AXES, inertia, strict=True):
+        lowest = math.inf
+        for v in _hip_joints(robot, axis):
+            index = v - 6  # the free flyer's 6 velocities come first
+            kp = robot.description.joint_actuation(names[index]).robot_kp
+            if kp is None:
+                raise ValueError(f"{robot.name}: joint {names[index]} has no robot_kp; no servo bound for the lean")
+            lowest = min(lowest, math.sqrt(kp / (moved + float(armature[index]))))
+        bandwidths.append(lowest)
+    return bandwidths[0], bandwidths[1]
+
+
+def hip_strategy_limits(robot: RobotModel, max_lean: float = 0.25, gains: str = "stiff") -> HipStrategyLimits:
     """The hip strategy's limits for ``robot``: its lean inertia and the hips' torque budget
-    (:data:`HIP_TORQUE_SHARE` of each hip's rated torque over the inertia), leaning at most ``max_lean`` (rad)."""
+    (:data:`HIP_TORQUE_SHARE` of each hip's rated torque over the inertia), leaning at most ``max_lean`` (rad); with
+    ``gains="robot"`` (the robot's own soft servos) also :func:`servo_bandwidth`."""
+    if gains not in ("stiff", "robot"):
+        raise ValueError(f"gains must be 'stiff' or 'robot', got {gains!r}")
     inertia = lean_inertia(robot)
     accelerations = tuple(
         HIP_TORQUE_SHARE * _hip_torque(robot, axis) / i for axis, i in zip(_AXES, inertia, strict=True)
     )
-    return HipStrategyLimits(inertia=inertia, max_acceleration=accelerations, max_lean=max_lean)  # type: ignore[arg-type]
+    bandwidth = servo_bandwidth(robot, inertia) if gains == "robot" else None
+    return HipStrategyLimits(
+        inertia=inertia,
+        max_acceleration=accelerations,  # type: ignore[arg-type]
+        max_lean=max_lean,
+        servo_bandwidth=bandwidth,
+    )

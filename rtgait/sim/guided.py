@@ -328,7 +328,7 @@ def simulate_guided(
         walk.planner_config(),
         None,
         walk.sole,
-        robot_info(sim.robot),
+        robot_info(sim.robot, gains=sim.config.gains),
         dt=sim.control_dt,
         options=controller_options,
     )

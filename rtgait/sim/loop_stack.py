@@ -36,7 +36,7 @@ __all__ = ["LoopStack", "build_stack", "open_loop_controller"]
 
 def open_loop_controller(sim: SimModel, planner: OnlinePlanner) -> WalkingController:
     """The ``open-loop`` level around ``planner`` (not started): the plan alone, as the paper assumes."""
-    info = robot_info(sim.robot)
+    info = robot_info(sim.robot, gains=sim.config.gains)
     return WalkingController("open-loop", planner, info, sim.control_dt, ControllerOptions())
 
 

@@ -76,3 +76,18 @@ def test_the_limits_come_from_the_hips(robot: RobotModel) -> None:
         torque = 2.0 * inertia * acceleration
         assert 80.0 <= torque <= 170.0
     assert lean_inertia(RobotModel.load("talos"))[1] > 3 * lean_inertia(RobotModel.load("g1"))[1]
+
+
+def test_the_servo_bound_is_the_hip_servos_natural_frequency_at_the_robots_gains(robot: RobotModel) -> None:
+    """At the robot's own gains the lean carries sqrt(robot_kp / (I + armature)) of the hip joint about each axis
+    (the description's numbers, read here by joint name); with the stiff gains none."""
+    stiff, own = hip_strategy_limits(robot), hip_strategy_limits(robot, gains="robot")
+    assert stiff.servo_bandwidth is None
+    assert own.servo_bandwidth is not None
+    hips = {"talos": ("leg_left_3_joint", "leg_left_2_joint"), "g1": ("left_hip_pitch_joint", "left_hip_roll_joint")}
+    for joint, inertia, bandwidth in zip(hips[robot.name], own.inertia, own.servo_bandwidth, strict=True):
+        spec = robot.description.joint_actuation(joint)
+        assert spec.robot_kp is not None and spec.armature is not None
+        assert bandwidth == pytest.approx(np.sqrt(spec.robot_kp / (inertia + spec.armature)), rel=1e-12)
+    with pytest.raises(ValueError, match="gains"):
+        hip_strategy_limits(robot, gains="soft")

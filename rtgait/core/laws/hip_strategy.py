@@ -39,6 +39,12 @@ stands; less with the acceleration limit (a bang-bang lean to ``max_lean`` in ``
 e^{-w t_1})^2 / z_c`` with ``tau = I max_acceleration``). The upper body then returns while the feet hold the
 DCM.
 
+*Servo*: on drives whose position servos are soft for the upper body (a robot at its own low gains), the lean above
+is the target of a reference shaped by the servo's own dynamics (:class:`~rtgait.core.laws.servo_reference.
+ServoReference`, at ``servo_bandwidth`` ``sqrt(kp / I)`` per axis): the lean sent to the IK is that reference, its
+acceleration at most ``min(w_s^2 max_lean, max_acceleration)`` and its rate ``w_s max_lean``, and the CMP shift (2)
+is the reference's acceleration, the one the servo can make, not the bang-bang one it could not follow.
+
 Pure float arithmetic, explicit state (:meth:`HipStrategy.reset`), a few microseconds per tick.
 """
 
@@ -47,6 +53,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from typing import NamedTuple
+
+from rtgait.core.laws.servo_reference import ServoReference
 
 __all__ = ["HipStrategy", "HipStrategyLimits", "LeanOutput"]
 
@@ -64,6 +72,9 @@ class HipStrategyLimits:
             leans (m): the law saturates for a few ticks at landings, which a walk does not need a lean for.
         return_rate: the return's natural frequency ``w_r`` (1/s).
         return_acceleration: largest acceleration of the return (rad/s^2).
+        servo_bandwidth: the closed-loop natural frequency ``sqrt(kp / I)`` (1/s) of the joints that make the lean
+            ``(forward, lateral)``, whose servo-shaped reference is sent (module docstring, *Servo*); ``None``: the
+            lean itself (stiff servos that follow it).
     """
 
     inertia: tuple[float, float]
@@ -72,10 +83,13 @@ class HipStrategyLimits:
     deadband: float = 0.01
     return_rate: float = 2.0
     return_acceleration: float = 2.0
+    servo_bandwidth: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
-        for name in ("inertia", "max_acceleration"):
+        for name in ("inertia", "max_acceleration", "servo_bandwidth"):
             pair = getattr(self, name)
+            if pair is None and name == "servo_bandwidth":
+                continue
             if len(pair) != 2 or not all(math.isfinite(v) and v > 0.0 for v in pair):
                 raise ValueError(f"HipStrategyLimits.{name} must be two finite values > 0, got {pair!r}")
         for name, high in (("max_lean", 1.0), ("deadband", 0.5), ("return_rate", 100.0),
@@ -132,23 +146,36 @@ class HipStrategy:
             raise ValueError(f"dt must be > 0 s, got {dt}")
         self.limits, self.mass, self.dt, self.gravity = limits, float(mass), float(dt), float(gravity)
         self._to_cmp = tuple(i / (mass * gravity) for i in limits.inertia)
+        bandwidth = limits.servo_bandwidth
+        self._servo = (
+            None
+            if bandwidth is None
+            else tuple(
+                ServoReference(w, limits.max_lean, a, dt)
+                for w, a in zip(bandwidth, limits.max_acceleration, strict=True)
+            )
+        )
         self.reset()
 
     def reset(self) -> None:
         """Upright and at rest."""
         self._lean = [0.0, 0.0]  # heading frame: forward, left (rad)
         self._rate = [0.0, 0.0]  # rad/s
+        for servo in self._servo or ():
+            servo.reset()
 
     @property
     def lean(self) -> tuple[float, float]:
-        """The lean in the heading frame ``(forward, left)`` (rad) after the last tick."""
+        """The lean in the heading frame ``(forward, left)`` (rad) after the last tick (the law's, before any servo
+        reference)."""
         return self._lean[0], self._lean[1]
 
     @property
     def at_rest(self) -> bool:
         """Upright and still (within 1e-6 rad and rad/s)."""
         (l0, l1), (r0, r1) = self._lean, self._rate  # every tick of a walk: no generator
-        return abs(l0) < 1e-6 and abs(l1) < 1e-6 and abs(r0) < 1e-6 and abs(r1) < 1e-6
+        law = abs(l0) < 1e-6 and abs(l1) < 1e-6 and abs(r0) < 1e-6 and abs(r1) < 1e-6
+        return law and (self._servo is None or (self._servo[0].at_rest and self._servo[1].at_rest))
 
     def update(self, shortfall: tuple[float, float], yaw: float) -> LeanOutput:
         """One tick: the lean for the DCM law's shortfall ``p_law - p_cmd`` (m, world frame) at heading ``yaw``
@@ -194,8 +221,12 @@ class HipStrategy:
                 rate = 0.0
             self._lean[axis], self._rate[axis] = lam, rate
             offsets[axis] = self._to_cmp[axis] * acc
+        sent = self._lean
+        if self._servo is not None:  # what the soft servos can follow, and the CMP its acceleration makes
+            sent = [servo.step(target) for servo, target in zip(self._servo, self._lean, strict=True)]
+            offsets = [k * servo.acceleration for k, servo in zip(self._to_cmp, self._servo, strict=True)]
         # Heading frame -> world: a lean toward the heading frame's u = (forward, left) rotates about z x u.
-        fx = c * self._lean[0] - s * self._lean[1]
-        fy = s * self._lean[0] + c * self._lean[1]
+        fx = c * sent[0] - s * sent[1]
+        fy = s * sent[0] + c * sent[1]
         ox, oy = offsets
         return LeanOutput((-fy, fx, 0.0), (c * ox - s * oy, s * ox + c * oy), leaning)
