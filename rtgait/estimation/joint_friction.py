@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-__all__ = ["MEASURED_STICTION_SPEED", "JointFriction"]
+__all__ = ["MEASURED_STICTION_SPEED", "JointFriction", "checked_friction"]
 
 MEASURED_STICTION_SPEED = 0.1
 """``v_s`` (rad/s): the speed over which the Coulomb part's sign is smoothed (module docstring)."""
@@ -37,15 +37,7 @@ class JointFriction:
     """
 
     def __init__(self, coulomb: np.ndarray, viscous: np.ndarray, speed: float = MEASURED_STICTION_SPEED) -> None:
-        coulomb, viscous = np.array(coulomb, dtype=float), np.array(viscous, dtype=float)
-        if coulomb.shape != viscous.shape or coulomb.ndim != 1:
-            raise ValueError(f"coulomb and viscous friction must be two arrays of one shape, got {coulomb.shape} "
-                             f"and {viscous.shape}")  # fmt: skip
-        for name, values in (("coulomb", coulomb), ("viscous", viscous)):
-            if not (np.isfinite(values).all() and (values >= 0.0).all()):
-                raise ValueError(f"{name} friction must be finite and >= 0, got {values!r}")
-        if not (math.isfinite(speed) and speed > 0.0):
-            raise ValueError(f"the stiction speed must be > 0 rad/s, got {speed}")
+        coulomb, viscous = checked_friction(coulomb, viscous, speed)
         self.coulomb, self.viscous, self.speed = coulomb, viscous, float(speed)
 
     def torques(self, velocity: np.ndarray) -> np.ndarray:
@@ -54,3 +46,22 @@ class JointFriction:
         torque *= self.coulomb
         torque += self.viscous * velocity
         return torque
+
+
+def checked_friction(coulomb: np.ndarray, viscous: np.ndarray, speed: float) -> tuple[np.ndarray, np.ndarray]:
+    """``coulomb`` (N m) and ``viscous`` (N m s/rad) friction per joint as new float arrays, checked with the stiction
+    ``speed`` (rad/s).
+
+    Raises:
+        ValueError: arrays of different shapes or not 1-D, negative or non-finite values, a speed not > 0.
+    """
+    coulomb, viscous = np.array(coulomb, dtype=float), np.array(viscous, dtype=float)
+    if coulomb.shape != viscous.shape or coulomb.ndim != 1:
+        raise ValueError(f"coulomb and viscous friction must be two arrays of one shape, got {coulomb.shape} "
+                         f"and {viscous.shape}")  # fmt: skip
+    for name, values in (("coulomb", coulomb), ("viscous", viscous)):
+        if not (np.isfinite(values).all() and (values >= 0.0).all()):
+            raise ValueError(f"{name} friction must be finite and >= 0, got {values!r}")
+    if not (math.isfinite(speed) and speed > 0.0):
+        raise ValueError(f"the stiction speed must be > 0 rad/s, got {speed}")
+    return coulomb, viscous

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rtgait.estimation.joint_friction import JointFriction
+from rtgait.estimation.joint_friction import JointFriction, checked_friction
 
 if TYPE_CHECKING:
     from rtgait.robot.model import RobotModel
@@ -62,17 +62,9 @@ class FrictionCompensation:
         fraction: float = IDENTIFIED_FRACTION,
         speed: float = STICTION_SPEED,
     ) -> None:
-        coulomb, viscous = np.asarray(coulomb, dtype=float), np.asarray(viscous, dtype=float)
-        if coulomb.shape != viscous.shape or coulomb.ndim != 1:
-            raise ValueError(f"coulomb and viscous friction must be two arrays of one shape, got {coulomb.shape} "
-                             f"and {viscous.shape}")  # fmt: skip
-        for name, values in (("coulomb", coulomb), ("viscous", viscous)):
-            if not (np.isfinite(values).all() and (values >= 0.0).all()):
-                raise ValueError(f"{name} friction must be finite and >= 0, got {values!r}")
+        coulomb, viscous = checked_friction(coulomb, viscous, speed)
         if not (math.isfinite(fraction) and 0.0 <= fraction <= 1.0):
             raise ValueError(f"the compensated fraction must be in [0, 1], got {fraction}")
-        if not (math.isfinite(speed) and speed > 0.0):
-            raise ValueError(f"the stiction speed must be > 0 rad/s, got {speed}")
         self.coulomb = fraction * coulomb
         """``alpha F_c`` per joint (N m)."""
         self.viscous = fraction * viscous
