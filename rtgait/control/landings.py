@@ -205,6 +205,11 @@ class FootLandings(FootTargets):
         self._last_ik = (left, right)
         return left, right
 
+    @property
+    def last_ik_targets(self) -> tuple[Pose, Pose] | None:
+        """The IK's feet targets ``(x, y, z, yaw)`` of the last tick (:meth:`ik_targets`); ``None`` before the first."""
+        return self._last_ik
+
     # ----- phases and landings -------------------------------------------------------------------------------------
     def _enter_phase(self, q: int, support: str, m: Measurement) -> None:
         """Bookkeeping when the plan enters phase ``q``: a swing that ended in the air is late; a new swing blends
