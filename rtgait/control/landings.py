@@ -20,6 +20,8 @@ logged with its kind; in the ``"adaptive"`` level it also acts. Settings (s, m, 
 (:meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown`: re-anchoring and an immediate replan, after which the
 tick's sample is taken again); a re-landing only when it moved ``relanding_tolerance`` (heading: twice that, in rad)
 from where the foot was last anchored. A refused touch-down is logged (``"touchdown-refused"``); the plan stays.
+Off the flat floor the controller hands the landings over in the feet's frame (:mod:`rtgait.control.foot_frame`):
+measured from the standing foot's target, so that a re-anchored foot stays where it touched.
 
 **Heights.** Each foot's target is the plan's ``(x, y, z_plan, yaw)`` with a height offset ``z`` (m) on top:
 
