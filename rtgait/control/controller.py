@@ -148,6 +148,7 @@ class WalkingController:
         # The feet's landings: classification, re-anchoring, holds, heights and the IK targets' blends.
         self.foot_landings = FootLandings(planner, options, self.dt, adaptive=level == "adaptive")
         self._landings_update, self._landings_ik = self.foot_landings.update, self.foot_landings.ik_targets  # per tick
+        self._feet_frame = False  # whether the measurement is taken into the feet's frame: set by start()
         self.reset()
 
     def off_level_ground(self) -> None:
