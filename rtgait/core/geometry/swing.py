@@ -59,9 +59,9 @@ DESCENT_RISE = 0.25
 """Share of a swing down a stair over which the sole rises to ``h`` above the upper tread, while it already moves
 forward: at the lift-off the height grows as ``10 h (s / DESCENT_RISE)^3`` and the forward travel as
 ``10 L (s / DESCENT_REACH)^3``, as steep as each other (45 degrees) for ``DESCENT_RISE = DESCENT_REACH (h / L)^(1/3)``,
-0.23-0.24 for the built-in stairs (h = 0.05 m, L = 0.44-0.50 m); so the toe, on the tread at the lift-off, rises
-off it at least as fast as it moves along it. Rising over :data:`RISE_SHARE` instead (about 25 degrees), Talos fell
-at the end of its 15 cm stairs in one run of three (``docs/results.md``)."""
+0.23-0.24 for the built-in stairs (h = 0.05 m, L = 0.44-0.50 m); at 0.25 the toe, on the tread at the lift-off, rises
+off it at 39-42 degrees. Rising over :data:`RISE_SHARE` instead (16-18 degrees), Talos fell at the end of its 15 cm
+stairs in one run of three (``docs/results.md``)."""
 
 
 def _clip01(s: float) -> float:
