@@ -1,6 +1,7 @@
 """Why Talos's reach check refuses BaselineWalkingController's 0.185 m stairs at its own COG height, against the
 leg's geometry read from the URDF's joint placements (independent of the IK), and that the COG height the scenario
-asks of Talos (``[walking.talos]``) gives the trailing leg the knee bend it has on the 15 cm stairs it climbs."""
+asks of Talos (``[walking.talos]``) gives the trailing leg the knee bend it has on the 15 cm stairs it climbs. Down
+the same stairs Talos reaches every tick at its own height with the swing forward first (swing.py), not without."""
 
 from __future__ import annotations
 
@@ -90,3 +91,22 @@ def test_a_height_talos_cannot_reach_is_refused_naming_the_scenarios_setting(tmp
     assert error.startswith("rtgait: error: the start of the walk at t=0.000 s is out of reach for talos: COG error")
     assert error.endswith("with the COG at the scenario's walking.talos.cog_height = 0.95 m")
     assert "\n" not in error
+
+
+def test_talos_reaches_down_the_stairs_with_the_swing_forward_first_and_not_without(talos, monkeypatch) -> None:
+    # The swing down a stair over its landing by mid-swing, then straight down: every tick reached at Talos's own
+    # 0.84 m. With the former stair profile (the foot held over the tread below until 65 % of the swing) the swing
+    # leg folds under the hip and step 3 is refused; its hip-to-ankle distance there is under half thigh + shank.
+    from rtgait.core.geometry import swing
+
+    walk = own_walk(talos, "stairs-down-185")
+    motion = whole_body_motion(talos, walk)
+    assert motion.errors[:, 0].max() < 0.01  # within the reach check's COG limit (m)
+    monkeypatch.setattr(swing, "down_stair", lambda start, end: False)
+    former = own_walk(talos, "stairs-down-185")
+    with pytest.raises(UnreachableError, match=r"^step 3 .* out of reach for talos"):
+        whole_body_motion(talos, former)
+    lifted = whole_body_motion(talos, former, limits=_NO_LIMITS)
+    worst = int(np.argmax(lifted.errors[:, 0]))
+    folded = min(_hip_to_ankle(talos, lifted.q[worst], side) for side in ("left", "right"))
+    assert folded < 0.5 * _leg_length(talos)
