@@ -58,6 +58,12 @@ class IKWeights(NamedTuple):
         pelvis: per rad^2.
         damping: on every velocity coordinate (m^2 or rad^2 per unit step).
         posture: pull of the joints toward half-sitting (per rad^2).
+        limit: curvature of the joint-limit barrier at the limit (per rad^2); 0 turns the barrier off.
+        limit_margin: depth of the barrier's band inside each limit (rad).
+
+    The barrier (:class:`~rtgait.robot.ik.WholeBodyIK`) costs ``k d^3 / 3`` for a joint ``d`` rad inside the band,
+    ``k = limit / (2 limit_margin)``: its gradient and curvature start at zero at the band's edge, so that the
+    solution, and the velocity differenced from it, stay continuous as a joint nears its limit.
     """
 
     cog: float = 1.0
@@ -67,3 +73,5 @@ class IKWeights(NamedTuple):
     pelvis: float = 0.01
     damping: float = 1e-6
     posture: float = 1e-8
+    limit: float = 0.1
+    limit_margin: float = 0.05
