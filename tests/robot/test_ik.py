@@ -12,7 +12,6 @@ pin = pytest.importorskip("pinocchio")
 from rtgait.core.planner.sample import SampleColumns  # noqa: E402
 from rtgait.interface.task_targets import IKTargets  # noqa: E402
 from rtgait.robot.ik import WholeBodyIK  # noqa: E402
-from rtgait.robot.ik_terms import IKWeights  # noqa: E402
 from rtgait.robot.model import RobotModel  # noqa: E402
 from rtgait.robot.rotation_errors import _yaw_error  # noqa: E402
 
@@ -86,8 +85,8 @@ def test_tracks_a_planned_walk_tick_by_tick(talos, plan_walk):
 
 
 def test_joint_limits_hold_when_the_target_is_out_of_reach(talos):
-    # The COG 0.3 m above half-sitting: the legs stretch until a knee comes into the barrier's band inside its limit
-    # (0 rad) and stays there; the solver reports the COG error instead of leaving the limits.
+    # The COG 0.3 m above half-sitting: the legs stretch until a knee reaches its limit (0 rad) and stays
+    # there; the solver reports the COG error instead of leaving the limits.
     ik = WholeBodyIK(talos)
     half = talos.cog_half_sitting
     targets = IKTargets(
@@ -98,7 +97,7 @@ def test_joint_limits_hold_when_the_target_is_out_of_reach(talos):
     lower, upper = talos.model.lowerPositionLimit[7:], talos.model.upperPositionLimit[7:]
     assert np.all(q[7:] >= lower) and np.all(q[7:] <= upper)
     knees = [talos.model.joints[talos.model.getJointId(f"leg_{s}_4_joint")].idx_q for s in ("left", "right")]
-    assert 0.0 <= min(q[knees]) < IKWeights().limit_margin
+    assert min(q[knees]) == pytest.approx(0.0, abs=1e-9)
     assert errors.cog > 0.1
     assert errors.cog == pytest.approx(fk_errors(talos, q, targets)["cog"], abs=1e-9)
 

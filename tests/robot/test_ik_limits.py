@@ -16,7 +16,7 @@ pytest.importorskip("pinocchio")
 
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.ik import WholeBodyIK
-from rtgait.robot.ik_terms import IKWeights
+from rtgait.robot.ik_terms import SMOOTH_LIMITS, IKWeights
 
 TICKS = 400
 LIFT = 0.05  # m: the swing foot's height
@@ -49,19 +49,19 @@ def rate_step(path: np.ndarray) -> float:
 def test_the_solution_slows_smoothly_into_a_limit(g1):
     # 0.1 m carries the unconstrained ankle roll from 0.07 rad to about 0.02 rad beyond its limit.
     upper = g1.model.upperPositionLimit
-    smooth, ankle = sweep(g1, IKWeights(), 0.1)
+    smooth, ankle = sweep(g1, SMOOTH_LIMITS, 0.1)
     assert smooth[0, ankle] < 0.1
-    assert smooth[:, ankle].max() > upper[ankle] - IKWeights().limit_margin  # it did enter the barrier's band
+    assert smooth[:, ankle].max() > upper[ankle] - SMOOTH_LIMITS.limit_margin  # it did enter the barrier's band
     assert smooth[:, ankle].max() < upper[ankle]
     assert rate_step(smooth) < 0.1
-    pinned, _ = sweep(g1, IKWeights(limit=0.0), 0.1)
+    pinned, _ = sweep(g1, IKWeights(), 0.1)
     assert pinned[:, ankle].max() == pytest.approx(upper[ankle], abs=1e-9)  # the hard stop
     assert rate_step(pinned) > 1.0
 
 
 def test_limits_are_never_left_far_beyond_reach(g1):
     # 0.3 m asks for about 0.4 rad of ankle roll: the barrier gives way and the pin holds the limit.
-    path, ankle = sweep(g1, IKWeights(), 0.3)
+    path, ankle = sweep(g1, SMOOTH_LIMITS, 0.3)
     lower, upper = g1.model.lowerPositionLimit[7:], g1.model.upperPositionLimit[7:]
     assert np.all(path[:, 7:] >= lower) and np.all(path[:, 7:] <= upper)
     assert path[-1, ankle] == pytest.approx(g1.model.upperPositionLimit[ankle], abs=1e-9)
@@ -72,10 +72,10 @@ def test_the_barrier_is_idle_away_from_the_limits(g1):
     half = 0.5 * g1.step_width
     cog = g1.cog_half_sitting
     targets = IKTargets([cog[0], cog[1], cog[2] - COG_DROP], [0.0, half, 0.0, 0.0], [0.0, -half, 0.0, 0.0])
-    with_barrier, _ = WholeBodyIK(g1).solve(targets, g1.q_half_sitting, 200, 1e-9)
-    without, _ = WholeBodyIK(g1, IKWeights(limit=0.0)).solve(targets, g1.q_half_sitting, 200, 1e-9)
+    with_barrier, _ = WholeBodyIK(g1, SMOOTH_LIMITS).solve(targets, g1.q_half_sitting, 200, 1e-9)
+    without, _ = WholeBodyIK(g1).solve(targets, g1.q_half_sitting, 200, 1e-9)
     lower, upper = g1.model.lowerPositionLimit[7:], g1.model.upperPositionLimit[7:]
-    margin = IKWeights().limit_margin
+    margin = SMOOTH_LIMITS.limit_margin
     assert np.all(with_barrier[7:] > lower + margin) and np.all(with_barrier[7:] < upper - margin)
     np.testing.assert_allclose(with_barrier, without, atol=1e-12)
 
