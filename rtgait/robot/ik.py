@@ -25,16 +25,19 @@ by a Cholesky factorisation (LAPACK ``dposv``). ``D`` is a small damping (it kee
 singular legs, knees stretched) plus the tiny posture weight ``mu``, which pulls the joints toward half-sitting
 in whatever freedom the tasks leave.
 
-Joint limits are approached smoothly and never left. Within ``limit_margin`` of a limit a barrier
-``k d^3 / 3`` (``d`` the depth into that band, rad) joins the cost; its gradient ``k d^2`` and curvature ``2 k d``
+Joint limits are never left. With a barrier (``IKWeights.limit > 0``: ``SMOOTH_LIMITS``, for a reference that feeds
+forward torques) they are also approached smoothly: within ``limit_margin`` of a limit ``k d^3 / 3`` (``d`` the depth
+into that band, rad) joins the cost; its gradient ``k d^2`` and curvature ``2 k d``
 grow from zero at the band's edge, so the solution stays continuous in the targets with a continuous rate: a joint
 that the tasks drive toward its limit slows down over the band and the other joints take over the task gradually.
 A hard stop instead (the joint pinned where it would cross, the rest re-solved) moves the other joints in one tick,
-a step in the reference's velocity whose difference is a burst of acceleration in the feed-forward torques. As a
-backstop, a step that would still cross a limit is solved again with those joints pinned at the limit, and the
-result is clipped. The solver is warm-started from the previous tick; since the targets move by
-millimetres per tick, one iteration leaves errors of micrometres, and more iterations are made (up to
-``max_iterations``) only while an error is above the tolerance.
+a step in the reference's velocity whose difference is a burst of acceleration in the feed-forward torques. Without
+the barrier (the default), and as its backstop, a step that would cross a limit is solved again with those joints
+pinned at the limit, and the result is clipped.
+
+The solver is warm-started from the previous tick; since the targets move by millimetres per tick, one iteration
+leaves errors of micrometres, and more iterations are made (up to ``max_iterations``) only while an error is above
+the tolerance.
 
 The weights of the tasks and the errors a solution leaves in them are in :mod:`rtgait.robot.ik_terms`; the rotation
 errors of the orientation tasks in :mod:`rtgait.robot.rotation_errors`.
