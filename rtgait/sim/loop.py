@@ -67,6 +67,7 @@ from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.push import Push
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.ik import WholeBodyIK
+from rtgait.robot.ik_terms import SMOOTH_LIMITS
 from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Pushes
 from rtgait.sim.drive_mode import with_gains
 from rtgait.sim.drive_summary import ComTracking
@@ -139,7 +140,9 @@ class ClosedLoop(LoopReadout):
     ) -> None:
         options = options or LoopOptions()
         robot, model = sim.robot, sim.model
-        ik = ik or WholeBodyIK(robot)
+        if ik is None:
+            # The feed-forward differences the IK's reference twice: keep its rate continuous near joint limits.
+            ik = WholeBodyIK(robot, SMOOTH_LIMITS if options.feeds_forward(sim.config.gains) else None)
         if ik.robot is not robot:
             raise ValueError(f"the IK solver was built for another model of {ik.robot.name!r}, not this simulation's")
         if isinstance(controller, OnlinePlanner):
