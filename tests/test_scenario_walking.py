@@ -18,8 +18,10 @@ def test_the_185_staircase_asks_talos_for_its_own_cog_height_and_toe_release() -
     walking = load_scenario("stairs-up-185").walking
     assert walking_for(walking, "talos") == RobotWalking("talos", cog_height=0.81, toe_release=0.5)
     assert walking_for(walking, "g1") is None  # G1 walks it with its own values
-    # The other built-ins ask nothing of any robot: their walks are unchanged.
-    assert [name for name in builtin_scenarios() if load_scenario(name).walking] == ["stairs-up-185"]
+    # Up the 15 cm stairs Talos keeps only its swing's toe down longer (its COG height is its own); the other
+    # built-ins ask nothing of any robot: their walks are unchanged.
+    assert walking_for(load_scenario("stairs-up").walking, "talos") == RobotWalking("talos", toe_release=0.5)
+    assert [name for name in builtin_scenarios() if load_scenario(name).walking] == ["stairs-up", "stairs-up-185"]
 
 
 def test_a_table_per_robot_reaches_the_scenario(tmp_path: Path) -> None:

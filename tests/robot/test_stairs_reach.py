@@ -53,7 +53,7 @@ def test_the_scenario_asks_talos_alone_for_its_height_and_toe_release(talos, g1)
     assert robot_scenario(scenario, talos).cog_height == 0.81
     assert walking_robot(walking, scenario) is walking  # applied twice: the same robot (its MuJoCo scene too)
     assert walking_robot(g1, scenario) is g1  # asked nothing: its own
-    assert walking_robot(talos, load_scenario("stairs-up")) is talos
+    assert walking_robot(talos, load_scenario("stairs-down")) is talos
 
 
 def test_at_its_own_height_talos_trailing_leg_runs_out_of_length_at_step_3(talos) -> None:
