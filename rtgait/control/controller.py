@@ -22,9 +22,7 @@ the plan under way, whose COM the stiff servos track with the law's correction. 
 measured state (the core's ``feedback="measured"``); on a stiff position-controlled robot the IK's COM target then
 follows each tick's servo lag instead of holding the robot (``docs/design/control.md``).
 
-When no step catches the error, the plan is kept (:meth:`WalkingController._dcm_error_replan`): no replan for an
-outward DCM error in single support unless step timing adaptation may hold the stance longer, and a later step's
-landing and timing are kept when no candidate for it catches the error (the core's ``on_failure="keep"``).
+When no step catches the error, the plan is kept (:mod:`rtgait.control.error_replan`).
 
 On the closed levels, two corrections for a robot that is not its model (``docs/robots.md``, "Model error"): the
 DCM bias estimator (:mod:`rtgait.estimation.dcm_bias`, ``ControllerOptions.dcm_bias``) takes the offset of the
@@ -41,6 +39,7 @@ import dataclasses
 import math
 from typing import TYPE_CHECKING
 
+from rtgait.control.error_replan import dcm_error_replan
 from rtgait.control.external_force import ExternalForce, shifted_measurement
 from rtgait.control.foot_control import FootForceControl, FootOffsets, split_zmp
 from rtgait.control.foot_frame import feet_offset, translated
@@ -69,7 +68,6 @@ from rtgait.core.lipm.closed_form import GRAVITY
 from rtgait.core.planner.config import PlannerConfig
 from rtgait.core.planner.levels import ControllerLevel, check_level, level_config
 from rtgait.core.planner.online import OnlinePlanner
-from rtgait.core.planner.sample import SampleValues
 from rtgait.estimation.dcm_bias import DcmBiasEstimator
 
 if TYPE_CHECKING:
@@ -77,7 +75,6 @@ if TYPE_CHECKING:
 
     import numpy as np
 
-    from rtgait.core.laws.stepping import StepAdjustment
     from rtgait.estimation.state import FootState, Measurement
 
 __all__ = [
@@ -219,8 +216,13 @@ class WalkingController:
         if adaptive:
             planner.observe(t, m.com[:2], m.com_vel[:2])  # with "always", may replan at once (DCM error)
         values, support, q = planner.sample_values(t)
-        if self._on_error and self._dcm_error_replan(t, m, values, support, q, events):
-            values, support, q = planner.sample_values(t)
+        if self._on_error:
+            replanned, self._last_error_replan = dcm_error_replan(
+                planner, self.options, t, m, values, support, q, events, self._last_error_replan,
+                self.foot_landings.skimming,
+            )  # fmt: skip
+            if replanned:
+                values, support, q = planner.sample_values(t)
         # The landings (may replan: a touch-down), the feet's targets and the support acted on (foot_landings.py).
         values, planned_support, q, left, right, support = self._landings_update(t, m, values, support, q, events)
         self._planner_events(t, events)
@@ -266,66 +268,6 @@ class WalkingController:
             t, com, left, right, offsets, zmp, planned_zmp, com_offset, support, q, tuple(events) or _NO_EVENTS,
             planned_support, (values.dcm_x, values.dcm_y), lean,
         ))  # fmt: skip
-
-    def _dcm_error_replan(
-        self, t: float, m: Measurement, values: SampleValues, support: str, q: int, events: list[ControlEvent]
-    ) -> bool:
-        """``"on-error"``: replan from the measured state when the measured DCM is more than ``replan_dcm_error`` off
-        the plan's, as the core's ``observe`` does with ``feedback="measured"`` (at most every
-        :data:`ERROR_REPLAN_INTERVAL`, not within :data:`ERROR_REPLAN_MIN_REMAINDER` of a phase's end); returns
-        whether it replanned.
-
-        *A step that does not catch the push is not taken when it is a later step's.* The replan's step adjustment
-        moves the landing of the step swinging now or, within the limits' ``min_time_to_touchdown`` of its
-        touch-down, the next one's. For that later step, when no candidate keeps the plan's ZMP inside the support
-        (the core's emergency decision: the best margin, still outside), the core's ``on_failure="keep"`` keeps its
-        landing and timing, and the plan goes on from the planned state: the measured state stays out of the plan,
-        the stiff servos keep pulling the COM back to the plan and the DCM law with the foot force control recover
-        what the sole can (the ``"stabilized"`` level's recovery). Such a step would be a later landing moved far
-        to reshape the plan's connection while the robot must first stand a single support on the foot away from
-        the push. The step swinging now, or lifting off next, still takes its best landing (``"continue"``): that
-        foot can still go toward the capture point."""
-        threshold = self.options.replan_dcm_error
-        ex = m.dcm[0] - values.dcm_x
-        ey = m.dcm[1] - values.dcm_y
-        if ex * ex + ey * ey <= threshold * threshold or t - self._last_error_replan < ERROR_REPLAN_INTERVAL:
-            return False
-        planner = self.planner
-        remainder = planner.phase_start(q) + planner.timeline.duration(q) - t
-        if remainder < ERROR_REPLAN_MIN_REMAINDER:
-            return False
-        self._last_error_replan = t
-        adjust = self.options.step_adjustment
-        if self.foot_landings.skimming:  # a foot on its way over ground it met early: its landing stays
-            adjust = None
-        if self._only_crossing_catches(values, support, ex, ey) and not _lengthens(adjust):
-            events.append(ControlEvent(t, "replan-skipped", support, "outward DCM error in single support"))
-            return False
-        if adjust is not None and support in _SIDES and remainder < adjust.limits.min_time_to_touchdown:
-            adjust = dataclasses.replace(adjust, on_failure="keep")  # the core moves the next step's landing
-        replanned = planner.replan_now(t, "dcm-error", feedback="measured", step_adjustment=adjust or False)
-        if replanned is not None and self.options.com_reference == "planned":
-            # The footsteps are the measured state's; the COM goes on from where the plan had it, so that the
-            # servos keep pulling the robot back: the plan under way remade from the state sampled before.
-            planner.observe(t, (values.cog_x, values.cog_y), (values.cog_vx, values.cog_vy))
-            planner.replan_now(t, "dcm-error-plan", feedback="measured", step_adjustment=False)
-            planner.observe(t, m.com[:2], m.com_vel[:2])
-        return replanned is not None
-
-    @staticmethod
-    def _only_crossing_catches(values: SampleValues, support: str, ex: float, ey: float) -> bool:
-        """Whether, in a single support, the DCM error ``(ex, ey)`` (m) points outward from the stance foot more
-        than along it: the capture point then moves away from where the swing foot may land (the stride box keeps
-        it on its own side, the leg collision model would refuse a crossing step), so no landing catches it and
-        the plan under way is kept: unless step timing adaptation may lengthen the single support
-        (``max_single_support``), when the replan's decision may hold the stance longer (:func:`_lengthens`)."""
-        if support not in _SIDES:
-            return False
-        yaw = values.lfoot_yaw if support == "left" else values.rfoot_yaw  # the stance foot's
-        c, s = math.cos(yaw), math.sin(yaw)
-        along, lateral = c * ex + s * ey, -s * ex + c * ey
-        outward = lateral if support == "left" else -lateral
-        return outward > abs(along)
 
     # ----- the support polygon -------------------------------------------------------------------------------------
     def _support_polygon(self, support: str, left: tuple[float, ...], right: tuple[float, ...]) -> np.ndarray:
@@ -407,13 +349,6 @@ class WalkingController:
         switch_level(self, level)
 
 
-def _lengthens(adjust: StepAdjustment | None) -> bool:
-    """Whether step adjustment ``adjust`` may give a step a longer single support: then a DCM error toward the
-    stance foot's outside has an answer, the stance held longer while the sole's centre of pressure at its outer
-    edge brings the DCM back, and the controller replans for it."""
-    return adjust is not None and adjust.adapt_timing and adjust.limits.max_single_support is not None
-
-
 def make_controller(
     level: ControllerLevel,
     planner_config: PlannerConfig,
@@ -455,7 +390,7 @@ def make_controller(
         planner_config, level, sole, replan_dcm_error=options.replan_dcm_error, step_adjustment=adjust
     )
     if level == "adaptive" and options.measured_replanning == "on-error":
-        # The controller takes the measured state in, and steps elsewhere, only on a DCM error (_dcm_error_replan).
+        # The controller takes the measured state in, and steps elsewhere, only on a DCM error (error_replan).
         options = dataclasses.replace(options, step_adjustment=adjust)
         config = dataclasses.replace(config, feedback="planned", step_adjustment=None)
     return WalkingController(level, OnlinePlanner(config, strides), info, dt, options, terrain)
