@@ -12,7 +12,9 @@ loaded by path. Its tables, in SI units (m, rad, s, kg m^2, N m/rad):
   foot), ``outer``;
 * ``[walking]``: ``cog_height`` (the planner's constant COG height), ``moving_joints`` (all others stay locked at
   the posture), ``torso_frame`` (kept upright, heading along the mean yaw of the feet), optional ``toe_release``
-  (the share of a swing up a stair over which the sole levels after its toe-off: :mod:`rtgait.core.geometry.toe_off`);
+  (the share of a swing up a stair over which the sole levels after its toe-off: :mod:`rtgait.core.geometry.toe_off`)
+  and ``descent_bend`` (m: down a stair, the swing foot's path bent toward the other foot at mid-swing, so the
+  folded swing leg's thigh passes clear of the stance thigh: :func:`rtgait.core.geometry.swing.swing_pose`);
 * ``[posture]``: the half-sitting start posture, joint name -> angle (joints not listed are at 0);
 * optional, for the physics layer: ``[gains]`` (``kp``, ``kd``: a number or a table per joint) and ``[actuation]``
   (periods, the command's delay, natural frequency, damping ratio, motor types ``[actuation.motors.<name>]`` and
@@ -109,6 +111,8 @@ class RobotDescription:
         toe_release: share of a swing up a stair over which the sole levels after its toe-off
             (``walking.toe_release``, default :data:`~rtgait.core.geometry.toe_off.RELEASE`;
             :mod:`rtgait.core.geometry.toe_off`).
+        descent_bend: down a stair, the sideways bend of the swing foot's path toward the other foot at mid-swing
+            (m, ``walking.descent_bend``, default 0: straight; :func:`rtgait.core.geometry.swing.swing_pose`).
         moving_joints: joints the walking motion may move, in the order given.
         torso_frame: frame kept upright while walking.
         posture: half-sitting posture, joint name -> angle (rad; m for prismatic joints); other joints at 0.
@@ -150,6 +154,7 @@ class RobotDescription:
     control: SettingsPairs = ()
     sensors: SensorSpec = field(default_factory=SensorSpec)
     toe_release: float = RELEASE
+    descent_bend: float = 0.0
     source: str = field(default="", compare=False)
 
     def posture_angle(self, joint: str) -> float:
@@ -243,13 +248,17 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
     sole = SoleRect(**sole_values)
 
     walking = FILES.table(data["walking"], "walking")
-    FILES.check_keys(walking, "walking", ("cog_height", "moving_joints", "torso_frame"), ("toe_release",))
+    required = ("cog_height", "moving_joints", "torso_frame")
+    FILES.check_keys(walking, "walking", required, ("toe_release", "descent_bend"))
     cog_height = FILES.number(walking["cog_height"], "walking.cog_height", rule="> 0", unit="m")
     toe_release = RELEASE
     if "toe_release" in walking:
         toe_release = FILES.number(walking["toe_release"], "walking.toe_release", rule="> 0", unit="")
         if toe_release > 1.0:
             raise RobotError(f"walking.toe_release must be a share of the swing in (0, 1], got {toe_release:g}")
+    descent_bend = 0.0
+    if "descent_bend" in walking:
+        descent_bend = FILES.number(walking["descent_bend"], "walking.descent_bend", rule=">= 0", unit="m")
     raw_joints = walking["moving_joints"]
     if not isinstance(raw_joints, list) or not raw_joints or not all(isinstance(j, str) for j in raw_joints):
         raise RobotError(f"walking.moving_joints must be a non-empty list of joint names, got {raw_joints!r}")
@@ -300,6 +309,7 @@ def parse_robot(data: dict[str, Any], source: str = "", base: Path | None = None
         sole=sole,
         cog_height=cog_height,
         toe_release=toe_release,
+        descent_bend=descent_bend,
         moving_joints=tuple(raw_joints),
         torso_frame=torso_frame,
         posture=MappingProxyType(posture),

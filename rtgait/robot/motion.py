@@ -138,14 +138,18 @@ class RobotWalk(Scenario):
 
     Attributes:
         velocity_limits: the robot description's ``[velocity]`` table; ``None``: the planner's defaults.
+        descent_bend: the robot description's ``walking.descent_bend`` (m): its swing path's bend down a stair.
     """
 
     velocity_limits: VelocityLimits | None = None
+    descent_bend: float = 0.0
 
     def planner_config(self) -> PlannerConfig:
         """The scenario's planner config with the robot's velocity-walk bounds, those of its timing's COG sway
-        (:meth:`~rtgait.core.planner.config.VelocityLimits.apply`)."""
+        (:meth:`~rtgait.core.planner.config.VelocityLimits.apply`), and its swing path's bend down a stair."""
         config = super().planner_config()
+        if self.descent_bend:
+            config = dataclasses.replace(config, descent_bend=self.descent_bend)
         return config if self.velocity_limits is None else self.velocity_limits.apply(config)
 
 
@@ -190,7 +194,7 @@ def robot_scenario(scenario: Scenario, robot: RobotModel) -> RobotWalk:
     values = {f.name: getattr(scenario, f.name) for f in dataclasses.fields(Scenario)}
     cog_height = walking_robot(robot, scenario).description.cog_height
     values.update(cog_height=cog_height, step_width=robot.step_width, sole=robot.description.sole)
-    return RobotWalk(**values, velocity_limits=limits)
+    return RobotWalk(**values, velocity_limits=limits, descent_bend=robot.description.descent_bend)
 
 
 def _where(rollout: Rollout, k: int) -> str:

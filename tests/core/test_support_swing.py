@@ -267,3 +267,33 @@ def test_swing_turns_the_short_way_across_pi():
     steps = [wrap_angle(b - a) for a, b in itertools.pairwise(yaws)]
     assert all(step >= 0.0 for step in steps)
     assert sum(steps) == pytest.approx(0.2)
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+@pytest.mark.parametrize("yaw", [0.0, 0.7])
+def test_a_bent_swing_down_a_stair_passes_toward_the_other_foot_and_lands_on_its_foothold(side, yaw):
+    # Down a 0.15 m stair, heading yaw: the bent path lies `bend` toward the other foot at mid-swing (a left foot to
+    # its right, perpendicular to the heading), 64 s^3 (1 - s)^3 of it elsewhere, and ends where the straight one
+    # does; its velocity is the derivative of its pose.
+    bend, heading = 0.035, np.array([math.cos(yaw), math.sin(yaw)])
+    start = Footstep(0.0, 0.0, yaw, side, z=0.3)
+    end = Footstep(0.4 * heading[0], 0.4 * heading[1], yaw, side, z=0.15)
+    towards_other = np.array([heading[1], -heading[0]]) * (1.0 if side == "left" else -1.0)
+    for s in (0.0, 0.2, 0.5, 0.8, 1.0):
+        bent, straight = swing_pose(start, end, s, 0.05, bend), swing_pose(start, end, s, 0.05)
+        offset = np.subtract(bent[:2], straight[:2])
+        assert offset == pytest.approx(bend * 64.0 * s**3 * (1.0 - s) ** 3 * towards_other, abs=1e-12)
+        assert bent[2:] == straight[2:]
+        h, duration = 1e-6, 0.9
+        ahead = swing_pose(start, end, s + h, 0.05, bend) if s < 1.0 else bent
+        behind = swing_pose(start, end, s - h, 0.05, bend) if s > 0.0 else bent
+        step = (h if s in (0.0, 1.0) else 2.0 * h) * duration
+        velocity = swing_velocity(start, end, s, 0.05, duration, bend)
+        assert velocity[:2] == pytest.approx(np.subtract(ahead[:2], behind[:2]) / step, abs=1e-5)
+
+
+def test_only_a_swing_down_a_stair_is_bent():
+    flat = (Footstep(0.0, 0.1, 0.0, "left"), Footstep(0.3, 0.1, 0.0, "left"))
+    up = (Footstep(0.0, 0.1, 0.0, "left"), Footstep(0.3, 0.1, 0.0, "left", z=0.15))
+    for start, end in (flat, up):
+        assert swing_pose(start, end, 0.5, 0.05, 0.035) == swing_pose(start, end, 0.5, 0.05)

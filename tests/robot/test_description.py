@@ -112,6 +112,8 @@ BAD = [
      "walking.toe_release must be a share of the swing in (0, 1], got 1.5"),
     ("zero toe release", edited("cog_height = 0.84", "cog_height = 0.84\ntoe_release = 0"),
      "walking.toe_release must be a number > 0"),
+    ("negative descent bend", edited("descent_bend = 0.035", "descent_bend = -0.01"),
+     "walking.descent_bend must be a number >= 0"),
     ("moving joint not in URDF", edited('"torso_1_joint", "torso_2_joint",', '"torso_1_joint", "torso_3_joint",'),
      "walking.moving_joints: the URDF talos_reduced.urdf has no joint named torso_3_joint"),
     ("moving joint listed twice", edited('"torso_1_joint", "torso_2_joint",', '"torso_1_joint", "torso_1_joint",'),

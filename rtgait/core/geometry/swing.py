@@ -32,6 +32,8 @@ dorsiflexion (``docs/results.md``). Down a ramp the stair profile is kept.
 
 from __future__ import annotations
 
+import math
+
 from rtgait.core.geometry.footsteps import Footstep, wrap_angle
 from rtgait.core.geometry.toe_off import stair_rise
 
@@ -110,6 +112,18 @@ def swing_vertical(
     return z0 + (top - z0) * up - (top - z1) * down, ((top - z0) * dup - (top - z1) * ddown) / RISE_SHARE
 
 
+def _inward(start: Footstep, end: Footstep, s: float, bend: float) -> tuple[float, float, float, float]:
+    """Sideways bend ``(dx, dy)`` (m) of a swing down a stair and its derivative d/ds (module docstring): ``bend``
+    times ``64 s^3 (1 - s)^3`` toward the other foot's side (a left foot to its right), across the landing's
+    heading; zero for any other swing."""
+    if bend == 0.0 or not down_stair(start, end):
+        return 0.0, 0.0, 0.0, 0.0
+    b, db = lift(s)
+    inward = -bend if start.side == "left" else bend
+    ux, uy = -math.sin(end.yaw) * inward, math.cos(end.yaw) * inward
+    return ux * b, uy * b, ux * db, uy * db
+
+
 def _horizontal(start: Footstep, end: Footstep, s: float) -> tuple[float, float]:
     """Horizontal blend and its derivative d/ds: delayed at both ends over a height change but up a ramp."""
     if start.z == end.z or up_ramp(start, end):
@@ -122,27 +136,35 @@ def _horizontal(start: Footstep, end: Footstep, s: float) -> tuple[float, float]
     return k, dk / span
 
 
-def swing_pose(start: Footstep, end: Footstep, s: float, height: float) -> tuple[float, float, float, float]:
-    """Foot pose ``(x, y, z, yaw)`` (m, rad) at swing progress ``s`` in [0, 1] from ``start`` to ``end``."""
+def swing_pose(
+    start: Footstep, end: Footstep, s: float, height: float, bend: float = 0.0
+) -> tuple[float, float, float, float]:
+    """Foot pose ``(x, y, z, yaw)`` (m, rad) at swing progress ``s`` in [0, 1] from ``start`` to ``end``; down a
+    stair its path bent ``bend`` (m) toward the other foot's side at mid-swing (module docstring)."""
     s = _clip01(s)
     k, _ = _horizontal(start, end, s)
+    bx, by, _, _ = _inward(start, end, s, bend)
     return (
-        start.x + k * (end.x - start.x),
-        start.y + k * (end.y - start.y),
+        start.x + k * (end.x - start.x) + bx,
+        start.y + k * (end.y - start.y) + by,
         swing_vertical(start.z, end.z, s, height, up_ramp(start, end), down_stair(start, end))[0],
         wrap_angle(start.yaw + k * wrap_angle(end.yaw - start.yaw)),
     )
 
 
-def swing_velocity(start: Footstep, end: Footstep, s: float, height: float, duration: float) -> tuple[float, ...]:
-    """Foot velocity ``(vx, vy, vz, yaw_rate)`` (m/s, rad/s) at swing progress ``s`` over ``duration`` (s)."""
+def swing_velocity(
+    start: Footstep, end: Footstep, s: float, height: float, duration: float, bend: float = 0.0
+) -> tuple[float, ...]:
+    """Foot velocity ``(vx, vy, vz, yaw_rate)`` (m/s, rad/s) at swing progress ``s`` over ``duration`` (s), the
+    path bent by ``bend`` (m) as in :func:`swing_pose`."""
     s = _clip01(s)
     _, dk = _horizontal(start, end, s)
     _, dz = swing_vertical(start.z, end.z, s, height, up_ramp(start, end), down_stair(start, end))
+    _, _, dbx, dby = _inward(start, end, s, bend)
     scale = 1.0 / duration
     return (
-        dk * (end.x - start.x) * scale,
-        dk * (end.y - start.y) * scale,
+        (dk * (end.x - start.x) + dbx) * scale,
+        (dk * (end.y - start.y) + dby) * scale,
         dz * scale,
         dk * wrap_angle(end.yaw - start.yaw) * scale,
     )

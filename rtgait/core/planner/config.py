@@ -36,6 +36,9 @@ class PlannerConfig:
             :data:`~rtgait.core.limits.MAX_PHASE_W_T`; 5.7 s at the default height).
         step_width: lateral distance between the feet when standing and in straight walking (m).
         step_height: peak swing-foot height (m).
+        descent_bend: down a stair, how far the swing foot's path bends toward the other foot at mid-swing (m,
+            within [0, step_width / 2]; :func:`~rtgait.core.geometry.swing.swing_pose`): the robot's, for a folded
+            swing leg that would otherwise brush the stance leg (0, default: a straight path).
         horizon_steps: steps covered by each plan after its first double support, 1..20.
         connection: ``"real-time"``, ``"quasi-real-time"`` or ``"auto"`` (per change, the latest connection
             predicted to keep the ZMP margin at least ``auto_margin``, else a later step:
@@ -72,6 +75,7 @@ class PlannerConfig:
     timing: Timing = field(default_factory=lambda: Timing(0.8, 0.2))
     step_width: float = 0.19
     step_height: float = 0.05
+    descent_bend: float = 0.0
     horizon_steps: int = 3
     connection: ConnectionMode = "real-time"
     gravity: float = GRAVITY
@@ -143,6 +147,7 @@ class PlannerConfig:
                 f"min_step_width must be None or within (0, step_width = {self.step_width:g}] m, got {narrowest}"
             )
         check_range("step_height", self.step_height, 0.0, MAX_STRIDE, "m")
+        check_range("descent_bend", self.descent_bend, 0.0, 0.5 * self.step_width, "m")
         if self.replan_dcm_error is not None:
             check_range("replan_dcm_error", self.replan_dcm_error, 1e-4, 1.0, "m")
         if self.step_adjustment is not None and not isinstance(self.step_adjustment, StepAdjustment):

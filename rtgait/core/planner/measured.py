@@ -170,7 +170,7 @@ class MeasuredPlanning:
         if phase is None or phase.swing_from is None:
             raise RuntimeError(f"no foot is swinging at t={t} s")
         rel = t - self._t0
-        pose, vel = phase.swing_state(rel, self.config.step_height)
+        pose, vel = phase.swing_state(rel, self.config.step_height, self.config.descent_bend)
         self._swing_retarget = (phase.index, (rel, pose, vel, phase.lift_progress(rel)))
         return pose
 

@@ -110,7 +110,7 @@ class PlanSampling:
         if phase.swing_from is None:  # both feet on the ground, left then right
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw, rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = phase.feet
         else:
-            swing = phase.swing(rel, self.config.step_height)
+            swing = phase.swing(rel, self.config.step_height, self.config.descent_bend)
             left, right = (phase.feet, swing) if phase.support == "left" else (swing, phase.feet)
             lfoot_x, lfoot_y, lfoot_z, lfoot_yaw = left
             rfoot_x, rfoot_y, rfoot_z, rfoot_yaw = right

@@ -50,10 +50,12 @@ class PhaseInfo:
         self.support, self.feet, self.swing_from, self.swing_to = support, feet, swing_from, swing_to
         self.retarget = retarget
 
-    def swing(self, rel: float, height: float) -> tuple[float, float, float, float]:
-        """Swing foot pose ``(x, y, z, yaw)`` (m, rad) at ``rel`` (s from the walk's start)."""
+    def swing(self, rel: float, height: float, bend: float = 0.0) -> tuple[float, float, float, float]:
+        """Swing foot pose ``(x, y, z, yaw)`` (m, rad) at ``rel`` (s from the walk's start); ``bend`` (m): down a
+        stair, the path's sideways bend toward the other foot (:func:`~rtgait.core.geometry.swing.swing_pose`;
+        a retargeted swing starts from the bent path's pose and velocity and goes straight to its new landing)."""
         if self.retarget is None:
-            return swing_pose(self.swing_from, self.swing_to, (rel - self.start) / self.duration, height)
+            return swing_pose(self.swing_from, self.swing_to, (rel - self.start) / self.duration, height, bend)
         since, pose0, vel0, _ = self.retarget
         span = self.end - since
         x, y, yaw = retargeted_swing(pose0, vel0, self.swing_to, (rel - since) / span, span)
@@ -71,15 +73,17 @@ class PhaseInfo:
         since, _, _, s0 = self.retarget
         return s0 + (1.0 - s0) * (rel - since) / (self.end - since)
 
-    def swing_state(self, rel: float, height: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    def swing_state(
+        self, rel: float, height: float, bend: float = 0.0
+    ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         """Horizontal pose ``(x, y, yaw)`` and velocity of the swing foot at ``rel``, to retarget from."""
         if self.retarget is None:
             s = (rel - self.start) / self.duration
-            x, y, _, yaw = swing_pose(self.swing_from, self.swing_to, s, height)
-            vx, vy, _, vyaw = swing_velocity(self.swing_from, self.swing_to, s, height, self.duration)
+            x, y, _, yaw = swing_pose(self.swing_from, self.swing_to, s, height, bend)
+            vx, vy, _, vyaw = swing_velocity(self.swing_from, self.swing_to, s, height, self.duration, bend)
             return (x, y, yaw), (vx, vy, vyaw)
         h = 1e-6  # a second move within one swing: its velocity by a difference (rare, and smooth enough)
-        a, b = self.swing(rel, height), self.swing(rel + h, height)
+        a, b = self.swing(rel, height, bend), self.swing(rel + h, height, bend)
         return (a[0], a[1], a[3]), ((b[0] - a[0]) / h, (b[1] - a[1]) / h, (b[3] - a[3]) / h)
 
 
