@@ -85,6 +85,10 @@ class TorqueWrenches:
         contact_cutoff: the contact forces' low-pass's cut-off (Hz), > 0; ``inf``: no filter.
         friction: the joints' friction the measured (motor) torques carry and the links do not get (module
             docstring, "Friction"); ``None``: none, the measured torques act on the links.
+        momentum: the generalized-momentum observer (module docstring, "Momentum observer"): the unfiltered
+            accelerations, the torques' mean over the period and one low-pass at ``cutoff`` for both the reported
+            wrench and :attr:`contact_forces` (``acceleration_cutoff`` and ``contact_cutoff`` unused); ``False``: the
+            filtered accelerations' residual ("Filters").
 
     Raises:
         ValueError: a cut-off that is not > 0, or legs that are not two of as many joints.
@@ -93,7 +97,7 @@ class TorqueWrenches:
     def __init__(
         self, kinematics: RobotKinematics, cutoff: float = DEFAULT_WRENCH_CUTOFF,
         acceleration_cutoff: float = DEFAULT_ACCELERATION_CUTOFF, contact_cutoff: float = DEFAULT_CONTACT_CUTOFF,
-        friction: JointFriction | None = None,
+        friction: JointFriction | None = None, momentum: bool = True,
     ) -> None:  # fmt: skip
         if not cutoff > 0.0:
             raise ValueError(f"the wrench filter's cut-off must be > 0 Hz, got {cutoff}")
@@ -101,6 +105,9 @@ class TorqueWrenches:
             raise ValueError(f"the accelerations' filter cut-off must be > 0 Hz, got {acceleration_cutoff}")
         if not contact_cutoff > 0.0:
             raise ValueError(f"the contact forces' filter cut-off must be > 0 Hz, got {contact_cutoff}")
+        self.momentum = bool(momentum)
+        if self.momentum:  # one filter, the observer's, on both sides of the dynamics and for both uses
+            acceleration_cutoff, contact_cutoff = math.inf, cutoff
         self.acceleration_cutoff, self.contact_cutoff = float(acceleration_cutoff), float(contact_cutoff)
         legs = [list(leg) for leg in kinematics.leg_joints]
         if len(legs) != 2 or len(legs[0]) != len(legs[1]) or not legs[0]:
@@ -129,6 +136,7 @@ class TorqueWrenches:
         self._dt, self._beta, self._contact_beta = -1.0, 0.0, 0.0
         self._accel_dt, self._accel_beta = -1.0, 0.0
         self._filtered: tuple[np.ndarray, Vector] | None = None
+        self._torques: np.ndarray | None = None  # the last tick's link torques, for the period's mean
 
     @staticmethod
     def _base_acceleration(
@@ -196,7 +204,13 @@ class TorqueWrenches:
         jacobians, needed = self._leg_dynamics(angular_velocity, base, accelerations)
         if self.friction is not None:  # the torque that reaches the links: the motors' less their gears' friction
             torques = torques - self.friction.torques(joint_velocities)
-        left, right = torque_wrenches(jacobians, needed, torques[self._legs].reshape(self._leg_shape))
+        torques = torques[self._legs].reshape(self._leg_shape)
+        if self.momentum:  # the torques' mean over the period the velocities' difference spans (trapezoid)
+            last = self._torques
+            self._torques = torques.copy()
+            if last is not None and state is not None:
+                torques = 0.5 * (torques + last)
+        left, right = torque_wrenches(jacobians, needed, torques)
         contact = (left, right)
         if state is None:
             self.contact_forces = (contact[0][0:3], contact[1][0:3])
@@ -204,6 +218,7 @@ class TorqueWrenches:
             if dt != self._dt:  # betas for this period, recomputed only when the period changes
                 self._dt, self._beta = dt, math.exp(-2.0 * math.pi * self.cutoff * dt)
                 self._contact_beta = math.exp(-2.0 * math.pi * self.contact_cutoff * dt)
+        if state is not None and not self.momentum:  # the observer's contact forces are the reported wrench's
             b = self._contact_beta
             c = 1.0 - b
             (l0, l1, l2), (r0, r1, r2) = self.contact_forces
@@ -221,4 +236,6 @@ class TorqueWrenches:
             right = (b * r0 + c * right[0], b * r1 + c * right[1], b * r2 + c * right[2], b * r3 + c * right[3],
                      b * r4 + c * right[4], b * r5 + c * right[5])  # fmt: skip
         self._state = (left, right)
+        if self.momentum:
+            self.contact_forces = (left[0:3], right[0:3])
         return left, right
