@@ -232,7 +232,7 @@ def _torque_step_run(estimate: TorqueWrenches, legs: FreeLegs, step: float = 20.
 def test_a_torque_step_on_a_free_leg_reads_no_contact_force():
     # The momentum observer: the torque that accelerates the leg shows in its momentum as well, whatever the filter.
     legs = FreeLegs()
-    assert _torque_step_run(TorqueWrenches(legs), legs) < 1e-9
+    assert _torque_step_run(TorqueWrenches(legs, momentum=True), legs) < 1e-9
     # The filtered accelerations' residual reads the step as a ground force of tens of newtons on the free foot.
     assert _torque_step_run(TorqueWrenches(legs, momentum=False), legs) > 10.0
 
@@ -242,7 +242,7 @@ def test_the_momentum_observer_recovers_a_static_legs_wrench_through_its_low_pas
     # mean over the period, so a step of the wrench enters half on its first tick, then whole, through one low-pass.
     legs = Legs()
     cutoff = 30.0
-    estimate = TorqueWrenches(legs, cutoff=cutoff)
+    estimate = TorqueWrenches(legs, cutoff=cutoff, momentum=True)
     specific = np.array([0.0, 0.0, G])
     before = np.array([[1.0, -2.0, 150.0, 0.5, -1.0, 0.1], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]])
     after = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [-3.0, 4.0, 200.0, 1.0, 2.0, -0.2]])
