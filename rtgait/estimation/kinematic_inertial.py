@@ -113,6 +113,8 @@ class KinematicInertialEstimator:
         sustain_time: how long an unloaded foot's load must last to count (s).
         joint_friction: with ``"torques"``, the joints' identified friction, which the measured torques carry and
             the links do not get (:mod:`rtgait.estimation.torque_wrenches`, "Friction"); ``None``: none.
+        momentum_observer: with ``"torques"``, the generalized-momentum observer instead of the filtered
+            accelerations' residual (:mod:`rtgait.estimation.torque_wrenches`, "Momentum observer").
     """
 
     reads_truth = False
@@ -139,6 +141,7 @@ class KinematicInertialEstimator:
         landing_clearance: float = DEFAULT_LANDING_CLEARANCE,
         sustain_time: float = DEFAULT_SUSTAIN_TIME,
         joint_friction: JointFriction | None = None,
+        momentum_observer: bool = False,
     ) -> None:
         if not (math.isfinite(omega) and omega > 0.0):
             raise ValueError(f"omega must be > 0 (1/s), got {omega}")
@@ -185,7 +188,9 @@ class KinematicInertialEstimator:
         self.anchors = FootAnchors()
         self._mounts = kinematics.foot_sensors if wrenches == "sensors" else None
         self._torques = (
-            TorqueWrenches(kinematics, wrench_cutoff, friction=joint_friction) if wrenches == "torques" else None
+            TorqueWrenches(kinematics, wrench_cutoff, friction=joint_friction, momentum=momentum_observer)
+            if wrenches == "torques"
+            else None
         )
         self._kinematics_update = kinematics.update
         self.reset()

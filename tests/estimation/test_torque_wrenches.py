@@ -69,7 +69,9 @@ def test_the_accelerations_are_low_passed_from_the_first_difference_on():
     # y_k = beta y_k-1 + (1 - beta) x_k on each finite-differenced acceleration, started at the first difference.
     legs = Legs()
     cutoff = 30.0
-    estimate = TorqueWrenches(legs, cutoff=math.inf, acceleration_cutoff=cutoff, contact_cutoff=math.inf)
+    estimate = TorqueWrenches(
+        legs, cutoff=math.inf, acceleration_cutoff=cutoff, contact_cutoff=math.inf, momentum=False
+    )
     rng = np.random.default_rng(7)
     velocities = [rng.normal(size=legs.joint_count) for _ in range(6)]
     gyro = [tuple(rng.normal(size=3)) for _ in range(6)]
@@ -94,7 +96,7 @@ def test_the_accelerations_are_low_passed_from_the_first_difference_on():
 
 def test_the_contact_forces_are_low_passed_at_their_own_cut_off():
     legs = Legs()
-    estimate = TorqueWrenches(legs, cutoff=30.0, contact_cutoff=60.0)
+    estimate = TorqueWrenches(legs, cutoff=30.0, contact_cutoff=60.0, momentum=False)
     specific = np.array([0.0, 0.0, G])
     before = np.array([[1.0, -2.0, 150.0, 0.5, -1.0, 0.1], [0.0, 0.0, 80.0, 0.0, 0.0, 0.0]])
     after = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [-3.0, 4.0, 200.0, 1.0, 2.0, -0.2]])
@@ -125,7 +127,7 @@ def test_an_imu_off_a_spinning_base_gives_the_origins_specific_force():
 def test_the_wrench_through_the_jacobian_low_passed():
     legs = Legs()
     cutoff = 30.0
-    estimate = TorqueWrenches(legs, cutoff=cutoff)
+    estimate = TorqueWrenches(legs, cutoff=cutoff, momentum=False)
     specific = np.array([0.0, 0.0, G])
     before = np.array([[1.0, -2.0, 150.0, 0.5, -1.0, 0.1], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]])
     after = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [-3.0, 4.0, 200.0, 1.0, 2.0, -0.2]])
@@ -143,7 +145,7 @@ def test_the_wrench_through_the_jacobian_low_passed():
     # A repeated reading keeps the last wrenches.
     np.testing.assert_array_equal(update(before, 0.0), out)
     # Without the filter: the wrench at once.
-    estimate = TorqueWrenches(legs, cutoff=math.inf)
+    estimate = TorqueWrenches(legs, cutoff=math.inf, momentum=False)
     update(before)
     np.testing.assert_allclose(update(after), after, atol=1e-9)
 
@@ -189,3 +191,73 @@ def test_the_joints_friction_is_taken_out_of_the_motor_torques():
     np.testing.assert_allclose(estimate(None), ground - phantom, atol=1e-9)
     with pytest.raises(ValueError, match="one value per joint"):
         TorqueWrenches(legs, friction=JointFriction(coulomb[:3], viscous[:3]))
+
+
+class FreeLegs:
+    """Two six-joint legs on a base at rest, without gravity, of constant inertia ``M`` each (``M q'' = tau + J^T
+    F``): their inverse dynamics for the joints' accelerations are ``M q''``."""
+
+    joint_count = 12
+    leg_joints = (tuple(range(6)), tuple(range(6, 12)))
+
+    def __init__(self) -> None:
+        rng = np.random.default_rng(11)
+        roots = rng.normal(size=(2, 6, 6)) * 0.3
+        self.inertia = roots @ roots.transpose(0, 2, 1) + 0.2 * np.eye(6)  # kg m^2, symmetric positive definite
+        self.jacobians = rng.normal(size=(2, 6, 6)) * 0.2 + 0.5 * np.eye(6)
+
+    def leg_dynamics(self, angular_velocity, acceleration, joint_accelerations):
+        legs = joint_accelerations.reshape(2, 6)
+        return self.jacobians, np.einsum("lij,lj->li", self.inertia, legs)
+
+
+def _torque_step_run(estimate: TorqueWrenches, legs: FreeLegs, step: float = 20.0, ticks: int = 12) -> np.ndarray:
+    """The left leg's hip torque rises by ``step`` (N m) over one period (linear between the readings) and holds;
+    the feet are free, the joints' velocities the exact ones. Returns the contact forces' largest magnitude."""
+    torques, velocities = np.zeros(legs.joint_count), np.zeros(legs.joint_count)
+    largest = 0.0
+    for k in range(ticks):
+        new = np.zeros(legs.joint_count)
+        new[0] = step if k >= 3 else 0.0
+        # The velocity's change over the period is M^-1 times the torque's integral: the trapezoid, exact for a ramp.
+        mean = 0.5 * (torques + new)
+        velocities = velocities + DT * np.concatenate([np.linalg.solve(legs.inertia[i], mean[6 * i : 6 * i + 6])
+                                                       for i in (0, 1)])  # fmt: skip
+        torques = new
+        estimate.update(DT, velocities, torques, (0.0, 0.0, 0.0), (0.0, 0.0, G), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+        largest = max(largest, float(np.abs(estimate.contact_forces).max()))
+    return largest
+
+
+def test_a_torque_step_on_a_free_leg_reads_no_contact_force():
+    # The momentum observer: the torque that accelerates the leg shows in its momentum as well, whatever the filter.
+    legs = FreeLegs()
+    assert _torque_step_run(TorqueWrenches(legs, momentum=True), legs) < 1e-9
+    # The filtered accelerations' residual reads the step as a ground force of tens of newtons on the free foot.
+    assert _torque_step_run(TorqueWrenches(legs, momentum=False), legs) > 10.0
+
+
+def test_the_momentum_observer_recovers_a_static_legs_wrench_through_its_low_pass():
+    # A static leg (no motion) under the ground's wrench: tau = tau_id - J^T F. The observer's input is the torques'
+    # mean over the period, so a step of the wrench enters half on its first tick, then whole, through one low-pass.
+    legs = Legs()
+    cutoff = 30.0
+    estimate = TorqueWrenches(legs, cutoff=cutoff, momentum=True)
+    specific = np.array([0.0, 0.0, G])
+    before = np.array([[1.0, -2.0, 150.0, 0.5, -1.0, 0.1], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]])
+    after = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [-3.0, 4.0, 200.0, 1.0, 2.0, -0.2]])
+    zero = np.zeros(legs.joint_count)
+
+    def update(wrenches: np.ndarray) -> np.ndarray:
+        return np.array(estimate.update(DT, zero, _torques_for(legs, wrenches, specific), (0.0, 0.0, 0.0),
+                                        tuple(specific), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))  # fmt: skip
+
+    for _ in range(3):
+        np.testing.assert_allclose(update(before), before, atol=1e-9)  # a constant wrench, from the first tick on
+    beta = math.exp(-2.0 * math.pi * cutoff * DT)
+    expected = beta * before + (1.0 - beta) * 0.5 * (before + after)
+    for _ in range(5):
+        out = update(after)
+        np.testing.assert_allclose(out, expected, atol=1e-9)
+        np.testing.assert_allclose(estimate.contact_forces, expected[:, 0:3], atol=1e-9)  # one filter for both
+        expected = beta * expected + (1.0 - beta) * after
