@@ -128,6 +128,8 @@ class FootLandings(FootTargets):
         self._skim: list[tuple[float, float, float, float] | None] = [None, None]
         self._late = [False, False]  # the swing ended in the air ...
         self._late_from = [math.inf, math.inf]  # ... and from when (s) it counts as late
+        # A late foot's descent under way: (its target's height when it began (m), the tick before its first (s)).
+        self._descent: list[tuple[float, float] | None] = [None, None]
         self._landed = [True, True]  # whether the foot's last swing ended on the ground
         self._anchor: list[tuple[float, float, float] | None] = [None, None]  # the last re-anchored pose per foot
         self._swing_phase = [-2, -2]  # phase of each foot's last swing
@@ -149,6 +151,7 @@ class FootLandings(FootTargets):
         self.adaptive = adaptive
         if not adaptive:
             self._late = [False, False]
+            self._descent = [None, None]
 
     # ----- the tick ------------------------------------------------------------------------------------------------
     def update(
@@ -232,12 +235,14 @@ class FootLandings(FootTargets):
             if not self._landed[i]:
                 loaded = (m.left, m.right)[i].loaded
                 self._late[i] = self.adaptive and not loaded
+                self._descent[i] = None
                 self._late_from[i] = self.planner.phase_start(q) + self.options.late_grace
                 self._landed[i] = loaded
         if support in _SIDES:  # a single support: the other foot lifts off
             i = 1 if support == "left" else 0
             self._swing_phase[i] = q
             self._landed[i] = self._late[i] = False
+            self._descent[i] = None
             self._ground[i] = None
             planner = self.planner
             self._blend[i] = (self._z[i], planner.phase_start(q), planner.timeline.duration(q))
@@ -300,7 +305,7 @@ class FootLandings(FootTargets):
             stance = q + 1 if support == "double" else q
             until = planner.phase_start(stance) + planner.timeline.duration(stance)
             self._ground[i] = (self._z[i], ground, t, max(until, t + self.dt))
-        self._late[i] = False
+        self._late[i], self._descent[i] = False, None
         if kind == "early":
             # Stand on it from now on where it landed; it goes on down with the plan (a stiff robot sags: most early
             # landings are that), but no further than late_descent_limit below where it touched (a higher ground).
