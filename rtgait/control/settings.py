@@ -100,7 +100,8 @@ class ControllerOptions:
             lengthen it (a push toward the stance foot's outside, which no landing catches).
         early_touchdown_fraction: a landing counts as an early touch-down from this fraction of the swing on; before,
             it is ignored (a scuff).
-        late_descent_speed: how fast a late foot's target goes down (m/s).
+        late_descent_speed: how fast a late foot's target goes down (m/s), reached from rest at gravity's peak
+            acceleration along a quintic blend (:mod:`rtgait.control.late_descent`).
         late_descent_limit: how far below the plan it goes at most (m); also how far below where it touched an
             early-landed foot's target goes on down.
         on_time_window: a touch-down this little before the plan's (s) is on time, not early: the foot goes on down
