@@ -42,10 +42,11 @@ measured from the standing foot's target, so that a re-anchored foot stays where
   the landing while it skims (:attr:`FootLandings.skimming`);
 * a *late* foot's target descends from where it stood, ``z = z_0 - D(t - t_late)``, to ``-late_descent_limit`` while
   the other foot carries the robot (auto_stabilizer ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset``
-  -0.02 m; the plan is not delayed); ``D`` (:mod:`rtgait.control.late_descent`) leaves rest, as the swing ends, and
-  reaches ``late_descent_speed`` along a quintic blend at gravity's peak acceleration (57 ms at 0.3 m/s), and comes
-  to rest at the limit the same way: started at full speed in one tick, the step of the target's velocity made the
-  swing leg ring and its force reading a landing with the sole millimetres up. Once landed it stands at the ground's
+  -0.02 m; the plan is not delayed). ``D`` is ``late_descent_speed`` times the time from the first tick (default),
+  or, with ``late_descent_acceleration`` > 0 (:mod:`rtgait.control.late_descent`), leaves rest as the swing ends,
+  reaches ``late_descent_speed`` along a quintic blend at that peak acceleration and comes to rest at the limit the
+  same way: started at full speed in one tick, the step of the target's velocity makes the swing leg ring and its
+  force reading a landing with the sole millimetres up. Once landed it stands at the ground's
   measured depth under its foothold,
   ``z_g = min(0, max(-late_descent_limit, d))``, reached linearly over the single support it carries next, ``z =
   z_land + (z_g - z_land) s``, ``s = (t - t_l) / (t_end - t_l)``: kept as deep as the target went, it would extend

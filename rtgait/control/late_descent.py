@@ -16,8 +16,9 @@ then ``v (tau - T_r / 2)`` at full speed; it stops at the descent's limit ``L`` 
 so that it reaches ``L`` at rest: position, velocity and acceleration are continuous throughout. When ``L < v T_r``
 there is no full speed: the peak speed is ``L / T_r``, reached halfway.
 
-**The ramp.** ``T_r = 15/8 v / g``: the blend's peak acceleration, ``15/8 v / T_r``, is gravity's, the most a foot
-let drop falls with (57 ms at 0.3 m/s; the lag it adds to the depth, ``v T_r / 2``, is 8.6 mm).
+**The ramp.** ``T_r = 15/8 v / a``: the blend's peak acceleration, ``15/8 v / T_r``, is ``a``
+(``ControllerOptions.late_descent_acceleration``). Its argued value is gravity's, the most a foot let drop falls
+with: 57 ms at 0.3 m/s, and the lag it adds to the depth, ``v T_r / 2``, is 8.6 mm.
 
 Python floats only (every tick of a late foot).
 """
@@ -32,9 +33,9 @@ _PEAK_RATE = 15.0 / 8.0
 """Peak slope of the quintic blend ``b`` (at ``s = 1/2``)."""
 
 
-def descent_ramp(speed: float) -> float:
-    """The ramp ``T_r`` (s) to the descent's ``speed`` (m/s) at gravity's peak acceleration (module docstring)."""
-    return _PEAK_RATE * speed / GRAVITY
+def descent_ramp(speed: float, acceleration: float = GRAVITY) -> float:
+    """The ramp ``T_r`` (s) to the descent's ``speed`` (m/s) at the peak ``acceleration`` (m/s^2, > 0)."""
+    return _PEAK_RATE * speed / acceleration
 
 
 def _ramp_depth(s: float) -> float:
@@ -43,12 +44,13 @@ def _ramp_depth(s: float) -> float:
     return s4 * (2.5 - 3.0 * s + s * s)
 
 
-def descent_depth(tau: float, speed: float, limit: float) -> float:
-    """Depth (m, >= 0) a late foot's target has gone down ``tau`` (s) after its descent began, at most ``limit`` (m)
-    and at ``speed`` (m/s) when there is room for it (module docstring)."""
+def descent_depth(tau: float, speed: float, limit: float, acceleration: float = GRAVITY) -> float:
+    """Depth (m, >= 0) a late foot's target has gone down ``tau`` (s) after its descent began, at most ``limit`` (m),
+    at ``speed`` (m/s) when there is room for it, leaving rest and coming to it at the peak ``acceleration`` (m/s^2,
+    > 0; module docstring)."""
     if tau <= 0.0 or limit <= 0.0 or speed <= 0.0:
         return 0.0
-    ramp = descent_ramp(speed)
+    ramp = descent_ramp(speed, acceleration)
     if limit < speed * ramp:  # too short for full speed: up to L / T_r and straight back down to rest
         speed = limit / ramp
     cruise = limit / speed - ramp  # time at full speed (s), >= 0

@@ -36,6 +36,7 @@ def test_descent_reaches_its_speed_when_there_is_room_and_lags_half_a_ramp():
     speed, limit = 0.3, 0.05
     ramp = descent_ramp(speed)
     assert ramp == pytest.approx(15.0 / 8.0 * speed / GRAVITY)
+    assert descent_ramp(speed, 2.0 * GRAVITY) == pytest.approx(0.5 * ramp)
     _, rates, _ = differences(speed, limit, 2.0 * ramp)
     assert max(rates) == pytest.approx(speed, rel=1e-6)
     tau = 1.5 * ramp  # at full speed: half a ramp behind a descent at full speed from the start
