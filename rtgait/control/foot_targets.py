@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from rtgait.control.late_descent import descent_depth
+
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
@@ -45,9 +47,21 @@ class FootTargets:
                 else:
                     self._z[i] = height * (1.0 - (0.0 if s < 0.0 else s))  # max(s, 0.0), without the call
             elif self._late[i] and t >= self._late_from[i]:
-                limit = self.options.late_descent_limit
-                z = self._z[i] - self.options.late_descent_speed * self.dt
-                self._z[i] = -limit if -limit > z else z  # max(z, -limit), without the call
+                options = self.options
+                if options.late_descent_acceleration > 0.0:
+                    # From where the target stood when it became late, at rest, down to the limit along a profile
+                    # continuous in position and velocity (rtgait.control.late_descent).
+                    descent = self._descent[i]
+                    if descent is None:
+                        descent = self._descent[i] = (self._z[i], t - self.dt)
+                    z0, since = descent
+                    room = z0 + options.late_descent_limit
+                    speed, acceleration = options.late_descent_speed, options.late_descent_acceleration
+                    self._z[i] = z0 - descent_depth(t - since, speed, room, acceleration)
+                else:  # at full speed from the first tick
+                    limit = options.late_descent_limit
+                    z = self._z[i] - options.late_descent_speed * self.dt
+                    self._z[i] = -limit if -limit > z else z  # max(z, -limit), without the call
             elif (ground := self._ground[i]) is not None:  # landed late: back to the ground's height
                 landed, level, start, until = ground
                 s = (t - start) / (until - start)

@@ -40,9 +40,14 @@ measured from the standing foot's target, so that a re-anchored foot stays where
   ``c``: :data:`SKIM_CLEARANCE`), and goes on with the plan's swing to the foothold, where it stands at that
   height (kept as the offset at the swing's end); the plan keeps its single support, and no step adjustment moves
   the landing while it skims (:attr:`FootLandings.skimming`);
-* a *late* foot's target descends, ``z <- max(z - late_descent_speed dt, -late_descent_limit)`` per tick, while the
-  other foot carries the robot (auto_stabilizer ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset``
-  -0.02 m; the plan is not delayed). Once landed it stands at the ground's measured depth under its foothold,
+* a *late* foot's target descends from where it stood, ``z = z_0 - D(t - t_late)``, to ``-late_descent_limit`` while
+  the other foot carries the robot (auto_stabilizer ``FootStepGenerator.h``: ``touchVel`` 0.3 m/s, ``goalOffset``
+  -0.02 m; the plan is not delayed). ``D`` is ``late_descent_speed`` times the time from the first tick (default),
+  or, with ``late_descent_acceleration`` > 0 (:mod:`rtgait.control.late_descent`), leaves rest as the swing ends,
+  reaches ``late_descent_speed`` along a quintic blend at that peak acceleration and comes to rest at the limit the
+  same way: started at full speed in one tick, the step of the target's velocity makes the swing leg ring and its
+  force reading a landing with the sole millimetres up. Once landed it stands at the ground's
+  measured depth under its foothold,
   ``z_g = min(0, max(-late_descent_limit, d))``, reached linearly over the single support it carries next, ``z =
   z_land + (z_g - z_land) s``, ``s = (t - t_l) / (t_end - t_l)``: kept as deep as the target went, it would extend
   the stance leg, lift the body and make the next landing later still. The depth is measured against the other
@@ -128,6 +133,8 @@ class FootLandings(FootTargets):
         self._skim: list[tuple[float, float, float, float] | None] = [None, None]
         self._late = [False, False]  # the swing ended in the air ...
         self._late_from = [math.inf, math.inf]  # ... and from when (s) it counts as late
+        # A late foot's descent under way: (its target's height when it began (m), the tick before its first (s)).
+        self._descent: list[tuple[float, float] | None] = [None, None]
         self._landed = [True, True]  # whether the foot's last swing ended on the ground
         self._anchor: list[tuple[float, float, float] | None] = [None, None]  # the last re-anchored pose per foot
         self._swing_phase = [-2, -2]  # phase of each foot's last swing
@@ -149,6 +156,7 @@ class FootLandings(FootTargets):
         self.adaptive = adaptive
         if not adaptive:
             self._late = [False, False]
+            self._descent = [None, None]
 
     # ----- the tick ------------------------------------------------------------------------------------------------
     def update(
@@ -232,12 +240,14 @@ class FootLandings(FootTargets):
             if not self._landed[i]:
                 loaded = (m.left, m.right)[i].loaded
                 self._late[i] = self.adaptive and not loaded
+                self._descent[i] = None
                 self._late_from[i] = self.planner.phase_start(q) + self.options.late_grace
                 self._landed[i] = loaded
         if support in _SIDES:  # a single support: the other foot lifts off
             i = 1 if support == "left" else 0
             self._swing_phase[i] = q
             self._landed[i] = self._late[i] = False
+            self._descent[i] = None
             self._ground[i] = None
             planner = self.planner
             self._blend[i] = (self._z[i], planner.phase_start(q), planner.timeline.duration(q))
@@ -300,7 +310,7 @@ class FootLandings(FootTargets):
             stance = q + 1 if support == "double" else q
             until = planner.phase_start(stance) + planner.timeline.duration(stance)
             self._ground[i] = (self._z[i], ground, t, max(until, t + self.dt))
-        self._late[i] = False
+        self._late[i], self._descent[i] = False, None
         if kind == "early":
             # Stand on it from now on where it landed; it goes on down with the plan (a stiff robot sags: most early
             # landings are that), but no further than late_descent_limit below where it touched (a higher ground).

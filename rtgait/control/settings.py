@@ -101,6 +101,11 @@ class ControllerOptions:
         early_touchdown_fraction: a landing counts as an early touch-down from this fraction of the swing on; before,
             it is ignored (a scuff).
         late_descent_speed: how fast a late foot's target goes down (m/s).
+        late_descent_acceleration: the peak acceleration (m/s^2) with which a late foot's target leaves rest for
+            ``late_descent_speed`` and comes to rest at ``late_descent_limit``, along a quintic blend
+            (:mod:`rtgait.control.late_descent`; 9.81, gravity's, is its argued value: 57 ms to 0.3 m/s); 0 (default):
+            at full speed from the first tick, a step of the target's velocity (off by default: at G1's own gains
+            the later landings it gives fall, ``docs/results.md``, "A late foot's descent from rest").
         late_descent_limit: how far below the plan it goes at most (m); also how far below where it touched an
             early-landed foot's target goes on down.
         on_time_window: a touch-down this little before the plan's (s) is on time, not early: the foot goes on down
@@ -154,6 +159,7 @@ class ControllerOptions:
     early_touchdown_fraction: float = 0.5
     late_descent_speed: float = 0.3
     late_descent_limit: float = 0.02
+    late_descent_acceleration: float = 0.0
     measured_replanning: str = "on-error"
     late_grace: float = 0.01
     on_time_window: float = 0.08
@@ -199,6 +205,7 @@ _RANGES = {
     "early_touchdown_fraction": (0.0, 1.0, "of the swing"),
     "late_descent_speed": (0.0, 10.0, "m/s"),
     "late_descent_limit": (0.0, 10.0, "m"),
+    "late_descent_acceleration": (0.0, 1000.0, "m/s^2"),
     "late_grace": (0.0, 10.0, "s"),
     "on_time_window": (0.0, 10.0, "s"),
     "relanding_tolerance": (0.0, 10.0, "m"),

@@ -295,10 +295,15 @@ def test_adaptive_early_touchdown_reanchors_and_switches_support(blend):
     assert foot == pytest.approx((landing.x, landing.y, max(0.0, floor), landing.yaw), abs=1e-9)
 
 
+@pytest.mark.parametrize("acceleration", [0.0, 9.81])
 @pytest.mark.parametrize("ground", [-0.004, 0.0])
-def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_ground(ground):
-    # Heights: ours only (no foot force control); late at once (no grace for the landing's detection).
-    ctl = controller("adaptive", options=ControllerOptions(measurement_filter=0.0, foot=None, late_grace=0.0))
+def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_ground(ground, acceleration):
+    # Heights: ours only (no foot force control); late at once (no grace for the landing's detection); the descent
+    # at full speed from its first tick (0) or from rest at gravity's peak acceleration.
+    options = ControllerOptions(
+        measurement_filter=0.0, foot=None, late_grace=0.0, late_descent_acceleration=acceleration
+    )
+    ctl = controller("adaptive", options=options)
     start, duration, swing = first_swing(ctl)
     side = ("left", "right")[swing]
     not_down = (True, False) if swing == 1 else (False, True)
@@ -306,16 +311,25 @@ def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_gro
     t = start + duration
     planner = ctl.planner
     heights = []
-    for _ in range(80):  # 0.3 mm per tick: the 2 cm limit is reached after 67 of the double support's 100 ticks
+    ticks = round(planner.timeline.duration(2) / DT) - 2  # the plan's double support, the foot not down
+    for _ in range(ticks):
         values, support, _ = planner.sample_values(t)
         out = ctl.tick(t, on_plan(t, values, support, loaded=not_down))
         assert support == "double" and out.support == ("left", "right")[1 - swing], "the other foot carries it"
         heights.append((out.left_foot if swing == 0 else out.right_foot)[2])
         t += DT
     options = ctl.options
-    steps = [a - b for a, b in itertools.pairwise(heights)]
-    assert steps[0] == pytest.approx(options.late_descent_speed * DT, abs=1e-9)
-    assert heights[-1] == pytest.approx(-options.late_descent_limit), "down to the limit, no further"
+    # Finite differences of the target: it leaves rest (the swing's end) without a step in velocity, reaches the
+    # descent speed, accelerates no faster than gravity and stays above the limit.
+    rates = [(b - a) / DT for a, b in itertools.pairwise([0.0, *heights])]
+    if acceleration == 0.0:  # a step of the velocity: 0.3 mm per tick, the 2 cm limit reached in 67 ticks
+        assert rates[0] == pytest.approx(-options.late_descent_speed, rel=1e-6)
+        assert heights[-1] == pytest.approx(-options.late_descent_limit), "down to the limit, no further"
+    else:
+        assert abs(rates[0]) < 0.01 * options.late_descent_speed, "the descent starts at rest"
+        assert max(abs(b - a) / DT for a, b in itertools.pairwise(rates)) <= acceleration * 1.001
+    assert min(rates) == pytest.approx(-options.late_descent_speed, rel=1e-6), "at full speed"
+    assert all(h >= -options.late_descent_limit - 1e-12 for h in heights)
     # It lands with its sole at `ground` (m): re-anchored; its target goes back up to the measured ground over the
     # single support it carries next, phase 3 (the target's own depth kept would extend the stance leg and lift the
     # body).
@@ -327,12 +341,13 @@ def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_gro
     assert any(e.kind == "touchdown" for e in out.events)
     assert planner.footprints()[2].x == pytest.approx(landing.x)
     assert out.support == "double"
-    assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(-options.late_descent_limit)
+    landed = (out.left_foot if swing == 0 else out.right_foot)[2]
+    assert heights[-1] - options.late_descent_speed * DT <= landed <= heights[-1], "on down by at most a tick"
     landed_at, end = t, planner.phase_start(3) + planner.timeline.duration(3)
     middle = 0.5 * (landed_at + end)
     out, t = walk_to(ctl, middle + 0.5 * DT, t + DT)
-    halfway = 0.5 * (ground - options.late_descent_limit)
-    slope = (ground + options.late_descent_limit) / (end - landed_at)
+    halfway = 0.5 * (ground + landed)
+    slope = (ground - landed) / (end - landed_at)
     assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(halfway, abs=slope * DT)
     out, t = walk_to(ctl, end + DT, t)
     assert (out.left_foot if swing == 0 else out.right_foot)[2] == pytest.approx(ground, abs=1e-12)
