@@ -59,6 +59,7 @@ from rtgait.estimation.landing_gate import (
 )
 from rtgait.estimation.load import DEFAULT_LANDING_FRACTION, DEFAULT_MIN_UNLOADED_TIME, LoadHysteresis
 from rtgait.estimation.rotations import mat_mul, mat_mul_t, mat_vec, quat_matrix, turned, yaw_of
+from rtgait.estimation.sensor_zero import DEFAULT_ZERO_TIME, AirborneZero
 from rtgait.estimation.sole_wrenches import SoleWrench, sensor_wrench
 from rtgait.estimation.state import FootState, Landing, Measurement
 from rtgait.estimation.torque_wrenches import DEFAULT_WRENCH_CUTOFF, TorqueWrenches
@@ -113,6 +114,8 @@ class KinematicInertialEstimator:
         sustain_time: how long an unloaded foot's load must last to count (s).
         joint_friction: with ``"torques"``, the joints' identified friction, which the measured torques carry and
             the links do not get (:mod:`rtgait.estimation.torque_wrenches`, "Friction"); ``None``: none.
+        sensor_zero_time: with ``"sensors"``, the airborne time (s) over which each foot sensor's zero is learnt
+            while its foot is in the air (:mod:`rtgait.estimation.sensor_zero`); ``None``: the readings as they are.
     """
 
     reads_truth = False
@@ -139,6 +142,7 @@ class KinematicInertialEstimator:
         landing_clearance: float = DEFAULT_LANDING_CLEARANCE,
         sustain_time: float = DEFAULT_SUSTAIN_TIME,
         joint_friction: JointFriction | None = None,
+        sensor_zero_time: float | None = DEFAULT_ZERO_TIME,
     ) -> None:
         if not (math.isfinite(omega) and omega > 0.0):
             raise ValueError(f"omega must be > 0 (1/s), got {omega}")
@@ -184,6 +188,7 @@ class KinematicInertialEstimator:
         self.attitude = AttitudeFilter(attitude_cutoff)
         self.anchors = FootAnchors()
         self._mounts = kinematics.foot_sensors if wrenches == "sensors" else None
+        self._zero = AirborneZero(sensor_zero_time) if wrenches == "sensors" and sensor_zero_time is not None else None
         self._torques = (
             TorqueWrenches(kinematics, wrench_cutoff, friction=joint_friction) if wrenches == "torques" else None
         )
@@ -198,6 +203,8 @@ class KinematicInertialEstimator:
         self.anchors.reset()
         if self._torques is not None:
             self._torques.reset()
+        if self._zero is not None:
+            self._zero.reset()
         self._loaded = (True, True)  # the first tick's feet anchor the world frame
         self._weight_left = 0.5
         self._yaw_offset = 0.0
@@ -235,9 +242,11 @@ class KinematicInertialEstimator:
         wz = m20 * gx + m21 * gy + m22 * gz - rwz
         specific = (m00 * fx + m01 * fy + m02 * fz, m10 * fx + m11 * fy + m12 * fz, m20 * fx + m21 * fy + m22 * fz)
         # 2. The ground's wrenches on the soles, in the sole frames.
-        torques = self._torques
+        torques, zero = self._torques, self._zero
         if torques is None:
-            wrench_left, wrench_right = self._sensor_wrenches(readings, r_left, r_right)
+            raw_left, raw_right = wrench_left, wrench_right = self._sensor_wrenches(readings, r_left, r_right)
+            if zero is not None:  # less each sensor's zero, learnt in the air (step 6)
+                wrench_left, wrench_right = zero.corrected(0, raw_left), zero.corrected(1, raw_right)
         else:
             if readings.joint_torques is None:
                 raise ValueError("the estimator reads the joint torques, the readings have none")
@@ -350,6 +359,10 @@ class KinematicInertialEstimator:
             if not right.loaded:
                 right = _new_tuple(FootState, (_ZERO3, _ZERO3, 0.0, _NAN2, _NAN2, *right[5:10], 0))
         self._loaded = (left.loaded, right.loaded)
+        if torques is None and zero is not None:  # a foot in the air reads its sensor's zero (sensor_zero)
+            air_time = self.load.air_time
+            zero.learn(0, raw_left, dt, air_time(0, t))
+            zero.learn(1, raw_right, dt, air_time(1, t))
         landings = _NO_LANDINGS
         if left_landing is not None or right_landing is not None:
             landings = tuple(landing for landing in (left_landing, right_landing) if landing is not None)
