@@ -10,7 +10,8 @@ vector in the sole frame (m/s^2):
 
     f_ground = f_s - m g_S,        t_ground = t_s - c x (m g_S)                             (N, N m)
 
-A swinging foot's acceleration times its mass is left out: a few newtons, well below the landing threshold.
+The foot's acceleration times its mass is left out here, for the wrench the estimator reports (a foot in contact
+is still); the load detection takes it out of the vertical force (:mod:`rtgait.estimation.foot_inertia`).
 
 **From joint torques** (a leg without a force sensor, the G1's). The dynamics of a leg's joints,
 ``M_l q'' + h_l = tau_l + J^T F``, with ``J`` the sole frame's 6 x n Jacobian with respect to the leg's joints
