@@ -7,10 +7,11 @@ sole wrench from the reading (the weight below the sensor removed, :mod:`rtgait.
 offset plus the foot's inertia, whose mean over a swing is about nil (the foot starts and ends it at rest). The zero
 is the mean of the airborne sole wrenches, in the sole frame (the sensor's, turned: both are on the foot):
 
-    b <- b + a (w - b),        a = dt / min(T, tau)                                           (N, N m)
+    b <- b + (dt / tau) (w - b)                                                             (N, N m)
 
-with ``T`` the time the foot has spent in the air so far: the running mean of the first ``tau`` of airborne time,
-then an exponential average over ``tau`` (:data:`DEFAULT_ZERO_TIME`, a few swings). Only ticks at least
+from ``b = 0`` (the sensor's own calibration), an exponential average over ``tau`` of airborne time
+(:data:`DEFAULT_ZERO_TIME`, a few swings): a running mean from the first airborne tick on would take the first
+swing's few ticks, whatever they read, for the zero. Only ticks at least
 ``settle_time`` after a lift-off count (the ground's force and the foot's ringing die out first), and the caller
 subtracts ``b`` from every reading of the foot (mc_rtc and auto_stabilizer zero their robots' foot sensors with the
 feet in the air likewise, once, before walking).
@@ -53,7 +54,6 @@ class AirborneZero:
     def reset(self) -> None:
         """Forget the zeros."""
         self.zeros: list[SoleWrench] = [_ZERO6, _ZERO6]
-        self._airborne = [0.0, 0.0]
 
     def corrected(self, index: int, wrench: SoleWrench) -> SoleWrench:
         """Foot ``index``'s (0 left, 1 right) sole wrench less its sensor's zero."""
@@ -66,8 +66,6 @@ class AirborneZero:
         been in the air for ``air_time`` (s; 0 for a loaded foot) of at least the settle time."""
         if dt <= 0.0 or air_time < self.settle_time:
             return
-        total = self._airborne[index] + dt
-        self._airborne[index] = total
-        a = dt / (total if total < self.time_constant else self.time_constant)
+        a = dt / self.time_constant if dt < self.time_constant else 1.0
         b = self.zeros[index]
         self.zeros[index] = tuple(bi + a * (wi - bi) for bi, wi in zip(b, wrench, strict=True))  # type: ignore[assignment]
