@@ -15,9 +15,13 @@ joints):
     u = R (w x d + d'),        a_c - g = R f_I + (u_k - u_(k-1)) / dt                     (m/s^2)
 
 the difference of one tick, as the IMU's specific force is the mean of the period that ends at the tick
-(:mod:`rtgait.sim.sensors`): both are the period's. Its noise is the joint velocities' differenced
-(``sqrt(2) sigma_v / dt`` through the legs' lever arms: a few newtons on Talos's foot) and the first tick has no
-difference (taken as nil). mc_rtc and auto_stabilizer remove the mass below their feet's sensors the same way.
+(:mod:`rtgait.sim.sensors`): both are the period's; the first tick has no difference (taken as nil). Its noise is the
+joint velocities' differenced (``sqrt(2) sigma_v / dt`` through the legs' lever arms): :data:`INERTIA_NOISE` on a
+still foot. Where a foot stands, or rests lightly for long (a long double support's 13-25 N, between the load
+thresholds), that noise is all the removal would add; so what lies within twice it of nil is taken as nil and the
+rest is moved towards nil by as much (a soft threshold, ``sign(x) max(|x| - 2 sigma, 0)``): a whipped or ringing
+foot's tens to hundreds of newtons pass, less 5 N. mc_rtc and auto_stabilizer remove the mass below their feet's
+sensors likewise.
 """
 
 from __future__ import annotations
@@ -53,8 +57,9 @@ class FootInertia:
         self, dt: float, up: tuple[float, float, float], w: tuple[float, float, float],
         specific: tuple[float, float, float], kin: BodyKinematics,
     ) -> tuple[float, float]:  # fmt: skip
-        """``m a_c,z`` of the left and right feet (N): the ground's vertical force on a foot is the sensor's, static
-        weight removed (:func:`~rtgait.estimation.sole_wrenches.sensor_wrench`), plus this.
+        """``m a_c,z`` of the left and right feet (N), soft-thresholded at twice its noise (module docstring): the
+        ground's vertical force on a foot is the sensor's, static weight removed
+        (:func:`~rtgait.estimation.sole_wrenches.sensor_wrench`), plus this.
 
         Args:
             dt: the tick's length (s); 0 at the first tick.
@@ -85,8 +90,20 @@ class FootInertia:
         # The IMU's vertical acceleration, a_I,z = (R f_I)_z - g.
         base = ux * specific[0] + uy * specific[1] + uz * specific[2] - self.gravity
         if last is None or dt <= 0.0:
-            return self.mounts[0].mass * base, self.mounts[1].mass * base
+            return _cored(self.mounts[0].mass * base), _cored(self.mounts[1].mass * base)
         return (
-            self.mounts[0].mass * (base + (left - last[0]) / dt),
-            self.mounts[1].mass * (base + (right - last[1]) / dt),
+            _cored(self.mounts[0].mass * (base + (left - last[0]) / dt)),
+            _cored(self.mounts[1].mass * (base + (right - last[1]) / dt)),
         )
+
+
+_CORE = 2.0 * INERTIA_NOISE
+
+
+def _cored(force: float) -> float:
+    """``force`` (N) soft-thresholded at twice :data:`INERTIA_NOISE`."""
+    if force > _CORE:
+        return force - _CORE
+    if force < -_CORE:
+        return force + _CORE
+    return 0.0

@@ -49,7 +49,7 @@ from rtgait.estimation.anchors import FootAnchors, Pose
 from rtgait.estimation.attitude_filter import DEFAULT_ATTITUDE_CUTOFF, AttitudeFilter
 from rtgait.estimation.contact_point import rocking_correction
 from rtgait.estimation.feet import FeetFromWrenches
-from rtgait.estimation.foot_inertia import INERTIA_NOISE, FootInertia
+from rtgait.estimation.foot_inertia import FootInertia
 from rtgait.estimation.joint_friction import JointFriction
 from rtgait.estimation.kinematics import RobotKinematics
 from rtgait.estimation.landing_gate import (
@@ -116,9 +116,7 @@ class KinematicInertialEstimator:
         joint_friction: with ``"torques"``, the joints' identified friction, which the measured torques carry and
             the links do not get (:mod:`rtgait.estimation.torque_wrenches`, "Friction"); ``None``: none.
         foot_inertia: with ``"sensors"``, the load detection reads the ground's force with the inertia of the foot
-            below each sensor removed (:mod:`rtgait.estimation.foot_inertia`), and its thresholds are the
-            ground-truth estimator's widened by twice that removal's noise each way (25 + 5 and 12.5 - 5 N on Talos)
-            unless given; ``False``: the sensors' force as it is, the ground-truth estimator's thresholds.
+            below each sensor removed (:mod:`rtgait.estimation.foot_inertia`); ``False``: the sensors' force as it is.
         sensor_zero_time: with ``"sensors"``, the airborne time (s) over which each foot sensor's zero is learnt
             while its foot is in the air (:mod:`rtgait.estimation.sensor_zero`); ``None``: the readings as they are.
     """
@@ -181,14 +179,6 @@ class KinematicInertialEstimator:
         # The release force is the ground-truth estimator's by default (half its landing force), from either source:
         # the quasi-static estimate of an unloading stance leg is as good as a sensor's; only a swinging leg's errs.
         release = 0.5 * DEFAULT_LANDING_FRACTION * weight if release_force is None else float(release_force)
-        if wrenches == "sensors" and foot_inertia:
-            # The inertia's difference adds its noise to the force the detection reads: the band between the
-            # thresholds is widened by twice its deviation each way, so that a foot resting with a force inside the
-            # band keeps its state as the truth's does (foot_inertia).
-            if landing_force is None:
-                landing += 2.0 * INERTIA_NOISE
-            if release_force is None:
-                release = max(0.0, release - 2.0 * INERTIA_NOISE)
         release = min(release, landing)
         self.load = LoadHysteresis(landing, release, min_unloaded_time, sustain_time)
         self.landing_clearance = float(landing_clearance)
