@@ -19,7 +19,9 @@ Each tick, with the base frame's kinematics (:class:`~rtgait.estimation.kinemati
    do not turn; ``yaw="imu"`` keeps the IMU's yaw, turned once at the start into the world frame. The gyro measures
    the IMU's body, so the base's angular velocity is ``R_BI w_I`` less the IMU's turn relative to the base.
 2. **Feet wrenches.** The ground's wrench on each sole (:mod:`rtgait.estimation.sole_wrenches`): from the foot
-   force sensors when the readings have them, else from the legs' joint torques and inverse dynamics, low-passed
+   force sensors when the readings have them, less each sensor's zero learnt with its foot in the air
+   (:mod:`rtgait.estimation.sensor_zero`; the load detection reads their vertical force with the foot's inertia
+   taken out, :mod:`rtgait.estimation.foot_inertia`), else from the legs' joint torques and inverse dynamics, low-passed
    (:mod:`rtgait.estimation.torque_wrenches`); from joint torques, a foot the load detection has in the air is
    reported without load (what is left of a swinging leg's wrench is the estimate's error).
 3. **Base position.** ``p = sum_i w_i (a_i - R p_i)`` over the feet anchors ``a_i``, weighted by the feet's vertical
