@@ -26,7 +26,7 @@ sensors likewise.
 
 from __future__ import annotations
 
-from rtgait.interface.body_kinematics import BodyKinematics, ForceSensorMount
+from rtgait.interface.body_kinematics import BodyKinematics, ForceSensorMount, FrameMotion
 
 __all__ = ["INERTIA_NOISE", "FootInertia"]
 
@@ -72,19 +72,10 @@ class FootInertia:
         ox, oy, oz = kin.imu.position
         ovx, ovy, ovz = kin.imu.velocity
         wx, wy, wz = w
-        velocities = []
-        for sole, mount in ((kin.left_sole, self.mounts[0]), (kin.right_sole, self.mounts[1])):
-            cx, cy, cz = mount.com
-            m0, m1, m2, m3, m4, m5, m6, m7, m8 = sole.rotation
-            # The foot's centre relative to the sole origin, base frame, and its velocity from the sole's turn.
-            rx, ry, rz = m0 * cx + m1 * cy + m2 * cz, m3 * cx + m4 * cy + m5 * cz, m6 * cx + m7 * cy + m8 * cz
-            (px, py, pz), (vx, vy, vz), (ax, ay, az) = sole.position, sole.velocity, sole.angular_velocity
-            dx, dy, dz = px + rx - ox, py + ry - oy, pz + rz - oz
-            ex = vx + (ay * rz - az * ry) - ovx + (wy * dz - wz * dy)
-            ey = vy + (az * rx - ax * rz) - ovy + (wz * dx - wx * dz)
-            ez = vz + (ax * ry - ay * rx) - ovz + (wx * dy - wy * dx)
-            velocities.append(ux * ex + uy * ey + uz * ez)
-        left, right = velocities
+        left = self._vertical_velocity(kin.left_sole, self.mounts[0].com, ux, uy, uz, ox, oy, oz, ovx, ovy, ovz,
+                                       wx, wy, wz)  # fmt: skip
+        right = self._vertical_velocity(kin.right_sole, self.mounts[1].com, ux, uy, uz, ox, oy, oz, ovx, ovy, ovz,
+                                        wx, wy, wz)  # fmt: skip
         last = self._last
         self._last = (left, right)
         # The IMU's vertical acceleration, a_I,z = (R f_I)_z - g.
@@ -95,6 +86,25 @@ class FootInertia:
             _cored(self.mounts[0].mass * (base + (left - last[0]) / dt)),
             _cored(self.mounts[1].mass * (base + (right - last[1]) / dt)),
         )
+
+    @staticmethod
+    def _vertical_velocity(
+        sole: FrameMotion, com: tuple[float, float, float], ux: float, uy: float, uz: float, ox: float, oy: float,
+        oz: float, ovx: float, ovy: float, ovz: float, wx: float, wy: float, wz: float,
+    ) -> float:  # fmt: skip
+        """The world-vertical velocity (m/s) of the foot's centre ``com`` (sole frame) relative to the IMU, ``up . (w
+        x d + d')``, from the sole's motion, the IMU's position and velocity and the base's angular velocity (base
+        frame)."""
+        cx, cy, cz = com
+        m0, m1, m2, m3, m4, m5, m6, m7, m8 = sole.rotation
+        # The foot's centre relative to the sole origin, base frame, and its velocity from the sole's turn.
+        rx, ry, rz = m0 * cx + m1 * cy + m2 * cz, m3 * cx + m4 * cy + m5 * cz, m6 * cx + m7 * cy + m8 * cz
+        (px, py, pz), (vx, vy, vz), (ax, ay, az) = sole.position, sole.velocity, sole.angular_velocity
+        dx, dy, dz = px + rx - ox, py + ry - oy, pz + rz - oz
+        ex = vx + (ay * rz - az * ry) - ovx + (wy * dz - wz * dy)
+        ey = vy + (az * rx - ax * rz) - ovy + (wz * dx - wx * dz)
+        ez = vz + (ax * ry - ay * rx) - ovz + (wx * dy - wy * dx)
+        return ux * ex + uy * ey + uz * ez
 
 
 _CORE = 2.0 * INERTIA_NOISE

@@ -375,15 +375,20 @@ class KinematicInertialEstimator:
                 right = _new_tuple(FootState, (_ZERO3, _ZERO3, 0.0, _NAN2, _NAN2, *right[5:10], 0))
         self._loaded = (left.loaded, right.loaded)
         if torques is None and zero is not None:  # a foot in the air reads its sensor's zero (sensor_zero)
-            air_time = self.load.air_time
-            if self._inertia is not None:  # less the foot's vertical inertia (sole frame): an unbiased mean
-                il, ir = inertia_left, inertia_right
-                raw_left = (raw_left[0] + il * r_left[6], raw_left[1] + il * r_left[7], raw_left[2] + il * r_left[8],
-                            *raw_left[3:])  # fmt: skip
-                raw_right = (raw_right[0] + ir * r_right[6], raw_right[1] + ir * r_right[7],
-                             raw_right[2] + ir * r_right[8], *raw_right[3:])  # fmt: skip
-            zero.learn(0, raw_left, dt, air_time(0, t))
-            zero.learn(1, raw_right, dt, air_time(1, t))
+            settle, air_time = zero.settle_time, self.load.air_time
+            inertia = self._inertia
+            if air_time(0, t) >= settle:
+                if inertia is not None:  # less the foot's vertical inertia (sole frame): an unbiased mean
+                    il = inertia_left
+                    raw_left = (raw_left[0] + il * r_left[6], raw_left[1] + il * r_left[7],
+                                raw_left[2] + il * r_left[8], *raw_left[3:])  # fmt: skip
+                zero.learn(0, raw_left, dt, math.inf)
+            if air_time(1, t) >= settle:
+                if inertia is not None:
+                    ir = inertia_right
+                    raw_right = (raw_right[0] + ir * r_right[6], raw_right[1] + ir * r_right[7],
+                                 raw_right[2] + ir * r_right[8], *raw_right[3:])  # fmt: skip
+                zero.learn(1, raw_right, dt, math.inf)
         landings = _NO_LANDINGS
         if left_landing is not None or right_landing is not None:
             landings = tuple(landing for landing in (left_landing, right_landing) if landing is not None)

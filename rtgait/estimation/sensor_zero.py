@@ -67,5 +67,8 @@ class AirborneZero:
         if dt <= 0.0 or air_time < self.settle_time:
             return
         a = dt / self.time_constant if dt < self.time_constant else 1.0
-        b = self.zeros[index]
-        self.zeros[index] = tuple(bi + a * (wi - bi) for bi, wi in zip(b, wrench, strict=True))  # type: ignore[assignment]
+        b0, b1, b2, b3, b4, b5 = self.zeros[index]
+        w0, w1, w2, w3, w4, w5 = wrench
+        # Written out: a generator over the six components costs more than their arithmetic.
+        self.zeros[index] = (b0 + a * (w0 - b0), b1 + a * (w1 - b1), b2 + a * (w2 - b2), b3 + a * (w3 - b3),
+                             b4 + a * (w4 - b4), b5 + a * (w5 - b5))  # fmt: skip
