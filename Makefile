@@ -34,9 +34,10 @@ demo: $(STAMP)
 	@echo "out/pushes/pushes.png is the largest push Talos survives in 4 directions at mid single support"
 	@echo "(a short run of benchmarks/pushes.py, bisected to 4 N s)."
 
+# The tests run in one process per core (pytest-xdist), at most four: each holds its own robot models (some 0.5 GB).
 test: $(STAMP)
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --maxprocesses 4
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

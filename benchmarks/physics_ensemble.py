@@ -7,7 +7,10 @@ in MuJoCo by :func:`rtgait.io.sim_run.simulate` under every setting of a fixed, 
 * physics step 1 ms or 0.5 ms (half the settings each; the control period stays the robot's),
 * contact time constant 2-10 ms and damping ratio 1-2 (MuJoCo's ``solref``),
 * sole friction 0.6-1.0,
-* every joint's armature, and every joint's kp and kd together, at 50-150 % of the robot's defaults.
+* every joint's armature, and every joint's kp and kd together, at 50-150 % of the drives' gains (``--gains``:
+  ``stiff``, the derived stiff servos, by default; ``robot``, the real robot's own gains, with the feed-forward
+  torques of whole-body inverse dynamics; ``--motor-model`` adds the motors' torque-speed envelopes, friction and the
+  command a control period late).
 
 The continuous parameters are a Latin hypercube sample (each parameter's range cut into as many equal strata as
 there are settings, one value drawn in each stratum, the strata shuffled independently per parameter), so even a
@@ -28,7 +31,8 @@ time of the first tip-over (``t``) or of the fall (``f``) on the walk's clock (s
 ``open-loop`` acts on the plan alone either way).
 
 Usage: ``python benchmarks/physics_ensemble.py [--json] [--per-setting] [--robot R] [--controller C] [--state S]
-[--quick] [--settings N] [--seed S] [--refine N] [--workers W] [--cases fig4,fig6,...]``
+[--gains stiff|robot] [--motor-model] [--quick] [--settings N] [--seed S] [--refine N] [--workers W]
+[--cases fig4,fig6,...]``
 """
 
 from __future__ import annotations
@@ -65,6 +69,15 @@ PHYSICS_DTS = (0.001, 0.0005)
 """Physics steps of the ensemble (s), each used by half of the settings."""
 
 
+@dataclasses.dataclass(frozen=True)
+class Drives:
+    """How the joints are driven in every setting (:class:`rtgait.sim.config.SimConfig` fields): the gain set that
+    ``gain_scale`` multiplies, and whether the motors have their envelopes, friction and delay."""
+
+    gains: str = "stiff"
+    motor_model: bool = False
+
+
 def ensemble(n: int, seed: int) -> list[dict[str, float]]:
     """``n`` physics settings: a Latin hypercube sample of :data:`RANGES`, physics steps alternating over
     :data:`PHYSICS_DTS` (see the module docstring). The same ``n`` and ``seed`` give the same settings."""
@@ -99,16 +112,17 @@ def _robot(name: str) -> Any:
 
 
 @functools.lru_cache(maxsize=4)
-def _sim(robot_name: str, setting: tuple[tuple[str, float], ...]) -> Any:
-    """The MuJoCo model of one setting, kept in the worker for the setting's other cases."""
+def _sim(robot_name: str, setting: tuple[tuple[str, Any], ...]) -> Any:
+    """The MuJoCo model of one setting (its physics and drives), kept in the worker for the setting's other cases."""
     from rtgait.sim.model import SimConfig, build_sim_model
 
     return build_sim_model(_robot(robot_name), SimConfig(meshes=False, **dict(setting)))
 
 
 def run_one(
-    robot_name: str, controller: str, scenario_name: str, index: int, setting: dict[str, float], state: str
-) -> dict:
+    robot_name: str, controller: str, scenario_name: str, index: int, setting: dict[str, float], state: str,
+    drives: Drives | None = None,
+) -> dict:  # fmt: skip
     """Walk one case under one setting, the controller on ``state`` (in a worker process); returns its outcome and a
     few numbers."""
     from rtgait.io.sim_run import mujoco_messages, simulate
@@ -116,7 +130,8 @@ def run_one(
     from rtgait.sim.loop_options import LoopOptions
 
     robot = _robot(robot_name)
-    sim = _sim(robot_name, tuple(sorted(setting.items())))
+    drives = drives or Drives()
+    sim = _sim(robot_name, tuple(sorted({**setting, **dataclasses.asdict(drives)}.items())))
     scenario = load_scenario(scenario_name)
     began = time.perf_counter()
     with mujoco_messages() as warnings:
@@ -140,11 +155,13 @@ def run_one(
 
 def run_ensemble(
     robot: str, controller: str, cases: tuple[str, ...], settings: list[dict[str, float]], workers: int, quiet: bool,
-    state: str = DEFAULT_STATE,
+    state: str = DEFAULT_STATE, drives: Drives | None = None,
 ) -> list[dict]:  # fmt: skip
-    """Every case under every setting, the controller on ``state``, in ``workers`` processes; progress on stderr
-    unless ``quiet``."""
-    tasks = [(robot, controller, case, i, setting, state) for i, setting in enumerate(settings) for case in cases]
+    """Every case under every setting, the controller on ``state`` and the joints on ``drives`` (default the stiff
+    servos), in ``workers`` processes; progress on stderr unless ``quiet``."""
+    tasks = [
+        (robot, controller, case, i, setting, state, drives) for i, setting in enumerate(settings) for case in cases
+    ]
     runs: list[dict] = []
     began = time.perf_counter()
     with ProcessPoolExecutor(max_workers=workers) as pool:
@@ -207,7 +224,12 @@ def main() -> None:
     parser.add_argument("--cases", default=",".join(CASES), help="comma-separated cases (default: the paper's four)")
     parser.add_argument("--state", choices=STATE_SOURCES, default=DEFAULT_STATE,
                         help=f"what the controller acts on (default {DEFAULT_STATE})")  # fmt: skip
+    parser.add_argument("--gains", choices=("stiff", "robot"), default="stiff",
+                        help="the gains scaled: stiff (default) or robot, with feed-forward torques")  # fmt: skip
+    parser.add_argument("--motor-model", action="store_true",
+                        help="the motors' torque-speed envelopes, friction and one period of delay")  # fmt: skip
     args = parser.parse_args()
+    drives = Drives(gains=args.gains, motor_model=args.motor_model)
     cases = tuple(case for case in args.cases.split(",") if case)
     unknown = [case for case in cases if case not in EXPECTED]
     if unknown:
@@ -219,7 +241,9 @@ def main() -> None:
     for setting in settings:
         setting["physics_dt"] /= args.refine
     began = time.perf_counter()
-    runs = run_ensemble(args.robot, args.controller, cases, settings, args.workers, quiet=False, state=args.state)
+    runs = run_ensemble(
+        args.robot, args.controller, cases, settings, args.workers, quiet=False, state=args.state, drives=drives
+    )
     wall = time.perf_counter() - began
     table = summarize(args.robot, args.controller, cases, runs)
     if args.json:
@@ -228,14 +252,16 @@ def main() -> None:
             "seed": args.seed,
             "refine": args.refine,
             "state": args.state,
+            "drives": dataclasses.asdict(drives),
             "ensemble": settings,
             "runs": runs,
             "wall_time": wall,
         }
         print(json.dumps(report))
         return
-    print(f"{args.robot}, {args.controller} on the {args.state} state: {n} physics settings (seed {args.seed}), "
-          f"{len(runs)} runs in {wall:.0f} s")  # fmt: skip
+    motors = " with the motor model" if drives.motor_model else ""
+    print(f"{args.robot}, {args.controller} on the {args.state} state, {drives.gains} gains{motors}: {n} physics "
+          f"settings (seed {args.seed}), {len(runs)} runs in {wall:.0f} s")  # fmt: skip
     for name, (low, high) in RANGES.items():
         print(f"  {name}: {low:g} to {high:g}")
     print(f"  physics_dt: {', '.join(f'{dt / args.refine:g}' for dt in PHYSICS_DTS)} s")

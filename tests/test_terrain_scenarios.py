@@ -114,8 +114,9 @@ def test_summary_reports_the_terrain_and_exported_footholds_keep_their_heights(t
 
 
 def test_physics_refuses_stairs_beyond_the_robot_s_legs_before_simulating(tmp_path, capsys):
-    # The scene builds every terrain; going down G1's 10 cm stairs, its swing leg, folded under the hip as it passes
-    # the stance foot, runs out of ankle range (docs/results.md).
+    # The scene builds every terrain; going down G1's 10 cm stairs, the rear foot flat on the upper tread runs out of
+    # ankle dorsiflexion in the double support of step 2, and the swing leg, folded as it passes the stance foot, out
+    # of ankle roll from step 3 on (docs/results.md).
     assert main(["simulate", "stairs-down-g1", "--robot", "g1", "--out", str(tmp_path / "sim")]) == 2
     error = capsys.readouterr().err
     assert "step 2" in error and "out of reach for g1" in error

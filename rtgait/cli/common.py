@@ -4,9 +4,10 @@ messages, progress bars, loading a robot, checks made before a long run."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
@@ -68,12 +69,35 @@ def require_extras(figures: bool, html: bool) -> None:
             raise RunError("--html needs meshcat: pip install 'rtgait[viz]'") from None
 
 
-def load_robot(name: str) -> RobotModel:
+def load_robot(name: str, scenario: Scenario | None = None) -> RobotModel:
+    """The robot ``name`` (built-in, or a description file), as it walks ``scenario`` when one is given: with the
+    COG height and toe release the scenario's ``[walking.<robot>]`` asks of it
+    (:func:`~rtgait.robot.motion.walking_robot`)."""
     try:
         from rtgait.robot.model import RobotModel
+        from rtgait.robot.motion import walking_robot
     except ImportError:
         raise RunError("--robot needs Pinocchio and example-robot-data: pip install 'rtgait[robot]'") from None
-    return RobotModel.load(name)
+    robot = RobotModel.load(name)
+    return robot if scenario is None else walking_robot(robot, scenario)
+
+
+@contextlib.contextmanager
+def asked_walking(scenario: Scenario, robot: RobotModel) -> Iterator[None]:
+    """Run the reach check of ``robot`` on ``scenario``: a refusal of a walk at the COG height the scenario asks of
+    the robot names that setting, the likely cause."""
+    from rtgait.robot.motion import UnreachableError
+    from rtgait.scenario.walking_table import walking_for
+
+    try:
+        yield
+    except UnreachableError as error:
+        entry = walking_for(scenario.walking, robot.name)
+        if entry is None or entry.cog_height is None:
+            raise
+        raise UnreachableError(
+            f"{error}, with the COG at the scenario's walking.{robot.name}.cog_height = {entry.cog_height:g} m"
+        ) from None
 
 
 def robot_walk(scenario: Scenario, robot: RobotModel) -> Scenario:

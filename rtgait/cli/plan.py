@@ -15,6 +15,7 @@ from rtgait.cli.common import (
     PROG,
     add_format_option,
     add_replay_background_option,
+    asked_walking,
     load_robot,
     out_folder,
     progress_printer,
@@ -138,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     _check_export(args.export_footsteps)
     robot = None
     if robot_name is not None:
-        robot = load_robot(robot_name)
+        robot = load_robot(robot_name, scenario)
         scenario = robot_walk(scenario, robot)
     result, wall_time, own = _run(scenario, args.quiet)
     # With obstacles, the walk under each of the paper's connection modes, for the figure like its Fig. 1.
@@ -148,7 +149,8 @@ def run(args: argparse.Namespace) -> int:
         from rtgait.robot.pipeline import run_on_robot
 
         # The robot's check: an IK error beyond its limit anywhere (UnreachableError) refuses the walk.
-        robot_run = run_on_robot(robot, result, scenario.cog_height, scenario.gravity, args.compensate)
+        with asked_walking(scenario, robot):
+            robot_run = run_on_robot(robot, result, scenario.cog_height, scenario.gravity, args.compensate)
     summary = write_plan_outputs(
         result, scenario, out, figures=figures, robot_run=robot_run, html=args.html, fmt=fmt,
         background=args.replay_background, obstacle_runs=walks,

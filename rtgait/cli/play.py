@@ -12,6 +12,7 @@ from rtgait.cli.common import (
     PROG,
     RunError,
     add_state_options,
+    asked_walking,
     check_state_options,
     load_robot,
     robot_walk,
@@ -154,7 +155,8 @@ def _live_walk(
     walk = robot_walk(scenario, robot)
     settings, _ = controller_settings(robot.description, scenario, None, ())  # their [control] tables, as simulate
     if not by_command:  # as simulate does: a walk the robot cannot reach is refused before it starts
-        whole_body_motion(robot, planned_walk(scenario, robot))
+        with asked_walking(scenario, robot):
+            whole_body_motion(robot, planned_walk(scenario, robot))
     obstacles = () if by_command else walk.obstacles  # drawn, and stepped around when seen
     terrain = None if by_command or walk.terrain is None else walk.terrain.terrain
     config = SimConfig(gains=gains, sensors=sensors, model_error=model_error)
@@ -185,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
     _requirements(args.screenshot is not None)
     # Every argument and file is checked before the display is: a bad --robot file is bad input (exit 2) with or
     # without a display. Loading a robot takes well under a second.
-    robot = load_robot(args.robot)
+    robot = load_robot(args.robot, scenario)
     from rtgait.viz.live_view import DisplayError, check_display, play
 
     try:

@@ -16,6 +16,7 @@ from rtgait.cli.common import (
     add_format_option,
     add_replay_background_option,
     add_state_options,
+    asked_walking,
     check_state_options,
     load_robot,
     out_folder,
@@ -38,6 +39,7 @@ from rtgait.estimation.estimator import DEFAULT_STATE
 from rtgait.outputs import staged_outputs
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
+from rtgait.scenario.walking_table import walking_for
 from rtgait.viz.walk_title import velocity_commands, velocity_facts, walk_title
 
 if TYPE_CHECKING:
@@ -190,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
         raise RunError("simulate needs MuJoCo and Pinocchio: pip install 'rtgait[robot,sim]'") from None
     state, sensors, model_error = state_settings(args)
     pushes = _check_simulation(args, scenario, velocity, out)
-    robot = load_robot(args.robot)
+    robot = load_robot(args.robot, scenario)
     walk = robot_walk(scenario, robot)
     options, chosen = controller_settings(robot.description, scenario, args.control, control_pairs)
     config = dataclasses.replace(
@@ -205,10 +207,13 @@ def run(args: argparse.Namespace) -> int:
             raise ScenarioError(f"--push at {push.start:g} s: {error}") from None
     # The check of `plan --robot`, on the walk the simulation will ask for: a robot that cannot reach it is refused.
     for command in [velocity] if not schedule else [v for _, *v in schedule]:  # each command's walk must be reachable
-        whole_body_motion(robot, planned_walk(scenario, robot, command))
+        with asked_walking(scenario, robot):
+            whole_body_motion(robot, planned_walk(scenario, robot, command))
     show = not args.quiet and sys.stderr.isatty()
     progress = progress_printer(sys.stderr, f"{PROG}: simulating {scenario.name}") if show else None
-    extra: dict[str, Any] = {"scenario": scenario.name, "connection": scenario.connection, "walk": _walk_facts(walk)}
+    extra: dict[str, Any] = {
+        "scenario": scenario.name, "connection": scenario.connection, "walk": _walk_facts(walk, robot)
+    }  # fmt: skip
     if chosen:
         extra["control"] = chosen
     if walk.terrain is not None:  # for the summary and the log, so that `rtgait plot` draws the terrain again
@@ -244,15 +249,22 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _walk_facts(walk: Scenario) -> dict[str, Any]:
-    """The walk's COG height, step width and sole as the robot gives them, for the summary."""
+def _walk_facts(walk: Scenario, robot: RobotModel) -> dict[str, Any]:
+    """The walk's COG height, step width and sole as the robot gives them, for the summary; the values the
+    scenario's ``[walking.<robot>]`` asks instead, named as such."""
     sole = walk.sole
-    return {
+    facts: dict[str, Any] = {
         "cog_height": walk.cog_height,
         "step_width": walk.step_width,
         "sole": {"front": sole.front, "back": sole.back, "inner": sole.inner, "outer": sole.outer},
         "source": "from the robot description (the scenario's own are not used)",
     }
+    asked = walking_for(walk.walking, robot.name)
+    if asked is not None:
+        facts["toe_release"] = robot.description.toe_release
+        keys = " and ".join(key for key in ("cog_height", "toe_release") if getattr(asked, key) is not None)
+        facts["source"] = f"from the robot description, {keys} from the scenario's [walking.{robot.name}]"
+    return facts
 
 
 def _physics(

@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING
 
 from rtgait.control.external_force import ExternalForce, shifted_measurement
 from rtgait.control.foot_control import FootForceControl, FootOffsets, split_zmp
+from rtgait.control.foot_frame import feet_offset, translated
 from rtgait.control.landings import FootLandings
 from rtgait.control.level_switch import switch_level
 from rtgait.control.settings import (
@@ -147,6 +148,7 @@ class WalkingController:
         # The feet's landings: classification, re-anchoring, holds, heights and the IK targets' blends.
         self.foot_landings = FootLandings(planner, options, self.dt, adaptive=level == "adaptive")
         self._landings_update, self._landings_ik = self.foot_landings.update, self.foot_landings.ik_targets  # per tick
+        self._feet_frame = False  # whether the measurement is taken into the feet's frame: set by start()
         self.reset()
 
     def off_level_ground(self) -> None:
@@ -188,10 +190,14 @@ class WalkingController:
             planner.start(t0)
         self._last_error_replan = -math.inf
         self._replans, self._adjustments = planner.replan_count, planner.step_adjustment_count
+        # Off the flat floor the measurement is taken into the feet's frame (foot_frame.py); flat walks as measured.
+        self._feet_frame = self.level == "adaptive" and not all(foot.level for foot in planner.footprints())
 
     # ----- the tick ------------------------------------------------------------------------------------------------
     def tick(self, t: float, measurement: Measurement) -> ControlTargets:
         """The IK targets at ``t`` (s) for this tick's measurement (:class:`~rtgait.estimation.state.Measurement`)."""
+        if self._feet_frame and (last := self.foot_landings.last_ik_targets) is not None:
+            measurement = translated(measurement, *feet_offset(measurement, *last))
         external = self.external
         leaning = external.active
         if leaning:  # plan and feed back in the frame of the unpulled pendulum (external_force.py)

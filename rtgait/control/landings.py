@@ -20,6 +20,8 @@ logged with its kind; in the ``"adaptive"`` level it also acts. Settings (s, m, 
 (:meth:`~rtgait.core.planner.online.OnlinePlanner.touchdown`: re-anchoring and an immediate replan, after which the
 tick's sample is taken again); a re-landing only when it moved ``relanding_tolerance`` (heading: twice that, in rad)
 from where the foot was last anchored. A refused touch-down is logged (``"touchdown-refused"``); the plan stays.
+Off the flat floor the controller hands the landings over in the feet's frame (:mod:`rtgait.control.foot_frame`):
+measured from the standing foot's target, so that a re-anchored foot stays where it touched.
 
 **Heights.** Each foot's target is the plan's ``(x, y, z_plan, yaw)`` with a height offset ``z`` (m) on top:
 
@@ -204,6 +206,11 @@ class FootLandings(FootTargets):
             right = blends[1].apply(t, right)
         self._last_ik = (left, right)
         return left, right
+
+    @property
+    def last_ik_targets(self) -> tuple[Pose, Pose] | None:
+        """The IK's feet targets ``(x, y, z, yaw)`` of the last tick (:meth:`ik_targets`); ``None`` before the first."""
+        return self._last_ik
 
     # ----- phases and landings -------------------------------------------------------------------------------------
     def _enter_phase(self, q: int, support: str, m: Measurement) -> None:

@@ -38,7 +38,7 @@ from rtgait.io.sim_files import (
 )
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.model import RobotModel
-from rtgait.robot.motion import robot_scenario
+from rtgait.robot.motion import robot_scenario, walking_robot
 from rtgait.scenario.scenario import Scenario
 from rtgait.sim.loop import LoopOptions, SimResult
 from rtgait.sim.model import SimConfig, SimModel, build_sim_model
@@ -135,6 +135,7 @@ def simulate(
     check_level(controller)
     if not isinstance(robot, RobotModel):
         robot = RobotModel.load(robot)
+    robot = walking_robot(robot, scenario)  # the COG height and toe release the scenario asks of it, if any
     walk = robot_scenario(scenario, robot)
     base_options = loop_options(push, options)
     for each in base_options.pushes:
@@ -279,6 +280,7 @@ def planned_walk(
     footsteps would not check); a hand-guided walk, whose steps the pull sets only while walking, over its start
     and one step in place: the robot's COG height and stance.
     """
+    robot = walking_robot(robot, scenario)
     walk = robot_scenario(scenario, robot)
     guided = walk.guide is not None and velocity is None
     planner, changes, stop_after = _planner(walk, VelocityCommand() if guided else velocity)

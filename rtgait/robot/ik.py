@@ -25,10 +25,19 @@ by a Cholesky factorisation (LAPACK ``dposv``). ``D`` is a small damping (it kee
 singular legs, knees stretched) plus the tiny posture weight ``mu``, which pulls the joints toward half-sitting
 in whatever freedom the tasks leave.
 
-Joint limits are never left: a step that would cross a limit is solved again with those joints pinned at the
-limit, and the result is clipped. The solver is warm-started from the previous tick; since the targets move by
-millimetres per tick, one iteration leaves errors of micrometres, and more iterations are made (up to
-``max_iterations``) only while an error is above the tolerance.
+Joint limits are never left. With a barrier (``IKWeights.limit > 0``: ``SMOOTH_LIMITS``, for a reference that feeds
+forward torques) they are also approached smoothly: within ``limit_margin`` of a limit ``k d^3 / 3`` (``d`` the depth
+into that band, rad) joins the cost; its gradient ``k d^2`` and curvature ``2 k d``
+grow from zero at the band's edge, so the solution stays continuous in the targets with a continuous rate: a joint
+that the tasks drive toward its limit slows down over the band and the other joints take over the task gradually.
+A hard stop instead (the joint pinned where it would cross, the rest re-solved) moves the other joints in one tick,
+a step in the reference's velocity whose difference is a burst of acceleration in the feed-forward torques. Without
+the barrier (the default), and as its backstop, a step that would cross a limit is solved again with those joints
+pinned at the limit, and the result is clipped.
+
+The solver is warm-started from the previous tick; since the targets move by millimetres per tick, one iteration
+leaves errors of micrometres, and more iterations are made (up to ``max_iterations``) only while an error is above
+the tolerance.
 
 The weights of the tasks and the errors a solution leaves in them are in :mod:`rtgait.robot.ik_terms`; the rotation
 errors of the orientation tasks in :mod:`rtgait.robot.rotation_errors`.
@@ -123,6 +132,16 @@ class WholeBodyIK:
         self._posture = w.posture
         self._max_step2 = max_step * max_step
         self._lower_list, self._upper_list = self._lower.tolist(), self._upper.tolist()
+        if not (math.isfinite(w.limit) and w.limit >= 0.0):
+            raise ValueError(f"the limit barrier's curvature must be >= 0 per rad^2, got {w.limit}")
+        if not (math.isfinite(w.limit_margin) and w.limit_margin > 0.0):
+            raise ValueError(f"the limit barrier's margin must be > 0 rad, got {w.limit_margin}")
+        # The barrier's band: limit_margin inside each limit, at most half a joint's range (the bands never overlap).
+        margin = np.minimum(w.limit_margin, 0.5 * (self._upper - self._lower))
+        self._band_lower, self._band_upper = self._lower + margin, self._upper - margin
+        self._band_lower_list, self._band_upper_list = self._band_lower.tolist(), self._band_upper.tolist()
+        self._barrier_k = w.limit / (2.0 * margin)  # k: curvature 2 k d reaches `limit` at the limit (d = margin)
+        self._barrier = w.limit > 0.0
         J = self._J = np.zeros((_N_TASKS, nv))
         # Views of J's task blocks, written in place at each evaluation.
         self._j_blocks = (J[0:3], J[3:9], J[9:15], J[15:18], J[18:21, 3:6])
@@ -207,6 +226,8 @@ class WholeBodyIK:
         g = _dot(JtW, _fromiter(self._e, np.float64, _N_TASKS))
         q_joints = q[7:]
         g[6:] += self._pull_tail - self._posture * q_joints
+        if self._barrier and _outside(q_joints.tolist(), self._band_lower_list, self._band_upper_list):
+            self._add_barrier(q_joints, H, g)
         _, dq, info = dposv(H, g)
         if info != 0:  # pragma: no cover - H is symmetric positive definite by construction (damping > 0)
             raise np.linalg.LinAlgError(f"the IK normal equations are not positive definite (LAPACK info {info})")
@@ -230,6 +251,21 @@ class WholeBodyIK:
             # limit to about 1e-6 of the step, and clipping removes that residue.
             np.clip(q_new[7:], self._lower, self._upper, out=q_new[7:])
         return q_new
+
+    def _add_barrier(self, q_joints: np.ndarray, H: np.ndarray, g: np.ndarray) -> None:
+        """Add the Newton terms of the joint-limit barrier ``k d^3 / 3`` to ``H`` and ``g`` (module docstring).
+
+        ``d`` is the depth into the band below the upper limit (cost gradient ``+k d^2``) or above the lower one
+        (``-k d^2``); ``g`` is the negative gradient, ``H`` gets the curvature ``2 k d``.
+        """
+        above = q_joints - self._band_upper
+        below = self._band_lower - q_joints
+        depth = np.maximum(np.maximum(above, below), 0.0)
+        inside = np.flatnonzero(depth)
+        d, k = depth[inside], self._barrier_k[inside]
+        rows = inside + 6
+        H[rows, rows] += 2.0 * k * d
+        g[rows] -= np.where(above[inside] > 0.0, 1.0, -1.0) * k * d * d
 
     def _pinned_step(self, q: np.ndarray, joints: np.ndarray, H: np.ndarray, g: np.ndarray) -> np.ndarray:
         """The step re-solved with every joint that would cross a limit pinned at that limit.

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-__all__ = ["IKErrors", "IKWeights"]
+__all__ = ["SMOOTH_LIMITS", "IKErrors", "IKWeights"]
 
 
 class IKErrors(NamedTuple):
@@ -58,6 +58,13 @@ class IKWeights(NamedTuple):
         pelvis: per rad^2.
         damping: on every velocity coordinate (m^2 or rad^2 per unit step).
         posture: pull of the joints toward half-sitting (per rad^2).
+        limit: curvature of the joint-limit barrier at the limit (per rad^2); 0 (default): no barrier, the joints
+            reach their limits exactly and are pinned there.
+        limit_margin: depth of the barrier's band inside each limit (rad).
+
+    The barrier (:class:`~rtgait.robot.ik.WholeBodyIK`) costs ``k d^3 / 3`` for a joint ``d`` rad inside the band,
+    ``k = limit / (2 limit_margin)``: its gradient and curvature start at zero at the band's edge, so that the
+    solution, and the velocity differenced from it, stay continuous as a joint nears its limit (:data:`SMOOTH_LIMITS`).
     """
 
     cog: float = 1.0
@@ -67,3 +74,17 @@ class IKWeights(NamedTuple):
     pelvis: float = 0.01
     damping: float = 1e-6
     posture: float = 1e-8
+    limit: float = 0.0
+    limit_margin: float = 0.05
+
+
+SMOOTH_LIMITS = IKWeights(limit=0.1, limit_margin=0.05)
+"""The weights for a reference that is differenced twice, into the accelerations of feed-forward torques: the
+default ones with the joint-limit barrier. A joint held off its limit hands its share of the tasks to the others,
+and the one that gives way is the softest task, the pelvis's orientation (weight 0.01, the waist keeping the torso
+upright); a barrier much stiffer than that turns within a fraction of its band, a step in the rate again (at 10 per
+rad^2 G1's hip roll's rate changed sign in one tick on the planned fig7), so its curvature at the limit is ten
+times the pelvis's weight. Its band, 0.05 rad, is crossed in 50 to 100 ms at a walking joint's 0.5 to 1 rad/s, ten
+to twenty times the rates' low-pass (``rtgait.robot.motion_rates``). The price: where a reachable walk takes a joint
+into the band the tasks are met less exactly (G1's planned fig8, ``benchmarks/ik.py``: the COG within 0.13 mm
+instead of 0.16 um; its planned fig7 within 3 mm)."""

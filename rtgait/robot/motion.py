@@ -24,6 +24,7 @@ from rtgait.robot.description import RobotError
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import BASE_COLUMNS, RobotModel
 from rtgait.scenario.scenario import Scenario
+from rtgait.scenario.walking_table import walking_for
 
 __all__ = [
     "ERROR_FIELDS",
@@ -32,6 +33,7 @@ __all__ = [
     "RobotWalk",
     "UnreachableError",
     "robot_scenario",
+    "walking_robot",
     "whole_body_motion",
 ]
 
@@ -147,8 +149,30 @@ class RobotWalk(Scenario):
         return config if self.velocity_limits is None else self.velocity_limits.apply(config)
 
 
+def walking_robot(robot: RobotModel, scenario: Scenario) -> RobotModel:
+    """``robot`` as it walks ``scenario``: its description's ``walking.cog_height`` and ``walking.toe_release``
+    replaced by those the scenario's ``[walking.<name>]`` table asks of it (:mod:`rtgait.scenario.walking_table`).
+
+    ``robot`` itself when the scenario asks nothing of it or asks its own values, so that a model built for the
+    returned robot (a MuJoCo scene) is built for ``robot`` too, and applying it twice changes nothing.
+    """
+    entry = walking_for(scenario.walking, robot.name)
+    if entry is None:
+        return robot
+    description = robot.description
+    asked = {
+        key: value
+        for key, value in (("cog_height", entry.cog_height), ("toe_release", entry.toe_release))
+        if value is not None and value != getattr(description, key)
+    }
+    if not asked:
+        return robot
+    return dataclasses.replace(robot, description=dataclasses.replace(description, **asked))
+
+
 def robot_scenario(scenario: Scenario, robot: RobotModel) -> RobotWalk:
-    """``scenario`` walked by ``robot``: its nominal COG height, its step width at half-sitting, its sole and, when
+    """``scenario`` walked by ``robot``: its nominal COG height (or the one the scenario's ``[walking.<name>]`` asks
+    of it, :func:`walking_robot`), its step width at half-sitting, its sole and, when
     its description has a ``[velocity]`` table, its bounds on walks by velocity command (:class:`RobotWalk`).
 
     Raises:
@@ -164,7 +188,8 @@ def robot_scenario(scenario: Scenario, robot: RobotModel) -> RobotWalk:
                 f"({robot.step_width:.4f} m): it is the narrowest stance a sideways walk closes to"
             )
     values = {f.name: getattr(scenario, f.name) for f in dataclasses.fields(Scenario)}
-    values.update(cog_height=robot.description.cog_height, step_width=robot.step_width, sole=robot.description.sole)
+    cog_height = walking_robot(robot, scenario).description.cog_height
+    values.update(cog_height=cog_height, step_width=robot.step_width, sole=robot.description.sole)
     return RobotWalk(**values, velocity_limits=limits)
 
 

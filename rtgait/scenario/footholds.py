@@ -117,7 +117,7 @@ def parse_footstep_plan(data: dict[str, Any], source: str = "") -> Scenario:
         data,
         "",
         ("name", "connection", "robot", "timing", "footstep"),
-        ("description", "auto_margin", "control", "walk", "obstacle", "terrain"),
+        ("description", "auto_margin", "control", "walk", "obstacle", "terrain", "walking"),
     )
     common = parse_common(data)
     walk = _FILES.table(data.get("walk", {}), "walk")
@@ -181,6 +181,9 @@ def footstep_plan_text(scenario: Scenario, footprints: Sequence[Footstep], name:
     lines += [f"dt = {scenario.dt!r}", f"horizon_steps = {scenario.horizon_steps}"]
     lines += [f"{key} = {getattr(t, key)!r}" for key in ("start", "end", "settle")]
     lines += ["", "[walk]", f"step_width = {scenario.step_width!r}", f"step_height = {scenario.step_height!r}"]
+    for entry in scenario.walking:  # what the walk asks of a named robot, kept with its footholds
+        lines += ["", f"[walking.{entry.robot}]"]
+        lines += [f"{key} = {getattr(entry, key)!r}" for key in ("cog_height", "toe_release") if getattr(entry, key)]
     landings = list(footprints)[2:]
     for k, foot in enumerate(landings, start=1):
         lines += ["", "[[footstep]]", f"side = {_toml_string(foot.side)}", f"x = {foot.x!r}", f"y = {foot.y!r}"]

@@ -20,6 +20,8 @@ and are loaded by name; any other file is loaded by path. Its parts, in SI units
   and ``walk.steps`` is the most steps the robot may take;
 * ``[[obstacle]]`` (optional): boxes seen while walking, which the walk steps around (:mod:`rtgait.scenario.obstacles`);
 * ``[terrain]`` (optional): the ground the walk's footsteps are placed on (:mod:`rtgait.scenario.terrain_table`);
+* ``[walking.<robot>]`` (optional): the COG height and toe release this walk asks of that robot, in place of its
+  description's (:mod:`rtgait.scenario.walking_table`);
 * ``[control]`` (optional): the controller's settings for this walk (``docs/cli_and_scenarios.md``, "Controller
   settings"), applied over the robot description's.
 
@@ -79,6 +81,7 @@ from rtgait.scenario.guide_path import GuidePath
 from rtgait.scenario.obstacles import check_seen_within
 from rtgait.scenario.terrain_table import TerrainSpec
 from rtgait.scenario.tomlfile import SettingsPairs, TomlFiles
+from rtgait.scenario.walking_table import RobotWalking
 
 __all__ = [
     "DEFAULT_STEP_HEIGHT",
@@ -151,6 +154,8 @@ class Scenario:
         velocity: the robot's stride limits (``[robot.velocity]``), applied over the planner's defaults; ``None``:
             the defaults.
         terrain: the ``[terrain]`` table (:class:`~rtgait.scenario.terrain_table.TerrainSpec`), or ``None``: flat.
+        walking: the ``[walking.<robot>]`` tables, what this walk asks of a named robot in place of its description's
+            ``[walking]`` values (:mod:`rtgait.scenario.walking_table`); a robot without one walks with its own.
     """
 
     name: str
@@ -178,6 +183,7 @@ class Scenario:
     obstacles: tuple[Obstacle, ...] = ()
     velocity: VelocityLimits | None = None
     terrain: TerrainSpec | None = None
+    walking: tuple[RobotWalking, ...] = ()
 
     def __post_init__(self) -> None:
         # The TOML loader already checks every field with its file path; these checks cover scenarios built in

@@ -43,14 +43,16 @@ from rtgait.scenario.scenario import (
     Scenario,
 )
 from rtgait.scenario.terrain_table import parse_terrain
+from rtgait.scenario.walking_table import parse_walking
 
 __all__ = ["build_scenario", "number", "parse_common", "parse_scenario", "walk_stance"]
 
 
 def parse_common(data: dict[str, Any]) -> dict[str, Any]:
     """The parts a scenario and a footstep plan (:mod:`rtgait.scenario.footholds`) share: ``name``, ``description``,
-    ``connection``, ``auto_margin``, ``[robot]``, ``[timing]``, ``[control]`` and ``[[obstacle]]``, checked
-    (``[control]``'s keys by :mod:`rtgait.control.control_table` when applied), as :class:`Scenario` keywords."""
+    ``connection``, ``auto_margin``, ``[robot]``, ``[timing]``, ``[control]``, ``[[obstacle]]`` and
+    ``[walking.<robot>]``, checked (``[control]``'s keys by :mod:`rtgait.control.control_table` when applied), as
+    :class:`Scenario` keywords."""
     name = _FILES.string(data, "name")
     if not _NAME_PATTERN.fullmatch(name):
         raise ScenarioError(f"name must be letters, digits, '.', '_' or '-' (a folder name), got {name!r}")
@@ -96,10 +98,12 @@ def parse_common(data: dict[str, Any]) -> dict[str, Any]:
     control = _FILES.settings(data["control"], "control") if "control" in data else ()
     velocity = parse_robot_velocity(robot["velocity"]) if "velocity" in robot else None
     obstacles = parse_obstacles(data["obstacle"]) if "obstacle" in data else ()
+    walking = parse_walking(data["walking"]) if "walking" in data else ()
     return {
         "name": name, "description": description, "connection": connection, "auto_margin": auto_margin,
         "cog_height": cog_height, "gravity": gravity, "mass": mass, "sole": sole, "timing": timing, "dt": dt,
         "horizon_steps": horizon_steps, "control": control, "velocity": velocity, "obstacles": obstacles,
+        "walking": walking,
     }  # fmt: skip
 
 
@@ -137,7 +141,7 @@ def parse_scenario(data: dict[str, Any], source: str = "") -> Scenario:
         data,
         "",
         ("name", "connection", "robot", "timing", "walk"),
-        ("description", "guide", "auto_margin", "control", "obstacle", "terrain"),
+        ("description", "guide", "auto_margin", "control", "obstacle", "terrain", "walking"),
     )
     common = parse_common(data)
     connection = common["connection"]

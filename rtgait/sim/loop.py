@@ -67,6 +67,7 @@ from rtgait.core.planner.online import OnlinePlanner
 from rtgait.core.push import Push
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.ik import WholeBodyIK
+from rtgait.robot.ik_terms import SMOOTH_LIMITS
 from rtgait.sim.contact import ContactMonitor, FallLimits, Landings, Pushes
 from rtgait.sim.drive_mode import with_gains
 from rtgait.sim.drive_summary import ComTracking
@@ -139,7 +140,9 @@ class ClosedLoop(LoopReadout):
     ) -> None:
         options = options or LoopOptions()
         robot, model = sim.robot, sim.model
-        ik = ik or WholeBodyIK(robot)
+        if ik is None:
+            # The feed-forward differences the IK's reference twice: keep its rate continuous near joint limits.
+            ik = WholeBodyIK(robot, SMOOTH_LIMITS if options.feeds_forward(sim.config.gains) else None)
         if ik.robot is not robot:
             raise ValueError(f"the IK solver was built for another model of {ik.robot.name!r}, not this simulation's")
         if isinstance(controller, OnlinePlanner):
@@ -241,11 +244,15 @@ class ClosedLoop(LoopReadout):
         # What every tick uses, bound once: a tuple unpacked into locals costs less than a dozen attribute lookups
         # (MuJoCo's arrays of fixed size are views that stay valid).
         robot_, stack = self.robot, self.stack
+        # A feed-forward computed at the sensed state reads the joints; the truth's estimator reads no encoders, so
+        # on the truth it gets the joints' true positions and velocities (robot.py, joint_truth).
+        feed = stack.feedforward
+        joint_truth = robot_.joint_truth if estimator.reads_truth and feed is not None and feed.tracking else None
         self._hot = (
             stack.estimate, stack.control, self._start.tick, robot_.ground_truth, robot_.write, robot_.first_substep,
             robot_.substep, self.contacts, self.landings, self._pushes.update, self._live.update, data, data.qpos,
             data.subtree_com[sim.base_body], data.site_xpos, data.actuator_force, sim.left_sole_site,
-            sim.right_sole_site, sim.substeps, estimator.reads_truth, robot_.read, dt, k0,
+            sim.right_sole_site, sim.substeps, estimator.reads_truth, robot_.read, joint_truth, dt, k0,
             -1 if n_ticks is None else n_ticks,
         )  # fmt: skip
         r = self.record
@@ -295,7 +302,7 @@ class ClosedLoop(LoopReadout):
             raise RuntimeError("the closed loop is over (fallen or at its last tick): make its result()")
         (estimate, control, start, ground_truth, write, first_substep, substep, contacts, landings, pushes, live_push,
          data, qpos, base_com, site_xpos, actuator_force, left_site, right_site, n_sub, estimator_reads_truth, read,
-         dt, k0, n_ticks) = self._hot  # fmt: skip
+         joint_truth, dt, k0, n_ticks) = self._hot  # fmt: skip
         ((pack_planned, planned_bytes, planned_row), (pack_cog, cog_bytes, cog_row), cog, bases, support, torque,
          commanded, replay_qpos, replay_soles, capacity, replay_every, replay_capacity) = self._rows  # fmt: skip
         if self._began is None:
@@ -316,7 +323,7 @@ class ClosedLoop(LoopReadout):
             # With one physics step a period, the last tick's record ran mj_subtreeVel on the state estimated now.
             if estimator_reads_truth:
                 truth = ground_truth(t, self.log is not None)
-                measurement = estimate(None, truth)
+                measurement = estimate(None if joint_truth is None else joint_truth(t), truth)
             else:  # the sensors' readings, stamped on the walk's clock (their sampling time, latency kept)
                 readings = read()
                 measurement = estimate(readings._replace(t=readings.t - (data.time - t)), None)
@@ -411,7 +418,8 @@ class ClosedLoop(LoopReadout):
         walk's clock (their sampling time, latency kept); ``None`` when the safety layer finds a fault."""
         estimate, ground_truth = self.stack.estimate, self.robot.ground_truth
         if self._hot[19]:  # the estimator reads the truth (as step() does)
-            return estimate(None, ground_truth(t, self.log is not None))
+            joint_truth = self._hot[21]
+            return estimate(None if joint_truth is None else joint_truth(t), ground_truth(t, self.log is not None))
         readings = self.robot.read()
         return estimate(readings._replace(t=readings.t - (self.data.time - t)), None)
 

@@ -106,6 +106,16 @@ class SimRobot:
             return self.reader.read(self.data, t)
         return self.reader.read(self.data, t, last[0], velocities, last[1])
 
+    def joint_truth(self, t: float) -> SensorReadings:
+        """The joints' true positions (rad) and velocities (rad/s), of the state :meth:`ground_truth` reads (the one
+        the last physics step started from), stamped ``t`` (s): the encoders' reading without their noise, offsets
+        or latency, and nothing else (no torques, IMU or force sensors). What a feed-forward computed at the sensed
+        state reads when the estimator reads the truth, which has no joints (:mod:`rtgait.stack.measured_motion`)."""
+        layout = self.sensors.layout
+        n, start = layout.joints, layout.start
+        values = self.data.sensordata[start : start + 2 * n].copy()
+        return SensorReadings(t, values[:n], values[n:])
+
     @property
     def last_contacts(self) -> tuple[StepSnapshot, ContactSums] | None:
         """The contacts and sites of the state now, as the last :meth:`first_substep` read and decoded them, when

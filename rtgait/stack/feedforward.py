@@ -34,8 +34,11 @@ the floor with the commanded wrench, and the difference from the motion's accele
 runs at the robot's sensed configuration and velocity (:mod:`rtgait.stack.measured_motion`: the base placed on the
 stance sole as estimated, the joints at their encoders) with the IK's acceleration, instead of at the IK's own
 configuration, so that gravity's torques are those of where the robot is. Torque drive's ``tracking`` adds the base's
-task and the joints' tracking torques: the torques then carry the motion under low drive gains. Without sensed joints
-(the truth's estimator reads no encoders) the tick falls back to the IK's configuration.
+task and the joints' tracking torques: the torques then carry the motion under low drive gains. The truth's estimator
+reads no encoders: on it the simulator passes the joints' true positions and velocities
+(:meth:`~rtgait.sim.robot.SimRobot.joint_truth`). Without sensed joints the tick falls back to the IK's configuration,
+whose gravity torques leave a drive as soft as G1's waist nearly no stiffness (:mod:`rtgait.stack.measured_motion`,
+"Position drive").
 """
 
 from __future__ import annotations

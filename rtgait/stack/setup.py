@@ -9,6 +9,7 @@ from rtgait.control.controller import make_controller
 from rtgait.interface.task_targets import IKTargets
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.ik import WholeBodyIK
+from rtgait.robot.ik_terms import SMOOTH_LIMITS
 from rtgait.stack.estimators import DEFAULT_STATE, StateSource, check_state, make_estimator
 from rtgait.stack.feedforward import FeedForward
 from rtgait.stack.walking_stack import WalkingStack
@@ -72,7 +73,8 @@ def walking_stack(
         level, walk.planner_config(), walk.strides(), walk.sole, robot_info(robot), dt=dt, options=options,
         terrain=walk.placed_on,
     )  # fmt: skip
-    ik = WholeBodyIK(robot)
+    # The feed-forward differences the IK's reference twice: keep its rate continuous near joint limits.
+    ik = WholeBodyIK(robot, SMOOTH_LIMITS if feedforward else None)
     cog, left, right = start_pose(controller.planner)
     q, _ = ik.solve(IKTargets(cog, left, right), robot.q_half_sitting, 200, 1e-9)
     if estimator is None:

@@ -9,7 +9,16 @@ import numpy as np
 import pytest
 
 from rtgait.core.geometry.footsteps import Footstep, SoleRect
-from rtgait.core.geometry.swing import RISE_SHARE, swing_pose, swing_velocity, swing_vertical, up_ramp
+from rtgait.core.geometry.swing import (
+    DESCENT_REACH,
+    DESCENT_RISE,
+    RISE_SHARE,
+    down_stair,
+    swing_pose,
+    swing_velocity,
+    swing_vertical,
+    up_ramp,
+)
 from rtgait.core.geometry.terrain import PIT_DEPTH, Slope, Stairs, Step, SteppingStones, sole_gap, surface
 from rtgait.core.geometry.terrain_walk import TerrainWalkError, check_reach
 
@@ -74,18 +83,26 @@ def test_reach_names_the_step():
 def test_swing_height_ends_on_the_footholds_and_its_rate_is_its_derivative(z0, z1):
     h = 0.05
     start, end = Footstep(0.0, 0.0, 0.0, "left", z=z0), Footstep(0.25, 0.0, 0.0, "left", z=z1)
+    down = down_stair(start, end)
+    assert down == (z1 < z0)
     assert swing_pose(start, end, 0.0, h)[2] == pytest.approx(z0)
     assert swing_pose(start, end, 1.0, h)[2] == pytest.approx(z1)
     assert swing_pose(start, end, 0.5, h)[2] == pytest.approx(max(z0, z1) + h)
     for s in np.linspace(0.01, 0.99, 23):
         d = 1e-6
-        numeric = (swing_vertical(z0, z1, s + d, h)[0] - swing_vertical(z0, z1, s - d, h)[0]) / (2 * d)
-        assert swing_vertical(z0, z1, s, h)[1] == pytest.approx(numeric, abs=1e-5)
+        for stair_down in (False, True):  # both profiles: the rate is the height's derivative
+            numeric = (
+                swing_vertical(z0, z1, s + d, h, stair_down=stair_down)[0]
+                - swing_vertical(z0, z1, s - d, h, stair_down=stair_down)[0]
+            ) / (2 * d)
+            assert swing_vertical(z0, z1, s, h, stair_down=stair_down)[1] == pytest.approx(numeric, abs=1e-5)
+        dz = (swing_pose(start, end, s + d, h)[2] - swing_pose(start, end, s - d, h)[2]) / (2 * d)
+        assert swing_velocity(start, end, s, h, 1.0)[2] == pytest.approx(dz, abs=1e-5)
         dx = (swing_pose(start, end, s + d, h)[0] - swing_pose(start, end, s - d, h)[0]) / (2 * d)
         assert swing_velocity(start, end, s, h, 1.0)[0] == pytest.approx(dx, abs=1e-5)
     for s in (0.0, 1.0):  # lift-off and touch-down at rest
         assert swing_velocity(start, end, s, h, 1.0) == pytest.approx((0.0, 0.0, 0.0, 0.0), abs=1e-12)
-    if z0 != z1:  # the sole holds the top over the middle of the swing
+    if z0 < z1:  # up: the sole holds the top over the middle of the swing
         for s in np.linspace(RISE_SHARE, 1.0 - RISE_SHARE, 5):
             assert swing_pose(start, end, s, h)[2] == pytest.approx(max(z0, z1) + h)
 
@@ -112,3 +129,61 @@ def test_up_a_ramp_the_swing_lifts_off_the_line_between_the_footholds():
     # Onto level ground higher up (the ramp's top) from a ramp foothold: the same; between level footholds: not.
     assert up_ramp(start, Footstep(1.2, 0.1, 0.0, "left", z=0.3))
     assert not up_ramp(Footstep(0.0, 0.1, 0.0, "left"), Footstep(0.4, 0.1, 0.0, "left", z=0.15))
+
+
+def test_down_a_stair_the_swing_moves_forward_at_the_top_then_comes_straight_down():
+    # From the upper tread (z0 = 0) to two treads down: the foot is over its landing by DESCENT_REACH of the swing, h
+    # above the upper tread from DESCENT_RISE on, and only then comes down, vertically.
+    h = 0.05
+    start, end = Footstep(0.24, -0.085, 0.0, "right"), Footstep(0.72, -0.085, 0.0, "right", z=-0.37)
+    for s in np.linspace(DESCENT_RISE, DESCENT_REACH, 7):
+        assert swing_pose(start, end, s, h)[2] == pytest.approx(h)
+    for s in np.linspace(DESCENT_REACH, 1.0, 7):
+        x, y, z, _ = swing_pose(start, end, s, h)
+        assert (x, y) == pytest.approx((end.x, end.y)) and end.z <= z <= h
+    heights = [swing_pose(start, end, s, h)[2] for s in np.linspace(0.0, 1.0, 201)]
+    assert max(heights) == pytest.approx(h)  # never above the clearance over the upper tread
+    # At the lift-off the sole rises about as steeply as it moves forward (10 h (s/sigma)^3 against 10 L (s/R)^3).
+    s = 0.02
+    x, _, z, _ = swing_pose(start, end, s, h)
+    assert 0.7 < z / (x - start.x) < 1.5
+    # A ramp's footholds keep the stair profile (not a stair: tilted), ascents theirs.
+    assert not down_stair(Footstep(0.0, 0.0, 0.0, "left", z=0.1, pitch=0.2), Footstep(0.3, 0.0, 0.0, "left"))
+    assert not down_stair(end, start)
+
+
+@pytest.mark.parametrize(
+    ("riser", "tread", "first_nose", "length", "sole"),
+    [
+        (0.185, 0.24, 0.36, 0.24, SOLE),  # stairs-down-185 (Talos)
+        (0.15, 0.25, 0.375, 0.25, SOLE),  # stairs-down (Talos)
+        (0.10, 0.22, 0.365, 0.22, SoleRect(0.13, 0.06, 0.03, 0.03)),  # stairs-down-g1 (G1)
+    ],
+)
+def test_down_the_built_in_stairs_every_nose_is_cleared_by_the_swing_height(riser, tread, first_nose, length, sole):
+    # The footholds one per tread, mid-tread; each nose is a point (x_n, z_n) on the stairs' profile. Wherever the
+    # swept sole (level, front ahead and back behind its sole point) spans a nose below the tread it left, its
+    # underside is at least the swing height h above it; over the nose of that tread it never cuts in, and is h above
+    # it once risen (s >= DESCENT_RISE).
+    h = 0.05
+    noses = [(first_nose + i * tread, -i * riser) for i in range(6)]
+    xs = [k * length for k in range(8)]  # the scenarios' footholds: one step a tread
+    zs = [-riser * sum(x > xn for xn, _ in noses) for x in xs]
+    assert zs[1] == 0.0 and zs[-1] == -6 * riser
+    for i in range(len(xs) - 2):
+        start = Footstep(xs[i], 0.0, 0.0, "left", z=zs[i])
+        end = Footstep(xs[i + 2], 0.0, 0.0, "left", z=zs[i + 2])
+        assert down_stair(start, end) == (zs[i + 2] < zs[i])
+        if zs[i + 2] == zs[i]:
+            continue
+        below, own, own_risen = np.inf, np.inf, np.inf
+        for s in np.linspace(0.0, 1.0, 2001):
+            x, _, z, _ = swing_pose(start, end, s, h)
+            for xn, zn in noses:
+                if x - sole.back <= xn <= x + sole.front:
+                    if zn < zs[i] - 1e-9:
+                        below = min(below, z - zn)
+                    elif zn == zs[i]:
+                        own = min(own, z - zn)
+                        own_risen = min(own_risen, z - zn) if s >= DESCENT_RISE else own_risen
+        assert below >= h - 1e-9 and own >= 0.0 and own_risen >= h - 1e-9, (i, below, own, own_risen)

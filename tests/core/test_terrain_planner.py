@@ -123,7 +123,9 @@ def test_a_touchdown_short_on_a_slope_leaves_the_later_footholds_where_they_were
     before, after = _short_touchdown("slope-down-g1", 13, 0.03)
     assert before[13].pitch > 0.1 and before[14].pitch == 0.0
     assert after[13].x == pytest.approx(before[13].x - 0.03)
-    assert (after[13].z, after[13].pitch) == (before[13].z, before[13].pitch)  # the planned surface stays
+    # The planned surface stays, at its height 3 cm up the ramp (down it, a landing short is higher).
+    assert after[13].pitch == before[13].pitch
+    assert after[13].z == pytest.approx(before[13].z + 0.03 * math.tan(before[13].pitch), abs=1e-12)
     for later, placed in zip(after[14:], before[14:], strict=True):
         assert (later.x, later.y, later.z, later.yaw, later.pitch) == pytest.approx(
             (placed.x, placed.y, placed.z, placed.yaw, placed.pitch), abs=1e-12

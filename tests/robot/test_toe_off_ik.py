@@ -15,7 +15,7 @@ import pytest
 pin = pytest.importorskip("pinocchio")
 
 from rtgait.core.geometry import support_height, toe_off  # noqa: E402
-from rtgait.robot.motion import UnreachableError, whole_body_motion  # noqa: E402
+from rtgait.robot.motion import UnreachableError, walking_robot, whole_body_motion  # noqa: E402
 from tests.robot.conftest import planned_walk  # noqa: E402  (the robot's own COG height, stance and sole)
 
 
@@ -58,3 +58,30 @@ def test_g1_reaches_its_stairs_with_the_toe_kept_down_past_the_stance_foot(g1) -
     levelled_early = RobotModel.load(dataclasses.replace(g1.description, toe_release=toe_off.RELEASE))
     with pytest.raises(UnreachableError, match=r"step 2 .* out of reach for g1"):
         whole_body_motion(levelled_early, walk)
+
+
+def _lowest_ankle_pitch(robot, walk) -> float:
+    """The smallest (most dorsiflexed) ankle pitch either foot's solved motion reaches over ``walk`` (rad)."""
+    motion = whole_body_motion(robot, walk)
+    columns = [robot.model.joints[robot.model.getJointId(f"leg_{side}_5_joint")].idx_q for side in ("left", "right")]
+    return float(motion.q[:, columns].min())
+
+
+def test_up_talos_stairs_the_swing_ankle_stays_off_the_references_clip_with_the_scenarios_toe_release(talos) -> None:
+    from rtgait.io.sim_run import planned_walk as scenario_walk
+    from rtgait.robot.model import RobotModel
+    from rtgait.scenario.loading import load_scenario
+    from rtgait.stack.command_limits import POSITION_MARGIN
+
+    scenario = load_scenario("stairs-up")
+    robot = walking_robot(talos, scenario)
+    assert robot.description.toe_release == 0.5  # the scenario's [walking.talos]
+    ankle = talos.model.getJointId("leg_right_5_joint")
+    stop = float(talos.model.lowerPositionLimit[talos.model.joints[ankle].idx_q])  # -1.309 rad, the URDF's
+    clip = stop + POSITION_MARGIN  # the joint references are kept this far off the stop
+    # Levelled over the default share, the swing's ankle is asked past the clip (1.305 rad of dorsiflexion): in closed
+    # loop its reference stops there in every swing from step 3.
+    levelled_early = RobotModel.load(dataclasses.replace(talos.description, toe_release=toe_off.RELEASE))
+    assert _lowest_ankle_pitch(levelled_early, scenario_walk(scenario, levelled_early)) < clip
+    # Kept on its toe until it passes the stance foot: well clear of it (1.140 rad).
+    assert _lowest_ankle_pitch(robot, scenario_walk(scenario, robot)) > clip + 0.1

@@ -154,3 +154,19 @@ def test_torque_drive_adds_the_tracking_damping_to_the_drives(g1_robot_gains):
     loop = standing_loop(g1_robot_gains, drive="torque")
     assert loop.stack.feedforward.tracking is not None
     np.testing.assert_allclose(loop.drive_gains[1], kd_t)
+
+
+def test_on_the_truth_the_feedforward_is_computed_at_the_true_joints(g1_robot_gains):
+    # The truth's estimator reads no encoders: the loop gives the feed-forward the joints' true positions and
+    # velocities, so that gravity's torques are those of where the robot is. At the IK's configuration instead, the
+    # waist's 40 N m/rad nearly cancel against the upper body's toppling stiffness and the trunk sagged (fig8 on the
+    # truth fell at 10.7 s). Standing, the state one physics step old is the state now to well under a milliradian.
+    sim = g1_robot_gains
+    loop = standing_loop(sim, state="truth")
+    for _ in range(50):
+        loop.step()
+    sensed = loop.stack.feedforward.tracking.q  # the configuration the last tick's torques were computed at
+    true = sim.pinocchio_from_qpos(loop.data.qpos)
+    np.testing.assert_allclose(sensed[7:], true[7:], atol=1e-3)
+    # The base placed from the true stance sole: where the robot's base is.
+    np.testing.assert_allclose(sensed[:3], true[:3], atol=1e-3)

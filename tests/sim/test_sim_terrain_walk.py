@@ -23,7 +23,9 @@ def test_talos_walks_up_the_ramp_and_stands_on_it(talos, shorten) -> None:
     assert result.ended_at_rest, "at rest with both soles flat on the ramp"
     assert result.tip_time is None, "no loaded sole turned off the surface under it"
     last = result.footprints[-1]
-    assert last.z == pytest.approx(math.tan(math.radians(10.0)) * 0.7)  # x = 1.2 m, 0.7 m up the ramp
+    # About x = 1.2 m, 0.7 m up the ramp, at the ramp's height under it (re-anchored where it landed).
+    assert last.x == pytest.approx(1.2, abs=0.01)
+    assert last.z == pytest.approx(math.tan(math.radians(10.0)) * (last.x - 0.5), abs=1e-3)
     assert last.pitch == pytest.approx(-math.radians(10.0))
     # The COG rose with the footholds: within 1 cm of their height gain (its height above them is the nominal one).
     start = int(np.searchsorted(result.times, 0.0))  # the walk's start, after the transition from half-sitting
@@ -71,7 +73,8 @@ def test_talos_walks_down_the_ramp_and_stands_on_it(talos, shorten) -> None:
     assert not result.fell and result.steps_completed == 7
     assert result.ended_at_rest and result.tip_time is None
     last = result.footprints[-1]
-    assert last.z == pytest.approx(-math.tan(math.radians(10.0)) * 0.7)  # x = 1.2 m, 0.7 m down the ramp
+    assert last.x == pytest.approx(1.2, abs=0.01)  # 0.7 m down the ramp, at the ramp's height under it
+    assert last.z == pytest.approx(-math.tan(math.radians(10.0)) * (last.x - 0.5), abs=1e-3)
     start = int(np.searchsorted(result.times, 0.0))
     assert result.cog[-1, 2] - result.cog[start, 2] == pytest.approx(last.z, abs=0.01)
     np.testing.assert_allclose(result.sole_tilt[-1], math.radians(10.0), atol=0.02)

@@ -8,16 +8,21 @@ of the segment between two consecutive footholds ``a, b`` of that side nearest t
 
 so a stance foot (``p = a``) has exactly its foothold's tilt, and a swing turns the sole from the lift-off's to the
 landing's surface as it moves, levelled to it at touch-down. On level footholds every tilt is 0 and nothing changes.
+
+A foothold's surface is the plane through it with the sole's normal ``n = R e_z``, ``R = Rz(yaw) Ry(pitch) Rx(roll)``:
+moved by ``(dx, dy)`` on it the height changes by ``-(n_x dx + n_y dy) / n_z`` (:func:`surface_rise`), the height a
+touch-down short of or beyond a tilted foothold re-anchors it at.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Sequence
 
 from rtgait.core.geometry.footsteps import Footstep
 
-__all__ = ["foot_tilt", "foothold_segment", "is_tilted", "tilted_feet"]
+__all__ = ["foot_tilt", "foothold_segment", "is_tilted", "surface_rise", "tilted_feet"]
 
 
 def is_tilted(prints: Sequence[Footstep]) -> bool:
@@ -66,3 +71,18 @@ def tilted_feet(
         (*left[:4], *foot_tilt(prints, "left", left[0], left[1])),
         (*right[:4], *foot_tilt(prints, "right", right[0], right[1])),
     )
+
+
+def surface_rise(foot: Footstep, dx: float, dy: float) -> float:
+    """Height change (m) of the plane a foothold stands on from ``foot`` to ``(foot.x + dx, foot.y + dy)`` (m), the
+    module docstring's ``-(n_x dx + n_y dy) / n_z``: ``dx tan(a)`` up a ramp of angle ``a`` along +x (pitch ``-a``),
+    0 on a level foothold (a floor, a stair tread)."""
+    if not (foot.pitch or foot.roll):
+        return 0.0
+    cy, sy = math.cos(foot.yaw), math.sin(foot.yaw)
+    cp, sp = math.cos(foot.pitch), math.sin(foot.pitch)
+    cr, sr = math.cos(foot.roll), math.sin(foot.roll)
+    # R e_z = Rz(yaw) (sp cr, -sr, cp cr)
+    ax, ay, nz = sp * cr, -sr, cp * cr
+    nx, ny = cy * ax - sy * ay, sy * ax + cy * ay
+    return -(nx * dx + ny * dy) / nz

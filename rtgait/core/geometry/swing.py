@@ -9,7 +9,17 @@ with ``top = max(z0, z1) + h`` and ``sigma`` = :data:`RISE_SHARE`,
 ``z(s) = z0 + (top - z0) b(s / sigma) - (top - z1) b((s - 1 + sigma) / sigma)`` (``b`` the quintic blend, clipped to
 [0, 1]), so the sole is ``h`` above the higher foothold over the middle ``1 - 2 sigma`` of the swing, and the
 horizontal blend starts :data:`HORIZONTAL_DELAY` later and ends as much earlier: the toe is above the upper tread
-before it passes the stair nose (going up), the heel leaves the nose before the foot comes down (going down).
+before it passes the stair nose (going up).
+
+Down a stair (both footholds level, the landing lower: :func:`down_stair`) the foot moves forward first and comes down
+after: the horizontal blend runs from the lift-off to :data:`DESCENT_REACH` of the swing (``k(s) = b(s / R)``), the
+height rises to ``top = z0 + h`` over the first :data:`DESCENT_RISE` (``rho``) and comes straight down onto the landing
+over the rest, ``z(s) = z0 + (top - z0) b(s / rho) - (top - z1) b((s - R) / (1 - R))``. The sole thus stays ``h``
+above the upper tread until it is over its landing, so no nose between the footholds (none higher than the upper
+tread) comes closer than ``h`` wherever it lies, also the one just behind the landing's heel; and the foot is no
+longer held high over the tread below, behind and then level with the stance foot, while the stance leg bends to
+lower the body (:mod:`rtgait.core.geometry.support_height`): with the profile above, Talos's swing leg folded to 0.28 m
+hip-to-ankle over the 0.185 m stairs, out of its reach (``docs/results.md``).
 
 Up a ramp (a foothold tilted to its surface, the landing higher: onto the ramp, along it and off its top) there is
 no nose to clear: the foot moves along the line between the footholds and lifts off it as on level ground,
@@ -23,6 +33,7 @@ dorsiflexion (``docs/results.md``). Down a ramp the stair profile is kept.
 from __future__ import annotations
 
 from rtgait.core.geometry.footsteps import Footstep, wrap_angle
+from rtgait.core.geometry.toe_off import stair_rise
 
 
 def blend(s: float) -> tuple[float, float]:
@@ -41,6 +52,16 @@ RISE_SHARE = 0.35
 """Share of a height-changing swing spent rising (and as much coming down) to ``max(z0, z1) + h``."""
 HORIZONTAL_DELAY = 0.1
 """Share of a height-changing swing at each end during which the foot only moves vertically."""
+DESCENT_REACH = 0.5
+"""Share of a swing down a stair by which the foot has reached its landing horizontally, at the top; over the rest
+it comes straight down onto it (module docstring)."""
+DESCENT_RISE = 0.25
+"""Share of a swing down a stair over which the sole rises to ``h`` above the upper tread, while it already moves
+forward: at the lift-off the height grows as ``10 h (s / DESCENT_RISE)^3`` and the forward travel as
+``10 L (s / DESCENT_REACH)^3``, as steep as each other (45 degrees) for ``DESCENT_RISE = DESCENT_REACH (h / L)^(1/3)``,
+0.23-0.24 for the built-in stairs (h = 0.05 m, L = 0.44-0.50 m); at 0.25 the toe, on the tread at the lift-off, rises
+off it at 39-42 degrees. Rising over :data:`RISE_SHARE` instead (16-18 degrees), Talos fell at the end of its 15 cm
+stairs in one run of three (``docs/results.md``)."""
 
 
 def _clip01(s: float) -> float:
@@ -54,15 +75,24 @@ def up_ramp(start: Footstep, end: Footstep) -> bool:
     return bool(tilted) and end.z > start.z
 
 
-def swing_height(z0: float, z1: float, s: float, height: float, ramp: bool = False) -> float:
+def down_stair(start: Footstep, end: Footstep) -> bool:
+    """Whether a swing from ``start`` to ``end`` goes down a stair: both footholds level, the landing lower by
+    :data:`~rtgait.core.geometry.toe_off.MIN_RISE` or more."""
+    return stair_rise(start, end) < 0.0
+
+
+def swing_height(z0: float, z1: float, s: float, height: float, ramp: bool = False, stair_down: bool = False) -> float:
     """Swing foot height (m) at progress ``s`` in [0, 1] from a foothold at ``z0`` to one at ``z1`` (module
-    docstring), ``height`` the clearance above the higher one (``ramp``: up a ramp, above the line between them)."""
-    return swing_vertical(z0, z1, s, height, ramp)[0]
+    docstring), ``height`` the clearance above the higher one (``ramp``: up a ramp, above the line between them;
+    ``stair_down``: down a stair, :func:`down_stair`)."""
+    return swing_vertical(z0, z1, s, height, ramp, stair_down)[0]
 
 
-def swing_vertical(z0: float, z1: float, s: float, height: float, ramp: bool = False) -> tuple[float, float]:
+def swing_vertical(
+    z0: float, z1: float, s: float, height: float, ramp: bool = False, stair_down: bool = False
+) -> tuple[float, float]:
     """Swing foot height (m) and its derivative d/ds at progress ``s`` (module docstring); ``ramp``: a swing up a
-    ramp (:func:`up_ramp`)."""
+    ramp (:func:`up_ramp`), ``stair_down``: down a stair (:func:`down_stair`)."""
     if z0 == z1 or ramp:  # level (a flat walk's swings unchanged) or up a ramp: the lift profile over the footholds
         z, dz = lift(s)
         if not ramp:
@@ -70,6 +100,11 @@ def swing_vertical(z0: float, z1: float, s: float, height: float, ramp: bool = F
         k, dk = blend(s)
         return z0 + (z1 - z0) * k + height * z, (z1 - z0) * dk + height * dz
     top = max(z0, z1) + height
+    if stair_down:  # forward at the top first, then straight down (module docstring)
+        up, dup = blend(_clip01(s / DESCENT_RISE))
+        span = 1.0 - DESCENT_REACH
+        down, ddown = blend(_clip01((s - DESCENT_REACH) / span))
+        return z0 + (top - z0) * up - (top - z1) * down, (top - z0) * dup / DESCENT_RISE - (top - z1) * ddown / span
     up, dup = blend(_clip01(s / RISE_SHARE))
     down, ddown = blend(_clip01((s - 1.0 + RISE_SHARE) / RISE_SHARE))
     return z0 + (top - z0) * up - (top - z1) * down, ((top - z0) * dup - (top - z1) * ddown) / RISE_SHARE
@@ -79,6 +114,9 @@ def _horizontal(start: Footstep, end: Footstep, s: float) -> tuple[float, float]
     """Horizontal blend and its derivative d/ds: delayed at both ends over a height change but up a ramp."""
     if start.z == end.z or up_ramp(start, end):
         return blend(s)
+    if down_stair(start, end):  # from the lift-off, done at DESCENT_REACH
+        k, dk = blend(_clip01(s / DESCENT_REACH))
+        return k, dk / DESCENT_REACH
     span = 1.0 - 2.0 * HORIZONTAL_DELAY
     k, dk = blend(_clip01((s - HORIZONTAL_DELAY) / span))
     return k, dk / span
@@ -91,7 +129,7 @@ def swing_pose(start: Footstep, end: Footstep, s: float, height: float) -> tuple
     return (
         start.x + k * (end.x - start.x),
         start.y + k * (end.y - start.y),
-        swing_vertical(start.z, end.z, s, height, up_ramp(start, end))[0],
+        swing_vertical(start.z, end.z, s, height, up_ramp(start, end), down_stair(start, end))[0],
         wrap_angle(start.yaw + k * wrap_angle(end.yaw - start.yaw)),
     )
 
@@ -100,7 +138,7 @@ def swing_velocity(start: Footstep, end: Footstep, s: float, height: float, dura
     """Foot velocity ``(vx, vy, vz, yaw_rate)`` (m/s, rad/s) at swing progress ``s`` over ``duration`` (s)."""
     s = _clip01(s)
     _, dk = _horizontal(start, end, s)
-    _, dz = swing_vertical(start.z, end.z, s, height, up_ramp(start, end))
+    _, dz = swing_vertical(start.z, end.z, s, height, up_ramp(start, end), down_stair(start, end))
     scale = 1.0 / duration
     return (
         dk * (end.x - start.x) * scale,

@@ -17,6 +17,7 @@ import time
 from collections.abc import Sequence
 from typing import Literal
 
+from rtgait.core.geometry.foot_tilt import surface_rise
 from rtgait.core.geometry.footsteps import SIDES, Footstep, Side
 from rtgait.core.input_bounds import MAX_YAW, InputOutOfBoundsError, check_position
 from rtgait.core.laws.stepping import StepAdjustment
@@ -103,7 +104,10 @@ class MeasuredPlanning:
         """A foot is on the ground at ``(x, y)`` (m) with heading ``yaw`` (rad): where a swing foot really landed,
         or where a stance foot slipped to. Its footprint is replaced and every later footprint follows it (strides
         stay relative), so errors never accumulate; after a foothold on sloped ground the later ones stay where they
-        were placed (:meth:`~rtgait.core.walk.changes.WalkChanges.retarget`). Returns the footprint index replaced.
+        were placed (:meth:`~rtgait.core.walk.changes.WalkChanges.retarget`). Off the flat floor the footprint keeps
+        its planned surface (height, pitch, roll), its height taken on that surface's plane where the foot landed
+        (:func:`~rtgait.core.geometry.foot_tilt.surface_rise`: ``d tan(a)`` lower for a landing ``d`` short up a ramp of
+        angle ``a``; a tread's height unchanged). Returns the footprint index replaced.
 
         The plan under way is remade at once from its own state at ``t`` (:meth:`replan_now`, reason
         ``"touchdown"``), so the ZMP rests on the new footprint from the end of the phase under way on (unless the
@@ -145,9 +149,10 @@ class MeasuredPlanning:
             index = i if self._walk.footprint(i).side == side else i + 1
         self._check_landing(index, footprint)
         planned = self._walk.footprint(index)
-        if not planned.level:  # a touch-down measures x, y, yaw: the planned height and surface stay
+        if not planned.level:  # a touch-down measures x, y, yaw: the height is the planned surface's there
+            rise = surface_rise(planned, footprint.x - planned.x, footprint.y - planned.y)
             footprint = Footstep(
-                footprint.x, footprint.y, footprint.yaw, footprint.side, planned.z, planned.pitch, planned.roll
+                footprint.x, footprint.y, footprint.yaw, footprint.side, planned.z + rise, planned.pitch, planned.roll
             )
         if kind == "single" and index == (q + 1) // 2 + 1:
             self._freeze_swing(t)

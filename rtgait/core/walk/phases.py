@@ -11,7 +11,14 @@ from __future__ import annotations
 import math
 
 from rtgait.core.geometry.footsteps import Footstep, Timeline
-from rtgait.core.geometry.swing import retargeted_swing, swing_height, swing_pose, swing_velocity, up_ramp
+from rtgait.core.geometry.swing import (
+    down_stair,
+    retargeted_swing,
+    swing_height,
+    swing_pose,
+    swing_velocity,
+    up_ramp,
+)
 from rtgait.core.walk.walk import Walk
 
 SwingRetarget = tuple[float, tuple[float, float, float], tuple[float, float, float], float]
@@ -51,7 +58,8 @@ class PhaseInfo:
         span = self.end - since
         x, y, yaw = retargeted_swing(pose0, vel0, self.swing_to, (rel - since) / span, span)
         progress = min(max(self.lift_progress(rel), 0.0), 1.0)
-        z = swing_height(self.swing_from.z, self.swing_to.z, progress, height, up_ramp(self.swing_from, self.swing_to))
+        a, b = self.swing_from, self.swing_to
+        z = swing_height(a.z, b.z, progress, height, up_ramp(a, b), down_stair(a, b))
         return (x, y, z, yaw)
 
     def lift_progress(self, rel: float) -> float:
