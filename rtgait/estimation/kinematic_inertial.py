@@ -47,7 +47,7 @@ from typing import Literal
 
 from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.core.geometry.hull import sole_extents
-from rtgait.estimation.anchors import FootAnchors, Pose
+from rtgait.estimation.anchors import FootAnchors, Pose, Vector
 from rtgait.estimation.attitude_filter import DEFAULT_ATTITUDE_CUTOFF, AttitudeFilter
 from rtgait.estimation.contact_point import rocking_correction
 from rtgait.estimation.feet import FeetFromWrenches
@@ -218,9 +218,7 @@ class KinematicInertialEstimator:
         self._loaded = (True, True)  # the first tick's feet anchor the world frame
         self._weight_left = 0.5
         self._yaw_offset = 0.0
-        self._last_motion: tuple[tuple[float, ...], tuple[float, float, float], tuple[float, float, float]] | None = (
-            None
-        )
+        self._last_motion: tuple[tuple[float, ...], Vector, Vector, Vector] | None = None
         self._t: float | None = None
 
     def update(self, readings: SensorReadings | None, truth: GroundTruth | None = None) -> Measurement:
@@ -291,15 +289,19 @@ class KinematicInertialEstimator:
         (rx, ry, rz), (rvx, rvy, rvz) = right_sole.position, right_sole.velocity
         left_rel = (r00 * lx + r01 * ly + r02 * lz, r10 * lx + r11 * ly + r12 * lz, r20 * lx + r21 * ly + r22 * lz)
         right_rel = (r00 * rx + r01 * ry + r02 * rz, r10 * rx + r11 * ry + r12 * rz, r20 * rx + r21 * ry + r22 * rz)
-        px, py, pz = anchors.base_position(wl, left_rel, right_rel)
         # Without a foot on the ground (a flight, a fall), no anchor holds: both follow their soles, and the base keeps
-        # the yaw the last tick gave it and moves on at its estimated velocity (the inertial estimate alone, below).
+        # the yaw the last tick gave it and moves on from its last place at its estimated velocity (the inertial
+        # estimate alone, below), whatever the legs do: the anchors, taken at the soles' last poses, would add the
+        # feet's motion relative to the base to it (a foot still on the ground through a 1-15 ms bounce would count
+        # the base's motion twice).
         standing = loaded_left or loaded_right
         if not standing and self._last_motion is not None:
             # The base origin's velocity at the last tick, v_I - R (w_B x p_I + p_I').
-            last_rot, relative, (vx, vy, vz) = self._last_motion
+            last_rot, relative, (vx, vy, vz), (px, py, pz) = self._last_motion
             mx, my, mz = mat_vec(last_rot, relative)
             px, py, pz = px + dt * (vx - mx), py + dt * (vy - my), pz + dt * (vz - mz)
+        else:
+            px, py, pz = anchors.base_position(wl, left_rel, right_rel)
         left_pos = (px + left_rel[0], py + left_rel[1], pz + left_rel[2])
         right_pos = (px + right_rel[0], py + right_rel[1], pz + right_rel[2])
         anchors.settle(wl, (*left_pos, yaw_of(r_left)), (*right_pos, yaw_of(r_right)), standing)
@@ -333,7 +335,7 @@ class KinematicInertialEstimator:
         # In flight no foot is held still: the accelerometer alone carries the velocity.
         velocity = self.velocity.update(dt, kinematic if standing else None, acceleration)
         vix, viy, viz = velocity
-        self._last_motion = (rot, (sx, sy, sz), velocity)  # for a flight's next tick (step 3)
+        self._last_motion = (rot, (sx, sy, sz), velocity, (px, py, pz))  # for a flight's next tick (step 3)
         # 5. COM and its velocity: c = p + R c_B, c' = v_I + R (w_B x (c_B - p_I) + c_B' - p_I').
         (cx, cy, cz), (cvx, cvy, cvz) = kin.com, kin.com_velocity
         dx, dy, dz = cx - ox, cy - oy, cz - oz

@@ -337,6 +337,25 @@ def test_a_robot_in_flight_moves_on_as_its_accelerometer_says():
     assert not m.left.loaded and not m.right.loaded
 
 
+def test_a_bounce_on_still_feet_moves_the_base_once():
+    # Both feet's loads drop to nothing for 20 ms while the feet stay on the ground and the base moves on over them (a
+    # stiff robot's bounce): the flight carries the base at its velocity from where it was, not on top of the legs'
+    # motion relative to it (which would count the base's 6 mm over the bounce twice).
+    robot = RigidRobot(FEET)
+    e = estimator(robot)
+    r, zero = rot(0.0, 0.0, 0.2), np.zeros(3)
+    p0, v0 = np.array([0.1, 0.0, 0.75]), np.array([0.3, -0.1, 0.0])
+    for k in range(301):
+        t = k * DT
+        loads = (0.0, 0.0) if 200 <= k < 220 else (300.0, 288.6)  # the bounce's ticks
+        m = e.update(robot.readings(t, p0 + v0 * t, r, v0, zero, zero, loads))
+        if k == 219:
+            assert not m.left.loaded and not m.right.loaded  # still in the bounce
+            np.testing.assert_allclose(m.com, p0 + v0 * t + r @ COM_IN_BASE, atol=1e-6)
+    np.testing.assert_allclose(m.com, p0 + v0 * 0.3 + r @ COM_IN_BASE, atol=1e-6)
+    assert m.left.loaded and m.right.loaded
+
+
 def test_a_swinging_foot_loaded_high_above_the_ground_does_not_land():
     # The right foot swings 50 mm above the left's sole with a 300 N spike on its sensor (a whipped foot's inertia):
     # not loaded, no landing; back on the ground, its first load is a landing at once. A foot on a 20 mm step the plan
