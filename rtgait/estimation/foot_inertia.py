@@ -47,6 +47,8 @@ class FootInertia:
     def __init__(self, mounts: tuple[ForceSensorMount, ForceSensorMount], gravity: float) -> None:
         self.mounts = mounts
         self.gravity = float(gravity)
+        self._masses = (float(mounts[0].mass), float(mounts[1].mass))
+        self._coms = (mounts[0].com, mounts[1].com)
         self.reset()
 
     def reset(self) -> None:
@@ -69,51 +71,64 @@ class FootInertia:
             kin: this tick's kinematics (base frame).
         """
         ux, uy, uz = up
-        ox, oy, oz = kin.imu.position
-        ovx, ovy, ovz = kin.imu.velocity
         wx, wy, wz = w
-        left = self._vertical_velocity(kin.left_sole, self.mounts[0].com, ux, uy, uz, ox, oy, oz, ovx, ovy, ovz,
-                                       wx, wy, wz)  # fmt: skip
-        right = self._vertical_velocity(kin.right_sole, self.mounts[1].com, ux, uy, uz, ox, oy, oz, ovx, ovy, ovz,
-                                        wx, wy, wz)  # fmt: skip
+        vertical = []
+        for frame in (kin.left_sole, kin.right_sole, kin.imu):
+            # The frame's velocity relative to the base origin, w x p + p' (base frame), its vertical part.
+            (px, py, pz), (vx, vy, vz) = frame.position, frame.velocity
+            vertical.append(
+                ux * (wy * pz - wz * py + vx) + uy * (wz * px - wx * pz + vy) + uz * (wx * py - wy * px + vz)
+            )
+        acceleration = ux * specific[0] + uy * specific[1] + uz * specific[2] - self.gravity
+        return self.from_motion(dt, up, w, acceleration, vertical[0] - vertical[2], vertical[1] - vertical[2],
+                                kin.left_sole, kin.right_sole)  # fmt: skip
+
+    def from_motion(
+        self, dt: float, up: tuple[float, float, float], w: tuple[float, float, float], acceleration: float,
+        left: float, right: float, left_sole: FrameMotion, right_sole: FrameMotion,
+    ) -> tuple[float, float]:  # fmt: skip
+        """:meth:`update` from what the estimator has already worked out: the IMU's vertical acceleration
+        ``acceleration`` (``(R f_I)_z - g``, m/s^2) and the world-vertical velocities ``left`` and ``right`` of the
+        sole origins relative to the IMU, ``up . (w x (p_s - p_I) + p_s' - p_I')`` (m/s); the soles' motions (base
+        frame) turn the foot's centre about its sole origin."""
+        ux, uy, uz = up
+        wx, wy, wz = w
+        (cx, cy, cz), (dx, dy, dz) = self._coms
+        # Each foot's centre relative to its sole origin, r = R_s c (base frame), turning at the sole's world rate
+        # w + w_s: its vertical velocity relative to the sole origin, up . ((w + w_s) x r).
+        m0, m1, m2, m3, m4, m5, m6, m7, m8 = left_sole.rotation
+        rx, ry, rz = m0 * cx + m1 * cy + m2 * cz, m3 * cx + m4 * cy + m5 * cz, m6 * cx + m7 * cy + m8 * cz
+        ax, ay, az = left_sole.angular_velocity
+        ax, ay, az = ax + wx, ay + wy, az + wz
+        left += ux * (ay * rz - az * ry) + uy * (az * rx - ax * rz) + uz * (ax * ry - ay * rx)
+        m0, m1, m2, m3, m4, m5, m6, m7, m8 = right_sole.rotation
+        rx, ry, rz = m0 * dx + m1 * dy + m2 * dz, m3 * dx + m4 * dy + m5 * dz, m6 * dx + m7 * dy + m8 * dz
+        ax, ay, az = right_sole.angular_velocity
+        ax, ay, az = ax + wx, ay + wy, az + wz
+        right += ux * (ay * rz - az * ry) + uy * (az * rx - ax * rz) + uz * (ax * ry - ay * rx)
         last = self._last
         self._last = (left, right)
-        # The IMU's vertical acceleration, a_I,z = (R f_I)_z - g.
-        base = ux * specific[0] + uy * specific[1] + uz * specific[2] - self.gravity
+        mass_left, mass_right = self._masses
         if last is None or dt <= 0.0:
-            return _cored(self.mounts[0].mass * base), _cored(self.mounts[1].mass * base)
-        return (
-            _cored(self.mounts[0].mass * (base + (left - last[0]) / dt)),
-            _cored(self.mounts[1].mass * (base + (right - last[1]) / dt)),
-        )
-
-    @staticmethod
-    def _vertical_velocity(
-        sole: FrameMotion, com: tuple[float, float, float], ux: float, uy: float, uz: float, ox: float, oy: float,
-        oz: float, ovx: float, ovy: float, ovz: float, wx: float, wy: float, wz: float,
-    ) -> float:  # fmt: skip
-        """The world-vertical velocity (m/s) of the foot's centre ``com`` (sole frame) relative to the IMU, ``up . (w
-        x d + d')``, from the sole's motion, the IMU's position and velocity and the base's angular velocity (base
-        frame)."""
-        cx, cy, cz = com
-        m0, m1, m2, m3, m4, m5, m6, m7, m8 = sole.rotation
-        # The foot's centre relative to the sole origin, base frame, and its velocity from the sole's turn.
-        rx, ry, rz = m0 * cx + m1 * cy + m2 * cz, m3 * cx + m4 * cy + m5 * cz, m6 * cx + m7 * cy + m8 * cz
-        (px, py, pz), (vx, vy, vz), (ax, ay, az) = sole.position, sole.velocity, sole.angular_velocity
-        dx, dy, dz = px + rx - ox, py + ry - oy, pz + rz - oz
-        ex = vx + (ay * rz - az * ry) - ovx + (wy * dz - wz * dy)
-        ey = vy + (az * rx - ax * rz) - ovy + (wz * dx - wx * dz)
-        ez = vz + (ax * ry - ay * rx) - ovz + (wx * dy - wy * dx)
-        return ux * ex + uy * ey + uz * ez
+            force_left, force_right = mass_left * acceleration, mass_right * acceleration
+        else:
+            force_left = mass_left * (acceleration + (left - last[0]) / dt)
+            force_right = mass_right * (acceleration + (right - last[1]) / dt)
+        # The soft threshold, written out: a call per foot costs as much as its arithmetic.
+        core = _CORE
+        if force_left > core:
+            force_left -= core
+        elif force_left < -core:
+            force_left += core
+        else:
+            force_left = 0.0
+        if force_right > core:
+            force_right -= core
+        elif force_right < -core:
+            force_right += core
+        else:
+            force_right = 0.0
+        return force_left, force_right
 
 
 _CORE = 2.0 * INERTIA_NOISE
-
-
-def _cored(force: float) -> float:
-    """``force`` (N) soft-thresholded at twice :data:`INERTIA_NOISE`."""
-    if force > _CORE:
-        return force - _CORE
-    if force < -_CORE:
-        return force + _CORE
-    return 0.0

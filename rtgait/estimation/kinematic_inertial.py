@@ -251,10 +251,8 @@ class KinematicInertialEstimator:
         specific = (m00 * fx + m01 * fy + m02 * fz, m10 * fx + m11 * fy + m12 * fz, m20 * fx + m21 * fy + m22 * fz)
         # 2. The ground's wrenches on the soles, in the sole frames.
         torques, zero = self._torques, self._zero
-        if torques is None:
-            raw_left, raw_right = wrench_left, wrench_right = self._sensor_wrenches(readings, r_left, r_right)
-            if zero is not None:  # less each sensor's zero, learnt in the air (step 6)
-                wrench_left, wrench_right = zero.corrected(0, raw_left), zero.corrected(1, raw_right)
+        if torques is None:  # each less its sensor's zero, learnt in the air (step 6)
+            wrench_left, wrench_right = self._sensor_wrenches(readings, r_left, r_right)
         else:
             if readings.joint_torques is None:
                 raise ValueError("the estimator reads the joint torques, the readings have none")
@@ -310,6 +308,9 @@ class KinematicInertialEstimator:
         # with the IMU's acceleration.
         (ox, oy, oz), (ovx, ovy, ovz) = imu_frame.position, imu_frame.velocity
         wr = 1.0 - wl
+        # The soles' velocities relative to the base origin, w_B x p_i + p_i' (base frame).
+        flx, fly, flz = wy * lz - wz * ly + lvx, wz * lx - wx * lz + lvy, wx * ly - wy * lx + lvz
+        frx, fry, frz = wy * rz - wz * ry + rvx, wz * rx - wx * rz + rvy, wx * ry - wy * rx + rvz
         # A loaded foot that rocks turns about its centre of pressure, not its sole origin (contact_point).
         bx = by = bz = 0.0
         if self.rocking:
@@ -325,9 +326,9 @@ class KinematicInertialEstimator:
                 bx, by, bz = bx + ax, by + ay, bz + az
         # The IMU's velocity relative to the base origin, w_B x p_I + p_I' (base frame).
         sx, sy, sz = wy * oz - wz * oy + ovx, wz * ox - wx * oz + ovy, wx * oy - wy * ox + ovz
-        ux = sx - wl * (wy * lz - wz * ly + lvx) - wr * (wy * rz - wz * ry + rvx) + bx
-        uy = sy - wl * (wz * lx - wx * lz + lvy) - wr * (wz * rx - wx * rz + rvy) + by
-        uz = sz - wl * (wx * ly - wy * lx + lvz) - wr * (wx * ry - wy * rx + rvz) + bz
+        ux = sx - wl * flx - wr * frx + bx
+        uy = sy - wl * fly - wr * fry + by
+        uz = sz - wl * flz - wr * frz + bz
         kinematic = (r00 * ux + r01 * uy + r02 * uz, r10 * ux + r11 * uy + r12 * uz, r20 * ux + r21 * uy + r22 * uz)
         qx, qy, qz = specific
         acceleration = (r00 * qx + r01 * qy + r02 * qz, r10 * qx + r11 * qy + r12 * qz,
@@ -346,16 +347,19 @@ class KinematicInertialEstimator:
                    viz + (r20 * ux + r21 * uy + r22 * uz))  # fmt: skip
         # 6. The feet's states, the ZMP and the landings.
         # A force sensor does not count contact points: 1 while the foot carries more than the release force.
-        sole_foot, release = self.feet.sole_foot, self._release
+        sole_foot, release, inertia = self.feet.sole_foot, self._release, self._inertia
         load_left = load_right = None
         if torques is not None:  # the load detection reads the faster-filtered forces (torque_wrenches)
             (flx, fly, flz), (frx, fry, frz) = torques.contact_forces
             load_left = r_left[6] * flx + r_left[7] * fly + r_left[8] * flz
             load_right = r_right[6] * frx + r_right[7] * fry + r_right[8] * frz
-        elif self._inertia is not None:  # the load detection reads the ground's force, the foot's inertia removed
-            inertia_left, inertia_right = self._inertia.update(
-                dt, (r_base[6], r_base[7], r_base[8]), (wx, wy, wz), specific, kin
-            )
+        elif inertia is not None:  # the load detection reads the ground's force, the foot's inertia removed
+            # From the IMU's vertical acceleration and the soles' vertical velocities relative to the IMU, as above.
+            vs = r20 * sx + r21 * sy + r22 * sz
+            inertia_left, inertia_right = inertia.from_motion(
+                dt, (r20, r21, r22), (wx, wy, wz), acceleration[2], r20 * flx + r21 * fly + r22 * flz - vs,
+                r20 * frx + r21 * fry + r22 * frz - vs, left_sole, right_sole,
+            )  # fmt: skip
             load_left, load_right = fz_left + inertia_left, fz_right + inertia_right
         # A swinging foot lands only near the stance sole's height (landing_gate).
         extents = self._extents
@@ -376,21 +380,21 @@ class KinematicInertialEstimator:
             if not right.loaded:
                 right = _new_tuple(FootState, (_ZERO3, _ZERO3, 0.0, _NAN2, _NAN2, *right[5:10], 0))
         self._loaded = (left.loaded, right.loaded)
-        if torques is None and zero is not None:  # a foot in the air reads its sensor's zero (sensor_zero)
+        if zero is not None and not (left.loaded and right.loaded):
+            # A foot in the air reads its sensor's zero (sensor_zero): the corrected wrench is what is left of it.
             settle, air_time = zero.settle_time, self.load.air_time
-            inertia = self._inertia
-            if air_time(0, t) >= settle:
+            if not left.loaded and air_time(0, t) >= settle:
                 if inertia is not None:  # less the foot's vertical inertia (sole frame): an unbiased mean
                     il = inertia_left
-                    raw_left = (raw_left[0] + il * r_left[6], raw_left[1] + il * r_left[7],
-                                raw_left[2] + il * r_left[8], *raw_left[3:])  # fmt: skip
-                zero.learn(0, raw_left, dt, math.inf)
-            if air_time(1, t) >= settle:
+                    wrench_left = (wrench_left[0] + il * r_left[6], wrench_left[1] + il * r_left[7],
+                                   wrench_left[2] + il * r_left[8], *wrench_left[3:])  # fmt: skip
+                zero.learn(0, wrench_left, dt, math.inf)
+            if not right.loaded and air_time(1, t) >= settle:
                 if inertia is not None:
                     ir = inertia_right
-                    raw_right = (raw_right[0] + ir * r_right[6], raw_right[1] + ir * r_right[7],
-                                 raw_right[2] + ir * r_right[8], *raw_right[3:])  # fmt: skip
-                zero.learn(1, raw_right, dt, math.inf)
+                    wrench_right = (wrench_right[0] + ir * r_right[6], wrench_right[1] + ir * r_right[7],
+                                    wrench_right[2] + ir * r_right[8], *wrench_right[3:])  # fmt: skip
+                zero.learn(1, wrench_right, dt, math.inf)
         landings = _NO_LANDINGS
         if left_landing is not None or right_landing is not None:
             landings = tuple(landing for landing in (left_landing, right_landing) if landing is not None)
@@ -406,10 +410,13 @@ class KinematicInertialEstimator:
         """The ground's wrenches on the soles in their frames from the feet's force sensors."""
         if readings.left_foot is None or readings.right_foot is None:
             raise ValueError("the estimator reads the feet's force sensors, the readings have none")
-        g, mounts = self.gravity, self._mounts
+        g, mounts, zero = self.gravity, self._mounts, self._zero
         assert mounts is not None  # the kinematics place them when the sensors are the source
+        zero_left, zero_right = (None, None) if zero is None else zero.zeros
         # Gravity in each sole frame: R_WS^T (0, 0, -g), the third row of R_WS times -g (yaw does not change it).
         return (
-            sensor_wrench(readings.left_foot, mounts[0], (-g * r_left[6], -g * r_left[7], -g * r_left[8])),
-            sensor_wrench(readings.right_foot, mounts[1], (-g * r_right[6], -g * r_right[7], -g * r_right[8])),
+            sensor_wrench(readings.left_foot, mounts[0], (-g * r_left[6], -g * r_left[7], -g * r_left[8]), zero_left),
+            sensor_wrench(
+                readings.right_foot, mounts[1], (-g * r_right[6], -g * r_right[7], -g * r_right[8]), zero_right
+            ),
         )

@@ -61,14 +61,14 @@ class AirborneZero:
         return (wrench[0] - b[0], wrench[1] - b[1], wrench[2] - b[2], wrench[3] - b[3], wrench[4] - b[4],
                 wrench[5] - b[5])  # fmt: skip
 
-    def learn(self, index: int, wrench: SoleWrench, dt: float, air_time: float) -> None:
-        """Take foot ``index``'s uncorrected sole ``wrench`` of a tick ``dt`` long (s) into its zero if the foot has
+    def learn(self, index: int, residual: SoleWrench, dt: float, air_time: float) -> None:
+        """Take foot ``index``'s sole wrench of a tick ``dt`` long (s), given as its ``residual`` (the wrench less the
+        current zero, ``w - b``: what the reading corrected by :meth:`corrected` gives), into its zero if the foot has
         been in the air for ``air_time`` (s; 0 for a loaded foot) of at least the settle time."""
         if dt <= 0.0 or air_time < self.settle_time:
             return
         a = dt / self.time_constant if dt < self.time_constant else 1.0
         b0, b1, b2, b3, b4, b5 = self.zeros[index]
-        w0, w1, w2, w3, w4, w5 = wrench
+        e0, e1, e2, e3, e4, e5 = residual
         # Written out: a generator over the six components costs more than their arithmetic.
-        self.zeros[index] = (b0 + a * (w0 - b0), b1 + a * (w1 - b1), b2 + a * (w2 - b2), b3 + a * (w3 - b3),
-                             b4 + a * (w4 - b4), b5 + a * (w5 - b5))  # fmt: skip
+        self.zeros[index] = (b0 + a * e0, b1 + a * e1, b2 + a * e2, b3 + a * e3, b4 + a * e4, b5 + a * e5)

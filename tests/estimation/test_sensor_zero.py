@@ -48,7 +48,7 @@ def _run(zero: AirborneZero, steps: int, seed: int = 0) -> list[tuple[float, ...
         corrected = zero.corrected(0, raw)
         load.update(0, corrected[2], t)
         load.prime()
-        zero.learn(0, raw, DT if k else 0.0, load.air_time(0, t))
+        zero.learn(0, corrected, DT if k else 0.0, load.air_time(0, t))
         out.append(corrected)
     return out
 
