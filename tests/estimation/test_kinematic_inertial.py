@@ -235,6 +235,12 @@ def test_a_foot_sensor_above_the_sole_with_the_foot_below_it():
     hanging_moment = np.cross(weight_at, weight) - np.cross(sensor_at, weight)
     hanging = Wrench(tuple(turn.T @ weight), tuple(turn.T @ hanging_moment))
     np.testing.assert_allclose(sensor_wrench(hanging, mount, tuple(gravity)), np.zeros(6), atol=1e-9)
+    # A sensor off by a wrench known in the sole frame, its zero: taken off, the ground's wrench again.
+    offset = np.array([1.5, -2.0, 4.0, 0.2, -0.3, 0.1])
+    off_reading = Wrench(tuple(turn.T @ (force + offset[:3])), tuple(turn.T @ (moment + offset[3:])))
+    zero = tuple(offset + np.concatenate([np.zeros(3), np.cross(sensor_at, offset[:3])]))  # about the sole origin
+    out = sensor_wrench(off_reading, mount, tuple(gravity), zero)
+    np.testing.assert_allclose(out, (*ground_force, *ground_moment), atol=1e-9)
 
 
 def test_joint_torques_give_the_sole_wrench_through_the_legs_jacobian():
