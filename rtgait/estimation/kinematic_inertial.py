@@ -25,7 +25,8 @@ Each tick, with the base frame's kinematics (:class:`~rtgait.estimation.kinemati
    (:mod:`rtgait.estimation.torque_wrenches`); from joint torques, a foot the load detection has in the air is
    reported without load (what is left of a swinging leg's wrench is the estimate's error).
 3. **Base position.** ``p = sum_i w_i (a_i - R p_i)`` over the feet anchors ``a_i``, weighted by the feet's vertical
-   forces (:mod:`rtgait.estimation.anchors`).
+   forces (:mod:`rtgait.estimation.anchors`); with no foot loaded (a flight, a bounce), ``p`` moves on from its last
+   value at the base's estimated velocity (step 4).
 4. **Velocity.** With ``w`` the gyro's angular velocity in the world, a foot ``i`` held still gives the base
    origin's velocity ``-(w x R p_i) - R p_i'`` (``p_i'`` from the joint velocities); their force-weighted mean, moved
    to the IMU (``+ w x R p_I + R p_I'``), is blended with the IMU's acceleration ``R_WI f + g`` by the complementary
