@@ -27,7 +27,8 @@ with ``--velocity-walks``, the walks by command, each robot and seed, on the est
 
 ``--shadow`` measures the estimator alone instead, as a tuning bench: fig8 walked on the simulator's truth (the same
 walk for every estimator setting) with the estimator updated in the shadow from the sensors each tick, with
-``--yaw feet|imu`` and ``--velocity-cutoff HZ``; the same errors, at ``--noise`` (its first value) and ``--seed``.
+``--yaw feet|imu`` and ``--velocity-cutoff HZ``; the same errors, at ``--noise`` (its first value) and ``--seed``,
+and at the physics step ``--physics-dt`` (default the robot's).
 With ``--push IMPULSE`` (N s) the walk on the truth is pushed as ``benchmarks/pushes.py --phase single`` pushes it
 (0.1 s on the base at mid single support of the middle step, along ``--push-direction`` degrees in the world,
 default 0: forward in fig8's middle step), and the report adds the errors over the push window, from the push's start
@@ -38,7 +39,7 @@ loaded that the truth has in the air (false contacts, which the controller may t
 Usage: ``python benchmarks/estimation.py [--robot R ...] [--velocity-walks] [--quick] [--walk-time S]
 [--noise F ...] [--latency L ...] [--no-degradation] [--model-error SEEDS] [--truth] [--workers N] [--json]``
 or ``python benchmarks/estimation.py --shadow [--robot R] [--scenario fig8] [--noise F] [--seed N]
-[--yaw feet|imu] [--velocity-cutoff HZ] [--push N_S [--push-direction DEG]]``
+[--yaw feet|imu] [--velocity-cutoff HZ] [--physics-dt S] [--push N_S [--push-direction DEG]]``
 """
 
 from __future__ import annotations
@@ -237,12 +238,13 @@ def push_errors(times: np.ndarray, estimate: Any, truth: Any, start: float) -> d
 
 def shadow(
     robot_name: str, scenario_name: str, noise: float, seed: int, push: tuple[float, float] | None = None,
-    **settings: object,
+    physics_dt: float | None = None, **settings: object,
 ) -> dict[str, Any]:  # fmt: skip
     """The errors of the estimator with ``settings`` (:class:`~rtgait.estimation.kinematic_inertial.
     KinematicInertialEstimator`'s) updated each tick from the sensors of a walk driven on the truth (module
     docstring), against the ground-truth estimator's state of the same instant; ``push``: ``(impulse, direction)``
-    (N s, deg) of a push at mid single support of the middle step, and the push window's errors."""
+    (N s, deg) of a push at mid single support of the middle step, and the push window's errors; ``physics_dt``: the
+    physics step (s; ``None``: the robot's)."""
     import numpy as np
     from pushes import PUSH_DURATION, push_site
 
@@ -260,7 +262,8 @@ def shadow(
     from rtgait.stack.setup import start_pose
 
     robot = RobotModel.load(robot_name)
-    sim = build_sim_model(robot, SimConfig(meshes=False, sensors=SensorSettings(noise=noise, seed=seed)))
+    config = SimConfig(meshes=False, physics_dt=physics_dt, sensors=SensorSettings(noise=noise, seed=seed))
+    sim = build_sim_model(robot, config)
     scenario = load_scenario(scenario_name)
     walk = robot_scenario(scenario, robot)
     level, changes, stop_after = _controller(walk, None, "adaptive", sim, robot_and_scenario_options(robot, scenario))
@@ -346,6 +349,7 @@ def main() -> None:
     parser.add_argument("--yaw", choices=("feet", "imu"), default="feet", help="--shadow: the base's yaw source")
     parser.add_argument("--velocity-cutoff", type=float, default=3.5, help="--shadow: velocity filter cut-off, Hz")
     parser.add_argument("--no-rocking", action="store_true", help="--shadow: hold the sole origins still, not the CoPs")
+    parser.add_argument("--physics-dt", type=float, help="--shadow: the physics step, s (default the robot's)")
     parser.add_argument("--push", type=float, help="--shadow: a push at mid single support of the middle step, N s")
     parser.add_argument("--push-direction", type=float, default=0.0, help="--shadow: its direction, deg (default 0)")
     args = parser.parse_args()
@@ -358,8 +362,10 @@ def main() -> None:
         if args.push is not None and not (math.isfinite(args.push) and args.push > 0.0):
             parser.error(f"--push must be an impulse > 0 N s, got {args.push}")
         push = None if args.push is None else (args.push, args.push_direction)
-        report = shadow(args.robots[0], args.scenario, args.noise[0], args.seed, push, yaw=args.yaw,
+        report = shadow(args.robots[0], args.scenario, args.noise[0], args.seed, push, args.physics_dt, yaw=args.yaw,
                         velocity_cutoff=args.velocity_cutoff, rocking=not args.no_rocking)  # fmt: skip
+        if args.physics_dt is not None:
+            report["physics_dt"] = args.physics_dt
         print(json.dumps(report))
         return
     began = time.perf_counter()

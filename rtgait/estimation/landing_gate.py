@@ -25,9 +25,8 @@ A load on a swinging foot is taken for a touch-down only if the robot's own sens
   against 2 ms), far beyond the 10 ms a landing's detection may take, and removed few false contacts the height
   gate had not (75 -> 67 ticks). The height gate alone is used.
 
-Removing the foot's inertia from the sensor's reading (its mass times its acceleration from the encoders) is not
-done: differencing 1 kHz joint velocities gives the foot's acceleration with noise of order the landing threshold
-(``docs/estimation.md``).
+The foot's inertia is taken out of the force the load detection reads (:mod:`rtgait.estimation.foot_inertia`):
+what is left of a whipped foot's reading is the removal's error, which the gate still backs up.
 """
 
 from __future__ import annotations

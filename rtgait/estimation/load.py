@@ -64,6 +64,11 @@ class LoadHysteresis:
         """The first tick's feet are known: from now on a load after flight is a landing."""
         self._primed = True
 
+    def air_time(self, index: int, t: float) -> float:
+        """How long foot ``index`` has been unloaded at ``t`` (s): 0 for a loaded foot, ``inf`` for one unloaded since
+        before the first tick."""
+        return 0.0 if self._loaded[index] else t - self._unloaded_since[index]
+
     def update(self, index: int, fz: float, t: float, near_ground: bool = True) -> bool | None:
         """Foot ``index``'s (0 left, 1 right) load state after this tick's force ``fz`` (N) at ``t`` (s); ``None`` for a
         landing (then loaded). ``near_ground``: whether an unloaded foot may become loaded (module docstring)."""

@@ -10,7 +10,8 @@ vector in the sole frame (m/s^2):
 
     f_ground = f_s - m g_S,        t_ground = t_s - c x (m g_S)                             (N, N m)
 
-A swinging foot's acceleration times its mass is left out: a few newtons, well below the landing threshold.
+The foot's acceleration times its mass is left out here, for the wrench the estimator reports (a foot in contact
+is still); the load detection takes it out of the vertical force (:mod:`rtgait.estimation.foot_inertia`).
 
 **From joint torques** (a leg without a force sensor, the G1's). The dynamics of a leg's joints,
 ``M_l q'' + h_l = tau_l + J^T F``, with ``J`` the sole frame's 6 x n Jacobian with respect to the leg's joints
@@ -39,9 +40,12 @@ SoleWrench = tuple[float, float, float, float, float, float]
 sole frame."""
 
 
-def sensor_wrench(reading: Wrench, mount: ForceSensorMount, gravity: tuple[float, float, float]) -> SoleWrench:
+def sensor_wrench(
+    reading: Wrench, mount: ForceSensorMount, gravity: tuple[float, float, float], zero: SoleWrench | None = None
+) -> SoleWrench:
     """The ground's wrench on a sole from its force sensor's ``reading`` (module docstring); ``gravity`` is the gravity
-    vector in the sole frame (m/s^2)."""
+    vector in the sole frame (m/s^2); ``zero``: the sensor's zero in the sole frame, taken off too
+    (:mod:`rtgait.estimation.sensor_zero`)."""
     (fx, fy, fz), (tx, ty, tz) = reading
     (px, py, pz), r, m, (cx, cy, cz) = mount
     # In the sole frame: f_s = R_s f, t_s = R_s t + p x f_s.
@@ -51,6 +55,9 @@ def sensor_wrench(reading: Wrench, mount: ForceSensorMount, gravity: tuple[float
     bx = r[0] * tx + r[1] * ty + r[2] * tz + (py * az - pz * ay)
     by = r[3] * tx + r[4] * ty + r[5] * tz + (pz * ax - px * az)
     bz = r[6] * tx + r[7] * ty + r[8] * tz + (px * ay - py * ax)
+    if zero is not None:
+        z0, z1, z2, z3, z4, z5 = zero
+        ax, ay, az, bx, by, bz = ax - z0, ay - z1, az - z2, bx - z3, by - z4, bz - z5
     if m == 0.0:
         return ax, ay, az, bx, by, bz
     wx, wy, wz = m * gravity[0], m * gravity[1], m * gravity[2]  # the weight below the sensor

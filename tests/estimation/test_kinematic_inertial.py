@@ -235,6 +235,12 @@ def test_a_foot_sensor_above_the_sole_with_the_foot_below_it():
     hanging_moment = np.cross(weight_at, weight) - np.cross(sensor_at, weight)
     hanging = Wrench(tuple(turn.T @ weight), tuple(turn.T @ hanging_moment))
     np.testing.assert_allclose(sensor_wrench(hanging, mount, tuple(gravity)), np.zeros(6), atol=1e-9)
+    # A sensor off by a wrench known in the sole frame, its zero: taken off, the ground's wrench again.
+    offset = np.array([1.5, -2.0, 4.0, 0.2, -0.3, 0.1])
+    off_reading = Wrench(tuple(turn.T @ (force + offset[:3])), tuple(turn.T @ (moment + offset[3:])))
+    zero = tuple(offset + np.concatenate([np.zeros(3), np.cross(sensor_at, offset[:3])]))  # about the sole origin
+    out = sensor_wrench(off_reading, mount, tuple(gravity), zero)
+    np.testing.assert_allclose(out, (*ground_force, *ground_moment), atol=1e-9)
 
 
 def test_joint_torques_give_the_sole_wrench_through_the_legs_jacobian():
@@ -335,6 +341,25 @@ def test_a_robot_in_flight_moves_on_as_its_accelerometer_says():
     np.testing.assert_allclose(m.com_vel, v, atol=2.0 * DT / tau * np.linalg.norm(v0))
     np.testing.assert_allclose(m.com, p + r @ COM_IN_BASE, atol=2.0 * DT / tau * np.linalg.norm(v0) * 0.1)
     assert not m.left.loaded and not m.right.loaded
+
+
+def test_a_bounce_on_still_feet_moves_the_base_once():
+    # Both feet's loads drop to nothing for 20 ms while the feet stay on the ground and the base moves on over them (a
+    # stiff robot's bounce): the flight carries the base at its velocity from where it was, not on top of the legs'
+    # motion relative to it (which would count the base's 6 mm over the bounce twice).
+    robot = RigidRobot(FEET)
+    e = estimator(robot)
+    r, zero = rot(0.0, 0.0, 0.2), np.zeros(3)
+    p0, v0 = np.array([0.1, 0.0, 0.75]), np.array([0.3, -0.1, 0.0])
+    for k in range(301):
+        t = k * DT
+        loads = (0.0, 0.0) if 200 <= k < 220 else (300.0, 288.6)  # the bounce's ticks
+        m = e.update(robot.readings(t, p0 + v0 * t, r, v0, zero, zero, loads))
+        if k == 219:
+            assert not m.left.loaded and not m.right.loaded  # still in the bounce
+            np.testing.assert_allclose(m.com, p0 + v0 * t + r @ COM_IN_BASE, atol=1e-6)
+    np.testing.assert_allclose(m.com, p0 + v0 * 0.3 + r @ COM_IN_BASE, atol=1e-6)
+    assert m.left.loaded and m.right.loaded
 
 
 def test_a_swinging_foot_loaded_high_above_the_ground_does_not_land():

@@ -130,10 +130,9 @@ def test_talos_estimate_with_the_sensors_noise(talos, scenario):
     relative, velocity, dcm, agree, delays = _errors(_shadow(talos, scenario, 1.0))
     assert relative < 0.005 and velocity < 0.02 and dcm < 0.010
     assert len(delays) >= 4 and max(abs(d) for d in delays) <= WITHIN
-    # The contact chatters tick by tick around the thresholds as a foot lifts off or lands, and an ankle sensor
-    # reads the foot's own inertia as the stiff leg stops it: a few newtons of sensor noise and offset flip some of
-    # those ticks (docs/estimation.md).
-    assert agree >= 0.98
+    # The goal, at the sensors' noise too: the foot's inertia taken out of the ankle sensors' force and
+    # their zeros learnt in the air (docs/estimation.md).
+    assert agree >= 0.99
 
 
 @pytest.mark.parametrize("noise", [0.0, 1.0])
