@@ -69,7 +69,7 @@ def build_stack(
     friction = identified_friction(robot) if sim.config.motor_model else None
     estimator = make_estimator(
         options.state, robot, controller.planner.w, gravity=gravity, start_feet=(tuple(left), tuple(right)),
-        joint_friction=friction,
+        joint_friction=friction, sensor_noise=sim.config.sensors.noise,
     )  # fmt: skip
     # Feed-forward torques are computed at the sensed state; torque drive adds the tracking of the IK's motion
     # (measured_motion.py).

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES, StateSource, check_state
 from rtgait.estimation.ground_truth import GroundTruthEstimator
 from rtgait.estimation.kinematic_inertial import KinematicInertialEstimator
+from rtgait.estimation.torque_landing import torque_landing_force
 from rtgait.robot.kinematics import PinocchioKinematics
 
 if TYPE_CHECKING:
@@ -99,13 +100,19 @@ def kinematic_inertial_estimator(
 def make_estimator(
     state: StateSource, robot: RobotModel, omega: float, *, gravity: float = 9.81,
     start_feet: tuple[Pose, Pose] | None = None, joint_friction: JointFriction | None = None,
+    sensor_noise: float = 1.0,
 ) -> Estimator:  # fmt: skip
     """The estimator of ``state`` for ``robot``: ``"truth"``, the ground-truth estimator (the thresholds scaled to
     the robot's weight); ``"estimated"``, :func:`kinematic_inertial_estimator` from the standing feet
-    ``start_feet``. ``omega`` (1/s) and ``gravity`` (m/s^2) are the planner's."""
+    ``start_feet``. ``omega`` (1/s) and ``gravity`` (m/s^2) are the planner's. ``sensor_noise``: the factor on the
+    described noise the sensors read with; beyond 1, a robot without foot force sensors takes its landings at a
+    threshold scaled with it (:mod:`rtgait.estimation.torque_landing`)."""
     check_state(state)
     if state == "truth":
         return GroundTruthEstimator(omega, robot.mass * gravity)
+    options: dict[str, object] = {}
+    if sensor_noise > 1.0 and robot.description.sensors.feet is None:  # at <= 1, the estimator's own default
+        options["landing_force"] = torque_landing_force(robot.mass * gravity, sensor_noise)
     return kinematic_inertial_estimator(
-        robot, omega, gravity=gravity, start_feet=start_feet, joint_friction=joint_friction
+        robot, omega, gravity=gravity, start_feet=start_feet, joint_friction=joint_friction, **options
     )

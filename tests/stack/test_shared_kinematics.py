@@ -30,3 +30,13 @@ def test_the_last_update_is_kept_and_the_rest_is_the_wrapped_kinematics():
 
 def test_an_estimator_without_kinematics_shares_none():
     assert shared_kinematics(make_estimator("truth", RobotModel.load("g1"), 3.5)) is None
+
+
+def test_the_landing_threshold_follows_the_sensor_noise_only_without_foot_sensors():
+    g1, talos = RobotModel.load("g1"), RobotModel.load("talos")
+    described = make_estimator("estimated", g1, 3.5).load.landing_force
+    assert make_estimator("estimated", g1, 3.5, sensor_noise=0.5).load.landing_force == described
+    assert make_estimator("estimated", g1, 3.5, sensor_noise=2.0).load.landing_force == pytest.approx(2.0 * described)
+    # Talos's feet carry force sensors: their threshold is the sensors', whatever the noise.
+    talos_force = make_estimator("estimated", talos, 3.5).load.landing_force
+    assert make_estimator("estimated", talos, 3.5, sensor_noise=2.0).load.landing_force == talos_force
