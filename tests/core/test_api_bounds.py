@@ -236,10 +236,10 @@ def test_time_bounds_of_sample_touchdown_and_replan_now():
     planner.start(0.0)
     planner.set_velocity(0.2)
     planner.sample(1.0)
-    began = time.perf_counter()
+    began = time.process_time()
     _refused(planner, lambda: planner.sample(1e300), "within")  # used to hang in phase_at
     _refused(planner, lambda: planner.sample(5e9), "t=5000000000.0 s must be before")  # within MAX_TIME, too far
-    assert time.perf_counter() - began < 0.5
+    assert time.process_time() - began < 0.5
     _refused(planner, lambda: planner.sample(math.inf), "finite")
     _refused(planner, lambda: planner.sample(-1.0), "before the plan")
     _refused(planner, lambda: planner.replan_now(0.5), "before the latest sample")
@@ -414,7 +414,7 @@ def _run_stream(seed: int) -> dict[str, int]:
             calls.append(extra)
         for name, call in calls:
             before = _observable(a)
-            began = time.perf_counter()
+            began = time.process_time()
             try:
                 with warnings.catch_warnings(record=True) as said:
                     warnings.simplefilter("always")
@@ -430,7 +430,7 @@ def _run_stream(seed: int) -> dict[str, int]:
                     twin_result = call(b)
                 if name == "touchdown":
                     assert twin_result == result
-            assert time.perf_counter() - began < CALL_SECONDS, f"{name} took {time.perf_counter() - began:.2f} s"
+            assert time.process_time() - began < CALL_SECONDS, f"{name} took {time.process_time() - began:.2f} s"
         t = max(t, a.latest_time)  # an accepted call may have moved the walk's clock on (a replan asked for later)
         s = a.sample(t)
         twin = b.sample(t)
