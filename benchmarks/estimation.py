@@ -250,6 +250,7 @@ def shadow(
 
     from rtgait.core.push import Push
     from rtgait.estimation.ground_truth import GroundTruthEstimator
+    from rtgait.estimation.torque_landing import torque_landing_force
     from rtgait.io.sim_run import _controller, robot_and_scenario_options
     from rtgait.robot.model import RobotModel
     from rtgait.robot.motion import robot_scenario
@@ -277,10 +278,14 @@ def shadow(
     options = LoopOptions(changes=changes, stop_after_steps=stop_after, state="truth", pushes=pushes)
     loop = ClosedLoop(sim, level, options)
     _, left, right = start_pose(level.planner)
+    weight = robot.mass * float(-sim.model.opt.gravity[2])
+    if noise > 1.0 and robot.description.sensors.feet is None and "landing_force" not in settings:
+        # As the closed loop's estimator (rtgait.stack.estimators.make_estimator): the landing force from joint
+        # torques scaled with the sensors' noise.
+        settings = {**settings, "landing_force": torque_landing_force(weight, noise)}
     estimator = kinematic_inertial_estimator(
         robot, level.planner.w, start_feet=(tuple(left), tuple(right)), **settings
     )  # fmt: skip
-    weight = robot.mass * float(-sim.model.opt.gravity[2])
     truth = GroundTruthEstimator(level.planner.w, weight)
     times, pairs = [], []
     while loop.step() and not loop.done:
