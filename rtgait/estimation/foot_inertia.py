@@ -91,21 +91,8 @@ class FootInertia:
         ``acceleration`` (``(R f_I)_z - g``, m/s^2) and the world-vertical velocities ``left`` and ``right`` of the
         sole origins relative to the IMU, ``up . (w x (p_s - p_I) + p_s' - p_I')`` (m/s); the soles' motions (base
         frame) turn the foot's centre about its sole origin."""
-        ux, uy, uz = up
-        wx, wy, wz = w
-        (cx, cy, cz), (dx, dy, dz) = self._coms
-        # Each foot's centre relative to its sole origin, r = R_s c (base frame), turning at the sole's world rate
-        # w + w_s: its vertical velocity relative to the sole origin, up . ((w + w_s) x r).
-        m0, m1, m2, m3, m4, m5, m6, m7, m8 = left_sole.rotation
-        rx, ry, rz = m0 * cx + m1 * cy + m2 * cz, m3 * cx + m4 * cy + m5 * cz, m6 * cx + m7 * cy + m8 * cz
-        ax, ay, az = left_sole.angular_velocity
-        ax, ay, az = ax + wx, ay + wy, az + wz
-        left += ux * (ay * rz - az * ry) + uy * (az * rx - ax * rz) + uz * (ax * ry - ay * rx)
-        m0, m1, m2, m3, m4, m5, m6, m7, m8 = right_sole.rotation
-        rx, ry, rz = m0 * dx + m1 * dy + m2 * dz, m3 * dx + m4 * dy + m5 * dz, m6 * dx + m7 * dy + m8 * dz
-        ax, ay, az = right_sole.angular_velocity
-        ax, ay, az = ax + wx, ay + wy, az + wz
-        right += ux * (ay * rz - az * ry) + uy * (az * rx - ax * rz) + uz * (ax * ry - ay * rx)
+        left += _centre_rise(up, w, left_sole, self._coms[0])
+        right += _centre_rise(up, w, right_sole, self._coms[1])
         last = self._last
         self._last = (left, right)
         mass_left, mass_right = self._masses
@@ -114,21 +101,25 @@ class FootInertia:
         else:
             force_left = mass_left * (acceleration + (left - last[0]) / dt)
             force_right = mass_right * (acceleration + (right - last[1]) / dt)
-        # The soft threshold, written out: a call per foot costs as much as its arithmetic.
+        # The soft threshold, sign(x) max(|x| - core, 0), without branches.
         core = _CORE
-        if force_left > core:
-            force_left -= core
-        elif force_left < -core:
-            force_left += core
-        else:
-            force_left = 0.0
-        if force_right > core:
-            force_right -= core
-        elif force_right < -core:
-            force_right += core
-        else:
-            force_right = 0.0
+        force_left = max(force_left - core, 0.0) + min(force_left + core, 0.0)
+        force_right = max(force_right - core, 0.0) + min(force_right + core, 0.0)
         return force_left, force_right
 
 
 _CORE = 2.0 * INERTIA_NOISE
+
+
+def _centre_rise(
+    up: tuple[float, float, float], w: tuple[float, float, float], sole: FrameMotion, com: tuple[float, float, float]
+) -> float:
+    """The world-vertical velocity (m/s) of a foot's centre ``com`` (sole frame) relative to its sole origin: with
+    ``r = R_s c`` (base frame) turning at the sole's world rate ``w + w_s``, ``up . ((w + w_s) x r)``."""
+    cx, cy, cz = com
+    m0, m1, m2, m3, m4, m5, m6, m7, m8 = sole.rotation
+    rx, ry, rz = m0 * cx + m1 * cy + m2 * cz, m3 * cx + m4 * cy + m5 * cz, m6 * cx + m7 * cy + m8 * cz
+    ax, ay, az = sole.angular_velocity
+    ax, ay, az = ax + w[0], ay + w[1], az + w[2]
+    ux, uy, uz = up
+    return ux * (ay * rz - az * ry) + uy * (az * rx - ax * rz) + uz * (ax * ry - ay * rx)
