@@ -28,6 +28,8 @@ from rtgait.interface.truth import GroundTruth
 from rtgait.sim.contact_reading import ContactSums
 from rtgait.sim.drives import Drives
 from rtgait.sim.ground_truth import GroundTruthReader
+from rtgait.sim.implicit_wrench import ImplicitStepWrench
+from rtgait.sim.sensor_sites import FOOT_SITES
 from rtgait.sim.sensors import SensorModel, applied_damping
 from rtgait.sim.step_snapshot import StepSnapshot, read_snapshot
 
@@ -61,6 +63,11 @@ class SimRobot:
         self.substeps = sim.substeps
         self._model, self._ctrl = sim.model, data.ctrl
         self._apply = self.drives.apply
+        # The feet's force sensors read with the acceleration the step integrates (module docstring).
+        self._wrench = None
+        if self.sensors.layout.feet:
+            sites = [mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_SITE, FOOT_SITES[s]) for s in ("left", "right")]
+            self._wrench = ImplicitStepWrench(sim.model, tuple(sites))
         # The first substep's contacts and sites, decoded once, when they are also the next tick's truth.
         self._last: tuple[StepSnapshot, ContactSums] | None = None
 
@@ -80,7 +87,8 @@ class SimRobot:
                 self.drives.kd, data.sensordata[start + n : start + 2 * n], data.qvel[self.sim.dof_index],
                 data.actuator_force, np.where(limited, ranges[:, 0], -np.inf), np.where(limited, ranges[:, 1], np.inf),
             )  # fmt: skip
-        return sensors.read(data.sensordata, float(data.time), damping)
+        feet = None if self._wrench is None else self._wrench.correction(data)
+        return sensors.read(data.sensordata, float(data.time), damping, feet)
 
     def write(self, command: JointCommand) -> None:
         """The drives' command for the coming control period (module docstring; without a command delay the arrays
@@ -127,6 +135,8 @@ class SimRobot:
         """Physics substep ``i`` (0 to ``substeps - 1``) of the control period, the drives at their interpolated
         references."""
         self._apply(i, self._ctrl)
+        if self._wrench is not None and i == self.substeps - 1:
+            self._wrench.keep_velocity(self.data)
         mujoco.mj_step(self._model, self.data)
         self._last = None
 
@@ -135,6 +145,8 @@ class SimRobot:
         read and decoded once (:mod:`rtgait.sim.step_snapshot`, :mod:`rtgait.sim.contact_reading`): the run's
         contact record reads them, and so does the next tick's truth when this is the period's only substep."""
         self._apply(0, self._ctrl)
+        if self._wrench is not None and self.substeps == 1:
+            self._wrench.keep_velocity(self.data)
         mujoco.mj_step(self._model, self.data)
         snapshot = read_snapshot(self.data)
         last = (snapshot, self.reader.contacts.read(self.data, snapshot))

@@ -37,7 +37,7 @@ if TYPE_CHECKING:
     from rtgait.interface.sensor_spec import SensorFrame
     from rtgait.robot.model import RobotModel
 
-__all__ = ["IMU_SITE", "IMU_SIZE", "SensorLayout", "add_sensors"]
+__all__ = ["FOOT_SITES", "IMU_SITE", "IMU_SIZE", "SensorLayout", "add_sensors"]
 
 IMU_SITE = "imu"
 """Name of the IMU's site."""

@@ -27,6 +27,8 @@ SensorSettings`), one reading per control tick of period ``dt``:
   torque (a strain gauge's, a motor current's) is the one that moves the joint; MuJoCo's reading differs from it by
   the damping's change over one step, which on G1's stiff legs made the legs' wrench from their torques err by 6 N
   RMS on a swinging foot with noise-free sensors (``docs/estimation.md``);
+* the feet's force sensors, likewise, read the wrench of the step's acceleration, not of MuJoCo's forward dynamics
+  (:mod:`rtgait.sim.implicit_wrench`);
 * the IMU filter's orientation ``q_m = q_e q``, an error rotation in the world frame: white roll and pitch, and a yaw
   that drifts at a rate drawn once per run (``yaw = rate t``, ``t`` from the first reading).
 
@@ -138,11 +140,14 @@ class SensorModel:
         self._stamps = [0.0] * (self.latency + 1)
         self.ticks = 0
 
-    def read(self, sensordata: np.ndarray, t: float, damping: np.ndarray | None = None) -> SensorReadings:
+    def read(
+        self, sensordata: np.ndarray, t: float, damping: np.ndarray | None = None, feet: np.ndarray | None = None
+    ) -> SensorReadings:
         """The reading of this control tick from MuJoCo's ``sensordata`` (true values, see the module docstring),
         sampled at ``t`` (s), delivered :attr:`latency` ticks late; ``damping``: each joint's ``kd (dq - dq_end)``
         over the physics step from the sampled state (N m, joint order; 0 where the drive saturates), added to the
-        torques (:func:`applied_damping`)."""
+        torques (:func:`applied_damping`); ``feet``: added to the feet's force sensors (12 numbers, MuJoCo's sign;
+        :mod:`rtgait.sim.implicit_wrench`)."""
         layout = self.layout
         size, ring, k = layout.size, self._ring, self.ticks
         slot = k % len(ring)
@@ -151,6 +156,8 @@ class SensorModel:
         if damping is not None:
             n = layout.joints
             values[2 * n : 3 * n] += damping
+        if feet is not None:
+            values[size - 12 :] += feet
         if self._imu_at >= 0:
             self._mean_specific_force(values, t)
         values += self._offset

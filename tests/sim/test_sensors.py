@@ -9,6 +9,7 @@ sampled every ``dt`` has the standard deviation ``N / sqrt(dt)``, a bias walk of
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from typing import Any
 
@@ -348,3 +349,55 @@ def test_g1_joint_torques_are_the_ones_its_drives_applied_over_the_step() -> Non
         instants.append(np.abs(data.actuator_force - law)[free].max())
     assert max(errors) < 1e-9
     assert max(instants) > 0.05  # MuJoCo's force of the instant differs from it: the test can tell them apart
+
+
+def test_ankle_sensors_read_the_wrench_that_moves_the_foot(talos_sim: Any) -> None:
+    """Talos in the air, its legs swinging on the stiff servos: each foot sensor reads the Newton-Euler wrench
+    of the foot below it, ``f = m (a - g)`` and ``t = I w' + w x I w + (c - p) x f`` about the sensor, with ``a`` and
+    ``w'`` the foot's mean accelerations over the physics step (its velocities at consecutive ticks), not MuJoCo's
+    wrench of the forward dynamics' acceleration (:mod:`rtgait.sim.implicit_wrench`)."""
+    from rtgait.interface.command import JointCommand
+
+    sim = talos_sim
+    model, data = sim.model, sim.new_data()
+    data.qpos[2] += 1.0  # no contact for the ticks below
+    mujoco.mj_forward(model, data)
+    start = data.ctrl.copy()
+    robot = SimRobot(sim, data, start)
+    robot.sensors = SensorModel(sim, SensorSettings(noise=0.0, latency=0))
+    feet = [_site(sim, f"{side}_foot_sensor") for side in ("left", "right")]
+    legs = np.array([name.startswith("leg_") for name in robot.joint_names])
+    h, gravity, n = model.opt.timestep, model.opt.gravity, len(robot.joint_names)
+    frames, errors, raw_errors = [], [], []
+    for k in range(40):
+        swing = np.where(legs, 0.05 * math.sin(2.0 * math.pi * 2.0 * k * sim.control_dt), 0.0)
+        robot.write(JointCommand(start + swing, np.zeros(n)))
+        robot.first_substep()
+        reading = robot.read()
+        frame = []
+        for site, wrench in zip(feet, (reading.left_foot, reading.right_foot), strict=True):
+            body = model.site_bodyid[site]
+            velocity = np.empty(6)
+            mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_BODY, body, velocity, 0)  # at the COM, world
+            axes = data.ximat[body].reshape(3, 3)  # the body's principal axes of inertia
+            inertia = axes @ np.diag(model.body_inertia[body]) @ axes.T
+            at = sim.sensors.stop - 12 + 6 * feet.index(site)  # MuJoCo's force reading of this foot
+            raw = -data.sensordata[at : at + 3]
+            frame.append((velocity[:3].copy(), velocity[3:].copy(), inertia, data.xipos[body].copy(),
+                          data.site_xpos[site].copy(), data.site_xmat[site].reshape(3, 3).copy(),
+                          np.concatenate([wrench.force, wrench.torque]), raw.copy()))  # fmt: skip
+        frames.append(frame)
+        assert data.ncon == 0
+    mass = model.body_mass[model.site_bodyid[feet[0]]]
+    for before, after in itertools.pairwise(frames[1:]):
+        for (w, v, inertia, com, origin, rotation, reading, raw), (w_end, v_end, *_) in zip(before, after, strict=True):
+            force = mass * ((v_end - v) / h - gravity)
+            torque = inertia @ ((w_end - w) / h) + np.cross(w, inertia @ w) + np.cross(com - origin, force)
+            # The reading's sign: the wrench on the leg from the foot, the opposite of the parent's on the foot.
+            expected = -np.concatenate([rotation.T @ force, rotation.T @ torque])
+            errors.append(np.abs(reading - expected))
+            raw_errors.append(np.abs(raw - expected[:3]))
+    errors = np.array(errors)
+    # The finite differences' acceleration is the step's mean, the correction's that of its start: O(h) apart.
+    assert errors[:, :3].max() < 0.5 and errors[:, 3:].max() < 0.02
+    assert np.array(raw_errors).max() > 20.0  # MuJoCo's own reading is off by more: the test tells them apart
