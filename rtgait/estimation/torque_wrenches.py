@@ -144,8 +144,16 @@ class TorqueWrenches:
         self._legs = slice(both[0], both[0] + len(both)) if consecutive else np.array(both)
         self._leg_shape = (2, len(legs[0]))
         self._leg_dynamics = kinematics.leg_dynamics
-        self._velocities = np.zeros(kinematics.joint_count)
-        self._accelerations = np.zeros(kinematics.joint_count)
+        n = kinematics.joint_count
+        self._velocities = np.zeros(n)
+        self._at_rest = np.zeros(n)  # the first tick's joint accelerations
+        # The joints' accelerations: row 0 the low-passed ones (the filter's state), row 1 this tick's difference; the
+        # rows' weights in the low-pass, ``(beta, 1 - beta)``, and the rate ``1 / dt`` as arrays for the period.
+        self._motion = np.zeros((2, n))
+        self._filtered_joints, self._difference = self._motion
+        self._weights = np.zeros((2, n))
+        self._rates = np.zeros(n)
+        self._filter_accelerations = self.acceleration_cutoff != math.inf
         self.reset()
 
     def reset(self) -> None:
@@ -154,10 +162,20 @@ class TorqueWrenches:
         self._state: tuple[SoleWrench, SoleWrench] | None = None
         self.contact_forces: tuple[Vector, Vector] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         """The soles' forces low-passed at ``contact_cutoff`` for the contact detection (N, sole frames)."""
-        self._dt, self._beta, self._contact_beta = -1.0, 0.0, 0.0
-        self._accel_dt, self._accel_beta = -1.0, 0.0
-        self._filtered: tuple[np.ndarray, Vector] | None = None
+        self._dt = -1.0  # the period of the values below, recomputed only when it changes
+        self._rate, self._beta, self._contact_beta, self._accel_beta = 0.0, 0.0, 0.0, 0.0
+        self._filtered_angular: Vector | None = None  # the low-passed angular acceleration; None: not started
         self._torques: np.ndarray | None = None  # the last tick's link torques, for the period's mean
+
+    def _set_period(self, dt: float) -> None:
+        """The rate and the filters' betas for the period ``dt`` (s)."""
+        self._dt, self._rate = dt, 1.0 / dt
+        self._rates.fill(self._rate)
+        self._beta = math.exp(-2.0 * math.pi * self.cutoff * dt)
+        self._contact_beta = math.exp(-2.0 * math.pi * self.contact_cutoff * dt)
+        self._accel_beta = beta = math.exp(-2.0 * math.pi * self.acceleration_cutoff * dt)
+        self._weights[0].fill(beta)
+        self._weights[1].fill(1.0 - beta)
 
     @staticmethod
     def _base_acceleration(
@@ -194,31 +212,32 @@ class TorqueWrenches:
         if state is not None and dt <= 0.0:
             return state
         wx, wy, wz = angular_velocity
-        accelerations = self._accelerations
         if state is None:  # no earlier tick: the motion's accelerations taken as zero
             ax = ay = az = 0.0
+            accelerations = self._at_rest
         else:
-            rate = 1.0 / dt
+            if dt != self._dt:
+                self._set_period(dt)
+            accelerations = self._difference
             np.subtract(joint_velocities, self._velocities, out=accelerations)
-            accelerations *= rate
+            accelerations *= self._rates
+            rate = self._rate
             px, py, pz = self._angular  # type: ignore[misc]
             ax, ay, az = (wx - px) * rate, (wy - py) * rate, (wz - pz) * rate
-            if self.acceleration_cutoff != math.inf:
-                if dt != self._accel_dt:
-                    self._accel_dt, self._accel_beta = dt, math.exp(-2.0 * math.pi * self.acceleration_cutoff * dt)
-                ba = self._accel_beta
-                if self._filtered is None:
-                    self._filtered = (accelerations.copy(), (ax, ay, az))
+            if self._filter_accelerations:
+                filtered, angular = self._filtered_joints, self._filtered_angular
+                if angular is None:  # the first difference starts the filter
+                    filtered[:] = accelerations
                 else:
-                    joints, (gx, gy, gz) = self._filtered
-                    # joints <- ba joints + (1 - ba) accelerations, in place; the legs are handed the filtered ones.
-                    accelerations *= 1.0 - ba
-                    joints *= ba
-                    joints += accelerations
-                    accelerations[:] = joints
-                    c = 1.0 - ba
-                    ax, ay, az = ba * gx + c * ax, ba * gy + c * ay, ba * gz + c * az
-                    self._filtered = (joints, (ax, ay, az))
+                    # filtered <- beta filtered + (1 - beta) difference: both rows weighted at once, in place.
+                    self._motion *= self._weights
+                    filtered += accelerations
+                    b = self._accel_beta
+                    c = 1.0 - b
+                    gx, gy, gz = angular
+                    ax, ay, az = b * gx + c * ax, b * gy + c * ay, b * gz + c * az
+                self._filtered_angular = (ax, ay, az)
+                accelerations = filtered  # the legs are handed the filtered ones
         self._velocities[:] = joint_velocities
         self._angular = angular_velocity
         base = self._base_acceleration((ax, ay, az), angular_velocity, specific_force, imu_position, imu_velocity)
@@ -235,10 +254,6 @@ class TorqueWrenches:
         contact = (left, right)
         if state is None:
             self.contact_forces = (contact[0][0:3], contact[1][0:3])
-        else:
-            if dt != self._dt:  # betas for this period, recomputed only when the period changes
-                self._dt, self._beta = dt, math.exp(-2.0 * math.pi * self.cutoff * dt)
-                self._contact_beta = math.exp(-2.0 * math.pi * self.contact_cutoff * dt)
         if state is not None and not self.momentum:  # the observer's contact forces are the reported wrench's
             b = self._contact_beta
             c = 1.0 - b

@@ -40,7 +40,8 @@ _AT_REST = (0.0, 0.0, 0.0)
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 # The calls of a tick, bound once (a module attribute lookup each otherwise).
 _center_of_mass, _frame_placement, _frame_velocity = pin.centerOfMass, pin.updateFramePlacement, pin.getFrameVelocity
-_WORLD = pin.LOCAL_WORLD_ALIGNED
+_rnea, _joint_jacobians, _frame_jacobian = pin.rnea, pin.computeJointJacobians, pin.getFrameJacobian
+_WORLD, _LOCAL = pin.LOCAL_WORLD_ALIGNED, pin.LOCAL
 _COM_VALUES = 6  # the COM's position and velocity at the start of the kinematics' buffer
 _FRAME_VALUES = 18  # a frame's position, rotation, linear and angular velocity, after them
 
@@ -84,11 +85,12 @@ class PinocchioKinematics:
         self.leg_joints = (self._leg(robot.left_sole_id), self._leg(robot.right_sole_id))
         # Each leg's columns of the velocity vector: a slice where they follow each other (no copy to index them).
         self._leg_columns = tuple(_columns(leg, 6) for leg in self.leg_joints)
-        self._jacobians = np.empty((2, 6, len(self.leg_joints[0])))
-        self._holding = np.empty((2, len(self.leg_joints[0])))
-        # Both legs' rows of the torques at once when the right leg's columns follow the left's: a view, no copy.
+        # The legs' needed torques: a view of the inverse dynamics' output in the data (rewritten by each pass), both
+        # legs' rows at once when the right leg's joints follow the left's; else gathered into an array.
         both = _columns(self.leg_joints[0] + self.leg_joints[1], 6)
-        self._both_legs = both if isinstance(both, slice) else None
+        legs_shape = (2, len(self.leg_joints[0]))
+        self._needed = self.data.tau[both].reshape(legs_shape) if isinstance(both, slice) else np.empty(legs_shape)
+        self._needed_rows = None if isinstance(both, slice) else both
         # The legs' dynamics: the gravity comes in as the base's specific force (module docstring); the rotors.
         model.gravity = pin.Motion.Zero()
         model.armature[6:] = joint_drives(robot)[1]
@@ -158,11 +160,11 @@ class PinocchioKinematics:
     def leg_dynamics(
         self, angular_velocity: tuple[float, float, float], acceleration: tuple[float, ...],
         joint_accelerations: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-        """The soles' Jacobians (sole frame, rows linear then angular) with respect to each leg's joints, shape
-        ``(2, 6, n_leg)``, and the torques each leg's joints need for the motion with the soles free, shape
-        ``(2, n_leg)``, at the configuration and joint velocities of the last :meth:`update` (arrays the next call
-        overwrites; module docstring).
+    ) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:  # fmt: skip
+        """The soles' Jacobians (sole frame, rows linear then angular) with respect to each leg's joints, left then
+        right, shape ``(6, n_leg)`` each, and the torques each leg's joints need for the motion with the soles free,
+        shape ``(2, n_leg)``, at the configuration and joint velocities of the last :meth:`update` (the torques an
+        array the next call overwrites; module docstring).
 
         Args:
             angular_velocity: the base's angular velocity (rad/s, base frame).
@@ -175,18 +177,16 @@ class PinocchioKinematics:
         v[6:] = self._v[6:]
         a[0:6] = acceleration
         a[6:] = joint_accelerations
-        torques = pin.rnea(model, data, q, v, a)
-        pin.computeJointJacobians(model, data)  # from the joint placements of q, which update() and rnea computed
-        (left, right), jacobians, legs = self._soles, self._jacobians, self._holding
-        columns_left, columns_right = self._leg_columns
-        jacobians[0] = pin.getFrameJacobian(model, data, left, pin.LOCAL)[:, columns_left]
-        jacobians[1] = pin.getFrameJacobian(model, data, right, pin.LOCAL)[:, columns_right]
-        both = self._both_legs
-        if both is not None:
-            return jacobians, torques[both].reshape(legs.shape)
-        legs[0] = torques[columns_left]
-        legs[1] = torques[columns_right]
-        return jacobians, legs
+        _rnea(model, data, q, v, a)  # into data.tau, of which the needed torques are a view
+        _joint_jacobians(model, data)  # from the joint placements of q, which update() and rnea computed
+        (left, right), (columns_left, columns_right) = self._soles, self._leg_columns
+        # Each sole's columns of its frame Jacobian: views of Pinocchio's new arrays, no copy.
+        jacobians = (_frame_jacobian(model, data, left, _LOCAL)[:, columns_left],
+                     _frame_jacobian(model, data, right, _LOCAL)[:, columns_right])  # fmt: skip
+        needed, rows = self._needed, self._needed_rows
+        if rows is not None:  # legs whose joints do not follow each other: gathered
+            data.tau.take(rows, out=needed.reshape(-1))
+        return jacobians, needed
 
     # ----- construction --------------------------------------------------------------------------------------------
     def _leg(self, sole: int) -> tuple[int, ...]:
