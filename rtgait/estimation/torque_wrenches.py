@@ -77,6 +77,7 @@ the landing threshold: a touch-down detected while the foot is still 30 mm up). 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -94,6 +95,23 @@ DEFAULT_ACCELERATION_CUTOFF = 30.0
 """Cut-off of the low-pass on the finite-differenced accelerations (Hz): a 5.3 ms time constant (module docstring)."""
 
 Vector = tuple[float, float, float]
+
+_PERIODS_KEPT = 8
+"""How many periods' values are kept: a clock's rounding gives a few periods (three on the simulator's 2 ms ticks),
+which alternate; more are forgotten all at once."""
+
+
+class _Period(NamedTuple):
+    """A period's values: the rate ``1 / dt`` (1/s), as a number and an array of the joints' size; the accelerations'
+    low-pass weights ``(beta, 1 - beta)`` as rows of that size and its ``beta``; the reported wrench's and the contact
+    forces' ``beta``."""
+
+    rate: float
+    rates: np.ndarray
+    weights: np.ndarray
+    acceleration_beta: float
+    beta: float
+    contact_beta: float
 
 
 class TorqueWrenches:
@@ -151,9 +169,8 @@ class TorqueWrenches:
         # rows' weights in the low-pass, ``(beta, 1 - beta)``, and the rate ``1 / dt`` as arrays for the period.
         self._motion = np.zeros((2, n))
         self._filtered_joints, self._difference = self._motion
-        self._weights = np.zeros((2, n))
-        self._rates = np.zeros(n)
         self._filter_accelerations = self.acceleration_cutoff != math.inf
+        self._periods: dict[float, _Period] = {}
         self.reset()
 
     def reset(self) -> None:
@@ -162,20 +179,21 @@ class TorqueWrenches:
         self._state: tuple[SoleWrench, SoleWrench] | None = None
         self.contact_forces: tuple[Vector, Vector] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         """The soles' forces low-passed at ``contact_cutoff`` for the contact detection (N, sole frames)."""
-        self._dt = -1.0  # the period of the values below, recomputed only when it changes
-        self._rate, self._beta, self._contact_beta, self._accel_beta = 0.0, 0.0, 0.0, 0.0
         self._filtered_angular: Vector | None = None  # the low-passed angular acceleration; None: not started
         self._torques: np.ndarray | None = None  # the last tick's link torques, for the period's mean
 
-    def _set_period(self, dt: float) -> None:
-        """The rate and the filters' betas for the period ``dt`` (s)."""
-        self._dt, self._rate = dt, 1.0 / dt
-        self._rates.fill(self._rate)
-        self._beta = math.exp(-2.0 * math.pi * self.cutoff * dt)
-        self._contact_beta = math.exp(-2.0 * math.pi * self.contact_cutoff * dt)
-        self._accel_beta = beta = math.exp(-2.0 * math.pi * self.acceleration_cutoff * dt)
-        self._weights[0].fill(beta)
-        self._weights[1].fill(1.0 - beta)
+    def _period(self, dt: float) -> _Period:
+        """The rate and the filters' weights for the period ``dt`` (s), kept for the next ticks of that period."""
+        periods = self._periods
+        if len(periods) >= _PERIODS_KEPT:
+            periods.clear()
+        rate, n = 1.0 / dt, self._velocities.size
+        accel_beta = math.exp(-2.0 * math.pi * self.acceleration_cutoff * dt)
+        periods[dt] = period = _Period(
+            rate, np.full(n, rate), np.array([np.full(n, accel_beta), np.full(n, 1.0 - accel_beta)]), accel_beta,
+            math.exp(-2.0 * math.pi * self.cutoff * dt), math.exp(-2.0 * math.pi * self.contact_cutoff * dt),
+        )  # fmt: skip
+        return period
 
     @staticmethod
     def _base_acceleration(
@@ -216,12 +234,11 @@ class TorqueWrenches:
             ax = ay = az = 0.0
             accelerations = self._at_rest
         else:
-            if dt != self._dt:
-                self._set_period(dt)
+            period = self._periods.get(dt) or self._period(dt)
             accelerations = self._difference
             np.subtract(joint_velocities, self._velocities, out=accelerations)
-            accelerations *= self._rates
-            rate = self._rate
+            accelerations *= period.rates
+            rate = period.rate
             px, py, pz = self._angular  # type: ignore[misc]
             ax, ay, az = (wx - px) * rate, (wy - py) * rate, (wz - pz) * rate
             if self._filter_accelerations:
@@ -230,9 +247,9 @@ class TorqueWrenches:
                     filtered[:] = accelerations
                 else:
                     # filtered <- beta filtered + (1 - beta) difference: both rows weighted at once, in place.
-                    self._motion *= self._weights
+                    self._motion *= period.weights
                     filtered += accelerations
-                    b = self._accel_beta
+                    b = period.acceleration_beta
                     c = 1.0 - b
                     gx, gy, gz = angular
                     ax, ay, az = b * gx + c * ax, b * gy + c * ay, b * gz + c * az
@@ -255,7 +272,7 @@ class TorqueWrenches:
         if state is None:
             self.contact_forces = (contact[0][0:3], contact[1][0:3])
         if state is not None and not self.momentum:  # the observer's contact forces are the reported wrench's
-            b = self._contact_beta
+            b = period.contact_beta
             c = 1.0 - b
             (l0, l1, l2), (r0, r1, r2) = self.contact_forces
             (m0, m1, m2, *_), (n0, n1, n2, *_) = contact
@@ -264,7 +281,7 @@ class TorqueWrenches:
                 (b * r0 + c * n0, b * r1 + c * n1, b * r2 + c * n2),
             )
         if state is not None and self.cutoff != math.inf:
-            b = self._beta
+            b = period.beta
             c = 1.0 - b
             (l0, l1, l2, l3, l4, l5), (r0, r1, r2, r3, r4, r5) = state
             left = (b * l0 + c * left[0], b * l1 + c * left[1], b * l2 + c * left[2], b * l3 + c * left[3],
