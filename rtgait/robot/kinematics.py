@@ -42,8 +42,6 @@ _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its gen
 _center_of_mass, _frame_placement, _frame_velocity = pin.centerOfMass, pin.updateFramePlacement, pin.getFrameVelocity
 _rnea, _joint_jacobians, _frame_jacobian = pin.rnea, pin.computeJointJacobians, pin.getFrameJacobian
 _WORLD, _LOCAL = pin.LOCAL_WORLD_ALIGNED, pin.LOCAL
-_COM_VALUES = 6  # the COM's position and velocity at the start of the kinematics' buffer
-_FRAME_VALUES = 18  # a frame's position, rotation, linear and angular velocity, after them
 
 
 class PinocchioKinematics:
@@ -108,23 +106,13 @@ class PinocchioKinematics:
             self._imu_fixed = FrameMotion(
                 tuple(placement.translation.tolist()), tuple(placement.rotation.ravel().tolist()), _AT_REST, _AT_REST
             )
-        # Views of the data's arrays that the forward kinematics rewrite in place: the COM, its velocity, the frames'
-        # translations and rotations (column-major, flattened without a copy); the frames' velocities (linear then
-        # angular) are new arrays each tick.
+        # Views of the data's arrays that the forward kinematics rewrite in place: the COM, its velocity, each frame's
+        # translation and rotation (the frames' velocities are new arrays each tick).
         data = self.data
         frames = (robot.left_sole_id, robot.right_sole_id) + (() if self._imu_fixed is not None else (self._imu,))
         self._frames = (*frames[:2], frames[2] if len(frames) == 3 else -1)
-        self._parts: list[np.ndarray] = [data.com[0], data.vcom[0]]
-        for frame in frames:
-            placement = data.oMf[frame]
-            self._parts += [placement.translation, placement.rotation.T.reshape(9), np.zeros(6)]
-        self._buffer = np.empty(sum(part.size for part in self._parts))
-        # The buffer's order for the outputs: each rotation turned row-major (R[r][c] from column-major 3 c + r), so
-        # that every output is a slice of one tuple.
-        order = list(range(self._buffer.size))
-        for k in range(_COM_VALUES, self._buffer.size, _FRAME_VALUES):
-            order[k + 3 : k + 12] = [k + 3 + 3 * c + r for r in range(3) for c in range(3)]
-        self._order = np.array(order)
+        self._com, self._com_velocity = data.com[0], data.vcom[0]
+        self._placements = {frame: (data.oMf[frame].translation, data.oMf[frame].rotation) for frame in frames}
         self.foot_sensors: tuple[ForceSensorMount, ForceSensorMount] | None = None
         if sensor_frames is not None:
             self.foot_sensors = tuple(  # type: ignore[assignment]
@@ -138,24 +126,23 @@ class PinocchioKinematics:
         v[6:] = joint_velocities
         _center_of_mass(model, data, q, v, False)  # forward kinematics (positions, velocities), COM, COM velocity
         left, right, imu = self._frames
-        _frame_placement(model, data, left)
-        _frame_placement(model, data, right)
-        parts = self._parts
-        parts[4] = _frame_velocity(model, data, left, _WORLD).vector
-        parts[7] = _frame_velocity(model, data, right, _WORLD).vector
         fixed = self._imu_fixed
-        if fixed is None:
-            _frame_placement(model, data, imu)
-            parts[10] = _frame_velocity(model, data, imu, _WORLD).vector
-        # One copy of every value into a buffer, one reordering and one conversion to Python floats.
-        values = tuple(np.concatenate(parts, out=self._buffer).take(self._order).tolist())
-        if fixed is None:
-            fixed = _frame_motion(values, _COM_VALUES + 2 * _FRAME_VALUES)
         return _new_tuple(
             BodyKinematics,
-            (values[0:3], values[3:6], _frame_motion(values, _COM_VALUES),
-             _frame_motion(values, _COM_VALUES + _FRAME_VALUES), fixed),
+            (tuple(self._com.tolist()), tuple(self._com_velocity.tolist()), self._frame_motion(left),
+             self._frame_motion(right), self._frame_motion(imu) if fixed is None else fixed),
         )  # fmt: skip
+
+    def _frame_motion(self, frame: int) -> FrameMotion:
+        """A frame's placement and velocity after the forward kinematics, as Python floats: position, rotation
+        (row-major), linear and angular velocity (base frame)."""
+        model, data = self.model, self.data
+        translation, rotation = self._placements[frame]
+        _frame_placement(model, data, frame)
+        (r0, r1, r2), velocity = rotation.tolist(), _frame_velocity(model, data, frame, _WORLD).vector.tolist()
+        return _new_tuple(
+            FrameMotion, (tuple(translation.tolist()), (*r0, *r1, *r2), tuple(velocity[0:3]), tuple(velocity[3:6]))
+        )
 
     def leg_dynamics(
         self, angular_velocity: tuple[float, float, float], acceleration: tuple[float, ...],
@@ -225,13 +212,6 @@ def _add_frame(model: pin.Model, name: str, frame: SensorFrame, field: str) -> i
     link = model.frames[link_id]
     placement = link.placement * pin.SE3(np.eye(3), np.asarray(frame.offset, dtype=float))
     return int(model.addFrame(pin.Frame(name, link.parentJoint, link_id, placement, pin.FrameType.OP_FRAME)))
-
-
-def _frame_motion(values: tuple[float, ...], k: int) -> FrameMotion:
-    """The frame whose 18 values start at ``values[k]``: position, rotation (row-major), linear and angular
-    velocity."""
-    return _new_tuple(FrameMotion, (values[k : k + 3], values[k + 3 : k + 12], values[k + 12 : k + 15],
-                                    values[k + 15 : k + 18]))  # fmt: skip
 
 
 def _columns(indices: tuple[int, ...], offset: int) -> slice | np.ndarray:
