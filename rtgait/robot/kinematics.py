@@ -160,8 +160,8 @@ class PinocchioKinematics:
             joint_accelerations: the joints' accelerations (rad/s^2), shape ``(joint_count,)``.
         """
         model, data, q, v, a = self.model, self.data, self._q, self._v_dynamics, self._a_dynamics
-        v[3:6] = angular_velocity
-        v[6:] = self._v[6:]
+        v[:] = self._v  # the joints' velocities of update(), the base at rest; then the base turning
+        v[3], v[4], v[5] = angular_velocity
         a[0:6] = acceleration
         a[6:] = joint_accelerations
         _rnea(model, data, q, v, a)  # into data.tau, of which the needed torques are a view
