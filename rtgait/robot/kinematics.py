@@ -139,10 +139,9 @@ class PinocchioKinematics:
         model, data = self.model, self.data
         translation, rotation = self._placements[frame]
         _frame_placement(model, data, frame)
-        (r0, r1, r2), velocity = rotation.tolist(), _frame_velocity(model, data, frame, _WORLD).vector.tolist()
-        return _new_tuple(
-            FrameMotion, (tuple(translation.tolist()), (*r0, *r1, *r2), tuple(velocity[0:3]), tuple(velocity[3:6]))
-        )
+        r0, r1, r2 = rotation.tolist()
+        vx, vy, vz, wx, wy, wz = _frame_velocity(model, data, frame, _WORLD).vector.tolist()
+        return _new_tuple(FrameMotion, (tuple(translation.tolist()), (*r0, *r1, *r2), (vx, vy, vz), (wx, wy, wz)))
 
     def leg_dynamics(
         self, angular_velocity: tuple[float, float, float], acceleration: tuple[float, ...],
