@@ -23,7 +23,7 @@ update::
 (``PYTHONHASHSEED=0``: the strings' hashes, random otherwise, change the count a little). The whole run's count, the
 recording and the imports included, moves by tens of millions of instructions from run to run (the difference of an
 ``--updates 1000`` and an ``--updates 0`` run by up to 70,000 an update); the marked updates' count repeats within
-0.01 %.
+0.2 %.
 """
 
 from __future__ import annotations
