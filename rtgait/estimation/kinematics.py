@@ -44,7 +44,7 @@ class RobotKinematics(Protocol):
     def leg_dynamics(
         self, angular_velocity: tuple[float, float, float], acceleration: tuple[float, ...],
         joint_accelerations: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    ) -> tuple[Sequence[np.ndarray], np.ndarray]:  # fmt: skip
         """Each leg's dynamics at the configuration and joint velocities of the last :meth:`update`.
 
         Args:
@@ -54,9 +54,9 @@ class RobotKinematics(Protocol):
             joint_accelerations: the joints' accelerations (rad/s^2), shape ``(joint_count,)``.
 
         Returns:
-            ``(jacobians, torques)``: the sole frames' Jacobians with respect to each leg's joints, shape
-            ``(2, 6, n_leg)``, rows ``(linear; angular)`` in the sole frame; and the torques (N m) each leg's joints
-            need for that motion with the sole free, gravity included, shape ``(2, n_leg)``, in :attr:`leg_joints`
-            order.
+            ``(jacobians, torques)``: the left and right sole frames' Jacobians with respect to their legs' joints,
+            shape ``(6, n_leg)`` each, rows ``(linear; angular)`` in the sole frame; and the torques (N m) each leg's
+            joints need for that motion with the sole free, gravity included, shape ``(2, n_leg)``, in
+            :attr:`leg_joints` order.
         """
         ...

@@ -27,13 +27,15 @@ knee, where ``F`` is not observable along the leg's axis (then the least-squares
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from scipy.linalg.lapack import dgesv as _gesv
 
 from rtgait.interface.body_kinematics import ForceSensorMount
 from rtgait.interface.readings import Wrench
 
-__all__ = ["SoleWrench", "sensor_wrench", "torque_wrenches"]
+__all__ = ["SoleWrench", "leg_wrench", "sensor_wrench", "torque_wrenches"]
 
 SoleWrench = tuple[float, float, float, float, float, float]
 """``(fx, fy, fz, tx, ty, tz)``: the ground's force on a sole (N) and its moment about the sole origin (N m), in the
@@ -64,28 +66,32 @@ def sensor_wrench(
     return (ax - wx, ay - wy, az - wz, bx - (cy * wz - cz * wy), by - (cz * wx - cx * wz), bz - (cx * wy - cy * wx))
 
 
-def torque_wrenches(jacobians: np.ndarray, needed: np.ndarray, torques: np.ndarray) -> list[SoleWrench]:
+def torque_wrenches(
+    jacobians: Sequence[np.ndarray], needed: np.ndarray, torques: np.ndarray
+) -> tuple[SoleWrench, SoleWrench]:
     """The ground's wrench on each sole from its leg's joint torques (module docstring).
 
     Args:
-        jacobians: the soles' Jacobians with respect to their legs' joints, shape ``(2, 6, n)``, rows linear then
-            angular, sole frame.
+        jacobians: the left and right soles' Jacobians with respect to their legs' joints, shape ``(6, n)`` each, rows
+            linear then angular, sole frame.
         needed: the torques each leg's motion needs with the sole free, ``tau_id`` (N m), shape ``(2, n)``.
         torques: the legs' measured joint torques (N m), shape ``(2, n)``.
 
     Returns:
         The left and right soles' wrenches.
     """
-    rhs = needed - torques
-    out = []
-    for i in (0, 1):
-        jt = jacobians[i].T
-        if jt.shape[0] == 6:
-            # LAPACK's solver called directly: numpy's solve costs four times as much on a 6 x 6.
-            _, _, wrench, info = _gesv(jt, rhs[i])
-            if info == 0:
-                out.append(tuple(wrench.tolist()))
-                continue
-        # A leg of other than six joints, or a singular Jacobian: the least-squares (or least-norm) wrench.
-        out.append(tuple(np.linalg.lstsq(jt, rhs[i], rcond=None)[0].tolist()))
-    return out  # type: ignore[return-value]
+    left, right = needed - torques
+    return leg_wrench(jacobians[0], left), leg_wrench(jacobians[1], right)
+
+
+def leg_wrench(jacobian: np.ndarray, residual: np.ndarray) -> SoleWrench:
+    """The wrench ``F`` with ``J^T F = residual``: a sole's Jacobian ``J`` with respect to its leg's joints, shape
+    ``(6, n)``, and the leg's residual torques ``tau_id - tau_l`` (N m), shape ``(n,)`` (module docstring)."""
+    jt = jacobian.T
+    if jt.shape[0] == 6:
+        # LAPACK's solver called directly: numpy's solve costs four times as much on a 6 x 6.
+        _, _, wrench, info = _gesv(jt, residual)
+        if info == 0:
+            return tuple(wrench.tolist())  # type: ignore[return-value]
+    # A leg of other than six joints, or a singular Jacobian: the least-squares (or least-norm) wrench.
+    return tuple(np.linalg.lstsq(jt, residual, rcond=None)[0].tolist())  # type: ignore[return-value]

@@ -77,6 +77,7 @@ the landing threshold: a touch-down detected while the foot is still 30 mm up). 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -94,6 +95,23 @@ DEFAULT_ACCELERATION_CUTOFF = 30.0
 """Cut-off of the low-pass on the finite-differenced accelerations (Hz): a 5.3 ms time constant (module docstring)."""
 
 Vector = tuple[float, float, float]
+
+_PERIODS_KEPT = 8
+"""How many periods' values are kept: a clock's rounding gives a few periods (three on the simulator's 2 ms ticks),
+which alternate; more are forgotten all at once."""
+
+
+class _Period(NamedTuple):
+    """A period's values: the rate ``1 / dt`` (1/s), as a number and an array of the joints' size; the accelerations'
+    low-pass weights ``(beta, 1 - beta)`` as rows of that size and its ``beta``; the reported wrench's and the contact
+    forces' ``beta``."""
+
+    rate: float
+    rates: np.ndarray
+    weights: np.ndarray
+    acceleration_beta: float
+    beta: float
+    contact_beta: float
 
 
 class TorqueWrenches:
@@ -144,8 +162,15 @@ class TorqueWrenches:
         self._legs = slice(both[0], both[0] + len(both)) if consecutive else np.array(both)
         self._leg_shape = (2, len(legs[0]))
         self._leg_dynamics = kinematics.leg_dynamics
-        self._velocities = np.zeros(kinematics.joint_count)
-        self._accelerations = np.zeros(kinematics.joint_count)
+        n = kinematics.joint_count
+        self._velocities = np.zeros(n)
+        self._at_rest = np.zeros(n)  # the first tick's joint accelerations
+        # The joints' accelerations: row 0 the low-passed ones (the filter's state), row 1 this tick's difference; the
+        # rows' weights in the low-pass, ``(beta, 1 - beta)``, and the rate ``1 / dt`` as arrays for the period.
+        self._motion = np.zeros((2, n))
+        self._filtered_joints, self._difference = self._motion
+        self._filter_accelerations = self.acceleration_cutoff != math.inf
+        self._periods: dict[float, _Period] = {}
         self.reset()
 
     def reset(self) -> None:
@@ -154,10 +179,21 @@ class TorqueWrenches:
         self._state: tuple[SoleWrench, SoleWrench] | None = None
         self.contact_forces: tuple[Vector, Vector] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         """The soles' forces low-passed at ``contact_cutoff`` for the contact detection (N, sole frames)."""
-        self._dt, self._beta, self._contact_beta = -1.0, 0.0, 0.0
-        self._accel_dt, self._accel_beta = -1.0, 0.0
-        self._filtered: tuple[np.ndarray, Vector] | None = None
+        self._filtered_angular: Vector | None = None  # the low-passed angular acceleration; None: not started
         self._torques: np.ndarray | None = None  # the last tick's link torques, for the period's mean
+
+    def _period(self, dt: float) -> _Period:
+        """The rate and the filters' weights for the period ``dt`` (s), kept for the next ticks of that period."""
+        periods = self._periods
+        if len(periods) >= _PERIODS_KEPT:
+            periods.clear()
+        rate, n = 1.0 / dt, self._velocities.size
+        accel_beta = math.exp(-2.0 * math.pi * self.acceleration_cutoff * dt)
+        periods[dt] = period = _Period(
+            rate, np.full(n, rate), np.array([np.full(n, accel_beta), np.full(n, 1.0 - accel_beta)]), accel_beta,
+            math.exp(-2.0 * math.pi * self.cutoff * dt), math.exp(-2.0 * math.pi * self.contact_cutoff * dt),
+        )  # fmt: skip
+        return period
 
     @staticmethod
     def _base_acceleration(
@@ -194,31 +230,31 @@ class TorqueWrenches:
         if state is not None and dt <= 0.0:
             return state
         wx, wy, wz = angular_velocity
-        accelerations = self._accelerations
         if state is None:  # no earlier tick: the motion's accelerations taken as zero
             ax = ay = az = 0.0
+            accelerations = self._at_rest
         else:
-            rate = 1.0 / dt
+            period = self._periods.get(dt) or self._period(dt)
+            accelerations = self._difference
             np.subtract(joint_velocities, self._velocities, out=accelerations)
-            accelerations *= rate
+            accelerations *= period.rates
+            rate = period.rate
             px, py, pz = self._angular  # type: ignore[misc]
             ax, ay, az = (wx - px) * rate, (wy - py) * rate, (wz - pz) * rate
-            if self.acceleration_cutoff != math.inf:
-                if dt != self._accel_dt:
-                    self._accel_dt, self._accel_beta = dt, math.exp(-2.0 * math.pi * self.acceleration_cutoff * dt)
-                ba = self._accel_beta
-                if self._filtered is None:
-                    self._filtered = (accelerations.copy(), (ax, ay, az))
+            if self._filter_accelerations:
+                filtered, angular = self._filtered_joints, self._filtered_angular
+                if angular is None:  # the first difference starts the filter
+                    filtered[:] = accelerations
                 else:
-                    joints, (gx, gy, gz) = self._filtered
-                    # joints <- ba joints + (1 - ba) accelerations, in place; the legs are handed the filtered ones.
-                    accelerations *= 1.0 - ba
-                    joints *= ba
-                    joints += accelerations
-                    accelerations[:] = joints
-                    c = 1.0 - ba
-                    ax, ay, az = ba * gx + c * ax, ba * gy + c * ay, ba * gz + c * az
-                    self._filtered = (joints, (ax, ay, az))
+                    # filtered <- beta filtered + (1 - beta) difference: both rows weighted at once, in place.
+                    self._motion *= period.weights
+                    filtered += accelerations
+                    b = period.acceleration_beta
+                    c = 1.0 - b
+                    gx, gy, gz = angular
+                    ax, ay, az = b * gx + c * ax, b * gy + c * ay, b * gz + c * az
+                self._filtered_angular = (ax, ay, az)
+                accelerations = filtered  # the legs are handed the filtered ones
         self._velocities[:] = joint_velocities
         self._angular = angular_velocity
         base = self._base_acceleration((ax, ay, az), angular_velocity, specific_force, imu_position, imu_velocity)
@@ -235,12 +271,8 @@ class TorqueWrenches:
         contact = (left, right)
         if state is None:
             self.contact_forces = (contact[0][0:3], contact[1][0:3])
-        else:
-            if dt != self._dt:  # betas for this period, recomputed only when the period changes
-                self._dt, self._beta = dt, math.exp(-2.0 * math.pi * self.cutoff * dt)
-                self._contact_beta = math.exp(-2.0 * math.pi * self.contact_cutoff * dt)
         if state is not None and not self.momentum:  # the observer's contact forces are the reported wrench's
-            b = self._contact_beta
+            b = period.contact_beta
             c = 1.0 - b
             (l0, l1, l2), (r0, r1, r2) = self.contact_forces
             (m0, m1, m2, *_), (n0, n1, n2, *_) = contact
@@ -249,7 +281,7 @@ class TorqueWrenches:
                 (b * r0 + c * n0, b * r1 + c * n1, b * r2 + c * n2),
             )
         if state is not None and self.cutoff != math.inf:
-            b = self._beta
+            b = period.beta
             c = 1.0 - b
             (l0, l1, l2, l3, l4, l5), (r0, r1, r2, r3, r4, r5) = state
             left = (b * l0 + c * left[0], b * l1 + c * left[1], b * l2 + c * left[2], b * l3 + c * left[3],

@@ -40,9 +40,8 @@ _AT_REST = (0.0, 0.0, 0.0)
 _new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 # The calls of a tick, bound once (a module attribute lookup each otherwise).
 _center_of_mass, _frame_placement, _frame_velocity = pin.centerOfMass, pin.updateFramePlacement, pin.getFrameVelocity
-_WORLD = pin.LOCAL_WORLD_ALIGNED
-_COM_VALUES = 6  # the COM's position and velocity at the start of the kinematics' buffer
-_FRAME_VALUES = 18  # a frame's position, rotation, linear and angular velocity, after them
+_rnea, _joint_jacobians, _frame_jacobian = pin.rnea, pin.computeJointJacobians, pin.getFrameJacobian
+_WORLD, _LOCAL = pin.LOCAL_WORLD_ALIGNED, pin.LOCAL
 
 
 class PinocchioKinematics:
@@ -84,11 +83,12 @@ class PinocchioKinematics:
         self.leg_joints = (self._leg(robot.left_sole_id), self._leg(robot.right_sole_id))
         # Each leg's columns of the velocity vector: a slice where they follow each other (no copy to index them).
         self._leg_columns = tuple(_columns(leg, 6) for leg in self.leg_joints)
-        self._jacobians = np.empty((2, 6, len(self.leg_joints[0])))
-        self._holding = np.empty((2, len(self.leg_joints[0])))
-        # Both legs' rows of the torques at once when the right leg's columns follow the left's: a view, no copy.
+        # The legs' needed torques: a view of the inverse dynamics' output in the data (rewritten by each pass), both
+        # legs' rows at once when the right leg's joints follow the left's; else gathered into an array.
         both = _columns(self.leg_joints[0] + self.leg_joints[1], 6)
-        self._both_legs = both if isinstance(both, slice) else None
+        legs_shape = (2, len(self.leg_joints[0]))
+        self._needed = self.data.tau[both].reshape(legs_shape) if isinstance(both, slice) else np.empty(legs_shape)
+        self._needed_rows = None if isinstance(both, slice) else both
         # The legs' dynamics: the gravity comes in as the base's specific force (module docstring); the rotors.
         model.gravity = pin.Motion.Zero()
         model.armature[6:] = joint_drives(robot)[1]
@@ -106,23 +106,13 @@ class PinocchioKinematics:
             self._imu_fixed = FrameMotion(
                 tuple(placement.translation.tolist()), tuple(placement.rotation.ravel().tolist()), _AT_REST, _AT_REST
             )
-        # Views of the data's arrays that the forward kinematics rewrite in place: the COM, its velocity, the frames'
-        # translations and rotations (column-major, flattened without a copy); the frames' velocities (linear then
-        # angular) are new arrays each tick.
+        # Views of the data's arrays that the forward kinematics rewrite in place: the COM, its velocity, each frame's
+        # translation and rotation (the frames' velocities are new arrays each tick).
         data = self.data
         frames = (robot.left_sole_id, robot.right_sole_id) + (() if self._imu_fixed is not None else (self._imu,))
         self._frames = (*frames[:2], frames[2] if len(frames) == 3 else -1)
-        self._parts: list[np.ndarray] = [data.com[0], data.vcom[0]]
-        for frame in frames:
-            placement = data.oMf[frame]
-            self._parts += [placement.translation, placement.rotation.T.reshape(9), np.zeros(6)]
-        self._buffer = np.empty(sum(part.size for part in self._parts))
-        # The buffer's order for the outputs: each rotation turned row-major (R[r][c] from column-major 3 c + r), so
-        # that every output is a slice of one tuple.
-        order = list(range(self._buffer.size))
-        for k in range(_COM_VALUES, self._buffer.size, _FRAME_VALUES):
-            order[k + 3 : k + 12] = [k + 3 + 3 * c + r for r in range(3) for c in range(3)]
-        self._order = np.array(order)
+        self._com, self._com_velocity = data.com[0], data.vcom[0]
+        self._placements = {frame: (data.oMf[frame].translation, data.oMf[frame].rotation) for frame in frames}
         self.foot_sensors: tuple[ForceSensorMount, ForceSensorMount] | None = None
         if sensor_frames is not None:
             self.foot_sensors = tuple(  # type: ignore[assignment]
@@ -136,33 +126,31 @@ class PinocchioKinematics:
         v[6:] = joint_velocities
         _center_of_mass(model, data, q, v, False)  # forward kinematics (positions, velocities), COM, COM velocity
         left, right, imu = self._frames
-        _frame_placement(model, data, left)
-        _frame_placement(model, data, right)
-        parts = self._parts
-        parts[4] = _frame_velocity(model, data, left, _WORLD).vector
-        parts[7] = _frame_velocity(model, data, right, _WORLD).vector
         fixed = self._imu_fixed
-        if fixed is None:
-            _frame_placement(model, data, imu)
-            parts[10] = _frame_velocity(model, data, imu, _WORLD).vector
-        # One copy of every value into a buffer, one reordering and one conversion to Python floats.
-        values = tuple(np.concatenate(parts, out=self._buffer).take(self._order).tolist())
-        if fixed is None:
-            fixed = _frame_motion(values, _COM_VALUES + 2 * _FRAME_VALUES)
         return _new_tuple(
             BodyKinematics,
-            (values[0:3], values[3:6], _frame_motion(values, _COM_VALUES),
-             _frame_motion(values, _COM_VALUES + _FRAME_VALUES), fixed),
+            (tuple(self._com.tolist()), tuple(self._com_velocity.tolist()), self._frame_motion(left),
+             self._frame_motion(right), self._frame_motion(imu) if fixed is None else fixed),
         )  # fmt: skip
+
+    def _frame_motion(self, frame: int) -> FrameMotion:
+        """A frame's placement and velocity after the forward kinematics, as Python floats: position, rotation
+        (row-major), linear and angular velocity (base frame)."""
+        model, data = self.model, self.data
+        translation, rotation = self._placements[frame]
+        _frame_placement(model, data, frame)
+        r0, r1, r2 = rotation.tolist()
+        vx, vy, vz, wx, wy, wz = _frame_velocity(model, data, frame, _WORLD).vector.tolist()
+        return _new_tuple(FrameMotion, (tuple(translation.tolist()), (*r0, *r1, *r2), (vx, vy, vz), (wx, wy, wz)))
 
     def leg_dynamics(
         self, angular_velocity: tuple[float, float, float], acceleration: tuple[float, ...],
         joint_accelerations: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-        """The soles' Jacobians (sole frame, rows linear then angular) with respect to each leg's joints, shape
-        ``(2, 6, n_leg)``, and the torques each leg's joints need for the motion with the soles free, shape
-        ``(2, n_leg)``, at the configuration and joint velocities of the last :meth:`update` (arrays the next call
-        overwrites; module docstring).
+    ) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:  # fmt: skip
+        """The soles' Jacobians (sole frame, rows linear then angular) with respect to each leg's joints, left then
+        right, shape ``(6, n_leg)`` each, and the torques each leg's joints need for the motion with the soles free,
+        shape ``(2, n_leg)``, at the configuration and joint velocities of the last :meth:`update` (the torques an
+        array the next call overwrites; module docstring).
 
         Args:
             angular_velocity: the base's angular velocity (rad/s, base frame).
@@ -171,22 +159,20 @@ class PinocchioKinematics:
             joint_accelerations: the joints' accelerations (rad/s^2), shape ``(joint_count,)``.
         """
         model, data, q, v, a = self.model, self.data, self._q, self._v_dynamics, self._a_dynamics
-        v[3:6] = angular_velocity
-        v[6:] = self._v[6:]
+        v[:] = self._v  # the joints' velocities of update(), the base at rest; then the base turning
+        v[3], v[4], v[5] = angular_velocity
         a[0:6] = acceleration
         a[6:] = joint_accelerations
-        torques = pin.rnea(model, data, q, v, a)
-        pin.computeJointJacobians(model, data)  # from the joint placements of q, which update() and rnea computed
-        (left, right), jacobians, legs = self._soles, self._jacobians, self._holding
-        columns_left, columns_right = self._leg_columns
-        jacobians[0] = pin.getFrameJacobian(model, data, left, pin.LOCAL)[:, columns_left]
-        jacobians[1] = pin.getFrameJacobian(model, data, right, pin.LOCAL)[:, columns_right]
-        both = self._both_legs
-        if both is not None:
-            return jacobians, torques[both].reshape(legs.shape)
-        legs[0] = torques[columns_left]
-        legs[1] = torques[columns_right]
-        return jacobians, legs
+        _rnea(model, data, q, v, a)  # into data.tau, of which the needed torques are a view
+        _joint_jacobians(model, data)  # from the joint placements of q, which update() and rnea computed
+        (left, right), (columns_left, columns_right) = self._soles, self._leg_columns
+        # Each sole's columns of its frame Jacobian: views of Pinocchio's new arrays, no copy.
+        jacobians = (_frame_jacobian(model, data, left, _LOCAL)[:, columns_left],
+                     _frame_jacobian(model, data, right, _LOCAL)[:, columns_right])  # fmt: skip
+        needed, rows = self._needed, self._needed_rows
+        if rows is not None:  # legs whose joints do not follow each other: gathered
+            data.tau.take(rows, out=needed.reshape(-1))
+        return jacobians, needed
 
     # ----- construction --------------------------------------------------------------------------------------------
     def _leg(self, sole: int) -> tuple[int, ...]:
@@ -225,13 +211,6 @@ def _add_frame(model: pin.Model, name: str, frame: SensorFrame, field: str) -> i
     link = model.frames[link_id]
     placement = link.placement * pin.SE3(np.eye(3), np.asarray(frame.offset, dtype=float))
     return int(model.addFrame(pin.Frame(name, link.parentJoint, link_id, placement, pin.FrameType.OP_FRAME)))
-
-
-def _frame_motion(values: tuple[float, ...], k: int) -> FrameMotion:
-    """The frame whose 18 values start at ``values[k]``: position, rotation (row-major), linear and angular
-    velocity."""
-    return _new_tuple(FrameMotion, (values[k : k + 3], values[k + 3 : k + 12], values[k + 12 : k + 15],
-                                    values[k + 15 : k + 18]))  # fmt: skip
 
 
 def _columns(indices: tuple[int, ...], offset: int) -> slice | np.ndarray:
