@@ -37,17 +37,17 @@ class ImplicitStepWrench:
     def __init__(self, model: mujoco.MjModel, sites: tuple[int, ...]) -> None:
         self._model = model
         parents = model.body_parentid
-        pairs = []  # (sensor's site, body below it)
-        for site in sites:
+        pairs = []  # (where the sensor's six numbers start, its site, a body below it)
+        for k, site in enumerate(sites):
             subtree = [int(model.site_bodyid[site])]
             for body in range(subtree[0] + 1, model.nbody):  # MuJoCo numbers a body after its parent
                 if int(parents[body]) in subtree:
                     subtree.append(body)
-            pairs += [(site, body) for body in subtree]
+            pairs += [(6 * k, site, body) for body in subtree]
         self._sites = sites
         self._pairs = tuple(pairs)
-        self._mass = [float(model.body_mass[body]) for _, body in pairs]
-        self._inertia = [model.body_inertia[body].tolist() for _, body in pairs]  # about the principal axes
+        self._mass = [float(model.body_mass[body]) for _, _, body in pairs]
+        self._inertia = [model.body_inertia[body].tolist() for _, _, body in pairs]  # about the principal axes
         # Each body's translational then rotational Jacobian at its COM, stacked: one product gives all accelerations.
         self._jacobians = np.zeros((len(pairs), 6, model.nv))
         self._rate = 1.0 / model.opt.timestep
@@ -66,25 +66,29 @@ class ImplicitStepWrench:
         change = data.qvel - self.qvel_before
         change *= self._rate
         change -= data.qacc
-        for jacobian, (_, body) in zip(jacobians, self._pairs, strict=True):
+        for jacobian, (_, _, body) in zip(jacobians, self._pairs, strict=True):
             mujoco.mj_jacBodyCom(model, data, jacobian[:3], jacobian[3:], body)
         accelerations = (jacobians @ change).tolist()  # each body's COM and angular acceleration changes, world axes
         out = [0.0] * (6 * len(self._sites))
         xipos, ximat, site_xpos, site_xmat = data.xipos, data.ximat, data.site_xpos, data.site_xmat
-        for (site, body), mass, inertia, (ax, ay, az, wx, wy, wz) in zip(
+        for (at, site, body), mass, (ix, iy, iz), (ax, ay, az, wx, wy, wz) in zip(
             self._pairs, self._mass, self._inertia, accelerations, strict=True
         ):
             fx, fy, fz = mass * ax, mass * ay, mass * az
-            # I w' = A diag(I) A^T w', A the body's principal axes of inertia (columns).
-            a = ximat[body].tolist()
-            u = [inertia[i] * (a[i] * wx + a[3 + i] * wy + a[6 + i] * wz) for i in range(3)]
+            # I w' = A diag(I) A^T w', A the body's principal axes of inertia (its columns).
+            a0, a1, a2, a3, a4, a5, a6, a7, a8 = ximat[body].tolist()
+            u0 = ix * (a0 * wx + a3 * wy + a6 * wz)
+            u1 = iy * (a1 * wx + a4 * wy + a7 * wz)
+            u2 = iz * (a2 * wx + a5 * wy + a8 * wz)
             rx, ry, rz = (xipos[body] - site_xpos[site]).tolist()  # the body's COM from the sensor
-            tx = a[0] * u[0] + a[1] * u[1] + a[2] * u[2] + ry * fz - rz * fy
-            ty = a[3] * u[0] + a[4] * u[1] + a[5] * u[2] + rz * fx - rx * fz
-            tz = a[6] * u[0] + a[7] * u[1] + a[8] * u[2] + rx * fy - ry * fx
-            r = site_xmat[site].tolist()  # into the sensor's frame: R^T v
-            at = 6 * self._sites.index(site)
-            for i in range(3):
-                out[at + i] += r[i] * fx + r[3 + i] * fy + r[6 + i] * fz
-                out[at + 3 + i] += r[i] * tx + r[3 + i] * ty + r[6 + i] * tz
+            tx = a0 * u0 + a1 * u1 + a2 * u2 + ry * fz - rz * fy
+            ty = a3 * u0 + a4 * u1 + a5 * u2 + rz * fx - rx * fz
+            tz = a6 * u0 + a7 * u1 + a8 * u2 + rx * fy - ry * fx
+            r0, r1, r2, r3, r4, r5, r6, r7, r8 = site_xmat[site].tolist()  # into the sensor's frame: R^T v
+            out[at] += r0 * fx + r3 * fy + r6 * fz
+            out[at + 1] += r1 * fx + r4 * fy + r7 * fz
+            out[at + 2] += r2 * fx + r5 * fy + r8 * fz
+            out[at + 3] += r0 * tx + r3 * ty + r6 * tz
+            out[at + 4] += r1 * tx + r4 * ty + r7 * tz
+            out[at + 5] += r2 * tx + r5 * ty + r8 * tz
         return np.array(out)
