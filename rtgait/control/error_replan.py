@@ -63,8 +63,16 @@ def dcm_error_replan(
         return False, t
     if adjust is not None and support in _SIDES and remainder < adjust.limits.min_time_to_touchdown:
         adjust = dataclasses.replace(adjust, on_failure="keep")  # the core moves the next step's landing
+    reference = options.com_reference
+    if reference == "dcm":
+        # The measured DCM from the COM where the plan has it: the plan's COM position goes on without a step.
+        w = planner.w
+        cog = (values.cog_x, values.cog_y)
+        planner.observe(t, cog, (w * (m.dcm[0] - cog[0]), w * (m.dcm[1] - cog[1])))
     replanned = planner.replan_now(t, "dcm-error", feedback="measured", step_adjustment=adjust or False)
-    if replanned is not None and options.com_reference == "planned":
+    if reference == "dcm":
+        planner.observe(t, m.com[:2], m.com_vel[:2])
+    if replanned is not None and reference == "planned":
         # The footsteps are the measured state's; the COM goes on from where the plan had it, so that the
         # servos keep pulling the robot back: the plan under way remade from the state sampled before.
         planner.observe(t, (values.cog_x, values.cog_y), (values.cog_vx, values.cog_vy))
