@@ -45,7 +45,6 @@ from rtgait.control.foot_control import FootForceControl, FootOffsets, split_zmp
 from rtgait.control.foot_frame import feet_offset, translated
 from rtgait.control.landings import FootLandings
 from rtgait.control.level_switch import switch_level
-from rtgait.control.measured_zmp import sole_radius, within_soles
 from rtgait.control.settings import (
     ERROR_REPLAN_INTERVAL,
     ERROR_REPLAN_MIN_REMAINDER,
@@ -117,7 +116,6 @@ class WalkingController:
         self.terrain = terrain
         """The terrain the walk's footholds were placed on, for step adjustment's landings; ``None``: none known."""
         self.sole = info.sole
-        self._sole_radius = sole_radius(info.sole)  # a measured ZMP farther from both soles is no contact's
         closed = level != "open-loop"
         self.feedback = DcmFeedback(planner.w, options.dcm, dt) if closed else None
         self.foot = FootForceControl(options.foot, dt) if closed and options.foot is not None else None
@@ -291,11 +289,8 @@ class WalkingController:
 
     # ----- measurements and the planner's log ----------------------------------------------------------------------
     def _filter(self, m: Measurement) -> tuple[tuple[float, float] | None, FootState, FootState]:
-        """The measured ZMP and feet with their loads and CoPs low-passed (NaN restarts a filter); a ZMP no contact
-        of the feet gives is none (:mod:`rtgait.control.measured_zmp`)."""
+        """The measured ZMP and feet with their loads and CoPs low-passed (NaN restarts a filter)."""
         (zx, zy), fl, fr = m.zmp, m.left, m.right
-        if zx == zx and not within_soles(zx, zy, fl.pose, fr.pose, self._sole_radius):
-            zx = zy = math.nan  # no contact's ZMP (a pull read against a push): no measurement (measured_zmp.py)
         (lx, ly), (rx, ry) = fl.cop_local, fr.cop_local
         lz, rz = fl.normal_force, fr.normal_force
         state = self._filtered
