@@ -80,7 +80,7 @@ def test_a_later_table_wins_key_by_key():
         ((("max_lean", 0.0),), "scenario s: control.max_lean must be a number within (0, 0.6] rad"),
         ((("replan_dcm_error", 0.0),), "scenario s: control.replan_dcm_error must be a number within [0.0001, 1] m"),
         ((("adapt_timing", 1),), "scenario s: control.adapt_timing must be true or false, got 1"),
-        ((("com_reference", "plan"),), "scenario s: control.com_reference must be 'measured' or 'planned'"),
+        ((("com_reference", "plan"),), "scenario s: control.com_reference must be 'dcm' or 'measured' or 'planned'"),
         ((("dcm", 2.0),), "scenario s: control.dcm must be a table ([control.dcm]), got 2.0"),
         ((("step_adjustment", 1.0),), "scenario s: unknown key control.step_adjustment"),
     ],

@@ -45,6 +45,7 @@ from rtgait.control.foot_control import FootForceControl, FootOffsets, split_zmp
 from rtgait.control.foot_frame import feet_offset, translated
 from rtgait.control.landings import FootLandings
 from rtgait.control.level_switch import switch_level
+from rtgait.control.pendulum_zmp import pendulum_zmp
 from rtgait.control.settings import (
     ERROR_REPLAN_INTERVAL,
     ERROR_REPLAN_MIN_REMAINDER,
@@ -116,6 +117,7 @@ class WalkingController:
         self.terrain = terrain
         """The terrain the walk's footholds were placed on, for step adjustment's landings; ``None``: none known."""
         self.sole = info.sole
+        self._weight = info.mass * GRAVITY  # N
         closed = level != "open-loop"
         self.feedback = DcmFeedback(planner.w, options.dcm, dt) if closed else None
         self.foot = FootForceControl(options.foot, dt) if closed and options.foot is not None else None
@@ -289,8 +291,12 @@ class WalkingController:
 
     # ----- measurements and the planner's log ----------------------------------------------------------------------
     def _filter(self, m: Measurement) -> tuple[tuple[float, float] | None, FootState, FootState]:
-        """The measured ZMP and feet with their loads and CoPs low-passed (NaN restarts a filter)."""
+        """The measured ZMP (as the pendulum's, :mod:`rtgait.control.pendulum_zmp`) and feet with their loads and CoPs
+        low-passed (NaN restarts a filter)."""
         (zx, zy), fl, fr = m.zmp, m.left, m.right
+        # The ZMP of a pendulum carried by its weight (pendulum_zmp.py), before the filter: the measured moment, not
+        # M / F, on a total normal force near zero.
+        zx, zy = pendulum_zmp((zx, zy), m.com, fl.normal_force + fr.normal_force, self._weight)
         (lx, ly), (rx, ry) = fl.cop_local, fr.cop_local
         lz, rz = fl.normal_force, fr.normal_force
         state = self._filtered

@@ -5,6 +5,19 @@ the measured DCM is more than ``replan_dcm_error`` off the plan's (:mod:`rtgait.
 When no step catches the error, the plan is kept: no replan for an outward DCM error in single support unless step
 timing adaptation may hold the stance longer, and a later step's landing and timing are kept when no candidate for it
 catches the error (the core's ``on_failure="keep"``).
+
+Where the new plan's COM starts (``ControllerOptions.com_reference``). The pendulum's state splits into the DCM
+``xi = c + c'/w``, which diverges and which alone the plan's ZMP and step adjustment must answer, and a convergent part
+that decays by itself at the rate ``w``. ``"dcm"`` (default) starts the plan from the measured DCM with the COM where
+the plan has it,
+
+    c(t) = c_plan(t),        c'(t) = w (xi_measured - c_plan(t)),
+
+so the IK's COM target keeps its position and only its velocity steps, by ``w`` times the DCM error (about 0.1 m/s at
+the 25 mm threshold). ``"measured"`` starts it from the measured COM state: the target then moves by the COM error
+(the servo lag and the estimate's error, millimetres) in one tick, ``error / dt`` on the IK's velocity references
+(4-10 rad/s on Talos's legs, the stiff drives' damping at their torque limits for several ticks: ``docs/results.md``,
+"A DCM-error replan's step of the COM target").
 """
 
 from __future__ import annotations
@@ -63,8 +76,16 @@ def dcm_error_replan(
         return False, t
     if adjust is not None and support in _SIDES and remainder < adjust.limits.min_time_to_touchdown:
         adjust = dataclasses.replace(adjust, on_failure="keep")  # the core moves the next step's landing
+    reference = options.com_reference
+    if reference == "dcm":
+        # The measured DCM from the COM where the plan has it: the plan's COM position goes on without a step.
+        w = planner.w
+        cog = (values.cog_x, values.cog_y)
+        planner.observe(t, cog, (w * (m.dcm[0] - cog[0]), w * (m.dcm[1] - cog[1])))
     replanned = planner.replan_now(t, "dcm-error", feedback="measured", step_adjustment=adjust or False)
-    if replanned is not None and options.com_reference == "planned":
+    if reference == "dcm":
+        planner.observe(t, m.com[:2], m.com_vel[:2])
+    if replanned is not None and reference == "planned":
         # The footsteps are the measured state's; the COM goes on from where the plan had it, so that the
         # servos keep pulling the robot back: the plan under way remade from the state sampled before.
         planner.observe(t, (values.cog_x, values.cog_y), (values.cog_vx, values.cog_vy))

@@ -122,9 +122,14 @@ class ControllerOptions:
             (default): only when the measured DCM is more than ``replan_dcm_error`` off the plan's (a disturbance);
             every other plan (the regular double-support replans, the re-anchoring at landings, the start) continues
             the plan under way. ``"always"``: every plan, the core's ``feedback="measured"`` (module docstring).
-        com_reference: ``"adaptive"``, the plan of a DCM-error replan: ``"measured"`` (default) starts it from the
-            measured COM state; ``"planned"`` takes the footsteps the measured state's step adjustment gives and lets
-            the COM go on from where the plan had it, so that the servos keep pulling the robot back.
+        com_reference: ``"adaptive"``, the plan of a DCM-error replan: ``"dcm"`` (default) starts it from the
+            measured DCM ``xi`` with the COM where the plan has it, ``c = c_plan``, ``c' = w (xi - c_plan)``: the COM
+            target's position goes on without a step, its velocity steps by ``w`` times the DCM error (0.1 m/s at
+            the 25 mm threshold for Talos). ``"measured"`` starts it from the measured COM state: the COM target
+            moves by the COM error in one tick (mm, ``error / dt`` on the IK's velocity references: 4-10 rad/s on
+            Talos's legs, the stiff drives' damping at their torque limits for 3-10 ms). ``"planned"`` takes the
+            footsteps the measured state's step adjustment gives and lets the COM go on from where the plan had it,
+            so that the servos keep pulling the robot back.
         anchor_blend: how long (s) a foot's IK target takes to go from where it was to where a re-anchoring (or the
             start or end of an early landing's hold) puts it, from its pose and rate then, along the quintic of the
             planner's retargeted swing (:mod:`rtgait.control.target_blend`); 0 (default): at once. Moved in one tick,
@@ -164,7 +169,7 @@ class ControllerOptions:
     late_grace: float = 0.01
     on_time_window: float = 0.08
     relanding_tolerance: float = 0.01
-    com_reference: str = "measured"
+    com_reference: str = "dcm"
     adapt_timing: bool = True
     anchor_blend: float = 0.0
     hip_strategy: bool = True
@@ -215,7 +220,7 @@ _RANGES = {
     "swing_feedback": (0.0, 1e4, "s"),
 }
 _OPEN_BELOW = ("max_lean",)
-_CHOICES = {"measured_replanning": ("on-error", "always"), "com_reference": ("measured", "planned")}
+_CHOICES = {"measured_replanning": ("on-error", "always"), "com_reference": ("dcm", "measured", "planned")}
 
 
 class ControlEvent(NamedTuple):

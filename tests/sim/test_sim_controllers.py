@@ -195,6 +195,26 @@ def test_adaptive_replans_on_a_large_dcm_error():
     assert [(e.kind, e.detail) for e in events][:1] == [("replan", "dcm-error")]
 
 
+@pytest.mark.parametrize("reference_kind", ["dcm", "measured"])
+def test_a_dcm_error_replan_takes_the_measured_dcm_and_steps_the_com_only_when_asked(reference_kind):
+    """``com_reference="dcm"`` (default): the replanned plan's DCM is the measured one and its COM goes on from where
+    the plan had it (no step of the COM target); ``"measured"``: its COM is the measured COM, a step by the error."""
+    options = dataclasses.replace(EXACT, com_reference=reference_kind)
+    ctl, plan = controller("adaptive", options=options), reference()
+    error = (0.03, -0.01)  # the COM and the DCM off the plan by this (m)
+    for k in range(100):
+        t = k * DT
+        values, support, _ = plan.sample_values(t)
+        out = ctl.tick(t, on_plan(t, values, support, dcm_error=error if k == 99 else (0.0, 0.0)))
+    assert ("replan", "dcm-error") in [(e.kind, e.detail) for e in out.events]
+    after, _, _ = ctl.planner.sample_values(t)
+    dcm = (values.dcm_x + error[0], values.dcm_y + error[1])  # the measurement's
+    assert (after.dcm_x, after.dcm_y) == pytest.approx(dcm, abs=1e-6)
+    shift = (0.0, 0.0) if reference_kind == "dcm" else error  # the plan's COM, or the measurement's
+    com = (values.cog_x + shift[0], values.cog_y + shift[1])
+    assert (after.cog_x, after.cog_y) == pytest.approx(com, abs=1e-6)
+
+
 def test_the_controller_acts_on_the_measurement_s_dcm():
     """The DCM is made once, by the estimator (``Measurement.dcm``): the controller's law and its DCM-error replan act
     on that value, which the run logs, and not on one made again from the COM state. A measurement whose DCM field
