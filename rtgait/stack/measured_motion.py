@@ -86,6 +86,8 @@ TRACKING_FREQUENCY = 5.0
 """The tracking PD's natural frequency (Hz; module docstring)."""
 
 _LOCAL = pin.ReferenceFrame.LOCAL
+# The calls of a tick, bound once.
+_SE3, _rpy_to_matrix, _se3_to_xyzquat = pin.SE3, pin.rpy.rpyToMatrix, pin.SE3ToXYZQUAT
 
 
 class MeasuredMotion:
@@ -122,6 +124,10 @@ class MeasuredMotion:
         self.q = np.zeros(robot.model.nq)
         self.v = np.zeros(nv)
         self.a = np.zeros(nv)
+        self._sole_rotation = np.zeros(9)  # the estimator's sole rotation, row-major
+        self._sole_matrix = self._sole_rotation.reshape(3, 3)  # a view
+        self._sole_translation = np.zeros(3)
+        self._point = np.zeros(3)  # the stance sole's measured position
 
     def update(
         self,
@@ -166,11 +172,17 @@ class MeasuredMotion:
             ux, uy, uz = frame.velocity
             wx, wy, wz = frame.angular_velocity
             v[:6] = (wy * pz - wz * py - ux, wz * px - wx * pz - uy, wx * py - wy * px - uz, -wx, -wy, -wz)
-            sole_in_base = pin.SE3(np.array(frame.rotation).reshape(3, 3), np.array(position))
+            # Into buffers kept for it (no array made a tick), copied by the SE3.
+            rotation, translation = self._sole_rotation, self._sole_translation
+            rotation[:] = frame.rotation
+            translation[:] = position
+            sole_in_base = _SE3(self._sole_matrix, translation)
         x, y, z, yaw = foot.pose
-        measured = pin.SE3(pin.rpy.rpyToMatrix(foot.roll, foot.pitch, yaw), np.array([x, y, z]))
+        point = self._point
+        point[:] = x, y, z
+        measured = _SE3(_rpy_to_matrix(foot.roll, foot.pitch, yaw), point)
         base = measured * sole_in_base.inverse()
-        q[:7] = pin.SE3ToXYZQUAT(base)
+        q[:7] = _se3_to_xyzquat(base)
         a[:] = a_ref
         fb = self.feedback
         if not self.track:
