@@ -140,7 +140,8 @@ class MeasuredMotion:
         measurement: Measurement,
         body: BodyKinematics | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(q_s, v_s, a_ref)`` (module docstring; arrays kept and rewritten by the next call), and the tracking
+        """``(q_s, v_s, a_ref)`` (module docstring; arrays kept and rewritten by the next call, ``a_ref`` itself without
+        tracking), and the tracking
         torques in :attr:`feedback`, from the IK's
         configuration ``q_ref`` and its rates ``v_ref``, ``a_ref`` (Pinocchio's coordinates), the commanded joints
         ``joints_ref`` (rad; the IK's with the feet's tilts), the encoders' ``joints`` (rad) and
@@ -183,10 +184,10 @@ class MeasuredMotion:
         measured = _SE3(_rpy_to_matrix(foot.roll, foot.pitch, yaw), point)
         base = measured * sole_in_base.inverse()
         q[:7] = _se3_to_xyzquat(base)
-        a[:] = a_ref
         fb = self.feedback
         if not self.track:
-            return q, v, a
+            return q, v, a_ref  # the IK's acceleration itself: nothing is added to it
+        a[:] = a_ref
         # The IK's base height over its stance sole (m), to compare with the sensed one's.
         base_ref = pin.XYZQUATToSE3(q_ref[:7])
         pin.forwardKinematics(model, data, q_ref)
