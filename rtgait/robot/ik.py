@@ -69,7 +69,7 @@ _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 # Rows of the stacked task vector: COG 0:3, left foot 3:9 (position 3:6, orientation 6:9), right foot 9:15,
 # torso orientation 15:18, pelvis orientation 18:21.
 _N_TASKS = 21
-_dot, _fromiter, _concatenate, _array = np.dot, np.fromiter, np.concatenate, np.array
+_dot, _fromiter, _concatenate = np.dot, np.fromiter, np.concatenate
 _LAST_ROW = [0.0, 0.0, 0.0, 1.0]  # of a homogeneous matrix
 # The calls of an evaluation, bound once.
 _joint_jacobians, _com_jacobian = pin.computeJointJacobians, pin.jacobianCenterOfMass
@@ -135,7 +135,6 @@ class WholeBodyIK:
         self._damping = np.diag(diagonal)
         # The posture pull mu (q_posture - q) on the joint rows: mu q_posture, and mu.
         self._pull_tail = w.posture * robot.q_half_sitting[7:]
-        self._pull_tail_list = self._pull_tail.tolist()
         self._posture = w.posture
         self._max_step2 = max_step * max_step
         self._lower_list, self._upper_list = self._lower.tolist(), self._upper.tolist()
@@ -239,16 +238,11 @@ class WholeBodyIK:
         np.multiply(J, self._w_rows, out=self._wj)  # J^T W, through its view self._jtw
         H = JtW @ J
         H += self._damping
-        # The posture pull weight * (q_posture - q) on the joint rows (the free flyer's have none), added on Python
-        # floats element by element as numpy's in-place sum would (the same roundings, fewer calls).
-        gradient = _dot(JtW, _fromiter(self._e, np.float64, _N_TASKS)).tolist()
-        joints_now = q.tolist()[7:]
-        posture = self._posture
-        pulls = zip(gradient[6:], self._pull_tail_list, joints_now, strict=True)
-        gradient[6:] = [x + (p - posture * j) for x, p, j in pulls]
-        g = _array(gradient)
+        # The posture pull weight * (q_posture - q) on the joint rows (the free flyer's have none).
+        g = _dot(JtW, _fromiter(self._e, np.float64, _N_TASKS))
         q_joints = q[7:]
-        if self._barrier and _outside(joints_now, self._band_lower_list, self._band_upper_list):
+        g[6:] += self._pull_tail - self._posture * q_joints
+        if self._barrier and _outside(q_joints.tolist(), self._band_lower_list, self._band_upper_list):
             self._add_barrier(q_joints, H, g)
         _, dq, info = dposv(H, g)
         if info != 0:  # pragma: no cover - H is symmetric positive definite by construction (damping > 0)

@@ -44,8 +44,7 @@ JUMP_ACCELERATION = 50.0
 limits only): five times gravity, where a walking robot's base accelerates by a few m/s^2 and a target moved by a
 millimetre in a 2 ms tick gives 250 m/s^2."""
 
-_difference = pin.difference
-_NEAR_BOUND = 1e-9 * JUMP_ACCELERATION  # m/s^2: far beyond a few roundings' difference in the norm
+_difference, _subtract, _multiply = pin.difference, np.subtract, np.multiply
 
 DEFAULT_RATE_FILTER = 0.005
 """The low-pass's time constant ``T`` (s): module docstring."""
@@ -81,7 +80,9 @@ class MotionRates:
         self._a = np.zeros(model.nv)
         self._q: np.ndarray | None = None
         self._reseed = False  # since the last jump the reference has not yet moved smoothly (module docstring)
-        self._last_step = [0.0] * model.nv  # the last difference (velocity units) while _reseed
+        self._last_step = np.zeros(model.nv)  # the last difference (velocity units) while _reseed
+        self._change = np.zeros(model.nv)  # the filtered velocity's change over a tick (update)
+        self._scaled = np.zeros(model.nv)  # that change over the tick, times b (update)
         self.speed_limit = None if speed_limit is None else np.asarray(speed_limit, dtype=float)
         self._limits = None if speed_limit is None else self.speed_limit.tolist()
         self._spare = np.zeros(model.nq)  # the buffer of the next configuration (update)
@@ -117,18 +118,18 @@ class MotionRates:
         current = self._spare
         current[:] = q
         self._q, self._spare = current, previous
-        # The arithmetic on Python floats, element by element as numpy's would be (the same roundings), for a few
-        # dozen numbers at a fraction of the cost of numpy's calls.
         v, a, b, rate = self._v, self._a, self._blend, 1.0 / self.dt
-        step = [x * rate for x in _difference(self.model, previous, current).tolist()]
-        velocity = v.tolist()
+        step = _difference(self.model, previous, current)
+        step *= rate
         limits = self._limits
         if limits is not None:
             reseed = self._reseed
             # After a jump the base's difference is compared with the last difference, not with the kept velocity.
-            before = self._last_step if reseed else velocity
-            jumped = any(map(_gt, map(abs, step[6:]), limits)) or _base_jump(step, before, rate)
-            self._last_step = step
+            # The joints' speeds are compared as Python floats, mapped in C (numpy's comparisons without its calls).
+            jumped = any(map(_gt, map(abs, step[6:].tolist()), limits)) or _base_jump(
+                step[:3] - (self._last_step[:3] if reseed else v[:3]), rate
+            )
+            self._last_step = step  # a new array each tick, which the filter below does not change
             if jumped:
                 self.jumps += 1  # a jump of the reference, not a motion: the rates go on from the new configuration
                 self._reseed = True
@@ -137,22 +138,16 @@ class MotionRates:
                 self._reseed = False
                 v[:] = step
                 return v, a
-        # The velocity's change over the tick, b (step - v); a + b (step / dt - a) = (1 - b) a + b change / dt.
-        change = [(x - y) * b for x, y in zip(step, velocity, strict=True)]
-        keep, gain = 1.0 - b, b * rate
-        a[:] = [x * keep + c * gain for x, c in zip(a.tolist(), change, strict=True)]
-        v[:] = [x + c for x, c in zip(velocity, change, strict=True)]
+        change = _subtract(step, v, out=self._change)
+        change *= b  # the filtered velocity's change over the tick
+        # a + b (step / dt - a), in place: the acceleration's input is that change over the tick.
+        a *= 1.0 - b
+        a += _multiply(change, b * rate, out=self._scaled)
+        v += change
         return v, a
 
 
-def _base_jump(step: list[float], before: list[float], rate: float) -> bool:
-    """Whether the base's velocity ``step[:3]`` (m/s) differs from ``before[:3]`` by more than
-    :data:`JUMP_ACCELERATION` over a tick (``rate``: ticks per s), with the norm as ``np.linalg.norm`` takes it (the
-    square root of BLAS's dot product): the sum of squares in Python may round differently in its last bits, which
-    decides nothing unless it is that close to the bound, where the dot product decides."""
-    dx, dy, dz = step[0] - before[0], step[1] - before[1], step[2] - before[2]
-    excess = math.sqrt(dx * dx + dy * dy + dz * dz) * rate - JUMP_ACCELERATION
-    if abs(excess) > _NEAR_BOUND:
-        return excess > 0.0
-    change = np.array((dx, dy, dz))
+def _base_jump(change: np.ndarray, rate: float) -> bool:
+    """Whether the base's velocity changes by ``change`` (m/s) faster than :data:`JUMP_ACCELERATION` (``rate``:
+    ticks per s), the norm as ``np.linalg.norm`` takes it: the square root of the vector's dot product."""
     return math.sqrt(change.dot(change)) * rate > JUMP_ACCELERATION
