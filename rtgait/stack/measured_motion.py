@@ -124,10 +124,11 @@ class MeasuredMotion:
         self.q = np.zeros(robot.model.nq)
         self.v = np.zeros(nv)
         self.a = np.zeros(nv)
-        self._sole_rotation = np.zeros(9)  # the estimator's sole rotation, row-major
-        self._sole_matrix = self._sole_rotation.reshape(3, 3)  # a view
-        self._sole_translation = np.zeros(3)
-        self._point = np.zeros(3)  # the stance sole's measured position
+        # The estimator's sole rotation (row-major) and translation, then the stance sole's measured position.
+        self._pose_values = np.zeros(15)
+        self._sole_matrix = self._pose_values[:9].reshape(3, 3)  # views
+        self._sole_translation = self._pose_values[9:12]
+        self._point = self._pose_values[12:15]
 
     def update(
         self,
@@ -165,6 +166,8 @@ class MeasuredMotion:
             sole_in_base = base_ref.actInv(pin.updateFramePlacement(model, data, sole))
             jacobian = pin.getFrameJacobian(model, data, sole, _LOCAL)
             v[:6] = np.linalg.solve(jacobian[:, :6], -(jacobian[:, 6:] @ joint_velocities))
+            x, y, z, yaw = foot.pose
+            self._point[:] = x, y, z
         else:
             # The estimator's: the sole relative to the base at rest, moving at (u, w) from the joints alone (base
             # axes); the base's twist that holds the sole still is (w x p - u, -w) in its own axes.
@@ -173,15 +176,11 @@ class MeasuredMotion:
             ux, uy, uz = frame.velocity
             wx, wy, wz = frame.angular_velocity
             v[:6] = (wy * pz - wz * py - ux, wz * px - wx * pz - uy, wx * py - wy * px - uz, -wx, -wy, -wz)
-            # Into buffers kept for it (no array made a tick), copied by the SE3.
-            rotation, translation = self._sole_rotation, self._sole_translation
-            rotation[:] = frame.rotation
-            translation[:] = position
-            sole_in_base = _SE3(self._sole_matrix, translation)
-        x, y, z, yaw = foot.pose
-        point = self._point
-        point[:] = x, y, z
-        measured = _SE3(_rpy_to_matrix(foot.roll, foot.pitch, yaw), point)
+            # Into views of one buffer kept for it (one assignment, no array made a tick), copied by the SE3s.
+            x, y, z, yaw = foot.pose
+            self._pose_values[:] = (*frame.rotation, *position, x, y, z)
+            sole_in_base = _SE3(self._sole_matrix, self._sole_translation)
+        measured = _SE3(_rpy_to_matrix(foot.roll, foot.pitch, yaw), self._point)
         base = measured * sole_in_base.inverse()
         q[:7] = _se3_to_xyzquat(base)
         fb = self.feedback
