@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from operator import le as _le
 from typing import NamedTuple
 
 import numpy as np
@@ -74,6 +75,9 @@ SUM_WEIGHT = 1e3
 ``1e-6`` of the deviation from the desired wrenches."""
 
 _CONE_TOLERANCE = 1e-9  # N (times the sole's half-length for moments): a wrench this far outside is inside
+_NO_WRENCH = (0.0,) * 6  # a foot's wrench out of contact
+_array = np.array
+_new_tuple = tuple.__new__  # a NamedTuple from a tuple at once, without its generated __new__'s argument parsing
 
 
 class SoleCone:
@@ -178,6 +182,7 @@ class WrenchDistributor:
         self._faces[:16, :6] = self.cones[0].faces
         self._faces[16:, 6:] = self.cones[1].faces
         self._tolerance = _CONE_TOLERANCE * length
+        self._tolerances = [self._tolerance] * 32  # one per face, for _within
         self.qp_count = 0
 
     def distribute(
@@ -199,9 +204,23 @@ class WrenchDistributor:
             cops: in double support, each foot's desired CoP, world ``(x, y)`` on its sole's plane (m); ``None``: the
                 sole point.
         """
+        rows = (frames[0].tolist(), frames[1].tolist())
+        return self.distribute_rows(force, moment, rows, contact, left_ratio, cops)
+
+    def distribute_rows(
+        self,
+        force: Sequence[float],
+        moment: Sequence[float],
+        rows: Sequence[list[list[float]]],
+        contact: tuple[bool, bool],
+        left_ratio: float = 0.5,
+        cops: Sequence[Sequence[float] | None] = (None, None),
+    ) -> WrenchDistribution:
+        """:meth:`distribute` with each sole frame's placement as the rows of its homogeneous matrix in Python floats
+        (the first three at least: ``[R | p]``)."""
         fx, fy, fz = force
         nx, ny, nz = moment
-        left, right = frames[0].tolist(), frames[1].tolist()
+        left, right = rows
         if contact[0] and contact[1]:
             if not (math.isfinite(left_ratio) and 0.0 <= left_ratio <= 1.0):
                 raise ValueError(f"left_ratio must be within [0, 1], got {left_ratio}")
@@ -222,11 +241,11 @@ class WrenchDistributor:
             ex, ey, ez = yy * dz - yz * dy, yz * dx - yx * dz, yx * dy - yy * dx  # y x d
             wl = _local(left, sl * fx + ex, sl * fy + ey, sl * fz + ez, cl, pl, sl, force, length2, (yx, yy, yz))
             wr = _local(right, sr * fx - ex, sr * fy - ey, sr * fz - ez, cr, pr, sr, force, length2, (yx, yy, yz))
-            wrenches = np.array((wl, wr))
-            if float((self._faces @ wrenches.reshape(12)).max()) <= self._tolerance:
-                return WrenchDistribution(wrenches, "closed-form", 0.0)
+            wrenches = _array((wl, wr))
+            if _within(self._faces @ wrenches.reshape(12), self._tolerances):
+                return _new_tuple(WrenchDistribution, (wrenches, "closed-form", 0.0))
             if sl == 1.0 or sr == 1.0:  # all asked of one foot (the split at the segment's end): that foot alone?
-                alone = self._single(0 if sl == 1.0 else 1, frames, force, moment)
+                alone = self._single(0 if sl == 1.0 else 1, rows, force, moment)
                 if alone.method == "single":
                     return alone
             # The desired wrenches, for the QP (the closed form with y = 0).
@@ -234,39 +253,40 @@ class WrenchDistributor:
                 _local(left, sl * fx, sl * fy, sl * fz, cl, pl, sl, force, 0.0, (0.0, 0.0, 0.0)),
                 _local(right, sr * fx, sr * fy, sr * fz, cr, pr, sr, force, 0.0, (0.0, 0.0, 0.0)),
             ))  # fmt: skip
-            return self._qp(force, moment, frames, desired, (0, 1))
+            return self._qp(force, moment, rows, desired, (0, 1))
         if not (contact[0] or contact[1]):
             raise ValueError("at least one foot must be in contact to carry the robot")
-        single = self._single(0 if contact[0] else 1, frames, force, moment)
+        single = self._single(0 if contact[0] else 1, rows, force, moment)
         if single.method == "single":
             return single
-        return self._qp(force, moment, frames, single.wrenches, (0 if contact[0] else 1,))
+        return self._qp(force, moment, rows, single.wrenches, (0 if contact[0] else 1,))
 
     def _single(
-        self, i: int, frames: Sequence[np.ndarray], force: Sequence[float], moment: Sequence[float]
+        self, i: int, rows: Sequence[list[list[float]]], force: Sequence[float], moment: Sequence[float]
     ) -> WrenchDistribution:
         """The whole wrench on foot ``i`` (0 left, 1 right): method ``"single"`` when its cone holds it, else
         ``"outside"`` (the wrench as it is)."""
         fx, fy, fz = force
         nx, ny, nz = moment
-        h = frames[i].tolist()
+        h = rows[i]
         px, py, pz = h[0][3], h[1][3], h[2][3]
         # The whole wrench about the sole point: N - p x F.
         tx, ty, tz = nx - (py * fz - pz * fy), ny - (pz * fx - px * fz), nz - (px * fy - py * fx)
-        wrenches = np.zeros((2, 6))
-        wrenches[i] = _rotate_back(h, fx, fy, fz) + _rotate_back(h, tx, ty, tz)
-        inside = float((self.cones[i].faces @ wrenches[i]).max()) <= self._tolerance
-        return WrenchDistribution(wrenches, "single" if inside else "outside", 0.0)
+        wrench = _rotate_back(h, fx, fy, fz) + _rotate_back(h, tx, ty, tz)
+        wrenches = _array((wrench, _NO_WRENCH) if i == 0 else (_NO_WRENCH, wrench))
+        inside = _within(self.cones[i].faces @ wrenches[i], self._tolerances)
+        return _new_tuple(WrenchDistribution, (wrenches, "single" if inside else "outside", 0.0))
 
     def _qp(
         self,
         force: Sequence[float],
         moment: Sequence[float],
-        frames: Sequence[np.ndarray],
+        frames: Sequence[list[list[float]]],
         desired: np.ndarray,
         feet: tuple[int, ...],
     ) -> WrenchDistribution:
-        """The corner-force QP of the module docstring for the feet ``feet``, ``desired`` of shape ``(2, 6)``."""
+        """The corner-force QP of the module docstring for the feet ``feet``, ``desired`` of shape ``(2, 6)``, the sole
+        frames as :meth:`WrenchDistributor.distribute_rows` takes them."""
         self.qp_count += 1
         n = 16
         rows = 6 * (1 + len(feet))
@@ -276,7 +296,8 @@ class WrenchDistributor:
         rhs[0:6] = sum_scale * np.array([*force, *moment])
         for k, i in enumerate(feet):
             columns = slice(n * k, n * (k + 1))
-            matrix[0:6, columns] = (sum_scale[:, None] * force_transform(frames[i])) @ self.cones[i].generators
+            transform = force_transform(np.array(frames[i]))
+            matrix[0:6, columns] = (sum_scale[:, None] * transform) @ self.cones[i].generators
             matrix[6 * (k + 1) : 6 * (k + 2), columns] = self._scaled_generators[i]
             rhs[6 * (k + 1) : 6 * (k + 2)] = self._scale * desired[i]
         forces, _ = nnls(matrix, rhs)
@@ -285,6 +306,12 @@ class WrenchDistributor:
             wrenches[i] = self.cones[i].generators @ forces[n * k : n * (k + 1)]
         residual = float(np.linalg.norm(rhs[0:6] - matrix[0:6] @ forces)) / SUM_WEIGHT
         return WrenchDistribution(wrenches, "qp", residual)
+
+
+def _within(values: np.ndarray, tolerances: list[float]) -> bool:
+    """Whether every value of a cone's faces times a wrench is at most its tolerance: ``values.max() <= tolerance``,
+    compared as Python floats (a NaN fails both), without numpy's reduction calls."""
+    return all(map(_le, values.tolist(), tolerances))
 
 
 def _local(

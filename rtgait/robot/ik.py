@@ -50,6 +50,8 @@ returned solution is reused by the next tick's first step when it starts from th
 from __future__ import annotations
 
 import math
+from operator import gt as _gt
+from operator import lt as _lt
 
 import numpy as np
 import pinocchio as pin
@@ -67,7 +69,11 @@ _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 # Rows of the stacked task vector: COG 0:3, left foot 3:9 (position 3:6, orientation 6:9), right foot 9:15,
 # torso orientation 15:18, pelvis orientation 18:21.
 _N_TASKS = 21
-_dot, _fromiter = np.dot, np.fromiter
+_dot, _fromiter, _concatenate = np.dot, np.fromiter, np.concatenate
+_LAST_ROW = [0.0, 0.0, 0.0, 1.0]  # of a homogeneous matrix
+# The calls of an evaluation, bound once.
+_joint_jacobians, _com_jacobian = pin.computeJointJacobians, pin.jacobianCenterOfMass
+_frame_jacobian = pin.getFrameJacobian
 
 
 class WholeBodyIK:
@@ -155,6 +161,13 @@ class WholeBodyIK:
         self._torso_rest_t = data.oMf[robot.torso_id].rotation.T.copy()
         self._pelvis_rest_t = data.oMi[1].rotation.T.copy()
         self._cached_q: np.ndarray | None = None
+        # Views of what the kinematics rewrite in place in the data (its vectors keep their size): the COM, the
+        # pelvis's and the torso's rotations, and each sole's translation and rotation (column-major, flattened
+        # without a copy), read without a call into Pinocchio at each evaluation.
+        soles = [data.oMf[robot.left_sole_id], data.oMf[robot.right_sole_id]]
+        feet = [part for sole in soles for part in (sole.translation, sole.rotation.T.reshape(9))]
+        self._views = (data.com[0], data.oMi[1].rotation, data.oMf[robot.torso_id].rotation, feet)
+        self._feet_values = np.empty(24)
         self._com: list[float] = []
         self._left: list[list[float]] = []
         self._right: list[list[float]] = []
@@ -168,25 +181,28 @@ class WholeBodyIK:
         model, data = self.model, self.data
         j_com, j_left, j_right, j_torso, j_pelvis = self._j_blocks
         left_id, right_id, torso_id = self._frames
-        pin.computeJointJacobians(model, data, q)
+        _joint_jacobians(model, data, q)
         # After computeJointJacobians, the COG Jacobian and the frame Jacobians reuse the joint Jacobians; each
         # frame Jacobian call also updates that frame's placement in data.oMf.
-        j_com[...] = pin.jacobianCenterOfMass(model, data, False)
-        j_left[...] = pin.getFrameJacobian(model, data, left_id, _LWA)
-        j_right[...] = pin.getFrameJacobian(model, data, right_id, _LWA)
-        j_torso[...] = pin.getFrameJacobian(model, data, torso_id, _LWA)[3:6]
+        j_com[...] = _com_jacobian(model, data, False)
+        j_left[...] = _frame_jacobian(model, data, left_id, _LWA)
+        j_right[...] = _frame_jacobian(model, data, right_id, _LWA)
+        j_torso[...] = _frame_jacobian(model, data, torso_id, _LWA)[3:6]
         # The free flyer's angular velocity is in the pelvis frame: world-aligned, its Jacobian is [0, R, 0].
-        pelvis = data.oMi[1].rotation
+        com, pelvis, torso, feet = self._views
         j_pelvis[...] = pelvis
-        placements = data.oMf
         # Plain Python floats from here on: the error arithmetic is a few dozen scalar operations, which costs
         # less in Python than the per-call overhead of numpy on 3x3 arrays.
-        self._com = data.com[0].tolist()
-        self._left = placements[left_id].homogeneous.tolist()
-        self._right = placements[right_id].homogeneous.tolist()
+        self._com = com.tolist()
+        # The soles' placements as the rows of their homogeneous matrices, from one concatenation of the views.
+        p = _concatenate(feet, out=self._feet_values).tolist()
+        self._left = [[p[3], p[6], p[9], p[0]], [p[4], p[7], p[10], p[1]], [p[5], p[8], p[11], p[2]], _LAST_ROW]
+        self._right = [
+            [p[15], p[18], p[21], p[12]], [p[16], p[19], p[22], p[13]], [p[17], p[20], p[23], p[14]], _LAST_ROW
+        ]  # fmt: skip
         # The torso relative to its upright rest orientation: the torso task becomes "this rotation is a yaw".
         # np.dot: the same BLAS product as @ for these small operands, with less of numpy's dispatch around it.
-        self._torso = _dot(placements[torso_id].rotation, self._torso_rest_t).tolist()
+        self._torso = _dot(torso, self._torso_rest_t).tolist()
         self._pelvis = _dot(pelvis, self._pelvis_rest_t).tolist()
         self._cached_q = q
 
@@ -346,9 +362,6 @@ class WholeBodyIK:
 
 
 def _outside(joints: list[float], lower: list[float], upper: list[float]) -> bool:
-    """Whether any joint coordinate is below its lower or above its upper limit (scalar comparisons: cheaper than
-    numpy's calls on a few dozen numbers)."""
-    for value, low, high in zip(joints, lower, upper, strict=True):  # noqa: SIM110 - a loop costs less than any()
-        if value < low or value > high:
-            return True
-    return False
+    """Whether any joint coordinate is below its lower or above its upper limit (scalar comparisons mapped in C:
+    cheaper than numpy's calls on a few dozen numbers, and than a Python loop)."""
+    return any(map(_lt, joints, lower)) or any(map(_gt, joints, upper))

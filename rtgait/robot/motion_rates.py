@@ -32,6 +32,7 @@ foot's wrench 2.8 kN outside its cone, the hips at their torque limits, the stan
 from __future__ import annotations
 
 import math
+from operator import gt as _gt
 
 import numpy as np
 import pinocchio as pin
@@ -42,6 +43,8 @@ JUMP_ACCELERATION = 50.0
 """The free flyer's linear acceleration beyond which a tick is a jump of the reference (m/s^2; with joint speed
 limits only): five times gravity, where a walking robot's base accelerates by a few m/s^2 and a target moved by a
 millimetre in a 2 ms tick gives 250 m/s^2."""
+
+_difference, _subtract, _multiply = pin.difference, np.subtract, np.multiply
 
 DEFAULT_RATE_FILTER = 0.005
 """The low-pass's time constant ``T`` (s): module docstring."""
@@ -78,7 +81,11 @@ class MotionRates:
         self._q: np.ndarray | None = None
         self._reseed = False  # since the last jump the reference has not yet moved smoothly (module docstring)
         self._last_step = np.zeros(model.nv)  # the last difference (velocity units) while _reseed
+        self._change = np.zeros(model.nv)  # the filtered velocity's change over a tick (update)
+        self._scaled = np.zeros(model.nv)  # that change over the tick, times b (update)
         self.speed_limit = None if speed_limit is None else np.asarray(speed_limit, dtype=float)
+        self._limits = None if speed_limit is None else self.speed_limit.tolist()
+        self._spare = np.zeros(model.nq)  # the buffer of the next configuration (update)
         self.jumps = 0
         """Ticks taken as jumps of the reference (module docstring)."""
 
@@ -103,21 +110,26 @@ class MotionRates:
         """The velocity and acceleration at this tick's configuration ``q`` (arrays kept and rewritten by the next
         call; m/s and rad/s, m/s^2 and rad/s^2, Pinocchio's velocity coordinates)."""
         previous = self._q
-        self._q = np.array(q, dtype=float)
         if previous is None:
+            self._q = np.array(q, dtype=float)
+            self._spare = np.empty_like(self._q)
             return self._v, self._a
+        # The configuration kept in the buffer the previous one's frees (no allocation a tick).
+        current = self._spare
+        current[:] = q
+        self._q, self._spare = current, previous
         v, a, b, rate = self._v, self._a, self._blend, 1.0 / self.dt
-        step = pin.difference(self.model, previous, self._q)
+        step = _difference(self.model, previous, current)
         step *= rate
-        limit = self.speed_limit
-        if limit is not None:
-            reseed, last = self._reseed, self._last_step
+        limits = self._limits
+        if limits is not None:
+            reseed = self._reseed
             # After a jump the base's difference is compared with the last difference, not with the kept velocity.
-            before = last[:3] if reseed else v[:3]
-            jumped = bool((np.abs(step[6:]) > limit).any()) or (
-                float(np.linalg.norm(step[:3] - before)) * rate > JUMP_ACCELERATION
+            # The joints' speeds are compared as Python floats, mapped in C (numpy's comparisons without its calls).
+            jumped = any(map(_gt, map(abs, step[6:].tolist()), limits)) or _base_jump(
+                step[:3] - (self._last_step[:3] if reseed else v[:3]), rate
             )
-            last[:] = step
+            self._last_step = step  # a new array each tick, which the filter below does not change
             if jumped:
                 self.jumps += 1  # a jump of the reference, not a motion: the rates go on from the new configuration
                 self._reseed = True
@@ -126,10 +138,16 @@ class MotionRates:
                 self._reseed = False
                 v[:] = step
                 return v, a
-        step -= v
-        step *= b  # the filtered velocity's change over the tick
+        change = _subtract(step, v, out=self._change)
+        change *= b  # the filtered velocity's change over the tick
         # a + b (step / dt - a), in place: the acceleration's input is that change over the tick.
         a *= 1.0 - b
-        a += (b * rate) * step
-        v += step
+        a += _multiply(change, b * rate, out=self._scaled)
+        v += change
         return v, a
+
+
+def _base_jump(change: np.ndarray, rate: float) -> bool:
+    """Whether the base's velocity changes by ``change`` (m/s) faster than :data:`JUMP_ACCELERATION` (``rate``:
+    ticks per s), the norm as ``np.linalg.norm`` takes it: the square root of the vector's dot product."""
+    return math.sqrt(change.dot(change)) * rate > JUMP_ACCELERATION

@@ -34,6 +34,7 @@ command_delay``): until then the drives go on with the previous one, holding its
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from typing import TYPE_CHECKING
 
@@ -112,20 +113,13 @@ class Drives:
     def _checked(self, command: JointCommand) -> _Entry:
         """``command``'s arrays, checked: shapes ``(n,)``, finite values, gains >= 0."""
         n = self._size
-        arrays = []
-        for name, value, unit in (("positions", command.positions, "rad"), ("velocities", command.velocities, "rad/s"),
-                                  ("torques", command.torques, "N m"), ("kp", command.kp, "N m/rad"),
-                                  ("kd", command.kd, "N m s/rad")):  # fmt: skip
-            if value is None:
-                arrays.append(None)
-                continue
-            array = np.asarray(value, dtype=float)
-            gain = name in ("kp", "kd")
-            if array.shape != (n,) or not np.isfinite(array).all() or (gain and (array < 0.0).any()):
-                rule = "finite gains >= 0" if gain else "finite values"
-                raise ValueError(f"JointCommand.{name} must be {n} {rule} ({unit}), got {value!r}")
-            arrays.append(array)
-        return arrays[0], arrays[1], arrays[2], arrays[3], arrays[4]  # type: ignore[return-value]
+        return (
+            _array(command.positions, n, "positions", "rad"),
+            _array(command.velocities, n, "velocities", "rad/s"),
+            _array_or_none(command.torques, n, "torques", "N m"),
+            _array_or_none(command.kp, n, "kp", "N m/rad", gain=True),
+            _array_or_none(command.kd, n, "kd", "N m s/rad", gain=True),
+        )
 
     def _apply(
         self, q: np.ndarray, qd: np.ndarray, tau: np.ndarray | None, kp: np.ndarray | None, kd: np.ndarray | None
@@ -202,6 +196,28 @@ def _velocities(data: mujoco.MjData, index: np.ndarray) -> tuple[np.ndarray, np.
     if np.array_equal(index, np.arange(start, start + len(index))):
         return data.qvel[start : start + len(index)], None
     return data.qvel, index
+
+
+def _array(value: object, n: int, name: str, unit: str, gain: bool = False) -> np.ndarray:
+    """``value`` as an array of ``n`` finite floats (and, for a ``gain``, all >= 0), or ``ValueError`` naming the
+    command's field ``name`` in ``unit``.
+
+    The values' sum, as Python floats, is finite when they all are (a NaN or an infinity makes it NaN or infinite):
+    the check costs a fifth of ``np.isfinite(array).all()``'s, and only a sum that overflows is looked at value by
+    value."""
+    array = np.asarray(value, dtype=float)
+    if array.shape == (n,):
+        values = array.tolist()
+        finite = math.isfinite(sum(values)) or bool(np.isfinite(array).all())
+        if finite and not (gain and n > 0 and min(values) < 0.0):
+            return array
+    rule = "finite gains >= 0" if gain else "finite values"
+    raise ValueError(f"JointCommand.{name} must be {n} {rule} ({unit}), got {value!r}")
+
+
+def _array_or_none(value: object, n: int, name: str, unit: str, gain: bool = False) -> np.ndarray | None:
+    """:func:`_array`, ``None`` passing."""
+    return None if value is None else _array(value, n, name, unit, gain)
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:

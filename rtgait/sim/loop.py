@@ -220,7 +220,7 @@ class ClosedLoop(LoopReadout):
         """The walk's COM tracking errors, planned vs estimated and vs true (:mod:`rtgait.sim.drive_summary`)."""
         self.feedforward_clipped: int | None = None if feed is None else 0
         """The walk's ticks at which the safety layer clipped a feed-forward torque; ``None``: no feed-forward."""
-        self._torque_clips = self.stack.safety.clip.counts.torque
+        self._limits = self.stack.safety.clip
         self._clips_seen = 0
         self.start_balance = start_balance(
             sim, controller, self.stack, self.drive_gains, self.gravity, (self._cog_start, *start_feet)
@@ -362,7 +362,7 @@ class ClosedLoop(LoopReadout):
         # The commanded configuration: the IK's base and the command's joints (the ankle tilts added).
         command = made.command
         if self.feedforward_clipped is not None and k >= k0:
-            clips = int(self._torque_clips.sum())
+            clips = self._limits.torque_ticks
             if clips != self._clips_seen:
                 self.feedforward_clipped += 1
                 self._clips_seen = clips

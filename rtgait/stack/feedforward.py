@@ -50,7 +50,7 @@ import numpy as np
 
 from rtgait.control.foot_control import split_zmp
 from rtgait.robot.contact_wrenches import DEFAULT_FRICTION
-from rtgait.robot.inverse_dynamics import InverseDynamics, RequiredWrench
+from rtgait.robot.inverse_dynamics import InverseDynamics, RequiredWrench, wrench_zmp
 from rtgait.robot.joint_limits import joint_limits
 from rtgait.robot.motion_rates import DEFAULT_RATE_FILTER, MotionRates
 
@@ -141,22 +141,23 @@ class FeedForward:
         dynamics = self.dynamics
         if self.tracking is not None and sensed is not None:
             q, v, a = self.tracking.update(q, v, a, *sensed)
-        required = dynamics.update(q, v, a)
+        # The wrench as Python floats from here to the distribution (the same arithmetic as on arrays, fewer calls).
+        wrench = dynamics.compute(q, v, a)
         left, right = targets.left_foot, targets.right_foot
-        frames = dynamics.sole_frames
-        floor = 0.5 * float(frames[0][2, 3] + frames[1][2, 3])
+        rows = dynamics.sole_rows
+        floor = 0.5 * (rows[0][2][3] + rows[1][2][3])
         if out is None:
             support = "double"
             if shift is not None and math.isfinite(shift[0] + shift[1]):
-                required = commanded_wrench(required, shift, targets.cog, floor)
-                dynamics.require(required)
-            zmp = required.zmp(floor)
+                wrench = _moved(wrench, shift, targets.cog, floor)
+                dynamics.require_values(wrench)
+            zmp = wrench_zmp(wrench, floor)
         else:
             support, zmp = out.support, out.zmp_command
             shift = (zmp[0] - out.zmp_planned[0], zmp[1] - out.zmp_planned[1])
             if (shift[0] != 0.0 or shift[1] != 0.0) and math.isfinite(shift[0] + shift[1]):
-                required = commanded_wrench(required, shift, out.com, floor)
-                dynamics.require(required)
+                wrench = _moved(wrench, shift, out.com, floor)
+                dynamics.require_values(wrench)
         if not (math.isfinite(zmp[0]) and math.isfinite(zmp[1])):  # no upward force (a fall): split in the middle
             zmp = (0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]))
         split = split_zmp(zmp, left, right, self.sole, support)
@@ -179,12 +180,23 @@ def commanded_wrench(
     """``required`` (world axes, about the origin; N, N m) with its ZMP moved by ``shift`` (m), its line of action
     kept through ``com`` (m) over the floor at height ``floor`` (m): the module docstring's ``dF``, ``dN``; unchanged
     without an upward force or with the COM not above the floor."""
-    fz = float(required.force[2])
+    values = [*required.force.tolist(), *required.moment.tolist()]
+    moved = _moved(values, shift, com, floor)
+    if moved is values:
+        return required
+    return RequiredWrench(np.array(moved[:3]), np.array(moved[3:]))
+
+
+def _moved(
+    wrench: list[float], shift: tuple[float, float], com: tuple[float, float, float], floor: float
+) -> list[float]:
+    """:func:`commanded_wrench` on the wrench as six Python floats (force then moment); ``wrench`` itself when
+    unchanged."""
+    fx, fy, fz, nx, ny, nz = wrench
     height = com[2] - floor
     if not (fz > 0.0 and height > 0.0):
-        return required
+        return wrench
     dfx, dfy = -fz * shift[0] / height, -fz * shift[1] / height
     cx, cy, cz = com
-    force = required.force + np.array([dfx, dfy, 0.0])
-    moment = required.moment + np.array([-cz * dfy, cz * dfx, cx * dfy - cy * dfx])
-    return RequiredWrench(force, moment)
+    # The sums as the arrays' were: F + (dF_x, dF_y, 0) and N + c x dF.
+    return [fx + dfx, fy + dfy, fz + 0.0, nx + -cz * dfy, ny + cz * dfx, nz + (cx * dfy - cy * dfx)]

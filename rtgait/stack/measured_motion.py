@@ -86,6 +86,8 @@ TRACKING_FREQUENCY = 5.0
 """The tracking PD's natural frequency (Hz; module docstring)."""
 
 _LOCAL = pin.ReferenceFrame.LOCAL
+# The calls of a tick, bound once.
+_SE3, _rpy_to_matrix, _se3_to_xyzquat = pin.SE3, pin.rpy.rpyToMatrix, pin.SE3ToXYZQUAT
 
 
 class MeasuredMotion:
@@ -122,6 +124,11 @@ class MeasuredMotion:
         self.q = np.zeros(robot.model.nq)
         self.v = np.zeros(nv)
         self.a = np.zeros(nv)
+        # The estimator's sole rotation (row-major) and translation, then the stance sole's measured position.
+        self._pose_values = np.zeros(15)
+        self._sole_matrix = self._pose_values[:9].reshape(3, 3)  # views
+        self._sole_translation = self._pose_values[9:12]
+        self._point = self._pose_values[12:15]
 
     def update(
         self,
@@ -134,7 +141,8 @@ class MeasuredMotion:
         measurement: Measurement,
         body: BodyKinematics | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(q_s, v_s, a_ref)`` (module docstring; arrays kept and rewritten by the next call), and the tracking
+        """``(q_s, v_s, a_ref)`` (module docstring; arrays kept and rewritten by the next call, ``a_ref`` itself without
+        tracking), and the tracking
         torques in :attr:`feedback`, from the IK's
         configuration ``q_ref`` and its rates ``v_ref``, ``a_ref`` (Pinocchio's coordinates), the commanded joints
         ``joints_ref`` (rad; the IK's with the feet's tilts), the encoders' ``joints`` (rad) and
@@ -158,6 +166,8 @@ class MeasuredMotion:
             sole_in_base = base_ref.actInv(pin.updateFramePlacement(model, data, sole))
             jacobian = pin.getFrameJacobian(model, data, sole, _LOCAL)
             v[:6] = np.linalg.solve(jacobian[:, :6], -(jacobian[:, 6:] @ joint_velocities))
+            x, y, z, yaw = foot.pose
+            self._point[:] = x, y, z
         else:
             # The estimator's: the sole relative to the base at rest, moving at (u, w) from the joints alone (base
             # axes); the base's twist that holds the sole still is (w x p - u, -w) in its own axes.
@@ -166,15 +176,17 @@ class MeasuredMotion:
             ux, uy, uz = frame.velocity
             wx, wy, wz = frame.angular_velocity
             v[:6] = (wy * pz - wz * py - ux, wz * px - wx * pz - uy, wx * py - wy * px - uz, -wx, -wy, -wz)
-            sole_in_base = pin.SE3(np.array(frame.rotation).reshape(3, 3), np.array(position))
-        x, y, z, yaw = foot.pose
-        measured = pin.SE3(pin.rpy.rpyToMatrix(foot.roll, foot.pitch, yaw), np.array([x, y, z]))
+            # Into views of one buffer kept for it (one assignment, no array made a tick), copied by the SE3s.
+            x, y, z, yaw = foot.pose
+            self._pose_values[:] = (*frame.rotation, *position, x, y, z)
+            sole_in_base = _SE3(self._sole_matrix, self._sole_translation)
+        measured = _SE3(_rpy_to_matrix(foot.roll, foot.pitch, yaw), self._point)
         base = measured * sole_in_base.inverse()
-        q[:7] = pin.SE3ToXYZQUAT(base)
-        a[:] = a_ref
+        q[:7] = _se3_to_xyzquat(base)
         fb = self.feedback
         if not self.track:
-            return q, v, a
+            return q, v, a_ref  # the IK's acceleration itself: nothing is added to it
+        a[:] = a_ref
         # The IK's base height over its stance sole (m), to compare with the sensed one's.
         base_ref = pin.XYZQUATToSE3(q_ref[:7])
         pin.forwardKinematics(model, data, q_ref)

@@ -92,6 +92,47 @@ def test_the_armature_adds_its_inertia_times_the_acceleration(talos, dynamics):
     assert (joint_drives(talos)[1] > 0.0).all()
 
 
+@pytest.mark.parametrize("seed", [3, 4])
+def test_the_soles_and_the_required_wrench_are_pinocchio_s_placements_and_the_base_s_rnea(talos, dynamics, seed):
+    """The soles' placements the distribution takes are Pinocchio's own at that configuration, and the wrench as
+    floats is the base's RNEA carried to the world: each against Pinocchio's algorithms run here."""
+    q, v, a = _state(talos, seed)
+    values = dynamics.compute(q, v, a)
+    model = dynamics.model
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q)
+    for side, sole in enumerate((talos.left_sole_id, talos.right_sole_id)):
+        expected = data.oMf[sole].homogeneous
+        np.testing.assert_array_equal(dynamics.sole_frames[side], expected)
+        np.testing.assert_array_equal(dynamics.sole_rows[side], expected[:3].tolist())
+    base = pin.rnea(model, data, q, v, a)[:6]
+    np.testing.assert_allclose(values, data.oMi[1].act(pin.Force(base)).vector, rtol=1e-12, atol=1e-9)
+    required = dynamics.required
+    np.testing.assert_array_equal(np.r_[required.force, required.moment], values)
+    # From now on distribute shares out a weight of 900 N through the soles' midpoint.
+    middle = 0.5 * (dynamics.sole_frames[0][:3, 3] + dynamics.sole_frames[1][:3, 3])
+    weight = np.array([0.0, 0.0, 900.0])
+    dynamics.require_values([*weight, *np.cross(middle, weight)])
+    np.testing.assert_array_equal(dynamics.required.force, weight)
+    result = dynamics.distribute((True, True), 0.5)
+    np.testing.assert_allclose(_total(dynamics, result.wrenches), np.r_[weight, np.cross(middle, weight)], atol=1e-8)
+
+
+def test_the_distribution_of_rows_is_the_distribution_of_frames(talos, dynamics):
+    """Given as rows of Python floats or as homogeneous matrices, the same frames give the same wrenches to the bit,
+    in double support (closed form), single support and when the QP runs."""
+    q, v, a = _state(talos, 6, speed=0.1)
+    dynamics.update(q, v, a)
+    distributor, frames, rows = dynamics.distributor, dynamics.sole_frames, dynamics.sole_rows
+    required = dynamics.required
+    force, moment = required.force.tolist(), required.moment.tolist()
+    for contact, ratio in (((True, True), 0.4), ((True, False), 1.0), ((False, True), 0.0), ((True, True), 1.0)):
+        by_frames = distributor.distribute(force, moment, frames, contact, ratio)
+        by_rows = distributor.distribute_rows(force, moment, rows, contact, ratio)
+        assert by_rows.method == by_frames.method and by_rows.residual == by_frames.residual
+        np.testing.assert_array_equal(by_rows.wrenches, by_frames.wrenches)
+
+
 def test_standing_still_the_zmp_is_under_the_com(talos, dynamics):
     q = talos.q_half_sitting
     zero = np.zeros(talos.model.nv)

@@ -124,6 +124,28 @@ def test_gains_left_out_are_the_drives_own(talos_sim):
     np.testing.assert_array_equal(runs[0], runs[1])
 
 
+def test_a_command_with_a_value_not_finite_or_a_negative_gain_is_refused_and_changes_nothing(talos_sim):
+    """Each array of a command is checked value by value: a NaN or an infinity anywhere is refused, values whose sum
+    overflows are finite and taken, and a gain below zero is refused."""
+    data = talos_sim.new_data()
+    q0 = data.qpos[talos_sim.qpos_index].copy()
+    body = SimRobot(talos_sim, data, q0)
+    n = len(q0)
+    kp, kd = talos_sim.kp.copy(), talos_sim.kd.copy()
+    big = np.full(n, 1e308)  # finite, its sum is not
+    body.write(JointCommand(q0, np.zeros(n), big, kp, kd))
+    np.testing.assert_array_equal(body.drives.tau, big)
+    cases = (("positions", math.nan, "rad"), ("velocities", -math.inf, "rad/s"), ("torques", math.inf, "N m"),
+             ("kp", -1.0, "N m/rad"), ("kd", math.nan, "N m s/rad"))  # fmt: skip
+    for field, bad, unit in cases:
+        arrays = {"positions": q0.copy(), "velocities": np.zeros(n), "torques": np.zeros(n), "kp": kp, "kd": kd}
+        arrays[field] = arrays[field].copy()
+        arrays[field][n // 2] = bad
+        with pytest.raises(ValueError, match=rf"JointCommand\.{field} must be {n} .*\({unit}\)"):
+            body.write(JointCommand(**arrays))
+        np.testing.assert_array_equal(body.drives.tau, big)  # the last command stays
+
+
 @pytest.mark.parametrize("robot", ["talos", "g1"])
 def test_the_torque_speed_envelope(robot, talos_motors, g1_motors):
     """Joints spun near their no-load speed get at most their motor's driving torque along the motion, and their

@@ -154,6 +154,12 @@ def test_commands_out_of_range_are_clipped_and_counted(talos):
         "velocity": {"leg_left_4_joint": 2},
         "torque": {"leg_right_1_joint": 2},
     }
+    assert safety.clip.torque_ticks == 2  # the ticks with a clipped torque, as they happen
+    tau[knee] = -1000.0  # two joints clipped in one tick: one tick more
+    safety.limit(JointCommand(inside.copy(), np.zeros_like(inside), tau))
+    assert safety.clip.torque_ticks == 3
+    safety.clip.reset()
+    assert safety.clip.torque_ticks == 0
 
 
 def test_joint_limits_refuse_inconsistent_values():
