@@ -180,6 +180,7 @@ class TorqueWrenches:
         self.contact_forces: tuple[Vector, Vector] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         """The soles' forces low-passed at ``contact_cutoff`` for the contact detection (N, sole frames)."""
         self._filtered_angular: Vector | None = None  # the low-passed angular acceleration; None: not started
+        self._filtered_specific: Vector | None = None  # the low-passed specific force, started with the former
         self._torques: np.ndarray | None = None  # the last tick's link torques, for the period's mean
 
     def _period(self, dt: float) -> _Period:
@@ -253,7 +254,12 @@ class TorqueWrenches:
                     c = 1.0 - b
                     gx, gy, gz = angular
                     ax, ay, az = b * gx + c * ax, b * gy + c * ay, b * gz + c * az
+                    # The accelerometer's specific force is the base's acceleration: the same filter as the joints'
+                    # and the base's angular accelerations, or a jolt of the base reads as a force on a free foot.
+                    (sx, sy, sz), (fx, fy, fz) = self._filtered_specific, specific_force  # type: ignore[misc]
+                    specific_force = (b * sx + c * fx, b * sy + c * fy, b * sz + c * fz)
                 self._filtered_angular = (ax, ay, az)
+                self._filtered_specific = specific_force
                 accelerations = filtered  # the legs are handed the filtered ones
         self._velocities[:] = joint_velocities
         self._angular = angular_velocity
