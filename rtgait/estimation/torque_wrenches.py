@@ -180,7 +180,7 @@ class TorqueWrenches:
         self.contact_forces: tuple[Vector, Vector] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         """The soles' forces low-passed at ``contact_cutoff`` for the contact detection (N, sole frames)."""
         self._filtered_angular: Vector | None = None  # the low-passed angular acceleration; None: not started
-        self._filtered_specific: Vector | None = None  # the low-passed specific force, started with the former
+        self._filtered_origin: Vector | None = None  # the base origin's low-passed specific force
         self._torques: np.ndarray | None = None  # the last tick's link torques, for the period's mean
 
     def _period(self, dt: float) -> _Period:
@@ -231,6 +231,7 @@ class TorqueWrenches:
         if state is not None and dt <= 0.0:
             return state
         wx, wy, wz = angular_velocity
+        origin = None  # the base origin's low-passed specific force, where the accelerations are filtered
         if state is None:  # no earlier tick: the motion's accelerations taken as zero
             ax = ay = az = 0.0
             accelerations = self._at_rest
@@ -243,6 +244,12 @@ class TorqueWrenches:
             px, py, pz = self._angular  # type: ignore[misc]
             ax, ay, az = (wx - px) * rate, (wy - py) * rate, (wz - pz) * rate
             if self._filter_accelerations:
+                # The base origin's specific force is the base's linear acceleration (less gravity): it goes through
+                # the joints' and the angular accelerations' filter, or the balance of a leg whose hip jerks (the
+                # accelerometer's jolt at once, the joints' answer to it filtered) reads as a force on a free foot.
+                fx, fy, fz, _, _, _ = self._base_acceleration(
+                    (ax, ay, az), angular_velocity, specific_force, imu_position, imu_velocity
+                )
                 filtered, angular = self._filtered_joints, self._filtered_angular
                 if angular is None:  # the first difference starts the filter
                     filtered[:] = accelerations
@@ -254,16 +261,17 @@ class TorqueWrenches:
                     c = 1.0 - b
                     gx, gy, gz = angular
                     ax, ay, az = b * gx + c * ax, b * gy + c * ay, b * gz + c * az
-                    # The accelerometer's specific force is the base's acceleration: the same filter as the joints'
-                    # and the base's angular accelerations, or a jolt of the base reads as a force on a free foot.
-                    (sx, sy, sz), (fx, fy, fz) = self._filtered_specific, specific_force  # type: ignore[misc]
-                    specific_force = (b * sx + c * fx, b * sy + c * fy, b * sz + c * fz)
+                    sx, sy, sz = self._filtered_origin  # type: ignore[misc]
+                    fx, fy, fz = b * sx + c * fx, b * sy + c * fy, b * sz + c * fz
                 self._filtered_angular = (ax, ay, az)
-                self._filtered_specific = specific_force
+                self._filtered_origin = origin = (fx, fy, fz)
                 accelerations = filtered  # the legs are handed the filtered ones
         self._velocities[:] = joint_velocities
         self._angular = angular_velocity
-        base = self._base_acceleration((ax, ay, az), angular_velocity, specific_force, imu_position, imu_velocity)
+        if origin is None:
+            base = self._base_acceleration((ax, ay, az), angular_velocity, specific_force, imu_position, imu_velocity)
+        else:
+            base = (*origin, ax, ay, az)
         jacobians, needed = self._leg_dynamics(angular_velocity, base, accelerations)
         if self.friction is not None:  # the torque that reaches the links: the motors' less their gears' friction
             torques = torques - self.friction.torques(joint_velocities)
