@@ -32,7 +32,10 @@ exp(-2 pi f_c dt)``, one for each of the residual's two noises, whose spectra di
 result. The accelerations (the joints' ``q''`` and the base's ``w'``) are differences of noisy velocities: their noise,
 ``sqrt(2) sigma_v / dt`` per tick, rises with frequency (blue), and on G1 (0.02 rad/s at 500 Hz) it is most of the raw
 wrench's (17 of 19 N RMS of vertical force on a swinging leg); the measured torques' noise is white (1 N m each: 7 N
-RMS). The accelerations are low-passed at :data:`DEFAULT_ACCELERATION_CUTOFF` (a 5.3 ms time constant). The residual
+RMS). The accelerations are low-passed at :data:`DEFAULT_ACCELERATION_CUTOFF` (a 5.3 ms time constant), the base
+origin's specific force ``f_B`` (its linear acceleration) with them: the leg's balance holds between terms filtered
+alike, where the accelerometer's jolt taken at once against the joints' filtered answer to it read as a force on a
+free foot (G1 pushed back, its stance foot slapping the floor: up to 94 N, a touch-down in the air). The residual
 wrench is then low-passed twice: at :data:`DEFAULT_WRENCH_CUTOFF` (5.3 ms) for the wrench the estimator reports (the
 feet's forces, centres of pressure, ZMP and the anchors' weights), and at :data:`DEFAULT_CONTACT_CUTOFF` (2.7 ms) for
 the forces the contact detection reads (:attr:`TorqueWrenches.contact_forces`): a lift-off's drop of the ground's force,
