@@ -32,7 +32,10 @@ exp(-2 pi f_c dt)``, one for each of the residual's two noises, whose spectra di
 result. The accelerations (the joints' ``q''`` and the base's ``w'``) are differences of noisy velocities: their noise,
 ``sqrt(2) sigma_v / dt`` per tick, rises with frequency (blue), and on G1 (0.02 rad/s at 500 Hz) it is most of the raw
 wrench's (17 of 19 N RMS of vertical force on a swinging leg); the measured torques' noise is white (1 N m each: 7 N
-RMS). The accelerations are low-passed at :data:`DEFAULT_ACCELERATION_CUTOFF` (a 5.3 ms time constant). The residual
+RMS). The accelerations are low-passed at :data:`DEFAULT_ACCELERATION_CUTOFF` (a 5.3 ms time constant), the base
+origin's specific force ``f_B`` (its linear acceleration) with them: the leg's balance holds between terms filtered
+alike, where the accelerometer's jolt taken at once against the joints' filtered answer to it read as a force on a
+free foot (G1 pushed back, its stance foot slapping the floor: up to 94 N, a touch-down in the air). The residual
 wrench is then low-passed twice: at :data:`DEFAULT_WRENCH_CUTOFF` (5.3 ms) for the wrench the estimator reports (the
 feet's forces, centres of pressure, ZMP and the anchors' weights), and at :data:`DEFAULT_CONTACT_CUTOFF` (2.7 ms) for
 the forces the contact detection reads (:attr:`TorqueWrenches.contact_forces`): a lift-off's drop of the ground's force,
@@ -180,6 +183,7 @@ class TorqueWrenches:
         self.contact_forces: tuple[Vector, Vector] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         """The soles' forces low-passed at ``contact_cutoff`` for the contact detection (N, sole frames)."""
         self._filtered_angular: Vector | None = None  # the low-passed angular acceleration; None: not started
+        self._filtered_origin: Vector | None = None  # the base origin's low-passed specific force
         self._torques: np.ndarray | None = None  # the last tick's link torques, for the period's mean
 
     def _period(self, dt: float) -> _Period:
@@ -230,6 +234,7 @@ class TorqueWrenches:
         if state is not None and dt <= 0.0:
             return state
         wx, wy, wz = angular_velocity
+        origin = None  # the base origin's low-passed specific force, where the accelerations are filtered
         if state is None:  # no earlier tick: the motion's accelerations taken as zero
             ax = ay = az = 0.0
             accelerations = self._at_rest
@@ -242,6 +247,12 @@ class TorqueWrenches:
             px, py, pz = self._angular  # type: ignore[misc]
             ax, ay, az = (wx - px) * rate, (wy - py) * rate, (wz - pz) * rate
             if self._filter_accelerations:
+                # The base origin's specific force is the base's linear acceleration (less gravity): it goes through
+                # the joints' and the angular accelerations' filter, or the balance of a leg whose hip jerks (the
+                # accelerometer's jolt at once, the joints' answer to it filtered) reads as a force on a free foot.
+                fx, fy, fz, _, _, _ = self._base_acceleration(
+                    (ax, ay, az), angular_velocity, specific_force, imu_position, imu_velocity
+                )
                 filtered, angular = self._filtered_joints, self._filtered_angular
                 if angular is None:  # the first difference starts the filter
                     filtered[:] = accelerations
@@ -253,11 +264,17 @@ class TorqueWrenches:
                     c = 1.0 - b
                     gx, gy, gz = angular
                     ax, ay, az = b * gx + c * ax, b * gy + c * ay, b * gz + c * az
+                    sx, sy, sz = self._filtered_origin  # type: ignore[misc]
+                    fx, fy, fz = b * sx + c * fx, b * sy + c * fy, b * sz + c * fz
                 self._filtered_angular = (ax, ay, az)
+                self._filtered_origin = origin = (fx, fy, fz)
                 accelerations = filtered  # the legs are handed the filtered ones
         self._velocities[:] = joint_velocities
         self._angular = angular_velocity
-        base = self._base_acceleration((ax, ay, az), angular_velocity, specific_force, imu_position, imu_velocity)
+        if origin is None:
+            base = self._base_acceleration((ax, ay, az), angular_velocity, specific_force, imu_position, imu_velocity)
+        else:
+            base = (*origin, ax, ay, az)
         jacobians, needed = self._leg_dynamics(angular_velocity, base, accelerations)
         if self.friction is not None:  # the torque that reaches the links: the motors' less their gears' friction
             torques = torques - self.friction.torques(joint_velocities)
