@@ -15,9 +15,8 @@ the plan has it,
 
 so the IK's COM target keeps its position and only its velocity steps, by ``w`` times the DCM error (about 0.1 m/s at
 the 25 mm threshold). ``"measured"`` starts it from the measured COM state: the target then moves by the COM error
-(the servo lag and the estimate's error, millimetres) in one tick, ``error / dt`` on the IK's velocity references
-(4-10 rad/s on Talos's legs, the stiff drives' damping at their torque limits for several ticks: ``docs/results.md``,
-"A DCM-error replan's step of the COM target").
+(the servo lag and the estimate's error, millimetres) in one tick, ``error / dt`` on the IK's velocity references,
+which can drive the legs to their torque limits (``docs/results.md``, "A DCM-error replan's step of the COM target").
 """
 
 from __future__ import annotations

@@ -11,8 +11,8 @@ the ZMP a pendulum carried by its weight would have under that acceleration. At 
 to zero (a foot bouncing off, both feet off the ground for a few ticks, or one foot's sensor reading a pull against the
 other's push) ``p = M / F`` runs off to metres while ``F (p - c) = M - F c`` stays the measured moment: ``p_w`` goes to
 the COM's ground point, where a body without support has its ZMP (no horizontal acceleration). Fed ``p`` instead, the
-admittance ``d' = -A (p_cmd - p)`` moved the IK's COM target 26 mm in one tick at ``A = 0.5`` 1/s (a ZMP 52 m off, on
-2 N of total force: Talos down its 0.185 m stairs, ``docs/results.md``, "A DCM-error replan's step of the COM target").
+admittance ``d' = -A (p_cmd - p)`` steps the IK's COM target by centimetres in one tick when the feet barely touch
+(``docs/results.md``, "A DCM-error replan's step of the COM target").
 """
 
 from __future__ import annotations
