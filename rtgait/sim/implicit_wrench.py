@@ -3,9 +3,9 @@
 MuJoCo's ``force`` and ``torque`` sensors give the wrench between a site's body and its parent from the recursive
 Newton-Euler pass of ``mj_forward``, with the acceleration ``qacc`` of the forward dynamics. The ``implicitfast``
 integrator then moves the state with another one: it integrates the servos' damping at the step's end velocity,
-``qacc_step = (qvel_end - qvel) / h``. On a stiff leg the two differ by up to hundreds of rad/s^2, and a swinging
-Talos foot (1.6 kg) read up to 100 N off the force that moved it (``docs/robots.md``, "Sensors"), enough to be taken
-for a landing. A real strain gauge reads the wrench that moves the foot. The wrench changes with the acceleration
+``qacc_step = (qvel_end - qvel) / h``. On a stiff leg the two differ by up to hundreds of rad/s^2, enough for a
+swinging foot to read as landed (``docs/estimation.md``, "The simulated ankle sensors read the step's acceleration").
+A real strain gauge reads the wrench that moves the foot. The wrench changes with the acceleration
 linearly, the velocity terms being those of the same state, so for each body ``i`` below the sensor (mass ``m_i``,
 world inertia ``I_i`` about its centre of mass ``c_i``, Jacobians ``J_v,i``, ``J_w,i`` there) and
 ``dqacc = qacc_step - qacc``:
