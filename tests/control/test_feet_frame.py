@@ -13,32 +13,16 @@ import math
 
 import pytest
 
-from rtgait.control.controller import ControllerOptions, RobotInfo, make_controller
+from rtgait.control.controller import ControllerOptions, make_controller
 from rtgait.control.foot_control import split_zmp
 from rtgait.control.foot_frame import feet_offset, translated
-from rtgait.core.geometry.footsteps import SoleRect, Stride, Timing
-from rtgait.core.planner.online import PlannerConfig
-from rtgait.estimation.state import FootState, Landing, Measurement
+from rtgait.core.geometry.footsteps import Stride
+from rtgait.estimation.state import Landing, Measurement
+from tests.synthetic_robot import CONFIG, DT, INFO, SOLE, WEIGHT, foot_state
 
-SOLE = SoleRect(front=0.105, back=0.105, inner=0.065, outer=0.065)
-CONFIG = PlannerConfig(
-    cog_height=0.84, timing=Timing(0.7, 0.1, start=0.6, end=0.6, settle=0.8), step_width=0.2,
-    connection="quasi-real-time",
-)  # fmt: skip
-INFO = RobotInfo(mass=90.0, sole=SOLE, leg_length=0.84)
-WEIGHT = 90.0 * 9.81
-DT = 0.001
 RAMP = 0.2  # rad: up a ramp along +x, the footholds pitched toes up
 OFFSET = 0.006  # m: both soles estimated behind the IK's targets
 SHORT = 0.004  # m: the swing foot touches this far behind its target, seen from the standing foot
-
-
-def foot_state(pose, fz, cop, loaded) -> FootState:
-    x, y, _, yaw = pose
-    c, s = math.cos(yaw), math.sin(yaw)
-    local = (c * (cop[0] - x) + s * (cop[1] - y), -s * (cop[0] - x) + c * (cop[1] - y))
-    torque = (fz * local[1], -fz * local[0], 0.0)
-    return FootState((0.0, 0.0, fz), torque, fz, cop, local, tuple(pose), 0.0, 0.0, 0.0, loaded, 4 if loaded else 0)
 
 
 def measured(t, values, support, shift=0.0, landings=()) -> Measurement:

@@ -18,33 +18,17 @@ from rtgait.control.controller import (
     step_limits,
 )
 from rtgait.control.foot_control import split_zmp
-from rtgait.core.geometry.footsteps import SoleRect, Stride, Timing
+from rtgait.core.geometry.footsteps import SoleRect, Stride
 from rtgait.core.laws.stepping import SteppingLimits
 from rtgait.core.planner.levels import CONTROLLER_LEVELS, level_config
-from rtgait.core.planner.online import OnlinePlanner, PlannerConfig, straight_walk
-from rtgait.estimation.state import FootState, Landing, Measurement
+from rtgait.core.planner.online import OnlinePlanner, straight_walk
+from rtgait.estimation.state import Landing, Measurement
 from rtgait.robot.controller_info import robot_info
+from tests.synthetic_robot import CONFIG, DT, INFO, SOLE, WEIGHT, foot_state
 
-SOLE = SoleRect(front=0.105, back=0.105, inner=0.065, outer=0.065)
-CONFIG = PlannerConfig(
-    cog_height=0.84, timing=Timing(0.7, 0.1, start=0.6, end=0.6, settle=0.8), step_width=0.2,
-    connection="quasi-real-time",
-)  # fmt: skip
-INFO = RobotInfo(mass=90.0, sole=SOLE, leg_length=0.84)
-WEIGHT = 90.0 * 9.81
-DT = 0.001
 EXACT = ControllerOptions(measurement_filter=0.0, dcm_bias=False)
 """No filter on the measurement, and no DCM bias estimation: the synthetic measurements here hold the DCM off the plan
 without a ZMP to match (the bias filter would take that for a bias; its own tests are tests/estimation)."""
-
-
-def foot_state(pose, fz, cop, loaded) -> FootState:
-    """A measured foot at ``pose`` (x, y, z, yaw) carrying ``fz`` (N) with its CoP at world ``cop``."""
-    x, y, _, yaw = pose
-    c, s = math.cos(yaw), math.sin(yaw)
-    local = (c * (cop[0] - x) + s * (cop[1] - y), -s * (cop[0] - x) + c * (cop[1] - y))
-    torque = (fz * local[1], -fz * local[0], 0.0)
-    return FootState((0.0, 0.0, fz), torque, fz, cop, local, tuple(pose), 0.0, 0.0, 0.0, loaded, 4 if loaded else 0)
 
 
 def on_plan(t, values, support, dcm_error=(0.0, 0.0), landings=(), loaded=None) -> Measurement:
