@@ -69,12 +69,11 @@ from rtgait.estimation.state import FootState, Landing, Measurement
 from rtgait.estimation.torque_wrenches import DEFAULT_WRENCH_CUTOFF, TorqueWrenches
 from rtgait.estimation.velocity_filter import DEFAULT_VELOCITY_CUTOFF, ComplementaryVelocity
 from rtgait.interface.readings import SensorReadings
+from rtgait.interface.sensor_spec import YAW_SOURCES, YawSource
 from rtgait.interface.truth import GroundTruth
 
 __all__ = ["TORQUE_LANDING_FRACTION", "WRENCH_SOURCES", "YAW_SOURCES", "KinematicInertialEstimator"]
 
-YawSource = Literal["feet", "imu"]
-YAW_SOURCES: tuple[YawSource, ...] = ("feet", "imu")
 WrenchSource = Literal["sensors", "torques"]
 WRENCH_SOURCES: tuple[WrenchSource, ...] = ("sensors", "torques")
 

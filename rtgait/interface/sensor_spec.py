@@ -14,8 +14,13 @@ accelerometer's. An initial bias or offset is drawn once per run, normal with th
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
-__all__ = ["FootSensorSpec", "ImuSpec", "SensorFrame", "SensorSpec"]
+__all__ = ["YAW_SOURCES", "FootSensorSpec", "ImuSpec", "SensorFrame", "SensorSpec", "YawSource"]
+
+YawSource = Literal["feet", "imu"]
+YAW_SOURCES: tuple[YawSource, ...] = ("feet", "imu")
+"""Where an estimator takes the base's heading from (:attr:`ImuSpec.yaw_source`)."""
 
 
 @dataclass(frozen=True)
@@ -41,6 +46,9 @@ class ImuSpec:
         orientation_noise: standard deviation of the filter's roll and pitch error, white (rad).
         yaw_drift: standard deviation of the rate at which the filter's yaw drifts (rad/s), drawn once per run: the
             filter sees gravity, which fixes roll and pitch, but nothing fixes yaw.
+        yaw_source: where an estimator takes the base's heading from: ``"feet"``, the feet in contact, which hold
+            their heading while they stand; ``"imu"``, this filter's yaw, for an IMU whose yaw drifts less than the
+            robot's soles turn on the floor.
     """
 
     frame: SensorFrame
@@ -52,6 +60,7 @@ class ImuSpec:
     accel_bias_walk: float = 0.0
     orientation_noise: float = 0.0
     yaw_drift: float = 0.0
+    yaw_source: YawSource = "feet"
 
 
 @dataclass(frozen=True)

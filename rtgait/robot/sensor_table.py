@@ -5,7 +5,7 @@ Keys (all optional; units as :mod:`rtgait.interface.sensor_spec`):
 * ``encoder_resolution`` (rad), ``encoder_noise`` (rad), ``velocity_noise`` (rad/s), ``joint_torques`` (bool),
   ``torque_noise`` (N m), ``latency`` (control periods, an integer >= 0);
 * ``[sensors.imu]``: ``frame`` (a URDF link or joint), ``offset`` ([x, y, z] in that frame, m), and the noise keys
-  of :class:`~rtgait.interface.sensor_spec.ImuSpec`;
+  of :class:`~rtgait.interface.sensor_spec.ImuSpec`, and ``yaw_source`` (``"feet"``, default, or ``"imu"``);
 * ``[sensors.feet]``: ``left_frame``, ``right_frame``, ``left_offset``, ``right_offset`` and the noise keys of
   :class:`~rtgait.interface.sensor_spec.FootSensorSpec`. No table: the robot has no foot force sensor.
 """
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from rtgait.interface.sensor_spec import FootSensorSpec, ImuSpec, SensorFrame, SensorSpec
+from rtgait.interface.sensor_spec import YAW_SOURCES, FootSensorSpec, ImuSpec, SensorFrame, SensorSpec
 from rtgait.robot.description_checks import FILES, RobotError, UrdfNames
 from rtgait.scenario.tomlfile import is_finite_number
 
@@ -43,9 +43,12 @@ def parse_sensors(raw: Any, names: UrdfNames) -> SensorSpec:
         values["latency"] = latency
     if "imu" in table:
         imu = FILES.table(table["imu"], "sensors.imu")
-        FILES.check_keys(imu, "sensors.imu", ("frame",), ("offset", *_IMU_NOISE))
+        FILES.check_keys(imu, "sensors.imu", ("frame",), ("offset", "yaw_source", *_IMU_NOISE))
         frame = _frame(imu, "frame", "offset", "sensors.imu", names)
-        values["imu"] = ImuSpec(frame, **_numbers(imu, "sensors.imu", _IMU_NOISE))
+        yaw_source = imu.get("yaw_source", "feet")
+        if yaw_source not in YAW_SOURCES:
+            raise RobotError(f"sensors.imu.yaw_source must be one of {', '.join(YAW_SOURCES)}, got {yaw_source!r}")
+        values["imu"] = ImuSpec(frame, **_numbers(imu, "sensors.imu", _IMU_NOISE), yaw_source=yaw_source)
     if "feet" in table:
         feet = FILES.table(table["feet"], "sensors.feet")
         FILES.check_keys(

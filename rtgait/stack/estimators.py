@@ -82,7 +82,8 @@ def kinematic_inertial_estimator(
         omega: the planner's pendulum frequency (1/s), for the DCM.
         gravity: the gravity's magnitude (m/s^2).
         start_feet: the standing soles' world poses ``(x, y, z, yaw)`` that fix the world frame.
-        sensors: where the IMU and the feet's force sensors are; default the description's ``[sensors]``.
+        sensors: where the IMU and the feet's force sensors are, and whose heading the estimator takes (the IMU's
+            ``yaw_source``); default the description's ``[sensors]``.
         options: further settings of :class:`~rtgait.estimation.kinematic_inertial.KinematicInertialEstimator`.
 
     Raises:
@@ -93,7 +94,10 @@ def kinematic_inertial_estimator(
         raise ValueError(f"{robot.name} has no IMU in its [sensors]: the kinematic-inertial estimator needs one")
     feet = None if spec.feet is None else (spec.feet.left, spec.feet.right)
     kinematics = SharedKinematics(PinocchioKinematics(robot, spec.imu.frame, feet))
-    settings = {"gravity": gravity, "start_feet": start_feet, "sole": robot.description.sole, **options}
+    settings = {
+        "gravity": gravity, "start_feet": start_feet, "sole": robot.description.sole, "yaw": spec.imu.yaw_source,
+        **options,
+    }  # fmt: skip
     return KinematicInertialEstimator(kinematics, omega, **settings)  # type: ignore[arg-type]
 
 

@@ -145,6 +145,8 @@ BAD = [
     ("sensor frame not in URDF", edited('frame = "imu_link"', 'frame = "imu_nowhere"'),
      "sensors.imu.frame: the URDF has no link or joint named 'imu_nowhere'"),
     ("unknown sensor key", edited("yaw_drift = 1e-4", "yaw_drfit = 1e-4"), "sensors.imu.yaw_drfit"),
+    ("unknown yaw source", edited('yaw_source = "imu"', 'yaw_source = "compass"'),
+     "sensors.imu.yaw_source must be one of feet, imu, got 'compass'"),
     ("negative sensor noise", edited("force_noise = 0.5", "force_noise = -0.5"),
      "sensors.feet.force_noise must be a number >= 0 N"),
     ("fractional latency", edited("latency = 0", "latency = 0.5"), "sensors.latency must be a whole number"),

@@ -40,3 +40,11 @@ def test_the_landing_threshold_follows_the_sensor_noise_only_without_foot_sensor
     # Talos's feet carry force sensors: their threshold is the sensors', whatever the noise.
     talos_force = make_estimator("estimated", talos, 3.5).load.landing_force
     assert make_estimator("estimated", talos, 3.5, sensor_noise=2.0).load.landing_force == talos_force
+
+
+def test_the_heading_comes_from_where_the_description_says():
+    # Talos's AHRS drifts 0.1 mrad/s in yaw, G1's IMU ten times that: Talos steers by its IMU, G1 by its feet.
+    talos, g1 = RobotModel.load("talos"), RobotModel.load("g1")
+    assert talos.description.sensors.imu.yaw_source == "imu"
+    assert make_estimator("estimated", talos, 3.5).yaw == "imu"
+    assert make_estimator("estimated", g1, 3.5).yaw == "feet"
