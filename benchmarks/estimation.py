@@ -27,8 +27,8 @@ with ``--velocity-walks``, the walks by command, each robot and seed, on the est
 
 ``--shadow`` measures the estimator alone instead, as a tuning bench: fig8 walked on the simulator's truth (the same
 walk for every estimator setting) with the estimator updated in the shadow from the sensors each tick, with
-``--yaw feet|imu`` and ``--velocity-cutoff HZ``; the same errors, at ``--noise`` (its first value) and ``--seed``,
-and at the physics step ``--physics-dt`` (default the robot's).
+``--yaw feet|imu`` (default the description's ``yaw_source``) and ``--velocity-cutoff HZ``; the same errors, at
+``--noise`` (its first value) and ``--seed``, and at the physics step ``--physics-dt`` (default the robot's).
 With ``--push IMPULSE`` (N s) the walk on the truth is pushed as ``benchmarks/pushes.py --phase single`` pushes it
 (0.1 s on the base at mid single support of the middle step, along ``--push-direction`` degrees in the world,
 default 0: forward in fig8's middle step), and the report adds the errors over the push window, from the push's start
@@ -351,7 +351,8 @@ def main() -> None:
     parser.add_argument("--shadow", action="store_true", help="the estimator alone, beside a walk on the truth")
     parser.add_argument("--scenario", default="fig8", help="--shadow: built-in scenario (default fig8)")
     parser.add_argument("--seed", type=int, default=0, help="--shadow: the sensors' seed (default 0)")
-    parser.add_argument("--yaw", choices=("feet", "imu"), default="feet", help="--shadow: the base's yaw source")
+    parser.add_argument("--yaw", choices=("feet", "imu"), default=None,
+                        help="--shadow: the base's yaw source (default: the description's yaw_source)")  # fmt: skip
     parser.add_argument("--velocity-cutoff", type=float, default=3.5, help="--shadow: velocity filter cut-off, Hz")
     parser.add_argument("--no-rocking", action="store_true", help="--shadow: hold the sole origins still, not the CoPs")
     parser.add_argument("--physics-dt", type=float, help="--shadow: the physics step, s (default the robot's)")
@@ -367,7 +368,8 @@ def main() -> None:
         if args.push is not None and not (math.isfinite(args.push) and args.push > 0.0):
             parser.error(f"--push must be an impulse > 0 N s, got {args.push}")
         push = None if args.push is None else (args.push, args.push_direction)
-        report = shadow(args.robots[0], args.scenario, args.noise[0], args.seed, push, args.physics_dt, yaw=args.yaw,
+        settings = {} if args.yaw is None else {"yaw": args.yaw}
+        report = shadow(args.robots[0], args.scenario, args.noise[0], args.seed, push, args.physics_dt, **settings,
                         velocity_cutoff=args.velocity_cutoff, rocking=not args.no_rocking)  # fmt: skip
         if args.physics_dt is not None:
             report["physics_dt"] = args.physics_dt
