@@ -200,6 +200,12 @@ def test_talos_walks_sideways_without_its_body_rising(robots):
     )
     assert sent[1] > 0.3
     check_walk(result, sent, "talos, sideways", ENDED_OVER_THE_FEET[result.state])
+    # The landings the estimator saw, against the simulator's contact forces: each within 10 ms. A late foot's
+    # target sent down at full speed in one tick whipped the leg, and the ankle sensor read it as a landing 30-46 ms
+    # before the sole touched (Talos's [control] late_descent_acceleration).
+    errors = result.estimation_errors
+    assert errors is not None and errors.landings >= 9 and errors.landings_missed == 0
+    assert max(map(abs, errors.landing_delays)) <= 0.010, f"landings seen {errors.landing_delays} s off"
 
 
 # The distance from where the walk was sent: Talos 17.9 mm on the estimate (12.8 mm at half the physics step; 17.9
