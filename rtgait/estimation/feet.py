@@ -8,13 +8,17 @@ of the sole plane about which the moment has no tangential part) is
 
     cop_local = (-t_y / f_z, t_x / f_z),        cop = o + R (cop_local, 0)               (m)
 
-NaN when the foot carries less than ``min_force``. The ZMP of both feet is the point of the ground plane ``z = h``
-about which the net moment of all foot forces is vertical: with ``tau_O = sum_feet (o - O) x F + tau_o`` about
+NaN when the foot carries less than ``min_force``. The ZMP of both feet is the point of the plane ``z = h`` about
+which the net moment of all foot forces is vertical: with ``tau_O = sum_feet (o - O) x F + tau_o`` about
 ``O = (0, 0, h)``,
 
     zmp = (-tau_O,y / F_z, tau_O,x / F_z)                                                 (m)
 
 which for feet flat on the ground is the force-weighted mean of their CoPs; NaN when no foot carries ``min_force``.
+The plane is the soles' by default, ``h = sum_i max(f_z,i, 0) o_z,i / sum_i max(f_z,i, 0)``: the stance sole's in
+single support, where the planner puts its ZMP (the support height of ``docs/method.md``). On a plane ``d`` below
+it the ZMP moves by ``d F_xy / F_z``, about ``d (c - p) / z_c``: on top of a 0.9 m staircase the ZMP on the floor's
+plane is twice as far from the COM as the pendulum's.
 A foot's wrench may also be given in its sole frame (``f``, ``t`` about the sole origin, as a force sensor's turned
 there): then ``F = R f``, ``tau_o = R t``.
 The sole's orientation is read as ``R = Rz(yaw) Ry(pitch) Rx(roll)``; its tilt is the angle between the sole normal
@@ -29,10 +33,19 @@ from rtgait.core.geometry.footsteps import Side
 from rtgait.estimation.load import LoadHysteresis
 from rtgait.estimation.state import FootState, Landing
 
-__all__ = ["FeetFromWrenches"]
+__all__ = ["FeetFromWrenches", "soles_plane"]
 
 _NAN2 = (math.nan, math.nan)
 _new_tuple = tuple.__new__  # a NamedTuple made from a tuple at once, without its generated __new__'s argument parsing
+
+
+def soles_plane(left_force: float, left_height: float, right_force: float, right_height: float) -> float:
+    """The height (m) of the ZMP's plane for the soles' vertical forces (N) and heights (m): the heights weighted
+    by the loads (a pull counts as none); 0 without load."""
+    lf = left_force if left_force > 0.0 else 0.0
+    rf = right_force if right_force > 0.0 else 0.0
+    total = lf + rf
+    return (lf * left_height + rf * right_height) / total if total > 0.0 else 0.0
 
 
 class FeetFromWrenches:
@@ -41,13 +54,13 @@ class FeetFromWrenches:
     Args:
         load: the feet's load and landing detection.
         min_force: least load (N) for which a CoP or a ZMP is given.
-        ground_height: height of the ground plane of the ZMP (m).
+        ground_height: height of the ZMP's plane (m); ``None``: the soles' (module docstring).
     """
 
-    def __init__(self, load: LoadHysteresis, min_force: float, ground_height: float = 0.0) -> None:
+    def __init__(self, load: LoadHysteresis, min_force: float, ground_height: float | None = None) -> None:
         self.load = load
         self.min_force = float(min_force)
-        self.ground_height = float(ground_height)
+        self.ground_height = None if ground_height is None else float(ground_height)
 
     def foot(
         self, index: int, t: float, fx: float, fy: float, fz: float, mx: float, my: float, mz: float, count: int,
@@ -123,8 +136,10 @@ class FeetFromWrenches:
         return foot, landing
 
     def zmp(self, left: FootState, right: FootState) -> tuple[tuple[float, float], float]:
-        """The ZMP of both feet on the ground plane (m; NaN below ``min_force``) and their total vertical force (N)."""
+        """The ZMP of both feet on its plane (m; NaN below ``min_force``) and their total vertical force (N)."""
         h = self.ground_height
+        if h is None:
+            h = soles_plane(left.force[2], left.pose[2], right.force[2], right.pose[2])
         # ZMP moments about (0, 0, h): (o - O) x F + tau_o per foot, in the order the feet are summed.
         zmp_mx = zmp_my = total = 0.0
         for foot in (left, right):

@@ -33,7 +33,7 @@ class GroundTruthEstimator:
         release_force: load below which a foot counts as unloaded (N); default half of ``landing_force``.
         min_unloaded_time: least flight time of a landing (s).
         min_force: least load (N) for which a CoP or a ZMP is given; default 0.1 % of the weight.
-        ground_height: height of the ground plane of the ZMP (m).
+        ground_height: height of the ZMP's plane (m); ``None``: the soles' (:mod:`rtgait.estimation.feet`).
     """
 
     reads_truth = True
@@ -47,7 +47,7 @@ class GroundTruthEstimator:
         release_force: float | None = None,
         min_unloaded_time: float = DEFAULT_MIN_UNLOADED_TIME,
         min_force: float | None = None,
-        ground_height: float = 0.0,
+        ground_height: float | None = None,
     ) -> None:
         if not (math.isfinite(omega) and omega > 0.0):
             raise ValueError(f"omega must be > 0 (1/s), got {omega}")

@@ -141,7 +141,7 @@ class KinematicInertialEstimator:
         release_force: float | None = None,
         min_unloaded_time: float = DEFAULT_MIN_UNLOADED_TIME,
         min_force: float | None = None,
-        ground_height: float = 0.0,
+        ground_height: float | None = None,
         velocity_cutoff: float = DEFAULT_VELOCITY_CUTOFF,
         attitude_cutoff: float = DEFAULT_ATTITUDE_CUTOFF,
         wrench_cutoff: float = DEFAULT_WRENCH_CUTOFF,

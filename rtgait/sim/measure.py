@@ -55,7 +55,7 @@ class SimMeasurer:
         release_force: float | None = None,
         min_unloaded_time: float = DEFAULT_MIN_UNLOADED_TIME,
         min_force: float | None = None,
-        ground_height: float = 0.0,
+        ground_height: float | None = None,
     ) -> None:
         contacts = ContactReader(
             model, base_body=base_body, left_site=left_site, right_site=right_site, left_geoms=left_geoms,

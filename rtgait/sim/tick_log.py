@@ -43,6 +43,7 @@ import numpy as np
 from rtgait.core.geometry.footsteps import SoleRect
 from rtgait.core.geometry.support import SUPPORT_CODES
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
+from rtgait.estimation.feet import soles_plane
 from rtgait.sim.estimation_errors import StateTrack
 from rtgait.sim.row_packing import row_packer
 
@@ -224,8 +225,12 @@ class TickLog:
             true: tuple[float, ...] = _NAN_TRUTH
         else:
             left, right = truth.left, truth.right
-            true = (*truth.com, *truth.com_vel, *left.sole_position, *right.sole_position, left.force[2],
-                    right.force[2], left.moment[0] + right.moment[0], left.moment[1] + right.moment[1])  # fmt: skip
+            (lfx, lfy, lfz), (rfx, rfy, rfz) = left.force, right.force
+            # The moment about the soles' plane's (0, 0, h): M - (0, 0, h) x F, its ZMP read off in finish().
+            h = soles_plane(lfz, left.sole_position[2], rfz, right.sole_position[2])
+            true = (*truth.com, *truth.com_vel, *left.sole_position, *right.sole_position, lfz, rfz,
+                    left.moment[0] + right.moment[0] + h * (lfy + rfy),
+                    left.moment[1] + right.moment[1] - h * (lfx + rfx))  # fmt: skip
         if targets is None:
             plan: tuple[float, ...] = _NAN_PLAN
             phase, support = -1, 0
@@ -291,8 +296,8 @@ class TickLog:
         com, velocity = columns[:, 0:3].copy(), columns[:, 3:6].copy()
         force = columns[:, 12:14].copy()
         total = force.sum(axis=1)
-        # The ZMP on the floor (z = 0) of the feet's wrenches, as the ground-truth estimator makes it
-        # (rtgait.estimation.feet): (-M_y, M_x) / F_z of their moment about the origin, NaN below its least force.
+        # The ZMP on the soles' plane of the feet's wrenches, as the ground-truth estimator makes it
+        # (rtgait.estimation.feet): (-M_y, M_x) / F_z of their moment about (0, 0, h), NaN below its least force.
         with np.errstate(invalid="ignore", divide="ignore"):
             zmp = np.column_stack([-columns[:, 15], columns[:, 14]]) / total[:, None]
         zmp[~(total > self._min_force)] = math.nan

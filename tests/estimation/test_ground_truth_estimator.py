@@ -72,6 +72,20 @@ def test_zmp_of_two_feet_is_the_force_weighted_mean_of_their_cops():
     assert m.support == "double"
 
 
+def test_the_zmp_of_a_foot_on_a_stair_is_where_its_force_meets_the_tread():
+    # A pendulum on a tread 0.9 m up, its COM 0.8 m above the tread and 0.05 m ahead of the centre of pressure: the
+    # ground's force points along c - p. Its ZMP is the centre of pressure on the tread; on the floor's plane 0.9 m
+    # below, the same line of force meets z = 0 a further 0.9 x 0.05 / 0.8 m behind.
+    tread, cop, com = 0.9, np.array([0.1, 0.2, 0.9]), np.array([0.15, 0.2, 1.7])
+    force = WEIGHT * (com - cop) / (com[2] - cop[2])
+    left = FootContact(tuple(force), tuple(np.cross(cop, force)), 4, [0.12, 0.2, tread], LEVEL)
+    right = FootContact((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0, [0.0, -0.1, 0.75], LEVEL)
+    m = GroundTruthEstimator(W, WEIGHT).update(None, _truth(0.0, left, right, com=tuple(com)))
+    assert m.zmp == pytest.approx((0.1, 0.2), abs=1e-12)
+    floor = GroundTruthEstimator(W, WEIGHT, ground_height=0.0).update(None, _truth(0.0, left, right, com=tuple(com)))
+    assert floor.zmp == pytest.approx((0.1 - 0.9 * 0.05 / 0.8, 0.2), abs=1e-12)
+
+
 def test_dcm_is_com_plus_velocity_over_omega():
     feet = _foot([(0.0, 0.1, 0.0)], [300.0], (0.0, 0.1, 0.0)), _foot([(0.0, -0.1, 0.0)], [300.0], (0.0, -0.1, 0.0))
     m = GroundTruthEstimator(W, WEIGHT).update(None, _truth(0.0, *feet, com=(0.1, -0.02, 0.8), com_vel=(0.3, 0.1, 0)))
