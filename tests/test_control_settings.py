@@ -98,16 +98,18 @@ def test_scenario_and_robot_files_carry_their_control_tables(tmp_path, write_sce
     assert load_scenario(scenario).control == (("late_grace", 0.02), ("dcm.k_p", 2.5))
     assert load_scenario("fig8").control == ()
     robot = write(tmp_path, "robot.toml", TALOS.read_text(encoding="utf-8") + "\n[control.foot]\nmax_height = 0.02\n")
-    assert load_robot(robot).control == (("foot.max_height", 0.02),)
+    assert load_robot(robot).control == (*load_robot(TALOS).control, ("foot.max_height", 0.02))
     scenario.write_text(text + "[control.foot]\nmax_tilt = [1, 2]\n", encoding="utf-8")
     with pytest.raises(ScenarioError, match=r"^control\.foot\.max_tilt must be a number, true or false, a string"):
         load_scenario(scenario)
 
 
 def test_precedence_robot_then_scenario_then_the_control_file(tmp_path, write_scenario):
-    robot = load_robot(write(tmp_path, "robot.toml", TALOS.read_text(encoding="utf-8") + (
-        "\n[control]\nmeasurement_filter = 0.01\n[control.dcm]\nk_p = 1.0\nk_i = 0.5\n"
-    )))  # fmt: skip
+    talos = TALOS.read_text(encoding="utf-8")  # its own [control] table gets one more key
+    robot = load_robot(write(tmp_path, "robot.toml", talos.replace(
+        "\n[control]\n", "\n[control]\nmeasurement_filter = 0.01\n", 1) + "\n[control.dcm]\nk_p = 1.0\nk_i = 0.5\n"
+    ))  # fmt: skip
+    own = dict(load_robot(TALOS).control)
     path = write_scenario(name="tuned")
     path.write_text(path.read_text(encoding="utf-8") + "[control.dcm]\nk_p = 2.0\n", encoding="utf-8")
     scenario = load_scenario(path)
@@ -117,7 +119,7 @@ def test_precedence_robot_then_scenario_then_the_control_file(tmp_path, write_sc
     assert (options.dcm.k_p, options.dcm.k_i, options.measurement_filter) == (2.0, 0.5, 0.01)
     options, chosen = controller_settings(robot, scenario, str(control), read_control_file(str(control)))
     assert (options.dcm.k_p, options.dcm.k_i, options.measurement_filter) == (3.0, 0.5, 0.01)
-    assert chosen == {"measurement_filter": 0.01, "dcm.k_p": 3.0, "dcm.k_i": 0.5}
+    assert chosen == {**own, "measurement_filter": 0.01, "dcm.k_p": 3.0, "dcm.k_i": 0.5}
     options, _ = controller_settings(robot, load_scenario("fig8"), None, ())
     assert options.dcm.k_p == 1.0
 

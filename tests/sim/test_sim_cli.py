@@ -335,7 +335,8 @@ def test_the_control_tables_reach_the_walking_controller(
     monkeypatch.setattr(run, "run_sim_loop", start)
     talos = (Path(__file__).parents[2] / "rtgait" / "robots" / "talos.toml").read_text(encoding="utf-8")
     robot = tmp_path / "robot.toml"
-    robot.write_text(talos + "\n[control]\nlate_grace = 0.02\n[control.dcm]\nk_p = 1.0\nk_i = 0.5\n", "utf-8")
+    talos = talos.replace("\n[control]\n", "\n[control]\nlate_grace = 0.02\n", 1)  # into its own table
+    robot.write_text(talos + "\n[control.dcm]\nk_p = 1.0\nk_i = 0.5\n", "utf-8")
     scenario = write_scenario(name="tuned", connection="quasi-real-time", single_support=0.7, double_support=0.1,
                               steps=2, step_length=0.08, short_ends=True)  # fmt: skip
     scenario.write_text(scenario.read_text("utf-8") + "[control.dcm]\nk_p = 2.5\n[control.foot]\nmax_height = 0.02\n")
