@@ -17,6 +17,8 @@ admittance ``d' = -A (p_cmd - p)`` steps the IK's COM target by centimetres in o
 
 from __future__ import annotations
 
+import math
+
 __all__ = ["pendulum_zmp"]
 
 
@@ -24,7 +26,7 @@ def pendulum_zmp(zmp: tuple[float, float], com: tuple[float, ...], force: float,
     """(1) of the module docstring: the measured ``zmp`` (m) with total normal force ``force`` (N) as the ZMP of a
     pendulum carried by ``weight`` (N, ``m g``), its COM at ``com`` (``(x, y, ...)``, m); ``zmp`` itself when
     ``force`` is not finite."""
-    if force != force or force in (float("inf"), float("-inf")):
+    if not math.isfinite(force):
         return zmp
     k = force / weight
     cx, cy = com[0], com[1]

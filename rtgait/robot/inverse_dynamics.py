@@ -215,4 +215,5 @@ class InverseDynamics:
     def sole_wrench(self, side: int, world: np.ndarray) -> np.ndarray:
         """A wrench given in world axes about the world origin (force then moment) as the sole ``side`` (0 left, 1
         right) takes it, sole frame about the sole point (at the last :meth:`update`)."""
-        return np.linalg.solve(force_transform(self.sole_frames[side]), np.asarray(world, dtype=float))
+        frame = np.array([*self._rows[side], _LAST_ROW])  # that sole's placement alone
+        return np.linalg.solve(force_transform(frame), np.asarray(world, dtype=float))
