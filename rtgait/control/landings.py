@@ -51,14 +51,17 @@ measured from the standing foot's target, so that a re-anchored foot stays where
   ``z_g = min(0, max(-late_descent_limit, d))``, reached linearly over the single support it carries next, ``z =
   z_land + (z_g - z_land) s``, ``s = (t - t_l) / (t_end - t_l)``: kept as deep as the target went, it would extend
   the stance leg, lift the body and make the next landing later still. The depth is measured against the other
-  foot, both soles in the estimator's frame, ``d = (z_l - z_o) - (z_f - (z_o,plan + z_o,offset))``: ``z_l`` and
-  ``z_o`` the measured heights of the landing sole and the other one, ``z_f`` the landing's foothold height, the
-  other foot standing at its target. On the flat floor (both footholds at 0) the estimator's frame is the floor's
-  and ``d = z_l``, the measured height itself (the other foot's servo lag left out); on terrain the measured
-  height is not the depth: down a ramp it is the foothold's own height (every stance target sank by up to
-  ``late_descent_limit`` and the stance leg, pushed into the ramp, lifted the body: Talos fell down ``slope-down``),
-  and the estimated frame's height drifts where the robot climbs (69 mm down over the 0.9 m of ``stairs-up``, about
-  11 mm a tread) while the difference of the two soles stays within 0.1 mm of the truth.
+  foot, both soles in the estimator's frame: ``r = (z_l - z_o) - (z_f - z_o,plan)``, ``z_l`` and ``z_o`` the
+  measured heights of the landing sole and the other one, ``z_f`` and ``z_o,plan`` their footholds' heights, is how
+  much lower than the plan the landing sole stands relative to the other, and ``d = z_o,offset + r`` when ``|r| >
+  ground_tolerance``, else ``d = z_o,offset``: the other foot stands at its ground's depth, its target's offset.
+  Neither the estimator's own height nor the relative one alone is the depth: the first drifts (69 mm down over the
+  0.9 m of ``stairs-up``, about 11 mm a tread; down a ramp it is the foothold's own height, and every stance target
+  sank by up to ``late_descent_limit`` and the stance leg, pushed into the ramp, lifted the body: Talos fell down
+  ``slope-down``), and the second carries the legs' calibration error, a few millimetres a landing, which added up
+  landing after landing sank every stance target (17 mm over a minute of Talos walking backward at its own gains
+  with a model error). Within the tolerance the ground is taken for the other foot's: a real change of level
+  (an unseen step down) is centimetres.
 
 **Blends.** A re-anchoring moves a landed foot's target by the servo lag, and an early landing's hold starts and
 ends with a jump; with ``anchor_blend`` > 0 the IK's target goes there from its old pose and rate along the planner's
@@ -357,15 +360,14 @@ class FootLandings(FootTargets):
         return landing.z, foothold.z, foothold.x, foothold.y
 
     def _depth(self, i: int, landing: Landing, m: Measurement, values: SampleValues) -> float:
-        """How far (m) below its foothold foot ``i`` met the ground at ``landing``, measured against the other foot
-        in the estimator's frame (module docstring, "Heights"); negative: lower than planned."""
+        """How far (m) below its foothold foot ``i`` met the ground at ``landing``: the other foot's ground depth,
+        plus the landing's height relative to the other sole beyond the plan's when that exceeds
+        ``ground_tolerance`` (module docstring, "Heights"); negative: lower than planned."""
         other = 1 - i
         planned = values.rfoot_z if other else values.lfoot_z
-        foothold = self._foothold_z(i)
-        if foothold == 0.0 and planned == 0.0:
-            return landing.z  # on the flat floor the estimator's frame is the floor's: the measured height
-        drift = (m.right if other else m.left).pose[2] - (planned + self._z[other])
-        return landing.z - drift - foothold
+        relative = (landing.z - (m.right if other else m.left).pose[2]) - (self._foothold_z(i) - planned)
+        ground = self._z[other]
+        return ground + relative if abs(relative) > self.options.ground_tolerance else ground
 
     def _foothold_z(self, i: int) -> float:
         """Height (m) of the foothold foot ``i``'s last swing went to (the plan's height for it at the swing's end);

@@ -108,6 +108,12 @@ class ControllerOptions:
             the later landings it gives fall, ``docs/results.md``, "A late foot's descent from rest").
         late_descent_limit: how far below the plan it goes at most (m); also how far below where it touched an
             early-landed foot's target goes on down.
+        ground_tolerance: a late foot's landing height relative to the other sole, beyond the plan's difference of
+            their footholds, is taken for a change of the ground only when it is larger than this (m); within it the
+            foot stands at the other foot's ground (:mod:`rtgait.control.landings`, "Heights"). The estimate of two
+            soles' relative height is off by the legs' joint calibration: up to 4.4 mm for Talos's zero offsets of
+            +-0.5 deg (worst case over the offsets at its landings), and taken at face value each landing's error
+            adds to the last (``docs/robots.md``, "Ground under a late foot").
         on_time_window: a touch-down this little before the plan's (s) is on time, not early: the foot goes on down
             with the plan and support switches with it. The swing's height profile ends flat (2 mm at 70 ms before
             the touch-down, :mod:`rtgait.core.geometry.swing`), so a robot whose stance side gives 2 mm touches that
@@ -165,6 +171,7 @@ class ControllerOptions:
     late_descent_speed: float = 0.3
     late_descent_limit: float = 0.02
     late_descent_acceleration: float = 0.0
+    ground_tolerance: float = 0.005
     measured_replanning: str = "on-error"
     late_grace: float = 0.01
     on_time_window: float = 0.08
@@ -211,6 +218,7 @@ _RANGES = {
     "late_descent_speed": (0.0, 10.0, "m/s"),
     "late_descent_limit": (0.0, 10.0, "m"),
     "late_descent_acceleration": (0.0, 1000.0, "m/s^2"),
+    "ground_tolerance": (0.0, 10.0, "m"),
     "late_grace": (0.0, 10.0, "s"),
     "on_time_window": (0.0, 10.0, "s"),
     "relanding_tolerance": (0.0, 10.0, "m"),

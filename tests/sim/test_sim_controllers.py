@@ -300,10 +300,12 @@ def test_adaptive_early_touchdown_reanchors_and_switches_support(blend):
 
 
 @pytest.mark.parametrize("acceleration", [0.0, 9.81])
-@pytest.mark.parametrize("ground", [-0.004, 0.0])
-def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_ground(ground, acceleration):
+@pytest.mark.parametrize(("met", "ground"), [(-0.012, -0.012), (-0.003, 0.0), (0.0, 0.0)])
+def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_ground(met, ground, acceleration):
     # Heights: ours only (no foot force control); late at once (no grace for the landing's detection); the descent
-    # at full speed from its first tick (0) or from rest at gravity's peak acceleration.
+    # at full speed from its first tick (0) or from rest at gravity's peak acceleration. The sole meets the floor
+    # `met` below the other one (m); within ground_tolerance (5 mm, the legs' calibration error) that is the other
+    # foot's ground, beyond it a lower ground (`ground`).
     options = ControllerOptions(
         measurement_filter=0.0, foot=None, late_grace=0.0, late_descent_acceleration=acceleration
     )
@@ -338,7 +340,7 @@ def test_adaptive_late_touchdown_lowers_the_foot_then_stands_at_the_measured_gro
     # single support it carries next, phase 3 (the target's own depth kept would extend the stance leg and lift the
     # body).
     target = planner.footprints()[2]
-    landing = Landing(t, side, target.x - 0.01, target.y, ground, target.yaw, 0.0, 0.0, 40.0)
+    landing = Landing(t, side, target.x - 0.01, target.y, met, target.yaw, 0.0, 0.0, 40.0)
     values, support, _ = planner.sample_values(t)
     out = ctl.tick(t, on_plan(t, values, support, landings=[landing], loaded=(True, True)))
     assert [e.detail for e in out.events if e.kind == "landing"] == ["late"]
