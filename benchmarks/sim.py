@@ -25,7 +25,9 @@ heading, and the base's yaw rate, from the walk's third step to three steps befo
 (measured vs planned, vs the multibody ZMP of the commanded motion, single support, RMS), the largest stance-foot
 slip, the share of ticks at which the legs' collision boxes touched and the real-time factor, over worker
 processes (``--workers``, default 2). ``--sim-option NAME=JSON`` sets a field of the MuJoCo model's
-:class:`~rtgait.sim.model.SimConfig` (e.g. ``leg_collisions=false``, to see what the legs' collision boxes cost).
+:class:`~rtgait.sim.model.SimConfig` (e.g. ``leg_collisions=false``, to see what the legs' collision boxes cost);
+``motor_model=true`` brings the description's command delay with it, as ``rtgait simulate --motor-model`` does, unless
+``command_delay`` is given too.
 
 Every run drives the joints with ``--gains`` (``stiff``, the default: the derived stiff servos; ``robot``: the real
 robot's own gains, with feed-forward torques) and ``--drive`` (``position``, the default; ``torque``: the motion carried
@@ -464,6 +466,10 @@ def main() -> None:
     unknown = sorted(set(args.sim_options) - known)
     if unknown:
         parser.error(f"--sim-option: SimConfig has no field {unknown[0]!r}")
+    if args.sim_options.get("motor_model") is True:
+        # The robot's motors come with its bus, as `rtgait simulate --motor-model` runs them: the command applied the
+        # description's actuation.command_delay periods late, unless a command_delay is given.
+        args.sim_options.setdefault("command_delay", None)
     if args.envelope:
         if args.gains != "stiff" or args.drive != "position":
             parser.error("--envelope sweeps the stiff position drives only (no --gains robot, --drive torque)")
