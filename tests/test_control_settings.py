@@ -11,7 +11,7 @@ import pytest
 
 from rtgait.cli.control_file import controller_settings, read_control_file
 from rtgait.cli.main import main
-from rtgait.control.control_table import ControlSettingsError, control_options
+from rtgait.control.control_table import ControlSettingsError, at_gains, control_options
 from rtgait.control.controller import make_controller
 from rtgait.control.settings import ControllerOptions, RobotInfo
 from rtgait.core.geometry.footsteps import SoleRect, Timing
@@ -181,3 +181,27 @@ def test_sole_levelling_is_off_by_default_off_the_flat_floor(name: str, levelled
     control.write_text("[control]\nsole_level = 0.5\n", encoding="utf-8")
     options, _ = controller_settings(load_robot("g1"), scenario, str(control), read_control_file(str(control)))
     assert options.sole_level == 0.5
+
+
+def test_a_robot_s_settings_per_gain_set_apply_at_those_gains_only(tmp_path):
+    # The table's own keys, then those of the drives' gain set over them; the other set's left out.
+    pairs = (("measurement_filter", 0.01), ("gains.stiff.measurement_filter", 0.02), ("gains.robot.dcm.k_p", 4.0))
+    assert at_gains(pairs, "stiff", "robot probe") == [("measurement_filter", 0.01), ("measurement_filter", 0.02)]
+    assert at_gains(pairs, "robot", "robot probe") == [("measurement_filter", 0.01), ("dcm.k_p", 4.0)]
+    options = control_options(("robot probe", at_gains(pairs, "robot", "robot probe")))
+    assert (options.measurement_filter, options.dcm.k_p) == (0.01, 4.0)
+    with pytest.raises(ControlSettingsError, match=r"^robot probe: control\.gains\.soft\.dcm\.k_p is not a setting of"):
+        at_gains((("gains.soft.dcm.k_p", 1.0),), "stiff", "robot probe")
+    # G1's: its late feet leave rest at the stiff servos (a step of the reference takes them to their torque limits),
+    # at once at its own gains; the summary's settings say which.
+    g1, fig8 = load_robot("g1"), load_scenario("fig8")
+    stiff, chosen = controller_settings(g1, fig8, None, (), "stiff")
+    assert stiff.late_descent_acceleration == 9.81 and chosen == {"late_descent_acceleration": 9.81}
+    robot, chosen = controller_settings(g1, fig8, None, (), "robot")
+    assert robot.late_descent_acceleration == ControllerOptions().late_descent_acceleration == 0.0 and chosen == {}
+    # A description's table is checked where it applies: a bad value in the other gain set's is refused there.
+    text = (Path(__file__).parents[1] / "rtgait" / "robots" / "g1.toml").read_text(encoding="utf-8")
+    bad = load_robot(write(tmp_path, "g1.toml", text + "\n[control.gains.robot]\nlate_descent_speed = -1.0\n"))
+    assert controller_settings(bad, fig8, None, (), "stiff")[0].late_descent_speed == 0.3
+    with pytest.raises(ControlSettingsError, match=r"^robot g1: control\.late_descent_speed must be a number within"):
+        controller_settings(bad, fig8, None, (), "robot")

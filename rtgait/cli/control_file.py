@@ -36,19 +36,25 @@ def read_control_file(path: str | None) -> SettingsPairs:
 
 
 def controller_settings(
-    robot: RobotDescription | None, scenario: Scenario, control_file: str | None, file_pairs: SettingsPairs
+    robot: RobotDescription | None,
+    scenario: Scenario,
+    control_file: str | None,
+    file_pairs: SettingsPairs,
+    gains: str = "stiff",
 ) -> tuple[ControllerOptions, dict[str, Any]]:
-    """The controller's settings for ``scenario`` walked by ``robot`` (``None``: no robot, the pendulum alone), with
-    ``file_pairs`` from ``control_file`` (:func:`read_control_file`) over both; and the keys the three tables set,
-    the last value of each, for the run's summary (empty when none set any).
+    """The controller's settings for ``scenario`` walked by ``robot`` (``None``: no robot, the pendulum alone) whose
+    drives run at ``gains`` (the robot's table as it applies to them,
+    :func:`~rtgait.control.control_table.at_gains`), with ``file_pairs`` from ``control_file``
+    (:func:`read_control_file`) over both; and the keys the three tables set, the last value of each, for the run's
+    summary (empty when none set any).
 
     Raises:
         rtgait.control.control_table.ControlSettingsError: a key or value the settings refuse (one line naming the
             file and the key).
     """
-    from rtgait.control.control_table import control_options, walk_defaults
+    from rtgait.control.control_table import at_gains, control_options, walk_defaults
 
-    layers = [] if robot is None else [(f"robot {robot.name}", robot.control)]
+    layers = [] if robot is None else [(f"robot {robot.name}", at_gains(robot.control, gains, f"robot {robot.name}"))]
     layers.append((f"scenario {scenario.name}", scenario.control))
     if control_file is not None:
         layers.append((f"--control {control_file}", file_pairs))

@@ -153,7 +153,7 @@ def _live_walk(
 
     state, sensors, model_error = state_settings(args)
     walk = robot_walk(scenario, robot)
-    settings, _ = controller_settings(robot.description, scenario, None, ())  # their [control] tables, as simulate
+    settings, _ = controller_settings(robot.description, scenario, None, (), gains)  # the [control] tables, as simulate
     if not by_command:  # as simulate does: a walk the robot cannot reach is refused before it starts
         with asked_walking(scenario, robot):
             whole_body_motion(robot, planned_walk(scenario, robot))

@@ -194,7 +194,7 @@ def run(args: argparse.Namespace) -> int:
     pushes = _check_simulation(args, scenario, velocity, out)
     robot = load_robot(args.robot, scenario)
     walk = robot_walk(scenario, robot)
-    options, chosen = controller_settings(robot.description, scenario, args.control, control_pairs)
+    options, chosen = controller_settings(robot.description, scenario, args.control, control_pairs, args.gains)
     config = dataclasses.replace(
         _physics_config(robot, args.control_dt, args.physics_dt), gains=args.gains, sensors=sensors,
         model_error=model_error, motor_model=args.motor_model, command_delay=None if args.motor_model else 0,

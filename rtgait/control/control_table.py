@@ -12,6 +12,11 @@ key and what is allowed (:class:`ControlSettingsError`).
 
 The tables arrive as ``(key, value)`` pairs, a subtable's keys dotted (``("dcm.k_p", 2.0)``), in file order, as
 :meth:`rtgait.scenario.tomlfile.TomlFiles.settings` reads them.
+
+**Per gain set.** A robot description's ``[control.gains.stiff]`` and ``[control.gains.robot]`` subtables hold
+settings that apply only when its drives run at that gain set (:data:`~rtgait.interface.command.GAIN_SETS`), over the
+rest of its table (:func:`at_gains`): a setting a robot needs against one kind of drive and not the other (a stiff
+position servo answers a step of its reference at its torque limit, a soft one with feed-forward torques does not).
 """
 
 from __future__ import annotations
@@ -23,9 +28,11 @@ from collections.abc import Iterable
 from rtgait.control.foot_control import FootControlGains
 from rtgait.control.settings import ControllerOptions
 from rtgait.core.laws.feedback import DcmFeedbackGains
+from rtgait.interface.command import GAIN_SETS
 
 __all__ = [
-    "DCM_KEYS", "FOOT_KEYS", "OPTION_KEYS", "ControlSettingsError", "apply_control", "control_options", "walk_defaults",
+    "DCM_KEYS", "FOOT_KEYS", "OPTION_KEYS", "ControlSettingsError", "apply_control", "at_gains", "control_options",
+    "walk_defaults",
 ]  # fmt: skip
 
 OPTION_KEYS = tuple(f.name for f in dataclasses.fields(ControllerOptions) if f.name != "step_adjustment")
@@ -42,6 +49,32 @@ _DEFAULT_FOOT = ControllerOptions().foot  # foot force control's gains when a ta
 
 class ControlSettingsError(ValueError):
     """A ``[control]`` key or value that the controller's settings refuse (one line naming the file and the key)."""
+
+
+def at_gains(pairs: Pairs, gains: str, source: str) -> list[tuple[str, object]]:
+    """A robot description's ``[control]`` pairs as they apply at the drives' ``gains`` (one of
+    :data:`~rtgait.interface.command.GAIN_SETS`): those outside ``[control.gains]`` as they are, then those of
+    ``[control.gains.<gains>]`` without the prefix, so that they win; the other gain sets' are left out.
+
+    Raises:
+        ControlSettingsError: a ``[control.gains]`` subtable that names no gain set, or a value directly in it.
+    """
+    if gains not in GAIN_SETS:
+        raise ValueError(f"gains must be one of {', '.join(GAIN_SETS)}, got {gains!r}")
+    common: list[tuple[str, object]] = []
+    chosen: list[tuple[str, object]] = []
+    for key, value in pairs:
+        head, _, rest = key.partition(".")
+        if head != "gains":
+            common.append((key, value))
+            continue
+        gain_set, _, name = rest.partition(".")
+        if gain_set not in GAIN_SETS or not name:
+            sets = ", ".join(f"[control.gains.{each}]" for each in GAIN_SETS)
+            raise ControlSettingsError(f"{source}: control.{key} is not a setting of {sets}")
+        if gain_set == gains:
+            chosen.append((name, value))
+    return common + chosen
 
 
 def walk_defaults(terrain_kind: str | None) -> ControllerOptions:

@@ -15,7 +15,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["JointCommand"]
+__all__ = ["GAIN_SETS", "JointCommand"]
+
+GAIN_SETS = ("stiff", "robot")
+"""The drives' own gain sets, those a command without gains gets: ``"stiff"``, servos derived stiff enough to follow
+any reference (a simulation's), or ``"robot"``, the gains the real robot's drives run (its description's
+``[actuation]`` table).
+"""
 
 
 class JointCommand(NamedTuple):

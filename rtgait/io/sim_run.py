@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterator, Sequence
 
 import mujoco
 
-from rtgait.control.control_table import control_options, walk_defaults
+from rtgait.control.control_table import at_gains, control_options, walk_defaults
 from rtgait.control.controller import ControllerOptions, WalkingController, make_controller
 from rtgait.core.analysis.rollout import Rollout, ScheduledChange, rollout
 from rtgait.core.obstacle.avoid import ObstacleReaction
@@ -141,7 +141,8 @@ def simulate(
     for each in base_options.pushes:
         each.check(robot.mass, walk.cog_height, walk.gravity)
     if controller_options is None:
-        controller_options = robot_and_scenario_options(robot, scenario)
+        gains = sim.config.gains if sim is not None else (config or SimConfig()).gains
+        controller_options = robot_and_scenario_options(robot, scenario, gains=gains)
     if sim is None:
         terrain = None if walk.terrain is None else walk.terrain.terrain
         sim = build_sim_model(robot, sim_config(config, control_dt, physics_dt), walk.obstacles, terrain)
@@ -175,10 +176,11 @@ def obstacle_reactions(walk: Scenario) -> tuple[tuple[float, ObstacleReaction], 
 
 
 def robot_and_scenario_options(
-    robot: RobotModel, scenario: Scenario, base: ControllerOptions | None = None
+    robot: RobotModel, scenario: Scenario, base: ControllerOptions | None = None, gains: str = "stiff"
 ) -> ControllerOptions:
     """``base`` (default :func:`~rtgait.control.control_table.walk_defaults` for the scenario's terrain) with the
-    ``[control]`` table of ``robot``'s description and then the one of ``scenario`` applied
+    ``[control]`` table of ``robot``'s description as it applies at the drives' ``gains``
+    (:func:`~rtgait.control.control_table.at_gains`) and then the one of ``scenario`` applied
     (:func:`rtgait.control.control_table.control_options`).
 
     Raises:
@@ -186,9 +188,9 @@ def robot_and_scenario_options(
     """
     if base is None:
         base = walk_defaults(None if scenario.terrain is None else scenario.terrain.terrain.kind)
-    return control_options(
-        (f"robot {robot.name}", robot.description.control), (f"scenario {scenario.name}", scenario.control), base=base
-    )
+    source = f"robot {robot.name}"
+    robot_pairs = at_gains(robot.description.control, gains, source)
+    return control_options((source, robot_pairs), (f"scenario {scenario.name}", scenario.control), base=base)
 
 
 def _velocity_schedule(

@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from rtgait.interface.command import GAIN_SETS
 from rtgait.sim.actuation import substeps
 
 if TYPE_CHECKING:
@@ -15,10 +16,9 @@ if TYPE_CHECKING:
 
 __all__ = ["GAIN_SETS", "SensorSettings", "SimConfig"]
 
-GAIN_SETS = ("stiff", "robot")
-"""The drives' own gains (``SimConfig.gains``): ``"stiff"``, the description's ``kp``/``kd`` or the stiff gains derived
-from the URDF (:mod:`rtgait.sim.actuation`); ``"robot"``, the gains the real robot's low-level controller runs
-(``robot_kp``/``robot_kd``)."""
+# GAIN_SETS (rtgait.interface.command): the drives' own gains, SimConfig.gains: "stiff", the description's kp/kd or
+# the stiff gains derived from the URDF (rtgait.sim.actuation); "robot", the gains the real robot's low-level
+# controller runs (robot_kp/robot_kd).
 
 
 @dataclass(frozen=True)
