@@ -4,8 +4,9 @@ The truth is the robot's own model: the whole-body IK (every joint within its UR
 :class:`~rtgait.robot.motion.UnreachableError` when it cannot follow the plan) and the distance between the left and
 right legs' collision meshes of the URDF (feet included), computed by Pinocchio's collision library along the
 planned walk. Every command the planner accepts at the paper's three timings, once clamped, is within that reach;
-and the limits are within the envelope the robots walked in MuJoCo (``docs/velocity_envelope.json``, recorded by
-``benchmarks/sim.py --envelope``). Then: the robot's walks carry the limits into the planner, and a bad
+and the limits are within the envelope the robots walked in MuJoCo, on the simulator's truth and on the estimate
+(``docs/velocity_envelope.json``, ``docs/velocity_envelope_estimated.json``, recorded by ``benchmarks/sim.py
+--envelope``). Then: the robot's walks carry the limits into the planner, and a bad
 ``[velocity]`` table is refused in one line naming the key.
 """
 
@@ -141,17 +142,21 @@ def test_every_command_the_planner_accepts_is_within_the_robot_s_reach(name, tim
         whole_body_motion(robot, plan)  # raises UnreachableError if the IK cannot follow it
 
 
-ENVELOPE = Path(__file__).resolve().parents[2] / "docs" / "velocity_envelope.json"
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+ENVELOPES = {"truth": DOCS / "velocity_envelope.json", "estimated": DOCS / "velocity_envelope_estimated.json"}
+"""The recorded sweeps, on the simulator's truth and on the estimator's state (``benchmarks/sim.py --envelope
+--state S --record FILE``)."""
 
 
+@pytest.mark.parametrize("state", ["truth", "estimated"])
 @pytest.mark.parametrize("name", ["talos", "g1"])
-def test_the_limits_are_within_the_walked_envelope(name, request):
+def test_the_limits_are_within_the_walked_envelope(name, state, request):
     """Along every direction of the recorded sweep, at each paper timing, the command on the robot's clamp (the
-    limits of that timing's sway) asks no more than the largest one the robot walked in MuJoCo: raise a limit, or
-    let a case of the record fail, and this fails until the envelope is walked again."""
+    limits of that timing's sway) asks no more than the largest one the robot walked in MuJoCo, on the truth and on
+    the estimate: raise a limit, or let a case of a record fail, and this fails until the envelope is walked again."""
     robot = request.getfixturevalue(name)
-    record = json.loads(ENVELOPE.read_text(encoding="utf-8"))
-    assert record["state"] == "truth" and not record["quick"]
+    record = json.loads(ENVELOPES[state].read_text(encoding="utf-8"))
+    assert record["state"] == state and not record["quick"]
     entries = [entry for entry in record["summary"] if entry["robot"] == name]
     assert {entry["timing"] for entry in entries} == {"fig6", "fig7", "fig8"}
     assert len(entries) == 3 * 11  # every direction of the full grid
