@@ -92,8 +92,13 @@ def run(
         "replans": len(steady),
         "samples": len(samples),
         "settings": {
-            "steps": steps, "dt": dt, "connection": mode, "horizon_steps": horizon, "gc": collect_garbage,
-            "feedback": feedback, "terrain": terrain,
+            "steps": steps,
+            "dt": dt,
+            "connection": mode,
+            "horizon_steps": horizon,
+            "gc": collect_garbage,
+            "feedback": feedback,
+            "terrain": terrain,
         },
     }
     if measured:
@@ -169,14 +174,20 @@ def main() -> None:
         f"garbage collector {'off' if args.no_gc else 'on'}, feedback {args.feedback}"
         + (f", terrain +-{TERRAIN_RISE:g} m per step" if args.terrain else "")
     )
-    print(f"replan : median {result['replan_us']['median']:7.2f} us   p99 {result['replan_us']['p99']:7.2f} us"
-          f"   ({result['replans']} replans)")
-    print(f"sample : median {result['sample_us']['median']:7.2f} us   p99 {result['sample_us']['p99']:7.2f} us"
-          f"   ({result['samples']} ticks)")
+    print(
+        f"replan : median {result['replan_us']['median']:7.2f} us   p99 {result['replan_us']['p99']:7.2f} us"
+        f"   ({result['replans']} replans)"
+    )
+    print(
+        f"sample : median {result['sample_us']['median']:7.2f} us   p99 {result['sample_us']['p99']:7.2f} us"
+        f"   ({result['samples']} ticks)"
+    )
     if "observe_us" in result:
         print(f"observe: median {result['observe_us']['median']:7.2f} us   p99 {result['observe_us']['p99']:7.2f} us")
-    print(f"replan back to back: median {result['replan_back_to_back_us']['median']:7.2f} us   "
-          f"p99 {result['replan_back_to_back_us']['p99']:7.2f} us")
+    print(
+        f"replan back to back: median {result['replan_back_to_back_us']['median']:7.2f} us   "
+        f"p99 {result['replan_back_to_back_us']['p99']:7.2f} us"
+    )
     print(f"operator build (once per plan shape, in start()): median {result['operator_build_us']['median']:.0f} us")
 
 

@@ -45,8 +45,10 @@ def walk(seconds: float, robot_name: str = "talos") -> SimRobot:
             continue
         if k % round(1.0 / dt) == 0:
             com, planned = out.measurement.com, out.targets.com
-            print(f"t {readings.t:5.2f} s  COM ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m, "
-                  f"planned ({planned[0]:+.3f}, {planned[1]:+.3f}) m, support {out.targets.support}")
+            print(
+                f"t {readings.t:5.2f} s  COM ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m, "
+                f"planned ({planned[0]:+.3f}, {planned[1]:+.3f}) m, support {out.targets.support}"
+            )
     return body
 
 

@@ -313,8 +313,11 @@ BAD_FILES = [
     ("unknown key", ("step_width = 0.19", "step_widht = 0.19"), "walk.step_widht"),
     ("dt longer than a phase", ("dt = 0.01", "dt = 0.3"), "timing.dt"),
     ("dt below the limit", ("dt = 0.01", "dt = 1e-6"), "timing.dt must be within [1e-05, 60] s"),
-    ("two changes of one step", ("length = 0.12\n", "length = 0.12\n\n[[walk.change]]\nstep = 2\nwidth = 0.2\n"),
-     "walk.change[0] and walk.change[1] both change step 2"),
+    (
+        "two changes of one step",
+        ("length = 0.12\n", "length = 0.12\n\n[[walk.change]]\nstep = 2\nwidth = 0.2\n"),
+        "walk.change[0] and walk.change[1] both change step 2",
+    ),
 ]
 
 

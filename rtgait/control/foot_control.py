@@ -137,7 +137,6 @@ class ZmpSplit(NamedTuple):
     saturated: bool
 
 
-
 def _clamp_to_sole(px: float, py: float, pose: Pose, sole: SoleRect, left: bool) -> tuple[float, float, bool]:
     """Nearest point of the sole rectangle of the foot at ``pose`` to ``(px, py)`` (m), and whether it moved."""
     x, y, yaw = pose[0], pose[1], pose[-1]

@@ -26,9 +26,7 @@ def share_dir() -> Path:
     try:
         dist = importlib.metadata.distribution(DISTRIBUTION)
     except importlib.metadata.PackageNotFoundError:
-        raise RobotDataError(
-            f"the '{DISTRIBUTION}' package is not installed: pip install 'rtgait[robot]'"
-        ) from None
+        raise RobotDataError(f"the '{DISTRIBUTION}' package is not installed: pip install 'rtgait[robot]'") from None
     folder = Path(dist.locate_file(SHARE))
     if not (folder / "example-robot-data" / "robots").is_dir():
         raise RobotDataError(f"'{DISTRIBUTION}' is installed but its robot folder is missing under {folder}")

@@ -53,8 +53,11 @@ def write_map(folder: Path, physics_from: Path | None = None) -> list[Path]:
     physics = None
     if physics_from is not None:
         physics = read_results(physics_from)
-        meta = {**meta, "physics": True,
-                "robot": json.loads((Path(physics_from) / "sweep.json").read_text(encoding="utf-8")).get("robot")}
+        meta = {
+            **meta,
+            "physics": True,
+            "robot": json.loads((Path(physics_from) / "sweep.json").read_text(encoding="utf-8")).get("robot"),
+        }
     figure = plot_map(rows, meta, physics)
     if figure is None:
         return []

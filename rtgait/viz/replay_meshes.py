@@ -35,7 +35,14 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 __all__ = [
-    "CREASE_ANGLE", "MESH_TRIANGLES", "Mesh", "MeshLibrary", "MeshUse", "crease_normals", "encode_mesh", "read_mesh",
+    "CREASE_ANGLE",
+    "MESH_TRIANGLES",
+    "Mesh",
+    "MeshLibrary",
+    "MeshUse",
+    "crease_normals",
+    "encode_mesh",
+    "read_mesh",
     "simplify",
 ]
 

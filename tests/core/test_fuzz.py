@@ -158,8 +158,10 @@ def _check_ticks(rows: list, w2: float) -> None:
         else:
             current.append(row)
     runs.append(current)
-    c, v, a, p = (slice(COL[x], COL[y] + 1) for x, y in (("cog_x", "cog_y"), ("cog_vx", "cog_vy"),
-                                                        ("cog_ax", "cog_ay"), ("zmp_x", "zmp_y")))
+    c, v, a, p = (
+        slice(COL[x], COL[y] + 1)
+        for x, y in (("cog_x", "cog_y"), ("cog_vx", "cog_vy"), ("cog_ax", "cog_ay"), ("zmp_x", "zmp_y"))
+    )
     for run in runs:
         if len(run) < 3:
             continue

@@ -350,5 +350,5 @@ def test_white_background(browser: Any, talos: Talos, tmp_path: Path) -> None:
     assert tab.problems == []
     height, width, _ = picture.shape
     # The right edge, below meshcat's controls button and away from the walk: the background itself.
-    edge = picture[height // 3: 2 * height // 3, width - 40:]
+    edge = picture[height // 3 : 2 * height // 3, width - 40 :]
     assert (edge.min(axis=2) > 225).mean() > 0.9  # white (the grid's grey lines cross it)

@@ -64,7 +64,8 @@ def test_reads_binary_and_ascii_stl(tmp_path: Path) -> None:
     mesh = read_mesh(path)
     assert mesh is not None and len(mesh.vertices) == 5 and mesh.triangles.shape == (6, 3)  # corners merged
     assert np.sort(mesh.vertices[mesh.triangles].reshape(-1, 3), axis=0) == pytest.approx(
-        np.sort(WEDGE.vertices[WEDGE.triangles].reshape(-1, 3), axis=0), abs=1e-7)  # float32 in the file
+        np.sort(WEDGE.vertices[WEDGE.triangles].reshape(-1, 3), axis=0), abs=1e-7
+    )  # float32 in the file
     fallback = replay_meshes._read_binary_stl(path)  # without trimesh
     assert fallback is not None and len(fallback.vertices) == 5 and len(fallback.triangles) == 6
     ascii_lines = ["solid wedge"]

@@ -75,6 +75,7 @@ MAX_DT = 1.0
 MAX_OMEGA = 1000.0
 """Largest pendulum frequency accepted (1/s); a COM 1 cm high on Earth gives 31 1/s."""
 
+
 def _check_real(name: str, value: object, low: float, high: float, unit: str, optional: bool = False) -> float | None:
     """``value`` as a float if a finite real within ``[low, high]`` (or ``None`` when ``optional``), else a
     ValueError naming ``name`` and the range."""

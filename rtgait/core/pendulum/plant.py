@@ -54,6 +54,7 @@ DEFAULT_REST_SPEED = 0.01
 """COM speed below which the pendulum may count as at rest (m/s): 1-10 % of walking speeds (0.1-1 m/s); with it the
 COM is within ``speed / w`` (3 mm at ``z_c = 0.8 m``) of its DCM."""
 
+
 def _floats2(name: str, value: Sequence[float] | np.ndarray) -> tuple[float, float]:
     """``value`` as two finite floats, else a ValueError naming ``name``."""
     try:

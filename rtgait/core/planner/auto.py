@@ -208,8 +208,11 @@ class AutoConnection:
         if not planner.started or q is None:
             # Before the walk starts every plan is still to be made; after its last replan none is left to choose.
             first = walk.change_step(step, **values, through=through)
-            kind, why = ("quasi-real-time", "before the walk starts") if not planner.started else ("real-time",
-                                                                                                   "no replan left")
+            kind, why = (
+                ("quasi-real-time", "before the walk starts")
+                if not planner.started
+                else ("real-time", "no replan left")
+            )
             return first, ChangeRecord(planner.latest_time, step, kind, step, last, planner.latest_time, (), why)
         self.held.pop(step, None)  # a newer wish for the same step replaces the one held
         options = auto_options(step, last, q, walk.n_steps, planner.config.horizon_steps)
