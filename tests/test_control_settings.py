@@ -186,9 +186,12 @@ def test_sole_levelling_is_off_by_default_off_the_flat_floor(name: str, levelled
 def test_a_robot_s_settings_per_gain_set_apply_at_those_gains_only(tmp_path):
     # The table's own keys, then those of the drives' gain set over them; the other set's left out.
     pairs = (("measurement_filter", 0.01), ("gains.stiff.measurement_filter", 0.02), ("gains.robot.dcm.k_p", 4.0))
-    assert at_gains(pairs, "stiff", "robot probe") == [("measurement_filter", 0.01), ("measurement_filter", 0.02)]
-    assert at_gains(pairs, "robot", "robot probe") == [("measurement_filter", 0.01), ("dcm.k_p", 4.0)]
-    options = control_options(("robot probe", at_gains(pairs, "robot", "robot probe")))
+    common = ("robot probe", [("measurement_filter", 0.01)])
+    stiff = ("robot probe [control.gains.stiff]", [("measurement_filter", 0.02)])
+    assert at_gains(pairs, "stiff", "robot probe") == [common, stiff]
+    robot = ("robot probe [control.gains.robot]", [("dcm.k_p", 4.0)])
+    assert at_gains(pairs, "robot", "robot probe") == [common, robot]
+    options = control_options(*at_gains(pairs, "robot", "robot probe"))
     assert (options.measurement_filter, options.dcm.k_p) == (0.01, 4.0)
     with pytest.raises(ControlSettingsError, match=r"^robot probe: control\.gains\.soft\.dcm\.k_p is not a setting of"):
         at_gains((("gains.soft.dcm.k_p", 1.0),), "stiff", "robot probe")
@@ -203,5 +206,6 @@ def test_a_robot_s_settings_per_gain_set_apply_at_those_gains_only(tmp_path):
     text = (Path(__file__).parents[1] / "rtgait" / "robots" / "g1.toml").read_text(encoding="utf-8")
     bad = load_robot(write(tmp_path, "g1.toml", text + "\n[control.gains.robot]\nlate_descent_speed = -1.0\n"))
     assert controller_settings(bad, fig8, None, (), "stiff")[0].late_descent_speed == 0.3
-    with pytest.raises(ControlSettingsError, match=r"^robot g1: control\.late_descent_speed must be a number within"):
+    message = r"^robot g1 \[control\.gains\.robot\]: control\.late_descent_speed must be a number within"
+    with pytest.raises(ControlSettingsError, match=message):
         controller_settings(bad, fig8, None, (), "robot")

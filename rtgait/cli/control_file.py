@@ -54,7 +54,7 @@ def controller_settings(
     """
     from rtgait.control.control_table import at_gains, control_options, walk_defaults
 
-    layers = [] if robot is None else [(f"robot {robot.name}", at_gains(robot.control, gains, f"robot {robot.name}"))]
+    layers = [] if robot is None else at_gains(robot.control, gains, f"robot {robot.name}")
     layers.append((f"scenario {scenario.name}", scenario.control))
     if control_file is not None:
         layers.append((f"--control {control_file}", file_pairs))

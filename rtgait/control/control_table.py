@@ -51,10 +51,11 @@ class ControlSettingsError(ValueError):
     """A ``[control]`` key or value that the controller's settings refuse (one line naming the file and the key)."""
 
 
-def at_gains(pairs: Pairs, gains: str, source: str) -> list[tuple[str, object]]:
-    """A robot description's ``[control]`` pairs as they apply at the drives' ``gains`` (one of
-    :data:`~rtgait.interface.command.GAIN_SETS`): those outside ``[control.gains]`` as they are, then those of
-    ``[control.gains.<gains>]`` without the prefix, so that they win; the other gain sets' are left out.
+def at_gains(pairs: Pairs, gains: str, source: str) -> list[tuple[str, list[tuple[str, object]]]]:
+    """A robot description's ``[control]`` pairs, from ``source``, as they apply at the drives' ``gains`` (one of
+    :data:`~rtgait.interface.command.GAIN_SETS`): two layers for :func:`control_options`, those outside
+    ``[control.gains]`` as they are, then those of ``[control.gains.<gains>]`` without the prefix, so that they win
+    (their source names the subtable, for messages); the other gain sets' are left out.
 
     Raises:
         ControlSettingsError: a ``[control.gains]`` subtable that names no gain set, or a value directly in it.
@@ -74,7 +75,7 @@ def at_gains(pairs: Pairs, gains: str, source: str) -> list[tuple[str, object]]:
             raise ControlSettingsError(f"{source}: control.{key} is not a setting of {sets}")
         if gain_set == gains:
             chosen.append((name, value))
-    return common + chosen
+    return [(source, common), (f"{source} [control.gains.{gains}]", chosen)]
 
 
 def walk_defaults(terrain_kind: str | None) -> ControllerOptions:

@@ -188,9 +188,8 @@ def robot_and_scenario_options(
     """
     if base is None:
         base = walk_defaults(None if scenario.terrain is None else scenario.terrain.terrain.kind)
-    source = f"robot {robot.name}"
-    robot_pairs = at_gains(robot.description.control, gains, source)
-    return control_options((source, robot_pairs), (f"scenario {scenario.name}", scenario.control), base=base)
+    robot_layers = at_gains(robot.description.control, gains, f"robot {robot.name}")
+    return control_options(*robot_layers, (f"scenario {scenario.name}", scenario.control), base=base)
 
 
 def _velocity_schedule(
