@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from swing_end import SIDES, _soles, touchdowns
+from swing_end import SIDES, _soles, read_run, touchdowns
 
 from rtgait.robot.model import RobotModel
 from rtgait.sim.log_file import read_sim_log
@@ -52,16 +52,8 @@ def _pitch(c: dict[str, np.ndarray], prefix: str) -> np.ndarray:
 
 def sag(path: str) -> list[dict[str, float]]:
     """Per planned touch-down of the log at ``path``: the module docstring's terms (m, rad, N m)."""
-    log = read_sim_log(path)
-    c = log.columns
-    robot = RobotModel.load(log.metadata["robot"])
-    names = list(robot.joint_names)
-    model, data = robot.model, robot.model.createData()
-    ids = {"left": robot.left_sole_id, "right": robot.right_sole_id}
+    c, robot, names, model, data, ids, measured, commanded, base = read_run(path)
     kp = {n: g for n, g in zip(names, _robot_kp(robot), strict=True)}
-    measured = np.column_stack([c[f"q_{n}"] for n in names])
-    commanded = np.column_stack([c[f"q_command_{n}"] for n in names])
-    base = np.column_stack([c[f"base_{a}"] for a in ("x", "y", "z", "qx", "qy", "qz", "qw")])
     pitch_error = _pitch(c, "base_q") - _pitch(c, "base_q_command")
     legs = {side: [i for i, n in enumerate(names) if n.startswith(side + "_")] for side in SIDES}
     end = float(c["t"][-1]) - TAIL

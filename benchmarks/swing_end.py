@@ -23,6 +23,7 @@ flips with the side) and, with ``--each``, one line per touch-down.
 from __future__ import annotations
 
 import argparse
+from typing import Any, NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -32,6 +33,44 @@ from rtgait.sim.log_file import read_sim_log
 
 SIDES = ("left", "right")
 TERMS = ("error", "swing_leg", "stance_leg", "stance_tilt", "stance_height", "ik_residual")
+
+
+class RunLog(NamedTuple):
+    """A run's ``sim.parquet`` with its robot, for the forward kinematics of its ticks.
+
+    Attributes:
+        columns: the log's columns by name.
+        robot: the robot the run walked (its description's name).
+        names: the joints, in the robot's order.
+        model, data: its reduced Pinocchio model and a data of it.
+        ids: the sole frames' ids by side.
+        measured, commanded: the joints' positions and their commands per tick (rad), shape ``(k, n)``.
+        base: the base's pose per tick, ``(x, y, z, qx, qy, qz, qw)`` (m), shape ``(k, 7)``.
+    """
+
+    columns: dict[str, Any]
+    robot: RobotModel
+    names: list[str]
+    model: pin.Model
+    data: pin.Data
+    ids: dict[str, int]
+    measured: np.ndarray
+    commanded: np.ndarray
+    base: np.ndarray
+
+
+def read_run(path: str) -> RunLog:
+    """The run logged at ``path`` (a ``sim.parquet``) with its robot's model."""
+    log = read_sim_log(path)
+    c = log.columns
+    robot = RobotModel.load(log.metadata["robot"])
+    names = list(robot.joint_names)
+    ids = {"left": robot.left_sole_id, "right": robot.right_sole_id}
+    return RunLog(
+        c, robot, names, robot.model, robot.model.createData(), ids,
+        np.column_stack([c[f"q_{n}"] for n in names]), np.column_stack([c[f"q_command_{n}"] for n in names]),
+        np.column_stack([c[f"base_{a}"] for a in ("x", "y", "z", "qx", "qy", "qz", "qw")]),
+    )  # fmt: skip
 
 
 def _soles(model: pin.Model, data: pin.Data, ids: dict[str, int], q: np.ndarray) -> dict[str, pin.SE3]:
@@ -51,15 +90,7 @@ def touchdowns(support: np.ndarray) -> list[tuple[int, str, str]]:
 
 def split(path: str, offset: int = 0) -> tuple[list[str], list[dict[str, float | np.ndarray]]]:
     """The joint names and, per touch-down, the terms of the module docstring (m) and the joints' errors (rad)."""
-    log = read_sim_log(path)
-    c = log.columns
-    robot = RobotModel.load(log.metadata["robot"])
-    names = list(robot.joint_names)
-    model, data = robot.model, robot.model.createData()
-    ids = {"left": robot.left_sole_id, "right": robot.right_sole_id}
-    measured = np.column_stack([c[f"q_{n}"] for n in names])
-    commanded = np.column_stack([c[f"q_command_{n}"] for n in names])
-    base = np.column_stack([c[f"base_{a}"] for a in ("x", "y", "z", "qx", "qy", "qz", "qw")])
+    c, _, names, model, data, ids, measured, commanded, base = read_run(path)
     legs = {side: [i for i, n in enumerate(names) if n.startswith(side + "_")] for side in SIDES}
     rows = []
     for tick, stance, swing in touchdowns(c["support_planned"]):
