@@ -331,6 +331,8 @@ def _seeds(text: str) -> list[int]:
 
 
 def main() -> None:
+    from rtgait.interface.sensor_spec import YAW_SOURCES
+
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robot", action="append", dest="robots", help="robot(s) (default talos and g1)")
     parser.add_argument("--velocity-walks", action="store_true", help="the walks by velocity command too")
@@ -351,7 +353,7 @@ def main() -> None:
     parser.add_argument("--shadow", action="store_true", help="the estimator alone, beside a walk on the truth")
     parser.add_argument("--scenario", default="fig8", help="--shadow: built-in scenario (default fig8)")
     parser.add_argument("--seed", type=int, default=0, help="--shadow: the sensors' seed (default 0)")
-    parser.add_argument("--yaw", choices=("feet", "imu"), default=None,
+    parser.add_argument("--yaw", choices=YAW_SOURCES, default=None,
                         help="--shadow: the base's yaw source (default: the description's yaw_source)")  # fmt: skip
     parser.add_argument("--velocity-cutoff", type=float, default=3.5, help="--shadow: velocity filter cut-off, Hz")
     parser.add_argument("--no-rocking", action="store_true", help="--shadow: hold the sole origins still, not the CoPs")

@@ -20,6 +20,7 @@ import json
 
 from rtgait.control.controller import make_controller
 from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
+from rtgait.interface.command import GAIN_SETS
 from rtgait.robot.controller_info import robot_info
 from rtgait.robot.description import load_robot
 from rtgait.robot.model import RobotModel
@@ -38,7 +39,7 @@ def main() -> None:
     parser.add_argument("--ticks", type=int, default=1000, help="ticks after the warm-up (default 1000)")
     parser.add_argument("--state", choices=STATE_SOURCES, default=DEFAULT_STATE,
                         help=f"what the controller acts on (default {DEFAULT_STATE})")  # fmt: skip
-    parser.add_argument("--gains", choices=("stiff", "robot"), default="stiff",
+    parser.add_argument("--gains", choices=GAIN_SETS, default="stiff",
                         help="the drives' gains: stiff (default) or robot, with feed-forward torques")  # fmt: skip
     parser.add_argument("--drive", choices=("position", "torque"), default="position",
                         help="position (default) or torque: a tenth of the robot's gains, with FF torques")  # fmt: skip

@@ -52,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
+from rtgait.interface.command import GAIN_SETS
 
 CASES = ("fig4", "fig6", "fig7", "fig8")
 EXPECTED = {"fig4": "loses balance", "fig6": "walks", "fig7": "walks", "fig8": "walks"}
@@ -224,7 +225,7 @@ def main() -> None:
     parser.add_argument("--cases", default=",".join(CASES), help="comma-separated cases (default: the paper's four)")
     parser.add_argument("--state", choices=STATE_SOURCES, default=DEFAULT_STATE,
                         help=f"what the controller acts on (default {DEFAULT_STATE})")  # fmt: skip
-    parser.add_argument("--gains", choices=("stiff", "robot"), default="stiff",
+    parser.add_argument("--gains", choices=GAIN_SETS, default="stiff",
                         help="the gains scaled: stiff (default) or robot, with feed-forward torques")  # fmt: skip
     parser.add_argument("--motor-model", action="store_true",
                         help="the motors' torque-speed envelopes, friction and one period of delay")  # fmt: skip

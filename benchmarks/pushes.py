@@ -451,6 +451,7 @@ def print_bounds(
 def main(argv: Sequence[str] | None = None) -> None:
     from rtgait.core.planner.levels import CONTROLLER_LEVELS
     from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
+    from rtgait.interface.command import GAIN_SETS
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robot", default="talos", help="built-in robot or description file (default talos)")
@@ -464,7 +465,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--out", type=Path, help="output folder (default out/pushes-<robot>)")
     parser.add_argument("--physics-dt", type=float, default=None, help="physics step, s (default: the robot's)")
-    parser.add_argument("--gains", choices=("stiff", "robot"), default="stiff",
+    parser.add_argument("--gains", choices=GAIN_SETS, default="stiff",
                         help="the drives' own gains: stiff (default) or robot, with feed-forward torques")  # fmt: skip
     parser.add_argument("--drive", choices=("position", "torque"), default="position",
                         help="position (default) or torque: a tenth of the robot's gains, with FF torques")  # fmt: skip

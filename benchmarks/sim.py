@@ -72,6 +72,7 @@ import numpy as np
 
 from rtgait.core.planner.online import OnlinePlanner
 from rtgait.estimation.estimator import DEFAULT_STATE, STATE_SOURCES
+from rtgait.interface.command import GAIN_SETS
 from rtgait.interface.task_targets import IKTargets
 from rtgait.io.sim_run import simulate
 from rtgait.robot.ik import WholeBodyIK
@@ -427,7 +428,7 @@ def main() -> None:
                         help="controller level(s); the speed report takes the first (default adaptive)")  # fmt: skip
     parser.add_argument("--state", choices=STATE_SOURCES, default=DEFAULT_STATE,
                         help=f"what the controller acts on (default {DEFAULT_STATE})")  # fmt: skip
-    parser.add_argument("--gains", choices=("stiff", "robot"), default="stiff",
+    parser.add_argument("--gains", choices=GAIN_SETS, default="stiff",
                         help="the drives' own gains: stiff (default) or robot, with feed-forward torques")  # fmt: skip
     parser.add_argument("--drive", choices=("position", "torque"), default="position",
                         help="position (default) or torque: a tenth of the robot's gains, with FF torques")  # fmt: skip

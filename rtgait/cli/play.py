@@ -20,6 +20,7 @@ from rtgait.cli.common import (
 )
 from rtgait.cli.control_file import controller_settings
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
+from rtgait.interface.command import GAIN_SETS
 from rtgait.io.summary_json import summary_text
 from rtgait.outputs import OutputError, check_destination
 from rtgait.robot.controller_info import robot_info
@@ -64,7 +65,7 @@ def add_parser(commands: Any) -> None:
         "adaptive; Insert switches it while walking)",
     )  # fmt: skip
     play.add_argument(
-        "--gains", choices=("stiff", "robot"), default="stiff", help="the drives' own gains: stiff (default) or "
+        "--gains", choices=GAIN_SETS, default="stiff", help="the drives' own gains: stiff (default) or "
         "robot, the real robot's, with feed-forward torques (as rtgait simulate)",
     )  # fmt: skip
     play.add_argument(

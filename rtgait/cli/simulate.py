@@ -36,6 +36,7 @@ from rtgait.cli.simulate_options import (
 from rtgait.cli.simulate_pendulum import _simulate_pendulum
 from rtgait.core.planner.levels import CONTROLLER_LEVELS
 from rtgait.estimation.estimator import DEFAULT_STATE
+from rtgait.interface.command import GAIN_SETS
 from rtgait.outputs import staged_outputs
 from rtgait.scenario.loading import load_scenario
 from rtgait.scenario.scenario import Scenario, ScenarioError
@@ -83,7 +84,7 @@ def add_parser(commands: Any) -> None:
     )
     simulate.add_argument(
         "--gains",
-        choices=("stiff", "robot"),
+        choices=GAIN_SETS,
         default="stiff",
         help="the drives' own gains: stiff (default), derived from the URDF for an open-loop pattern; robot, the "
         "gains the real robot's low-level controller runs, with feed-forward torques (docs/robots.md)",

@@ -30,6 +30,7 @@ import numpy as np
 import pinocchio as pin
 
 from rtgait.core.laws.hip_strategy import HipStrategyLimits
+from rtgait.interface.command import GAIN_SETS
 from rtgait.robot.drives import joint_drives
 from rtgait.robot.ik import WholeBodyIK
 from rtgait.robot.model import RobotModel
@@ -120,8 +121,8 @@ def hip_strategy_limits(robot: RobotModel, max_lean: float = 0.25, gains: str = 
     """The hip strategy's limits for ``robot``: its lean inertia and the hips' torque budget
     (:data:`HIP_TORQUE_SHARE` of each hip's rated torque over the inertia), leaning at most ``max_lean`` (rad); with
     ``gains="robot"`` (the robot's own soft servos) also :func:`servo_bandwidth`."""
-    if gains not in ("stiff", "robot"):
-        raise ValueError(f"gains must be 'stiff' or 'robot', got {gains!r}")
+    if gains not in GAIN_SETS:
+        raise ValueError(f"gains must be {' or '.join(map(repr, GAIN_SETS))}, got {gains!r}")
     inertia = lean_inertia(robot)
     accelerations = tuple(
         HIP_TORQUE_SHARE * _hip_torque(robot, axis) / i for axis, i in zip(_AXES, inertia, strict=True)

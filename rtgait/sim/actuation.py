@@ -47,6 +47,7 @@ from dataclasses import dataclass, replace
 import mujoco
 import numpy as np
 
+from rtgait.interface.command import GAIN_SETS
 from rtgait.robot.drives import joint_drives
 from rtgait.robot.joint_inertia import carried_inertia
 from rtgait.robot.model import RobotModel
@@ -184,8 +185,8 @@ def resolve_actuation(
         ValueError: bad periods (:func:`substeps`), an unknown gain set, a joint without the robot's gains, or a
             joint whose resolved kp is not > 0.
     """
-    if gains not in ("stiff", "robot"):
-        raise ValueError(f"gains must be 'stiff' or 'robot', got {gains!r}")
+    if gains not in GAIN_SETS:
+        raise ValueError(f"gains must be {' or '.join(map(repr, GAIN_SETS))}, got {gains!r}")
     description = robot.description
     if control_dt is None:
         control_dt = description.actuation.control_dt

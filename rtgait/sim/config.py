@@ -16,9 +16,8 @@ if TYPE_CHECKING:
 
 __all__ = ["GAIN_SETS", "SensorSettings", "SimConfig"]
 
-# GAIN_SETS (rtgait.interface.command): the drives' own gains, SimConfig.gains: "stiff", the description's kp/kd or
-# the stiff gains derived from the URDF (rtgait.sim.actuation); "robot", the gains the real robot's low-level
-# controller runs (robot_kp/robot_kd).
+# GAIN_SETS, SimConfig.gains' choices, is rtgait.interface.command's (re-exported here): "stiff", the description's
+# kp/kd or the gains derived from the URDF (rtgait.sim.actuation); "robot", robot_kp/robot_kd.
 
 
 @dataclass(frozen=True)
